@@ -1,0 +1,441 @@
+//! SO(3), the group of 3-D rotations, stored as a rotation matrix.
+//!
+//! Conventions (Solà, Deray, Atchuthan 2018, "A micro Lie theory", §§ 4–5 and App. B):
+//! - `Exp(φ) = I + (sin θ/θ)[φ]× + ((1 − cos θ)/θ²)[φ]×²`, θ = ‖φ‖ (Rodrigues, Solà eq. 77).
+//! - Perturbations are on the **right** (body side): `R ⊕ δ = R·Exp(δ)`, `S ⊖ R = Log(Rᵀ S)`.
+//! - Right Jacobian `Jr(φ)`: `Exp(φ + δ) ≈ Exp(φ)·Exp(Jr(φ) δ)` (Solà eq. 143);
+//!   left Jacobian `Jl(φ) = Jr(−φ) = Jr(φ)ᵀ`: `Exp(φ + δ) ≈ Exp(Jl(φ) δ)·Exp(φ)` (eq. 145).
+//!
+//! Numerics: every trigonometric coefficient is evaluated as a Taylor polynomial in θ² below
+//! θ = 1 (truncation error below 1e-17 relative) and in closed form above, written so that no
+//! subtraction cancels more than a few bits (e.g. `1 − cos θ = 2 sin²(θ/2)`). `Log` goes through
+//! Shepperd's quaternion extraction and `atan2`, so it is exact near θ = 0 and at θ = π, where a
+//! formula that divides by `sin θ` fails.
+
+use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
+
+/// Skew-symmetric matrix `[v]×` with `[v]× w = v × w` (the hat operator of so(3)).
+#[inline]
+pub fn hat(v: &Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
+}
+
+/// Inverse of [`hat`]: the vector of a skew-symmetric matrix. Only the antisymmetric part of
+/// `m` is read: `vee(m) = ½ (m − mᵀ)∨`.
+#[inline]
+pub fn vee(m: &Matrix3<f64>) -> Vector3<f64> {
+    Vector3::new(
+        0.5 * (m[(2, 1)] - m[(1, 2)]),
+        0.5 * (m[(0, 2)] - m[(2, 0)]),
+        0.5 * (m[(1, 0)] - m[(0, 1)]),
+    )
+}
+
+/// Below this angle (rad) the coefficients use Taylor polynomials in θ².
+const SERIES_BELOW: f64 = 1.0;
+
+/// Horner evaluation of Σ c_k x^k.
+#[inline(always)]
+pub(crate) fn horner(x: f64, c: &[f64]) -> f64 {
+    let mut acc = 0.0_f64;
+    for &ck in c.iter().rev() {
+        acc = acc.mul_add(x, ck);
+    }
+    acc
+}
+
+// Taylor coefficients in θ² (nine terms; for θ < 1 the first omitted term is < 1e-17 relative).
+// A = sin θ/θ = Σ (−1)^k θ^{2k}/(2k+1)!
+const A_SERIES: [f64; 9] = [
+    1.0,
+    -1.0 / 6.0,
+    1.0 / 120.0,
+    -1.0 / 5040.0,
+    1.0 / 362880.0,
+    -1.0 / 39916800.0,
+    1.0 / 6227020800.0,
+    -1.0 / 1307674368000.0,
+    1.0 / 355687428096000.0,
+];
+// B = (1 − cos θ)/θ² = Σ (−1)^k θ^{2k}/(2k+2)!
+const B_SERIES: [f64; 9] = [
+    1.0 / 2.0,
+    -1.0 / 24.0,
+    1.0 / 720.0,
+    -1.0 / 40320.0,
+    1.0 / 3628800.0,
+    -1.0 / 479001600.0,
+    1.0 / 87178291200.0,
+    -1.0 / 20922789888000.0,
+    1.0 / 6402373705728000.0,
+];
+// C = (θ − sin θ)/θ³ = Σ (−1)^k θ^{2k}/(2k+3)!
+const C_SERIES: [f64; 9] = [
+    1.0 / 6.0,
+    -1.0 / 120.0,
+    1.0 / 5040.0,
+    -1.0 / 362880.0,
+    1.0 / 39916800.0,
+    -1.0 / 6227020800.0,
+    1.0 / 1307674368000.0,
+    -1.0 / 355687428096000.0,
+    1.0 / 121645100408832000.0,
+];
+// D = 1/θ² − (1 + cos θ)/(2 θ sin θ) = (1 − (θ/2) cot(θ/2))/θ², from x cot x = Σ (−1)^k B_2k (2x)^{2k}/(2k)!
+// (Bernoulli numbers): D = 1/12 + θ²/720 + θ⁴/30240 + θ⁶/1209600 + θ⁸/47900160 + …
+const D_SERIES: [f64; 9] = [
+    1.0 / 12.0,
+    1.0 / 720.0,
+    1.0 / 30240.0,
+    1.0 / 1209600.0,
+    1.0 / 47900160.0,
+    691.0 / 1307674368000.0,
+    1.0 / 74724249600.0,
+    3617.0 / 10670622842880000.0,
+    43867.0 / 5109094217170944000.0,
+];
+
+/// The scalar coefficients of Rodrigues' formula and of the SO(3) Jacobians at angle θ:
+/// `a = sin θ/θ`, `b = (1 − cos θ)/θ²`, `c = (θ − sin θ)/θ³`.
+#[derive(Clone, Copy, Debug)]
+pub struct RodriguesCoeffs {
+    /// sin θ / θ
+    pub a: f64,
+    /// (1 − cos θ) / θ²
+    pub b: f64,
+    /// (θ − sin θ) / θ³
+    pub c: f64,
+}
+
+impl RodriguesCoeffs {
+    /// Coefficients for the rotation vector `phi` (rad).
+    #[inline]
+    pub fn new(phi: &Vector3<f64>) -> Self {
+        let theta2 = phi.norm_squared();
+        if theta2 < SERIES_BELOW * SERIES_BELOW {
+            Self {
+                a: horner(theta2, &A_SERIES),
+                b: horner(theta2, &B_SERIES),
+                c: horner(theta2, &C_SERIES),
+            }
+        } else {
+            let theta = theta2.sqrt();
+            let s = theta.sin();
+            let sh = (0.5 * theta).sin();
+            Self {
+                a: s / theta,
+                b: 2.0 * sh * sh / theta2,
+                c: (theta - s) / (theta2 * theta),
+            }
+        }
+    }
+}
+
+/// `D(θ) = 1/θ² − (1 + cos θ)/(2 θ sin θ)`, the coefficient of `[φ]×²` in `Jr⁻¹` and `Jl⁻¹`.
+/// Finite for θ < 2π; at θ = π it equals 1/π².
+#[inline]
+fn d_coeff(theta2: f64) -> f64 {
+    // The Bernoulli series converges for θ < 2π with ratio ~(θ/2π)²; below θ = ½ nine terms
+    // leave < 1e-21 relative. Above, the closed form loses at most ~6 bits of D, and D enters
+    // the Jacobians only multiplied by θ².
+    if theta2 < 0.25 {
+        horner(theta2, &D_SERIES)
+    } else {
+        let theta = theta2.sqrt();
+        let half = 0.5 * theta;
+        // (1 + cos θ)/sin θ = cot(θ/2)
+        (1.0 - half * half.cos() / half.sin()) / theta2
+    }
+}
+
+/// Right Jacobian of SO(3): `Jr(φ) = I − b[φ]× + c[φ]×²` (Solà eq. 143).
+#[inline]
+pub fn jr(phi: &Vector3<f64>) -> Matrix3<f64> {
+    let k = RodriguesCoeffs::new(phi);
+    let w = hat(phi);
+    Matrix3::identity() - w * k.b + w * w * k.c
+}
+
+/// Inverse right Jacobian: `Jr⁻¹(φ) = I + ½[φ]× + D[φ]×²` (Solà eq. 144), valid for θ < 2π.
+#[inline]
+pub fn jr_inv(phi: &Vector3<f64>) -> Matrix3<f64> {
+    let d = d_coeff(phi.norm_squared());
+    let w = hat(phi);
+    Matrix3::identity() + w * 0.5 + w * w * d
+}
+
+/// Left Jacobian: `Jl(φ) = Jr(−φ) = I + b[φ]× + c[φ]×²` (Solà eq. 145).
+#[inline]
+pub fn jl(phi: &Vector3<f64>) -> Matrix3<f64> {
+    jr(&-phi)
+}
+
+/// Inverse left Jacobian: `Jl⁻¹(φ) = I − ½[φ]× + D[φ]×²` (Solà eq. 146).
+#[inline]
+pub fn jl_inv(phi: &Vector3<f64>) -> Matrix3<f64> {
+    jr_inv(&-phi)
+}
+
+/// A rotation in SO(3), stored as the rotation matrix `R` (for a body→world attitude,
+/// `v_world = R v_body`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SO3 {
+    m: Matrix3<f64>,
+}
+
+impl Default for SO3 {
+    fn default() -> Self {
+        Self::identity()
+    }
+}
+
+impl SO3 {
+    /// The identity rotation.
+    #[inline]
+    pub fn identity() -> Self {
+        Self {
+            m: Matrix3::identity(),
+        }
+    }
+
+    /// Wraps a matrix that the caller guarantees is a rotation (orthonormal, det +1).
+    /// Use [`SO3::from_matrix`] when it may have drifted.
+    #[inline]
+    pub fn from_matrix_unchecked(m: Matrix3<f64>) -> Self {
+        Self { m }
+    }
+
+    /// The nearest rotation (Frobenius norm) to `m`, by SVD polar decomposition with the
+    /// determinant forced to +1. Use it to re-orthonormalise a drifted matrix.
+    pub fn from_matrix(m: &Matrix3<f64>) -> Self {
+        let svd = m.svd(true, true);
+        let (u, vt) = (svd.u.unwrap(), svd.v_t.unwrap());
+        let mut r = u * vt;
+        if r.determinant() < 0.0 {
+            let mut u2 = u;
+            u2.column_mut(2).neg_mut();
+            r = u2 * vt;
+        }
+        Self { m: r }
+    }
+
+    /// From a unit quaternion (Hamilton, `w + xi + yj + zk`, body→world when used as attitude).
+    #[inline]
+    pub fn from_quaternion(q: &UnitQuaternion<f64>) -> Self {
+        Self {
+            m: q.to_rotation_matrix().into_inner(),
+        }
+    }
+
+    /// From quaternion components `(w, x, y, z)`; the quaternion is normalised first.
+    /// Returns `None` if its norm is zero or not finite.
+    pub fn from_wxyz(w: f64, x: f64, y: f64, z: f64) -> Option<Self> {
+        let n = (w * w + x * x + y * y + z * z).sqrt();
+        if !(n.is_finite() && n > 0.0) {
+            return None;
+        }
+        Some(Self::from_quaternion(&UnitQuaternion::new_unchecked(
+            Quaternion::new(w / n, x / n, y / n, z / n),
+        )))
+    }
+
+    /// The unit quaternion of this rotation, with `w ≥ 0` (Shepperd's method: the largest of
+    /// `w², x², y², z²` is extracted from the diagonal, so no branch divides by a small number).
+    pub fn to_quaternion(&self) -> UnitQuaternion<f64> {
+        let q = shepperd(&self.m);
+        UnitQuaternion::new_normalize(q)
+    }
+
+    /// The rotation matrix.
+    #[inline]
+    pub fn matrix(&self) -> &Matrix3<f64> {
+        &self.m
+    }
+
+    /// Exponential map `Exp(φ)` of a rotation vector φ (rad), Rodrigues' formula (Solà eq. 77).
+    #[inline]
+    pub fn exp(phi: &Vector3<f64>) -> Self {
+        let k = RodriguesCoeffs::new(phi);
+        Self {
+            m: exp_from_coeffs(phi, &k),
+        }
+    }
+
+    /// `Exp(φ)` and its right Jacobian `Jr(φ)` sharing one set of coefficients.
+    #[inline]
+    pub fn exp_jr(phi: &Vector3<f64>) -> (Self, Matrix3<f64>) {
+        let k = RodriguesCoeffs::new(phi);
+        let w = hat(phi);
+        let w2 = w * w;
+        let r = Matrix3::identity() + w * k.a + w2 * k.b;
+        let j = Matrix3::identity() - w * k.b + w2 * k.c;
+        (Self { m: r }, j)
+    }
+
+    /// Logarithmic map `Log(R)`: the rotation vector φ with ‖φ‖ ∈ [0, π] and `Exp(φ) = R`.
+    /// At exactly θ = π either of the two opposite vectors may be returned.
+    pub fn log(&self) -> Vector3<f64> {
+        let q = shepperd(&self.m);
+        log_quaternion(q.w, &q.imag())
+    }
+
+    /// `Log(R)` and its Jacobian `d Log(R ⊕ δ)/dδ = Jr⁻¹(Log R)`.
+    pub fn log_jac(&self) -> (Vector3<f64>, Matrix3<f64>) {
+        let phi = self.log();
+        (phi, jr_inv(&phi))
+    }
+
+    /// Inverse `R⁻¹ = Rᵀ`.
+    #[inline]
+    pub fn inverse(&self) -> Self {
+        Self {
+            m: self.m.transpose(),
+        }
+    }
+
+    /// Inverse and its Jacobian `d(R⁻¹)/dR = −Ad(R) = −R` (Solà eq. 155).
+    #[inline]
+    pub fn inverse_jac(&self) -> (Self, Matrix3<f64>) {
+        (self.inverse(), -self.m)
+    }
+
+    /// Composition `R·S`.
+    #[inline]
+    pub fn compose(&self, other: &Self) -> Self {
+        Self {
+            m: self.m * other.m,
+        }
+    }
+
+    /// `R·S` with Jacobians `d(RS)/dR = Sᵀ` and `d(RS)/dS = I` (Solà eqs. 159–160).
+    #[inline]
+    pub fn compose_jac(&self, other: &Self) -> (Self, Matrix3<f64>, Matrix3<f64>) {
+        (
+            self.compose(other),
+            other.m.transpose(),
+            Matrix3::identity(),
+        )
+    }
+
+    /// Rotates a vector: `R v`.
+    #[inline]
+    pub fn act(&self, v: &Vector3<f64>) -> Vector3<f64> {
+        self.m * v
+    }
+
+    /// `R v` with Jacobians `d(Rv)/dR = −R[v]×` and `d(Rv)/dv = R` (Solà eqs. 167–168).
+    #[inline]
+    pub fn act_jac(&self, v: &Vector3<f64>) -> (Vector3<f64>, Matrix3<f64>, Matrix3<f64>) {
+        (self.m * v, -self.m * hat(v), self.m)
+    }
+
+    /// Adjoint `Ad(R) = R`: `R·Exp(δ) = Exp(Ad(R) δ)·R`.
+    #[inline]
+    pub fn adjoint(&self) -> Matrix3<f64> {
+        self.m
+    }
+
+    /// Right-plus `R ⊕ δ = R·Exp(δ)`.
+    #[inline]
+    pub fn plus(&self, delta: &Vector3<f64>) -> Self {
+        self.compose(&Self::exp(delta))
+    }
+
+    /// Right-minus `S ⊖ R = Log(Rᵀ S)` (`self` is S).
+    #[inline]
+    pub fn minus(&self, r: &Self) -> Vector3<f64> {
+        r.inverse().compose(self).log()
+    }
+
+    /// Re-orthonormalises a drifted rotation matrix by the polar decomposition.
+    pub fn normalized(&self) -> Self {
+        Self::from_matrix(&self.m)
+    }
+
+    /// Largest absolute entry of `RᵀR − I`: how far the stored matrix is from orthonormal.
+    pub fn orthonormality_error(&self) -> f64 {
+        (self.m.transpose() * self.m - Matrix3::identity()).amax()
+    }
+}
+
+impl core::ops::Mul for SO3 {
+    type Output = SO3;
+    #[inline]
+    fn mul(self, rhs: SO3) -> SO3 {
+        self.compose(&rhs)
+    }
+}
+
+impl core::ops::Mul<Vector3<f64>> for SO3 {
+    type Output = Vector3<f64>;
+    #[inline]
+    fn mul(self, rhs: Vector3<f64>) -> Vector3<f64> {
+        self.act(&rhs)
+    }
+}
+
+/// `I + a[φ]× + b[φ]×²`.
+#[inline(always)]
+fn exp_from_coeffs(phi: &Vector3<f64>, k: &RodriguesCoeffs) -> Matrix3<f64> {
+    let w = hat(phi);
+    Matrix3::identity() + w * k.a + w * w * k.b
+}
+
+/// Shepperd's rotation-matrix → quaternion, returning `w ≥ 0`. Not normalised (it is unit to
+/// round-off for an orthonormal input).
+fn shepperd(m: &Matrix3<f64>) -> Quaternion<f64> {
+    let (m00, m11, m22) = (m[(0, 0)], m[(1, 1)], m[(2, 2)]);
+    let tr = m00 + m11 + m22;
+    let q = if tr >= m00 && tr >= m11 && tr >= m22 {
+        let s = 2.0 * (1.0 + tr).sqrt(); // 4w
+        Quaternion::new(
+            0.25 * s,
+            (m[(2, 1)] - m[(1, 2)]) / s,
+            (m[(0, 2)] - m[(2, 0)]) / s,
+            (m[(1, 0)] - m[(0, 1)]) / s,
+        )
+    } else if m00 >= m11 && m00 >= m22 {
+        let s = 2.0 * (1.0 + m00 - m11 - m22).sqrt(); // 4x
+        Quaternion::new(
+            (m[(2, 1)] - m[(1, 2)]) / s,
+            0.25 * s,
+            (m[(0, 1)] + m[(1, 0)]) / s,
+            (m[(0, 2)] + m[(2, 0)]) / s,
+        )
+    } else if m11 >= m22 {
+        let s = 2.0 * (1.0 + m11 - m00 - m22).sqrt(); // 4y
+        Quaternion::new(
+            (m[(0, 2)] - m[(2, 0)]) / s,
+            (m[(0, 1)] + m[(1, 0)]) / s,
+            0.25 * s,
+            (m[(1, 2)] + m[(2, 1)]) / s,
+        )
+    } else {
+        let s = 2.0 * (1.0 + m22 - m00 - m11).sqrt(); // 4z
+        Quaternion::new(
+            (m[(1, 0)] - m[(0, 1)]) / s,
+            (m[(0, 2)] + m[(2, 0)]) / s,
+            (m[(1, 2)] + m[(2, 1)]) / s,
+            0.25 * s,
+        )
+    };
+    if q.w < 0.0 { -q } else { q }
+}
+
+/// Log of a unit quaternion `(w, v)` with `w ≥ 0` as a rotation vector:
+/// `φ = 2 atan2(‖v‖, w) v/‖v‖`, written as `(2/w)·(atan x / x)·v`, x = ‖v‖/w, for small x so
+/// that nothing divides by ‖v‖ (which underflows for θ ~ 1e-300).
+#[inline]
+fn log_quaternion(w: f64, v: &Vector3<f64>) -> Vector3<f64> {
+    let n2 = v.norm_squared();
+    if n2 < 1e-6 * w * w {
+        // x² < 1e-6: atan(x)/x = 1 − x²/3 + x⁴/5 − x⁶/7, truncation < 1e-24.
+        let x2 = n2 / (w * w);
+        let f = horner(x2, &[1.0, -1.0 / 3.0, 1.0 / 5.0, -1.0 / 7.0]);
+        v * (2.0 * f / w)
+    } else {
+        let n = n2.sqrt();
+        v * (2.0 * n.atan2(w) / n)
+    }
+}
+

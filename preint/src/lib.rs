@@ -1,0 +1,14 @@
+//! # preint — on-manifold IMU preintegration
+//!
+//! Conventions (see `docs/ARCHITECTURE.md`): world frame z up, gravity `g = (0, 0, −9.81)` by
+//! default; the accelerometer measures specific force; rotation perturbations on the right;
+//! preintegrated tangent order **[δφ, δv, δp]**, bias order **[b_g, b_a]**; integer-ns times.
+
+pub mod io;
+pub mod measurement;
+pub mod noise;
+pub mod sample;
+
+pub use measurement::{BiasJacobians, Cov9, Cov15, PreintegratedImu};
+pub use noise::ImuNoise;
+pub use sample::{ImuBias, ImuSample, dt_seconds};
