@@ -79,3 +79,19 @@ pub struct PreintegratedImu {
     /// Gravity vector in the world frame [m/s²] (default (0, 0, −9.81)).
     pub gravity: Vector3<f64>,
 }
+
+impl PreintegratedImu {
+    /// Deltas corrected to first order for a new bias estimate `bias` (Forster eq. 44):
+    /// `ΔR·Exp(∂ΔR/∂b_g δb_g)`, `Δv + ∂Δv/∂b_g δb_g + ∂Δv/∂b_a δb_a`, `Δp + …`, with
+    /// `δb = bias − bias_hat`. Returns `(ΔR(b), Δv(b) [m/s], Δp(b) [m])`.
+    pub fn corrected(&self, bias: &ImuBias) -> (SO3, Vector3<f64>, Vector3<f64>) {
+        let dbg = bias.gyro - self.bias_hat.gyro;
+        let dba = bias.acc - self.bias_hat.acc;
+        let j = &self.jac;
+        (
+            self.delta_r.plus(&(j.d_r_d_bg * dbg)),
+            self.delta_v + j.d_v_d_bg * dbg + j.d_v_d_ba * dba,
+            self.delta_p + j.d_p_d_bg * dbg + j.d_p_d_ba * dba,
+        )
+    }
+}
