@@ -7,7 +7,8 @@
 //!
 //! Conventions:
 //! - Perturbations are on the **right**: `X ⊕ δ = X·Exp(δ)`, `Y ⊖ X = Log(X⁻¹Y)`.
-//! - SO(3) tangent: rotation vector φ (rad). SE(3) tangent: `[ρ, θ]`, translation first.
+//! - SO(3) tangent: rotation vector φ (rad). SE(3) tangent: `[ρ, θ]`, translation first (Solà,
+//!   Barfoot, C++ Sophus; GTSAM and sophus-rs put the rotation first).
 //! - Right Jacobian `Jr(φ)`: `Exp(φ + δ) ≈ Exp(φ)·Exp(Jr(φ)δ)`; left `Jl(φ) = Jr(−φ)`.
 //! - Jacobians of an operation are returned next to its value by the `*_jac` variants
 //!   (`log_jac`, `compose_jac`, `act_jac`, …), each w.r.t. right perturbations of its inputs.

@@ -1,7 +1,7 @@
 //! SE(3), rigid-body transforms `T = (R, t)` acting as `x ↦ R x + t`.
 //!
-//! Tangent vectors are `ξ = [ρ, θ] ∈ R⁶`, **translation first** (Solà 2018 § 10.6, Barfoot,
-//! Sophus). `Exp(ξ) = (Exp(θ), Jl(θ) ρ)` (Solà eq. 172); perturbations are on the right:
+//! Tangent vectors are `ξ = [ρ, θ] ∈ R⁶`, **translation first**, as in Solà 2018 § 10.6,
+//! Barfoot 2017 and C++ Sophus. (GTSAM's `Pose3` and sophus-rs put the rotation first.) `Exp(ξ) = (Exp(θ), Jl(θ) ρ)` (Solà eq. 172); perturbations are on the right:
 //! `T ⊕ ξ = T·Exp(ξ)`.
 
 use crate::so3::{self, SO3, hat};
@@ -37,8 +37,21 @@ const QC: [f64; 12] = q_series(2);
 /// `Q = ½ρ̂ + a(θ̂ρ̂ + ρ̂θ̂ + θ̂ρ̂θ̂) + b(θ̂²ρ̂ + ρ̂θ̂² − 3θ̂ρ̂θ̂) + c(θ̂ρ̂θ̂² + θ̂²ρ̂θ̂)` with
 /// `a = (θ − sin θ)/θ³`, `b = (θ² + 2cos θ − 2)/(2θ⁴)`, `c = (2θ − 3 sin θ + θ cos θ)/(2θ⁵)`.
 pub fn q_block(rho: &Vector3<f64>, theta: &Vector3<f64>) -> Matrix3<f64> {
-    let t2 = theta.norm_squared();
-    let (a, b, c) = if t2 < 4.0 {
+    let (a, b, c) = q_coeffs(theta.norm_squared());
+    let th = hat(theta);
+    let rh = hat(rho);
+    let thrh = th * rh;
+    let rhth = rh * th;
+    let thrhth = thrh * th;
+    let th2 = th * th;
+    rh * 0.5 + (thrh + rhth + thrhth) * a + (th2 * rh + rhth * th - thrhth * 3.0) * b
+        + (thrhth * th + th * thrhth) * c
+}
+
+/// The scalars `(a, b, c)` of [`q_block`] at θ² [rad²]: `a = (θ − sin θ)/θ³`,
+/// `b = (θ² + 2cos θ − 2)/(2θ⁴)`, `c = (2θ − 3 sin θ + θ cos θ)/(2θ⁵)`; Taylor series below θ = 2.
+pub fn q_coeffs(t2: f64) -> (f64, f64, f64) {
+    if t2 < 4.0 {
         (
             so3::horner(t2, &QA),
             so3::horner(t2, &QB),
@@ -52,15 +65,7 @@ pub fn q_block(rho: &Vector3<f64>, theta: &Vector3<f64>) -> Matrix3<f64> {
             (t2 + 2.0 * co - 2.0) / (2.0 * t2 * t2),
             (2.0 * t - 3.0 * s + t * co) / (2.0 * t2 * t2 * t),
         )
-    };
-    let th = hat(theta);
-    let rh = hat(rho);
-    let thrh = th * rh;
-    let rhth = rh * th;
-    let thrhth = thrh * th;
-    let th2 = th * th;
-    rh * 0.5 + (thrh + rhth + thrhth) * a + (th2 * rh + rhth * th - thrhth * 3.0) * b
-        + (thrhth * th + th * thrhth) * c
+    }
 }
 
 /// A rigid-body transform: rotation `R` and translation `t` (`x_world = R x_body + t` for a

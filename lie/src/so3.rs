@@ -132,9 +132,9 @@ impl RodriguesCoeffs {
 }
 
 /// `D(θ) = 1/θ² − (1 + cos θ)/(2 θ sin θ)`, the coefficient of `[φ]×²` in `Jr⁻¹` and `Jl⁻¹`.
-/// Finite for θ < 2π; at θ = π it equals 1/π².
+/// Finite for θ < 2π; at θ = π it equals 1/π². Takes θ² [rad²].
 #[inline]
-fn d_coeff(theta2: f64) -> f64 {
+pub fn d_coeff(theta2: f64) -> f64 {
     // The Bernoulli series converges for θ < 2π with ratio ~(θ/2π)²; below θ = ½ nine terms
     // leave < 1e-21 relative. Above, the closed form loses at most ~6 bits of D, and D enters
     // the Jacobians only multiplied by θ².
