@@ -44,7 +44,9 @@ pub fn q_block(rho: &Vector3<f64>, theta: &Vector3<f64>) -> Matrix3<f64> {
     let rhth = rh * th;
     let thrhth = thrh * th;
     let th2 = th * th;
-    rh * 0.5 + (thrh + rhth + thrhth) * a + (th2 * rh + rhth * th - thrhth * 3.0) * b
+    rh * 0.5
+        + (thrh + rhth + thrhth) * a
+        + (th2 * rh + rhth * th - thrhth * 3.0) * b
         + (thrhth * th + th * thrhth) * c
 }
 
@@ -122,16 +124,22 @@ impl SE3 {
     /// `Exp(ξ)`, ξ = [ρ, θ]: `(Exp(θ), Jl(θ) ρ)` (Solà eq. 172).
     pub fn exp(xi: &Vector6<f64>) -> Self {
         let (rho, theta) = split(xi);
+        // Jl(θ)ρ = ρ + b θ×ρ + c θ×(θ×ρ) with the coefficients of Jl.
+        let (b, c) = so3::jac_coeffs(theta.norm_squared());
+        let tr = theta.cross(&rho);
         Self {
             r: SO3::exp(&theta),
-            t: so3::jl(&theta) * rho,
+            t: rho + tr * b + theta.cross(&tr) * c,
         }
     }
 
     /// `Log(T) = [Jl⁻¹(θ) t, θ]` with θ = Log(R) (Solà eq. 173).
     pub fn log(&self) -> Vector6<f64> {
         let theta = self.r.log();
-        join(&(so3::jl_inv(&theta) * self.t), &theta)
+        // Jl⁻¹(θ)t = t − ½ θ×t + D θ×(θ×t).
+        let tt = theta.cross(&self.t);
+        let d = so3::d_coeff(theta.norm_squared());
+        join(&(self.t - tt * 0.5 + theta.cross(&tt) * d), &theta)
     }
 
     /// `Log(T)` and its Jacobian `d Log(T ⊕ δ)/dδ = Jr⁻¹(Log T)`.
@@ -169,11 +177,7 @@ impl SE3 {
 
     /// `T₁·T₂` with Jacobians `Ad(T₂)⁻¹` and `I` (Solà eqs. 159–160).
     pub fn compose_jac(&self, o: &Self) -> (Self, Matrix6<f64>, Matrix6<f64>) {
-        (
-            self.compose(o),
-            o.inverse().adjoint(),
-            Matrix6::identity(),
-        )
+        (self.compose(o), o.inverse().adjoint(), Matrix6::identity())
     }
 
     /// Transforms a point: `R x + t`.
@@ -183,7 +187,10 @@ impl SE3 {
 
     /// `R x + t` with Jacobians `d/dT = [R, −R[x]×]` (3×6, order [ρ, θ]) and `d/dx = R`
     /// (Solà eq. 181).
-    pub fn act_jac(&self, x: &Vector3<f64>) -> (Vector3<f64>, nalgebra::Matrix3x6<f64>, Matrix3<f64>) {
+    pub fn act_jac(
+        &self,
+        x: &Vector3<f64>,
+    ) -> (Vector3<f64>, nalgebra::Matrix3x6<f64>, Matrix3<f64>) {
         let r = self.r.matrix();
         let mut j = nalgebra::Matrix3x6::zeros();
         j.fixed_view_mut::<3, 3>(0, 0).copy_from(r);

@@ -34,12 +34,13 @@ pub fn vee(m: &Matrix3<f64>) -> Vector3<f64> {
 /// Below this angle (rad) the coefficients use Taylor polynomials in θ².
 const SERIES_BELOW: f64 = 1.0;
 
-/// Horner evaluation of Σ c_k x^k.
+/// Horner evaluation of Σ c_k x^k. Plain multiply-add, not `f64::mul_add`: on the portable
+/// x86-64 target (no FMA) `mul_add` is a call into libm's software `fma`.
 #[inline(always)]
 pub(crate) fn horner(x: f64, c: &[f64]) -> f64 {
     let mut acc = 0.0_f64;
     for &ck in c.iter().rev() {
-        acc = acc.mul_add(x, ck);
+        acc = acc * x + ck;
     }
     acc
 }
@@ -107,12 +108,79 @@ pub struct RodriguesCoeffs {
     pub c: f64,
 }
 
+/// Below θ = 0.1 five Taylor terms already leave < 3e-18 relative truncation error
+/// (θ¹⁰/11!); per-sample IMU angles live here.
+const SHORT_SERIES_BELOW: f64 = 0.1;
+
+/// `(sin θ/θ, (1 − cos θ)/θ²)` at θ² [rad²]: the two coefficients Exp needs.
+#[inline]
+pub fn exp_coeffs(theta2: f64) -> (f64, f64) {
+    if theta2 < SHORT_SERIES_BELOW * SHORT_SERIES_BELOW {
+        (
+            horner(theta2, &A_SERIES[..5]),
+            horner(theta2, &B_SERIES[..5]),
+        )
+    } else if theta2 < SERIES_BELOW * SERIES_BELOW {
+        (horner(theta2, &A_SERIES), horner(theta2, &B_SERIES))
+    } else {
+        let theta = theta2.sqrt();
+        let sh = (0.5 * theta).sin();
+        (theta.sin() / theta, 2.0 * sh * sh / theta2)
+    }
+}
+
+/// `((1 − cos θ)/θ², (θ − sin θ)/θ³)` at θ² [rad²]: the two coefficients of Jr and Jl.
+#[inline]
+pub fn jac_coeffs(theta2: f64) -> (f64, f64) {
+    if theta2 < SHORT_SERIES_BELOW * SHORT_SERIES_BELOW {
+        (
+            horner(theta2, &B_SERIES[..5]),
+            horner(theta2, &C_SERIES[..5]),
+        )
+    } else if theta2 < SERIES_BELOW * SERIES_BELOW {
+        (horner(theta2, &B_SERIES), horner(theta2, &C_SERIES))
+    } else {
+        let theta = theta2.sqrt();
+        let sh = (0.5 * theta).sin();
+        (
+            2.0 * sh * sh / theta2,
+            (theta - theta.sin()) / (theta2 * theta),
+        )
+    }
+}
+
+/// `I + α[φ]× + β[φ]×²`, built entry-wise from `[φ]×² = φφᵀ − θ²I` (no 3×3 products).
+#[inline(always)]
+pub fn i_plus_hat_hat2(phi: &Vector3<f64>, alpha: f64, beta: f64) -> Matrix3<f64> {
+    let (x, y, z) = (phi.x, phi.y, phi.z);
+    let (xx, yy, zz) = (x * x, y * y, z * z);
+    let (bxy, bxz, byz) = (beta * x * y, beta * x * z, beta * y * z);
+    let (ax, ay, az) = (alpha * x, alpha * y, alpha * z);
+    Matrix3::new(
+        1.0 - beta * (yy + zz),
+        bxy - az,
+        bxz + ay,
+        bxy + az,
+        1.0 - beta * (xx + zz),
+        byz - ax,
+        bxz - ay,
+        byz + ax,
+        1.0 - beta * (xx + yy),
+    )
+}
+
 impl RodriguesCoeffs {
     /// Coefficients for the rotation vector `phi` (rad).
     #[inline]
     pub fn new(phi: &Vector3<f64>) -> Self {
         let theta2 = phi.norm_squared();
-        if theta2 < SERIES_BELOW * SERIES_BELOW {
+        if theta2 < SHORT_SERIES_BELOW * SHORT_SERIES_BELOW {
+            Self {
+                a: horner(theta2, &A_SERIES[..5]),
+                b: horner(theta2, &B_SERIES[..5]),
+                c: horner(theta2, &C_SERIES[..5]),
+            }
+        } else if theta2 < SERIES_BELOW * SERIES_BELOW {
             Self {
                 a: horner(theta2, &A_SERIES),
                 b: horner(theta2, &B_SERIES),
@@ -138,7 +206,9 @@ pub fn d_coeff(theta2: f64) -> f64 {
     // The Bernoulli series converges for θ < 2π with ratio ~(θ/2π)²; below θ = ½ nine terms
     // leave < 1e-21 relative. Above, the closed form loses at most ~6 bits of D, and D enters
     // the Jacobians only multiplied by θ².
-    if theta2 < 0.25 {
+    if theta2 < SHORT_SERIES_BELOW * SHORT_SERIES_BELOW {
+        horner(theta2, &D_SERIES[..5])
+    } else if theta2 < 0.25 {
         horner(theta2, &D_SERIES)
     } else {
         let theta = theta2.sqrt();
@@ -151,17 +221,14 @@ pub fn d_coeff(theta2: f64) -> f64 {
 /// Right Jacobian of SO(3): `Jr(φ) = I − b[φ]× + c[φ]×²` (Solà eq. 143).
 #[inline]
 pub fn jr(phi: &Vector3<f64>) -> Matrix3<f64> {
-    let k = RodriguesCoeffs::new(phi);
-    let w = hat(phi);
-    Matrix3::identity() - w * k.b + w * w * k.c
+    let (b, c) = jac_coeffs(phi.norm_squared());
+    i_plus_hat_hat2(phi, -b, c)
 }
 
 /// Inverse right Jacobian: `Jr⁻¹(φ) = I + ½[φ]× + D[φ]×²` (Solà eq. 144), valid for θ < 2π.
 #[inline]
 pub fn jr_inv(phi: &Vector3<f64>) -> Matrix3<f64> {
-    let d = d_coeff(phi.norm_squared());
-    let w = hat(phi);
-    Matrix3::identity() + w * 0.5 + w * w * d
+    i_plus_hat_hat2(phi, 0.5, d_coeff(phi.norm_squared()))
 }
 
 /// Left Jacobian: `Jl(φ) = Jr(−φ) = I + b[φ]× + c[φ]×²` (Solà eq. 145).
@@ -255,9 +322,9 @@ impl SO3 {
     /// Exponential map `Exp(φ)` of a rotation vector φ (rad), Rodrigues' formula (Solà eq. 77).
     #[inline]
     pub fn exp(phi: &Vector3<f64>) -> Self {
-        let k = RodriguesCoeffs::new(phi);
+        let (a, b) = exp_coeffs(phi.norm_squared());
         Self {
-            m: exp_from_coeffs(phi, &k),
+            m: i_plus_hat_hat2(phi, a, b),
         }
     }
 
@@ -265,18 +332,35 @@ impl SO3 {
     #[inline]
     pub fn exp_jr(phi: &Vector3<f64>) -> (Self, Matrix3<f64>) {
         let k = RodriguesCoeffs::new(phi);
-        let w = hat(phi);
-        let w2 = w * w;
-        let r = Matrix3::identity() + w * k.a + w2 * k.b;
-        let j = Matrix3::identity() - w * k.b + w2 * k.c;
-        (Self { m: r }, j)
+        (
+            Self {
+                m: i_plus_hat_hat2(phi, k.a, k.b),
+            },
+            i_plus_hat_hat2(phi, -k.b, k.c),
+        )
     }
 
     /// Logarithmic map `Log(R)`: the rotation vector φ with ‖φ‖ ∈ [0, π] and `Exp(φ) = R`.
     /// At exactly θ = π either of the two opposite vectors may be returned.
     pub fn log(&self) -> Vector3<f64> {
-        let q = shepperd(&self.m);
-        log_quaternion(q.w, &q.imag())
+        let m = &self.m;
+        // s = sin θ·n (antisymmetric part), c = cos θ.
+        let s = vee(m);
+        let c = 0.5 * (m[(0, 0)] + m[(1, 1)] + m[(2, 2)] - 1.0);
+        let s2 = s.norm_squared();
+        if c > 0.0 && s2 < 0.01 {
+            // θ < 0.1: θ/sin θ = asin(σ)/σ = Σ (2k)!/(4^k (k!)² (2k+1)) σ^{2k}, σ = sin θ;
+            // six terms leave < 2e-24.
+            s * horner(s2, &ASIN_SERIES)
+        } else if c > -0.9 {
+            // θ < 2.69: sin θ ≥ 0.43, so s carries full relative precision.
+            let sn = s2.sqrt();
+            s * (sn.atan2(c) / sn)
+        } else {
+            // Near π the antisymmetric part vanishes: extract the axis from the diagonal.
+            let q = shepperd(m);
+            log_quaternion(q.w, &q.imag())
+        }
     }
 
     /// `Log(R)` and its Jacobian `d Log(R ⊕ δ)/dδ = Jr⁻¹(Log R)`.
@@ -374,12 +458,15 @@ impl core::ops::Mul<Vector3<f64>> for SO3 {
     }
 }
 
-/// `I + a[φ]× + b[φ]×²`.
-#[inline(always)]
-fn exp_from_coeffs(phi: &Vector3<f64>, k: &RodriguesCoeffs) -> Matrix3<f64> {
-    let w = hat(phi);
-    Matrix3::identity() + w * k.a + w * w * k.b
-}
+/// asin(σ)/σ = Σ_k (2k)!/(4^k (k!)² (2k+1)) σ^{2k}.
+const ASIN_SERIES: [f64; 6] = [
+    1.0,
+    1.0 / 6.0,
+    3.0 / 40.0,
+    5.0 / 112.0,
+    35.0 / 1152.0,
+    63.0 / 2816.0,
+];
 
 /// Shepperd's rotation-matrix → quaternion, returning `w ≥ 0`. Not normalised (it is unit to
 /// round-off for an orthonormal input).
@@ -438,4 +525,3 @@ fn log_quaternion(w: f64, v: &Vector3<f64>) -> Vector3<f64> {
         v * (2.0 * n.atan2(w) / n)
     }
 }
-

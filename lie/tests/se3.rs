@@ -1,4 +1,5 @@
 //! SE(3): round trips, properties and Jacobians against central differences.
+#![allow(clippy::excessive_precision)] // 20-digit references from mpmath, kept as printed.
 
 mod common;
 use common::*;
@@ -37,13 +38,30 @@ fn xi(rho: [f64; 3], theta: Vector3<f64>) -> Vector6<f64> {
 #[test]
 fn round_trips_at_the_hard_angles() {
     let axis = Vector3::new(0.2, -0.5, 0.8).normalize();
-    for &t in &[0.0, 1e-300, 1e-15, 1e-8, 1e-4, 1.0, PI - 1e-6, PI - 1e-10, PI] {
+    for &t in &[
+        0.0,
+        1e-300,
+        1e-15,
+        1e-8,
+        1e-4,
+        1.0,
+        PI - 1e-6,
+        PI - 1e-10,
+        PI,
+    ] {
         let x = xi([0.3, -1.2, 2.5], axis * t);
         let g = SE3::exp(&x);
         let back = SE3::exp(&g.log());
-        assert!((back.matrix() - g.matrix()).norm() <= 1e-14 * 4.0, "θ = {t}");
+        assert!(
+            (back.matrix() - g.matrix()).norm() <= 1e-14 * 4.0,
+            "θ = {t}"
+        );
         if t <= PI - 1e-6 {
-            assert!((g.log() - x).norm() <= 1e-14 * x.norm(), "θ = {t}: {:e}", (g.log() - x).norm());
+            assert!(
+                (g.log() - x).norm() <= 1e-14 * x.norm(),
+                "θ = {t}: {:e}",
+                (g.log() - x).norm()
+            );
         }
     }
 }
@@ -67,7 +85,10 @@ const H: f64 = 1e-6;
 
 fn check6(name: &str, an: &Matrix6<f64>, num: nalgebra::DMatrix<f64>) {
     let e = rel_err(&dm(an), &num);
-    assert!(e < 1e-8, "{name}: relative error {e:e}\nanalytic {an}\nnumeric {num}");
+    assert!(
+        e < 1e-8,
+        "{name}: relative error {e:e}\nanalytic {an}\nnumeric {num}"
+    );
 }
 
 #[test]
@@ -82,13 +103,33 @@ fn jacobians_match_central_differences() {
     ] {
         let x = xi([0.7, -1.3, 0.4], theta);
         let t = SE3::exp(&x);
-        check6("Jr", &se3::jr(&x), num_jac(|v: &Vector6<f64>| SE3::exp(v), &x, H));
+        check6(
+            "Jr",
+            &se3::jr(&x),
+            num_jac(|v: &Vector6<f64>| SE3::exp(v), &x, H),
+        );
         let e0 = SE3::exp(&x);
-        check6("Jl", &se3::jl(&x), num_jac(|v: &Vector6<f64>| SE3::exp(v).compose(&e0.inverse()).log(), &x, H));
+        check6(
+            "Jl",
+            &se3::jl(&x),
+            num_jac(
+                |v: &Vector6<f64>| SE3::exp(v).compose(&e0.inverse()).log(),
+                &x,
+                H,
+            ),
+        );
         check6("log", &t.log_jac().1, num_jac(|g: &SE3| g.log(), &t, H));
-        check6("inverse", &t.inverse_jac().1, num_jac(|g: &SE3| g.inverse(), &t, H));
+        check6(
+            "inverse",
+            &t.inverse_jac().1,
+            num_jac(|g: &SE3| g.inverse(), &t, H),
+        );
         let (_, ja, jb) = t.compose_jac(&other);
-        check6("compose/a", &ja, num_jac(|g: &SE3| g.compose(&other), &t, H));
+        check6(
+            "compose/a",
+            &ja,
+            num_jac(|g: &SE3| g.compose(&other), &t, H),
+        );
         check6("compose/b", &jb, num_jac(|g: &SE3| t.compose(g), &other, H));
         let (_, jt, jp) = t.act_jac(&p);
         let e = rel_err(&dm(&jt), &num_jac(|g: &SE3| g.act(&p), &t, H));

@@ -22,12 +22,18 @@ fn so3_exp_log_compose_agree_with_sophus() {
     for phi in angles() {
         let ours = SO3::exp(&phi);
         let theirs = Rotation3F64::exp(phi);
-        assert!((ours.matrix() - theirs.matrix()).amax() < 1e-15, "exp at {phi}");
+        assert!(
+            (ours.matrix() - theirs.matrix()).amax() < 1e-15,
+            "exp at {phi}"
+        );
         assert!((ours.log() - theirs.log()).amax() < 1e-14, "log at {phi}");
         let b = Vector3::new(0.4, 0.1, -0.7);
         let oc = ours.compose(&SO3::exp(&b));
         let tc = theirs.group_mul(Rotation3F64::exp(b));
-        assert!((oc.matrix() - tc.matrix()).amax() < 1e-15, "compose at {phi}");
+        assert!(
+            (oc.matrix() - tc.matrix()).amax() < 1e-15,
+            "compose at {phi}"
+        );
     }
 }
 
@@ -54,11 +60,22 @@ fn se3_exp_log_agree_with_sophus() {
             let series = taylor_exp(&lie::se3::hat6(&x));
             assert!((ours.matrix() - series).amax() < 1e-15);
             let off = (theirs.matrix() - series).amax();
-            assert!(off > 0.1 * phi.norm_squared() / 6.0, "sophus now exact: {off:e}");
+            assert!(
+                off > 0.1 * phi.norm_squared() / 6.0,
+                "sophus now exact: {off:e}"
+            );
             continue;
         }
-        assert!((ours.matrix() - theirs.matrix()).amax() < 1e-14, "exp at {x}: ours {} theirs {}", ours.matrix(), theirs.matrix());
-        assert!((ours.log() - swap(&theirs.log())).amax() < 1e-13, "log at {x}");
+        assert!(
+            (ours.matrix() - theirs.matrix()).amax() < 1e-14,
+            "exp at {x}: ours {} theirs {}",
+            ours.matrix(),
+            theirs.matrix()
+        );
+        assert!(
+            (ours.log() - swap(&theirs.log())).amax() < 1e-13,
+            "log at {x}"
+        );
         assert!((ours.log() - x).amax() < 1e-14);
     }
 }
@@ -68,7 +85,11 @@ fn sophus_small_angle_left_jacobian_is_wrong_and_ours_is_right() {
     let phi = Vector3::new(2e-4, -5e-4, 3e-4); // θ ≈ 6e-4 ≤ 1e-3: sophus' small-angle branch
     // Jl(φ) by central differences: Exp(φ + δ) Exp(φ)ᵀ = Exp(Jl δ).
     let e0 = SO3::exp(&phi);
-    let num = num_jac(|p: &Vector3<f64>| SO3::exp(p).compose(&e0.inverse()).log(), &phi, 1e-7);
+    let num = num_jac(
+        |p: &Vector3<f64>| SO3::exp(p).compose(&e0.inverse()).log(),
+        &phi,
+        1e-7,
+    );
     let ours = rel_err(&dm(&jl(&phi)), &num);
     let theirs = rel_err(&dm(&Rotation3F64::left_jacobian(phi)), &num);
     assert!(ours < 1e-8, "ours: {ours:e}");
