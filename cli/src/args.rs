@@ -1,0 +1,49 @@
+//! Parsing helpers for flags: comma-separated vectors (negative numbers allowed in both
+//! `--flag -1,2,3` and `--flag=-1,2,3` forms) and lists of rates.
+
+use nalgebra::Vector3;
+
+/// Parses `x,y,z` into a vector; every component must be a finite number.
+pub fn vec3(s: &str) -> Result<Vector3<f64>, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != 3 {
+        return Err(format!("expected three comma-separated numbers x,y,z, got `{s}`"));
+    }
+    let mut v = [0.0; 3];
+    for (i, p) in parts.iter().enumerate() {
+        let x: f64 = p.parse().map_err(|_| format!("`{p}` is not a number (in `{s}`)"))?;
+        if !x.is_finite() {
+            return Err(format!("`{p}` is not finite (in `{s}`)"));
+        }
+        v[i] = x;
+    }
+    Ok(Vector3::new(v[0], v[1], v[2]))
+}
+
+/// Parses a comma-separated list of positive finite numbers (e.g. rates in Hz).
+pub fn positive_list(s: &str) -> Result<Vec<f64>, String> {
+    s.split(',')
+        .map(str::trim)
+        .map(|p| match p.parse::<f64>() {
+            Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+            _ => Err(format!("`{p}` is not a positive number (in `{s}`)")),
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn vectors_and_lists() {
+        assert_eq!(vec3("-0.01,0.002,0").unwrap(), Vector3::new(-0.01, 0.002, 0.0));
+        assert_eq!(vec3(" 1, 2 ,3").unwrap(), Vector3::new(1.0, 2.0, 3.0));
+        assert!(vec3("1,2").unwrap_err().contains("three"));
+        assert!(vec3("1,x,3").unwrap_err().contains("`x`"));
+        assert!(vec3("1,inf,3").is_err());
+        assert_eq!(positive_list("25,50.5").unwrap(), vec![25.0, 50.5]);
+        assert!(positive_list("25,-50").is_err());
+        assert!(positive_list("0").is_err());
+    }
+}

@@ -1,0 +1,386 @@
+//! Overlapping Allan deviation and IMU noise-parameter fits (IEEE Std 952-1997, Annex C;
+//! readings as in allan_variance_ros and kalibr_allan).
+//!
+//! # Allan deviation
+//! For a rate signal `y_k` sampled every `Δt` (after removing its mean, which the Allan
+//! variance ignores and which keeps the cumulative sums small), with the integral
+//! `θ_k = Δt Σ_{i<k} y_i` (k = 0…N) and cluster time `τ = mΔt`, the overlapping Allan variance is
+//!
+//! `σ²(τ) = Σ_{k=0}^{N−2m} (θ_{k+2m} − 2θ_{k+m} + θ_k)² / (2τ²(N − 2m + 1))`,
+//!
+//! O(N) per τ. Cluster sizes `m` are log-spaced ([`log_spaced_cluster_sizes`]) up to `⌊N/2⌋`;
+//! the fits only use points with at least 8 non-overlapping clusters (N/m ≥ 8).
+//!
+//! # Confidence
+//! Each point carries `σ/√(2(N/m − 1))`, the 1-σ error of an Allan deviation estimated from
+//! `K = N/m` independent clusters (IEEE 952 Annex C; El-Sheimy, Hou, Niu 2008, eq. 11). This is
+//! the non-overlapping figure: the overlapping estimator is somewhat better, so the band is
+//! conservative.
+//!
+//! # Fits (per channel)
+//! The model is `σ²(τ) = N²/τ + (2 ln2/π)B² + K²τ/3` (white noise, bias instability, rate
+//! random walk).
+//! - Local log-log slopes are least-squares slopes over ±2 neighbouring points.
+//! - **N** (white-noise density, unit/√Hz): the slope −½ line `σ = N/√τ` fitted (weighted mean of
+//!   `σ²τ`, weights = clusters) over the points whose local slope is within ±0.15 of −½, read
+//!   at τ = 1 s.
+//! - **K** (random walk, unit/s/√Hz): the slope +½ line `σ = K√(τ/3)` fitted the same way over
+//!   points with slope within ±0.15 of +½ (and ≥ 8 clusters), read at τ = 3 s.
+//! - Each line is fitted after subtracting the other fitted term (two passes), which removes most
+//!   of the bias from the crossover region where both terms matter.
+//! - **B** (bias instability): the minimum of σ(τ) over points with ≥ 8 clusters, divided by
+//!   `√(2 ln2/π) ≈ 0.664`. When the curve has no flat floor (e.g. white noise + random walk only)
+//!   this is an upper bound.
+//! - When no point has slope ≈ +½ (record too short for the random walk to show), K is reported
+//!   as the bound `σ(τ_max)·√(3/τ_max)` from the longest reliable τ and flagged.
+
+use preint::ImuSample;
+use preint::noise::ImuNoise;
+
+/// 2 ln2 / π: the bias-instability floor factor, `σ_floor = √(2 ln2/π)·B ≈ 0.664 B`.
+pub const BIAS_INSTABILITY_FACTOR: f64 = 0.664_282_818_183_265_3;
+
+/// Errors of the Allan analysis.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum AllanError {
+    /// Not enough samples to form clusters.
+    #[error("{0} samples: need at least 8 for an Allan deviation")]
+    TooFewSamples(usize),
+    /// The sample period is not positive and finite.
+    #[error("invalid sample period {0} s")]
+    BadPeriod(f64),
+    /// A sample is NaN or infinite.
+    #[error("channel {channel}: non-finite sample at index {index}")]
+    NonFinite {
+        /// Channel index.
+        channel: usize,
+        /// Sample index.
+        index: usize,
+    },
+    /// Timestamps are not strictly increasing or not uniform.
+    #[error("timestamps: {0}")]
+    Timestamps(String),
+    /// No point of the curve has slope ≈ −½: the white-noise density cannot be read.
+    #[error("channel {0}: no region with slope −1/2, white-noise density not fitted")]
+    NoWhiteNoiseRegion(usize),
+    /// Channels have different lengths.
+    #[error("channel lengths differ ({0} vs {1})")]
+    LengthMismatch(usize, usize),
+}
+
+/// One point of an Allan deviation curve.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AllanPoint {
+    /// Cluster size m (samples).
+    pub m: usize,
+    /// Cluster time τ = mΔt \[s\].
+    pub tau: f64,
+    /// Overlapping Allan deviation σ(τ) [signal unit].
+    pub adev: f64,
+    /// 1-σ uncertainty of `adev`: `adev/√(2(N/m − 1))` (see the module docs).
+    pub adev_err: f64,
+    /// Number of non-overlapping clusters N/m (as a real number).
+    pub clusters: f64,
+}
+
+/// Log-spaced cluster sizes `m = round(10^(k/per_decade))`, deduplicated, from 1 to
+/// `max_m`. `per_decade` ≥ 1.
+pub fn log_spaced_cluster_sizes(max_m: usize, per_decade: usize) -> Vec<usize> {
+    let per = per_decade.max(1) as f64;
+    let mut out: Vec<usize> = Vec::new();
+    let mut k = 0.0;
+    loop {
+        let m = 10f64.powf(k / per).round() as usize;
+        if m > max_m {
+            break;
+        }
+        if out.last() != Some(&m) {
+            out.push(m);
+        }
+        k += 1.0;
+    }
+    out
+}
+
+/// Overlapping Allan deviation of `data` (sample period `dt` \[s\]) at cluster sizes `ms`
+/// (sizes with `2m > N` are skipped). See the module docs for the formula.
+pub fn allan_deviation(data: &[f64], dt: f64, ms: &[usize]) -> Result<Vec<AllanPoint>, AllanError> {
+    let n = data.len();
+    if n < 8 {
+        return Err(AllanError::TooFewSamples(n));
+    }
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(AllanError::BadPeriod(dt));
+    }
+    if let Some(i) = data.iter().position(|v| !v.is_finite()) {
+        return Err(AllanError::NonFinite {
+            channel: 0,
+            index: i,
+        });
+    }
+    let mean = data.iter().sum::<f64>() / n as f64;
+    // θ in units of (signal · samples); Δt is applied once per τ.
+    let mut theta = Vec::with_capacity(n + 1);
+    let mut acc = 0.0;
+    theta.push(0.0);
+    for v in data {
+        acc += v - mean;
+        theta.push(acc);
+    }
+    let mut out = Vec::with_capacity(ms.len());
+    for &m in ms {
+        if m == 0 || 2 * m > n {
+            continue;
+        }
+        let count = n - 2 * m + 1;
+        let mut s = 0.0;
+        for k in 0..count {
+            let d = theta[k + 2 * m] - 2.0 * theta[k + m] + theta[k];
+            s += d * d;
+        }
+        let tau = m as f64 * dt;
+        // (Δt·d)² / (2τ²) = d² / (2m²).
+        let avar = s / (2.0 * (m * m) as f64 * count as f64);
+        let adev = avar.sqrt();
+        let clusters = n as f64 / m as f64;
+        out.push(AllanPoint {
+            m,
+            tau,
+            adev,
+            adev_err: adev / (2.0 * (clusters - 1.0)).sqrt(),
+            clusters,
+        });
+    }
+    Ok(out)
+}
+
+/// Fitted noise parameters of one channel (units: the signal's unit `u`, e.g. rad/s or m/s²).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NoiseFit {
+    /// White-noise density N [u/√Hz] (σ of the slope −½ line at τ = 1 s).
+    pub white_density: f64,
+    /// Its 1-σ uncertainty from the clusters of the points used.
+    pub white_density_err: f64,
+    /// τ range \[s\] of the points used for N.
+    pub white_tau_range: (f64, f64),
+    /// Random walk K [u/s/√Hz] (σ of the slope +½ line at τ = 3 s), or a bound (see
+    /// `random_walk_is_bound`).
+    pub random_walk: f64,
+    /// 1-σ uncertainty of K (NaN when it is a bound).
+    pub random_walk_err: f64,
+    /// τ range \[s\] of the points used for K (the single longest τ when it is a bound).
+    pub random_walk_tau_range: (f64, f64),
+    /// `true` when no slope +½ region exists and K is only the upper bound `σ(τ)√(3/τ)` at the
+    /// longest reliable τ.
+    pub random_walk_is_bound: bool,
+    /// Bias instability B \[u\] = min σ / 0.664 (an upper bound without a flat floor).
+    pub bias_instability: f64,
+    /// τ \[s\] of the minimum.
+    pub bias_instability_tau: f64,
+}
+
+const MIN_CLUSTERS: f64 = 8.0;
+const SLOPE_TOL: f64 = 0.15;
+
+fn local_slopes(pts: &[AllanPoint]) -> Vec<f64> {
+    let lx: Vec<f64> = pts.iter().map(|p| p.tau.ln()).collect();
+    let ly: Vec<f64> = pts.iter().map(|p| p.adev.max(1e-300).ln()).collect();
+    (0..pts.len())
+        .map(|i| {
+            let a = i.saturating_sub(2);
+            let b = (i + 2).min(pts.len() - 1);
+            let k = (b - a + 1) as f64;
+            let mx = lx[a..=b].iter().sum::<f64>() / k;
+            let my = ly[a..=b].iter().sum::<f64>() / k;
+            let (mut sxy, mut sxx) = (0.0, 0.0);
+            for j in a..=b {
+                sxy += (lx[j] - mx) * (ly[j] - my);
+                sxx += (lx[j] - mx) * (lx[j] - mx);
+            }
+            if sxx > 0.0 { sxy / sxx } else { f64::NAN }
+        })
+        .collect()
+}
+
+/// Weighted mean of `vals` (value, weight = 2(K−1), the inverse relative variance of σ) and
+/// the relative 1-σ error `1/√Σw` of the square root of that mean (the relative error of σ² is
+/// twice that of σ). Treats the points as independent: neighbouring τ share data, so this is
+/// optimistic.
+fn weighted(vals: &[(f64, f64)]) -> (f64, f64) {
+    let sw: f64 = vals.iter().map(|v| v.1).sum();
+    let mean = vals.iter().map(|v| v.0 * v.1).sum::<f64>() / sw;
+    (mean, (1.0 / sw).sqrt())
+}
+
+/// Fits N, K and B to one channel's curve (see the module docs). `channel` only labels errors.
+pub fn fit_noise(pts: &[AllanPoint], channel: usize) -> Result<NoiseFit, AllanError> {
+    let slopes = local_slopes(pts);
+    let white: Vec<usize> = (0..pts.len())
+        .filter(|&i| (slopes[i] + 0.5).abs() <= SLOPE_TOL && pts[i].clusters >= MIN_CLUSTERS)
+        .collect();
+    let rw: Vec<usize> = (0..pts.len())
+        .filter(|&i| (slopes[i] - 0.5).abs() <= SLOPE_TOL && pts[i].clusters >= MIN_CLUSTERS)
+        .collect();
+    if white.is_empty() {
+        return Err(AllanError::NoWhiteNoiseRegion(channel));
+    }
+    // Weight of a point: 2(K−1) = inverse relative variance of σ (so of σ², up to 4).
+    let wgt = |p: &AllanPoint| 2.0 * (p.clusters - 1.0);
+    let (mut n2, mut k2) = (0.0, 0.0);
+    let (mut n_rel, mut k_rel) = (f64::NAN, f64::NAN);
+    for _pass in 0..2 {
+        let v: Vec<(f64, f64)> = white
+            .iter()
+            .map(|&i| {
+                let p = &pts[i];
+                let s2 = (p.adev * p.adev - k2 * p.tau / 3.0).max(0.0);
+                (s2 * p.tau, wgt(p))
+            })
+            .collect();
+        let (m, rel) = weighted(&v);
+        n2 = m;
+        n_rel = rel;
+        if !rw.is_empty() {
+            let v: Vec<(f64, f64)> = rw
+                .iter()
+                .map(|&i| {
+                    let p = &pts[i];
+                    let s2 = (p.adev * p.adev - n2 / p.tau).max(0.0);
+                    (3.0 * s2 / p.tau, wgt(p))
+                })
+                .collect();
+            let (m, rel) = weighted(&v);
+            k2 = m;
+            k_rel = rel;
+        }
+    }
+    let reliable: Vec<&AllanPoint> = pts.iter().filter(|p| p.clusters >= MIN_CLUSTERS).collect();
+    let minp = reliable
+        .iter()
+        .min_by(|a, b| a.adev.total_cmp(&b.adev))
+        .copied()
+        .unwrap_or(&pts[0]);
+    let last = reliable.last().copied().unwrap_or(&pts[pts.len() - 1]);
+    let range = |idx: &[usize]| (pts[idx[0]].tau, pts[idx[idx.len() - 1]].tau);
+    let n = n2.sqrt();
+    let (k, k_err, k_range, bound) = if rw.is_empty() {
+        (
+            last.adev * (3.0 / last.tau).sqrt(),
+            f64::NAN,
+            (last.tau, last.tau),
+            true,
+        )
+    } else {
+        let k = k2.sqrt();
+        (k, k * k_rel, range(&rw), false)
+    };
+    Ok(NoiseFit {
+        white_density: n,
+        white_density_err: n * n_rel,
+        white_tau_range: range(&white),
+        random_walk: k,
+        random_walk_err: k_err,
+        random_walk_tau_range: k_range,
+        random_walk_is_bound: bound,
+        bias_instability: minp.adev / BIAS_INSTABILITY_FACTOR,
+        bias_instability_tau: minp.tau,
+    })
+}
+
+/// Allan analysis of a six-axis IMU record.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImuAllan {
+    /// Sample period Δt \[s\].
+    pub dt: f64,
+    /// Curves, channel order `[ω_x, ω_y, ω_z, a_x, a_y, a_z]`.
+    pub curves: [Vec<AllanPoint>; 6],
+    /// Fits, same order (gyro in rad/s units, accelerometer in m/s² units).
+    pub fits: [NoiseFit; 6],
+}
+
+impl ImuAllan {
+    /// Analyses six channels `[ω_x, ω_y, ω_z, a_x, a_y, a_z]` sampled every `dt` \[s\], with
+    /// `per_decade` log-spaced τ per decade (10 is typical).
+    pub fn from_channels(
+        channels: [&[f64]; 6],
+        dt: f64,
+        per_decade: usize,
+    ) -> Result<Self, AllanError> {
+        let n = channels[0].len();
+        for c in &channels {
+            if c.len() != n {
+                return Err(AllanError::LengthMismatch(n, c.len()));
+            }
+        }
+        let ms = log_spaced_cluster_sizes(n / 2, per_decade);
+        let mut curves: [Vec<AllanPoint>; 6] = Default::default();
+        for (i, c) in channels.iter().enumerate() {
+            curves[i] = allan_deviation(c, dt, &ms).map_err(|e| match e {
+                AllanError::NonFinite { index, .. } => AllanError::NonFinite { channel: i, index },
+                e => e,
+            })?;
+        }
+        let fits = [
+            fit_noise(&curves[0], 0)?,
+            fit_noise(&curves[1], 1)?,
+            fit_noise(&curves[2], 2)?,
+            fit_noise(&curves[3], 3)?,
+            fit_noise(&curves[4], 4)?,
+            fit_noise(&curves[5], 5)?,
+        ];
+        Ok(Self { dt, curves, fits })
+    }
+
+    /// Analyses IMU samples; the period is `(t_last − t_first)/(N − 1)` and every interval must
+    /// lie within ±10 % of it (no gaps or reordering).
+    pub fn from_samples(samples: &[ImuSample], per_decade: usize) -> Result<Self, AllanError> {
+        if samples.len() < 8 {
+            return Err(AllanError::TooFewSamples(samples.len()));
+        }
+        let n = samples.len();
+        let span = samples[n - 1].t_ns - samples[0].t_ns;
+        let dt = span as f64 * 1e-9 / (n - 1) as f64;
+        for (i, w) in samples.windows(2).enumerate() {
+            let d = (w[1].t_ns - w[0].t_ns) as f64 * 1e-9;
+            if !(d > 0.0 && (d - dt).abs() <= 0.1 * dt) {
+                return Err(AllanError::Timestamps(format!(
+                    "interval {i} is {d} s, mean period {dt} s (gap or reordering)"
+                )));
+            }
+        }
+        let ch: Vec<Vec<f64>> = (0..6)
+            .map(|c| {
+                samples
+                    .iter()
+                    .map(|s| if c < 3 { s.gyro[c] } else { s.acc[c - 3] })
+                    .collect()
+            })
+            .collect();
+        Self::from_channels(
+            [&ch[0], &ch[1], &ch[2], &ch[3], &ch[4], &ch[5]],
+            dt,
+            per_decade,
+        )
+    }
+
+    /// Kalibr noise parameters, aggregated over the three axes of each sensor by the **maximum**
+    /// (conservative: a VIO back end fed a too-small noise becomes overconfident). Random walks
+    /// that are only bounds are used as they are (conservative too). `update_rate = 1/Δt`.
+    pub fn to_imu_noise(&self) -> ImuNoise {
+        let max = |r: std::ops::Range<usize>, f: fn(&NoiseFit) -> f64| {
+            self.fits[r].iter().map(f).fold(0.0, f64::max)
+        };
+        ImuNoise {
+            gyro_noise_density: max(0..3, |f| f.white_density),
+            gyro_random_walk: max(0..3, |f| f.random_walk),
+            acc_noise_density: max(3..6, |f| f.white_density),
+            acc_random_walk: max(3..6, |f| f.random_walk),
+            update_rate_hz: 1.0 / self.dt,
+        }
+    }
+
+    /// Kalibr `imu.yaml` text of [`ImuAllan::to_imu_noise`] (via `preint::io`).
+    pub fn kalibr_yaml(&self) -> String {
+        preint::io::kalibr_yaml_string(&self.to_imu_noise())
+    }
+}

@@ -1,0 +1,24 @@
+//! # solver — numeric differentiation, Jacobian checking, on-manifold Gauss-Newton, Allan variance
+//!
+//! - [`numdiff`]: forward, central and Ridders differentiation of any `Fn(&X) -> Y` between
+//!   [`lie::Manifold`]s (Ceres `NumericDiffCostFunction` semantics).
+//! - [`checker`]: a Ceres `GradientChecker`-like comparison of analytic Jacobian blocks with
+//!   Ridders' numeric Jacobian.
+//! - [`gauss_newton`]: dense Gauss-Newton / Levenberg-Marquardt over manifolds with rank
+//!   analysis, run by argmin's `Executor`.
+//! - [`allan`]: overlapping Allan deviation and noise-parameter fits (Kalibr `imu.yaml`).
+//!
+//! Conventions (see `docs/ARCHITECTURE.md`): perturbations on the right, `X ⊕ δ = X·Exp(δ)`;
+//! Jacobians are w.r.t. those tangents; noise densities in Kalibr units.
+
+pub mod allan;
+pub mod checker;
+pub mod gauss_newton;
+pub mod numdiff;
+
+pub use checker::{CheckError, CheckOptions, CheckReport, check_jacobian, to_dmatrix};
+pub use gauss_newton::{
+    Damping, GaussNewton, GnError, GnState, LeastSquares, NumericLeastSquares, Solution,
+    StopReason, finish, solve,
+};
+pub use numdiff::{Method, NumDiffError, NumDiffOptions, RiddersJacobian, jacobian, ridders};
