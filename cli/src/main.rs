@@ -7,6 +7,7 @@ mod args;
 mod html;
 mod charts;
 mod commands;
+mod denoise;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;

@@ -31,10 +31,14 @@ pub fn run(cli: &Cli) -> Result<Output, CliError> {
     match &cli.command {
         Command::Integrate { .. } => integrate::run(&cli.command),
         Command::Speed { .. } => speed::run(&cli.command),
+        Command::Allan { .. } => allan::run(&cli.command),
+        Command::Advise { .. } => advise::run(&cli.command),
         other => Err(CliError::Usage(format!("not available in this build: {other:?}"))),
     }
 }
 
+pub mod advise;
+pub mod allan;
 pub mod integrate;
 pub mod speed;
 

@@ -1,0 +1,189 @@
+//! `preint advise`: the cheapest scheme and lowest rate whose discretisation error stays below a
+//! fraction of the noise-induced standard deviation of the preintegrated deltas.
+//!
+//! Method (everything estimated from the recording itself):
+//! 0. The white noise is separated from the motion (see [`crate::denoise`]): discretisation
+//!    error is a property of the motion, and comparing noisy decimated samples would measure the
+//!    noise (it enters a decimated-vs-full difference at ≈ σ√(d − 1)).
+//! 1. Windows of `--window` seconds are laid over the recording (at most 24, evenly spread).
+//! 2. Reference: the 4th-order scheme at the recording's rate. The reference's own error is
+//!    estimated by Richardson extrapolation, `|Δ_rk4(h) − Δ_rk4(2h)| / (2⁴ − 1)`.
+//! 3. For each scheme and each decimation d ∈ {1, 2, 4, …} (every d-th sample, i.e. what an IMU
+//!    sampling the same signal at rate/d would deliver, without its internal filtering) the
+//!    discretisation error is the distance to the reference: rotation angle [rad], |Δv| [m/s],
+//!    |Δp| [m], the maximum over windows.
+//! 4. The noise σ is from the preintegrated covariance at that rate: `√trace` of the δφ, δv and
+//!    δp blocks (the RMS norm of each error vector).
+//! 5. A (scheme, rate) is acceptable when all three errors are below `fraction·σ`; the cheapest
+//!    acceptable one (ns/sample measured on this machine × rate) is recommended.
+
+use super::integrate::{noise_or_default, scheme_name};
+use super::speed::{ns_per_sample, synthetic_stream};
+use super::{CliError, Output};
+use crate::Command;
+use preint::io::{check_si_units, read_euroc_imu};
+use preint::{ImuBias, ImuNoise, ImuSample, Level, PreintParams, PreintegratedImu, Scheme, preintegrate};
+use serde_json::json;
+use std::fmt::Write as _;
+
+/// One (scheme, rate) evaluation.
+#[derive(Clone, Debug)]
+pub struct Candidate {
+    /// Integration scheme.
+    pub scheme: Scheme,
+    /// Decimation factor (1 = the recording's rate).
+    pub decimation: usize,
+    /// Sample rate [Hz].
+    pub rate_hz: f64,
+    /// Discretisation error, max over windows: [rotation rad, velocity m/s, position m].
+    pub disc_err: [f64; 3],
+    /// Noise-induced σ (RMS norm) at that rate: [rad, m/s, m].
+    pub noise_sigma: [f64; 3],
+    /// Cost [ns per second of IMU data] on this machine.
+    pub cost_ns_per_s: f64,
+    /// All three errors below `fraction·σ`.
+    pub acceptable: bool,
+}
+
+fn errors(a: &PreintegratedImu, b: &PreintegratedImu) -> [f64; 3] {
+    [
+        a.delta_r.minus(&b.delta_r).norm(),
+        (a.delta_v - b.delta_v).norm(),
+        (a.delta_p - b.delta_p).norm(),
+    ]
+}
+
+fn sigma(m: &PreintegratedImu) -> [f64; 3] {
+    let tr = |k: usize| (0..3).map(|i| m.cov[(3 * k + i, 3 * k + i)]).sum::<f64>().sqrt();
+    [tr(0), tr(1), tr(2)]
+}
+
+/// Evaluates every scheme at the recording's rate and at decimated rates (see the module docs).
+pub fn evaluate(
+    samples: &[ImuSample],
+    noise: &ImuNoise,
+    gravity: f64,
+    window_s: f64,
+    fraction: f64,
+) -> Result<Vec<Candidate>, CliError> {
+    let fail = |e: preint::PreintError| CliError::Failed(e.to_string());
+    let n = samples.len();
+    let span = samples[n - 1].t_ns - samples[0].t_ns;
+    let w_ns = (window_s * 1e9).round() as i64;
+    if w_ns <= 0 || w_ns > span {
+        return Err(CliError::Usage(format!(
+            "--window {window_s} s must be positive and at most the recording's length ({:.3} s)",
+            span as f64 * 1e-9
+        )));
+    }
+    let dt_s = span as f64 * 1e-9 / (n - 1) as f64;
+    // Window starts: evenly spread, at most 24, leaving room for rk4's neighbours.
+    let margin = 64 * (span / (n as i64 - 1).max(1));
+    let usable = span - w_ns - 2 * margin;
+    if usable < 0 {
+        return Err(CliError::Usage("recording too short for this window".into()));
+    }
+    let nw = (usable / w_ns + 1).clamp(1, 24);
+    let starts: Vec<i64> = (0..nw)
+        .map(|k| samples[0].t_ns + margin + if nw > 1 { usable * k / (nw - 1) } else { 0 })
+        .collect();
+    let params = |s: Scheme, level: Level| {
+        PreintParams::from_noise(noise)
+            .with_scheme(s)
+            .with_level(level)
+            .with_gravity(nalgebra::Vector3::new(0.0, 0.0, -gravity))
+    };
+    let bias = ImuBias::zero();
+    let bench = synthetic_stream(20_000);
+    let mut out = Vec::new();
+    let mut d = 1;
+    while dt_s * d as f64 <= window_s / 8.0 && 1.0 / (dt_s * d as f64) >= 5.0 {
+        let dec: Vec<ImuSample> = samples.iter().step_by(d).copied().collect();
+        for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4] {
+            let mut err = [0.0f64; 3];
+            let mut sig = [0.0f64; 3];
+            for &t0 in &starts {
+                // Keyframes on the decimated grid so no boundary interpolation enters.
+                let i0 = dec.partition_point(|s| s.t_ns < t0);
+                let t_i = dec[i0].t_ns;
+                let j0 = dec.partition_point(|s| s.t_ns < t_i + w_ns).min(dec.len() - 1);
+                let t_j = dec[j0].t_ns;
+                let reference = preintegrate(&params(Scheme::Rk4, Level::Deltas), &bias, samples, t_i, t_j).map_err(fail)?;
+                let m = preintegrate(&params(scheme, Level::Covariance), &bias, &dec, t_i, t_j).map_err(fail)?;
+                let mut e = errors(&m, &reference);
+                if d == 1 && scheme == Scheme::Rk4 {
+                    // Richardson estimate of the reference's own error.
+                    let half: Vec<ImuSample> = samples.iter().step_by(2).copied().collect();
+                    let coarse = preintegrate(&params(Scheme::Rk4, Level::Deltas), &bias, &half, t_i, t_j);
+                    if let Ok(c) = coarse {
+                        e = errors(&c, &reference).map(|x| x / 15.0);
+                    }
+                }
+                let s = sigma(&m);
+                for k in 0..3 {
+                    err[k] = err[k].max(e[k]);
+                    sig[k] = sig[k].max(s[k]);
+                }
+            }
+            let rate = 1.0 / (dt_s * d as f64);
+            let cost = ns_per_sample(scheme, Level::Covariance, &bench, 3)? * rate;
+            let acceptable = (0..3).all(|k| err[k] < fraction * sig[k]);
+            out.push(Candidate { scheme, decimation: d, rate_hz: rate, disc_err: err, noise_sigma: sig, cost_ns_per_s: cost, acceptable });
+        }
+        d *= 2;
+    }
+    Ok(out)
+}
+
+/// The cheapest acceptable candidate, if any.
+pub fn recommend(c: &[Candidate]) -> Option<&Candidate> {
+    c.iter().filter(|c| c.acceptable).min_by(|a, b| a.cost_ns_per_s.total_cmp(&b.cost_ns_per_s))
+}
+
+pub fn run(cmd: &Command) -> Result<Output, CliError> {
+    let Command::Advise { imu, noise, window, fraction } = cmd else { unreachable!() };
+    if !(fraction.is_finite() && *fraction > 0.0) {
+        return Err(CliError::Usage(format!("--fraction must be positive, got {fraction}")));
+    }
+    let noise = noise_or_default(Some(noise))?;
+    let samples = read_euroc_imu(imu)?;
+    check_si_units(&samples, &imu.display().to_string())?;
+    let (signal, cutoffs) = crate::denoise::denoise(&samples, noise.gyro_noise_density, noise.acc_noise_density);
+    let cands = evaluate(&signal, &noise, 9.81, *window, *fraction)?;
+    let rec = recommend(&cands);
+    let rows: Vec<_> = cands
+        .iter()
+        .map(|c| json!({"scheme": scheme_name(c.scheme), "rate": c.rate_hz, "decimation": c.decimation,
+            "disc_err": {"rot_rad": c.disc_err[0], "vel_m_s": c.disc_err[1], "pos_m": c.disc_err[2]},
+            "noise_sigma": {"rot_rad": c.noise_sigma[0], "vel_m_s": c.noise_sigma[1], "pos_m": c.noise_sigma[2]},
+            "cost_ns_per_s": c.cost_ns_per_s, "acceptable": c.acceptable}))
+        .collect();
+    let json = json!({
+        "recommended_scheme": rec.map(|c| scheme_name(c.scheme)),
+        "recommended_rate": rec.map(|c| c.rate_hz),
+        "fraction": fraction, "window_s": window,
+        "denoise_cutoff_hz": {"gyro": cutoffs[0], "acc": cutoffs[1]},
+        "candidates": rows,
+        "method": "white noise removed by a zero-phase low-pass whose cutoff makes the residual match the noise density; reference = rk4 at the recording's rate; disc_err = max over windows of the distance to it; noise_sigma = sqrt(trace) of each covariance block",
+    });
+    let mut h = String::new();
+    let _ = writeln!(h, "{}: {} samples; window {window} s; threshold {fraction}·σ", imu.display(), samples.len());
+    let fmt_cut = |c: Option<f64>| c.map_or("none (residual is not white noise at any cutoff)".to_string(), |c| format!("{c:.2} Hz"));
+    let _ = writeln!(h, "signal/noise separation: zero-phase low-pass at gyro {}, accelerometer {}", fmt_cut(cutoffs[0]), fmt_cut(cutoffs[1]));
+    let _ = writeln!(h, "{:<9} {:>9} {:>11} {:>11} {:>11} {:>11} {:>11} {:>11} {:>12}", "scheme", "rate Hz",
+                     "rot err", "rot σ", "vel err", "vel σ", "pos err", "pos σ", "µs/s data");
+    for c in &cands {
+        let _ = writeln!(h, "{:<9} {:>9.1} {:>11.2e} {:>11.2e} {:>11.2e} {:>11.2e} {:>11.2e} {:>11.2e} {:>12.1}{}",
+            scheme_name(c.scheme), c.rate_hz, c.disc_err[0], c.noise_sigma[0], c.disc_err[1], c.noise_sigma[1],
+            c.disc_err[2], c.noise_sigma[2], c.cost_ns_per_s * 1e-3, if c.acceptable { "  ok" } else { "" });
+    }
+    match rec {
+        Some(c) => { let _ = writeln!(h, "recommended: {} at {:.1} Hz (cheapest whose discretisation error < {fraction}·σ on rotation, velocity and position)", scheme_name(c.scheme), c.rate_hz); }
+        None => { let _ = writeln!(h, "no scheme keeps the discretisation error below {fraction}·σ at these rates: use rk4 at the full rate, or record faster"); }
+    }
+    if cutoffs.iter().any(Option::is_none) {
+        let _ = writeln!(h, "note: the signal above the motion band is not white noise of the stated density (vibration, or a \
+                             density set too low): the errors above include that high-frequency content.");
+    }
+    Ok(Output { human: h, json })
+}
