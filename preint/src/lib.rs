@@ -4,11 +4,29 @@
 //! default; the accelerometer measures specific force; rotation perturbations on the right;
 //! preintegrated tangent order **[δφ, δv, δp]**, bias order **[b_g, b_a]**; integer-ns times.
 
+pub mod factor;
 pub mod io;
 pub mod measurement;
+pub mod merge;
+pub mod navstate;
 pub mod noise;
 pub mod sample;
 
 pub use measurement::{BiasJacobians, Cov9, Cov15, PreintegratedImu};
 pub use noise::ImuNoise;
 pub use sample::{ImuBias, ImuSample, dt_seconds};
+
+pub mod error;
+pub mod params;
+pub mod preintegrator;
+pub(crate) mod propagation;
+pub mod scheme;
+pub mod window;
+
+pub use error::PreintError;
+pub use params::{Level, PreintParams, Scheme};
+pub use preintegrator::{BiasUpdate, Preintegrator};
+pub use window::preintegrate;
+pub use factor::{CombinedImuFactor, FactorError, ImuFactor};
+pub use merge::{MergeError, merge};
+pub use navstate::{NavState, predict};

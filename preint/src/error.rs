@@ -1,0 +1,85 @@
+//! Typed errors of the preintegrator: every variant names the offending sample (its index in
+//! the order samples were given, and its timestamp) or parameter, and the problem.
+
+use thiserror::Error;
+
+/// Why a preintegration input was rejected. Sample indices count from 0 in the order the
+/// samples were passed to the preintegrator (or in the slice given to
+/// [`preintegrate`](crate::window::preintegrate)); timestamps are in ns.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum PreintError {
+    /// A gyro or accelerometer component is NaN or infinite.
+    #[error("sample {index} (t = {t_ns} ns): non-finite {field} value")]
+    NonFinite {
+        /// Sample index.
+        index: usize,
+        /// Sample timestamp [ns].
+        t_ns: i64,
+        /// `"gyro"` or `"acc"`.
+        field: &'static str,
+    },
+    /// A timestamp equals the previous one (Δt = 0).
+    #[error("sample {index} (t = {t_ns} ns): duplicate timestamp (Δt = 0)")]
+    DuplicateTimestamp {
+        /// Sample index.
+        index: usize,
+        /// Sample timestamp [ns].
+        t_ns: i64,
+    },
+    /// A timestamp is earlier than the previous one (Δt < 0).
+    #[error("sample {index} (t = {t_ns} ns): timestamp decreases (previous {prev_t_ns} ns, Δt = {} ns)", t_ns - prev_t_ns)]
+    DecreasingTimestamp {
+        /// Sample index.
+        index: usize,
+        /// Sample timestamp [ns].
+        t_ns: i64,
+        /// Previous sample timestamp [ns].
+        prev_t_ns: i64,
+    },
+    /// The gap to the previous sample exceeds `PreintParams::max_gap_ns`.
+    #[error(
+        "sample {index} (t = {t_ns} ns): gap of {gap_ns} ns to the previous sample exceeds the maximum {max_gap_ns} ns"
+    )]
+    GapTooLarge {
+        /// Sample index.
+        index: usize,
+        /// Sample timestamp [ns].
+        t_ns: i64,
+        /// Gap to the previous sample [ns].
+        gap_ns: i64,
+        /// Configured maximum [ns].
+        max_gap_ns: i64,
+    },
+    /// The window holds fewer than two samples (no interval to integrate).
+    #[error("window has {count} sample(s); at least 2 are needed (N samples make N−1 intervals)")]
+    TooFewSamples {
+        /// Number of samples in the window.
+        count: usize,
+    },
+    /// The keyframe interval `[t_i, t_j]` is empty or reversed (Δt ≤ 0).
+    #[error("keyframe window [{t_i_ns}, {t_j_ns}] ns has non-positive duration")]
+    NonPositiveWindow {
+        /// Keyframe i time [ns].
+        t_i_ns: i64,
+        /// Keyframe j time [ns].
+        t_j_ns: i64,
+    },
+    /// A keyframe time lies outside the time span of the given samples.
+    #[error("keyframe time {t_ns} ns is outside the samples [{first_ns}, {last_ns}] ns")]
+    KeyframeOutsideSamples {
+        /// Keyframe time [ns].
+        t_ns: i64,
+        /// First sample time [ns] (`i64::MAX` if there are none).
+        first_ns: i64,
+        /// Last sample time [ns] (`i64::MIN` if there are none).
+        last_ns: i64,
+    },
+    /// A parameter is invalid (non-finite, negative variance, non-positive threshold…).
+    #[error("invalid parameter {name}: {reason}")]
+    InvalidParameter {
+        /// Field name in [`PreintParams`](crate::params::PreintParams).
+        name: &'static str,
+        /// What is wrong with it.
+        reason: &'static str,
+    },
+}

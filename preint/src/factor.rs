@@ -1,0 +1,560 @@
+//! IMU factors: the Forster residual between two [`NavState`]s with analytic Jacobians, its
+//! whitened form, and the combined (15-dim) variant with the bias random walk.
+//!
+//! # Residual (Forster et al. 2017, T-RO, eq. 45)
+//!
+//! With `ΔR(b), Δv(b), Δp(b)` the deltas corrected to first order for the bias `b` at keyframe i
+//! (eq. 44, [`PreintegratedImu::corrected`]), `g` the world gravity and `Δt = t_j − t_i`:
+//!
+//! ```text
+//! r_φ = Log(ΔR(b)ᵀ R_iᵀ R_j)                                   [rad]
+//! r_v = R_iᵀ (v_j − v_i − g Δt) − Δv(b)                        [m/s]
+//! r_p = R_iᵀ (p_j − p_i − v_i Δt − ½ g Δt²) − Δp(b)            [m]
+//! ```
+//!
+//! in the order **[r_φ, r_v, r_p]**, the order of the preintegration covariance
+//! [δφ, δv, δp] (see [`crate::measurement`]), so `rᵀ Σ⁻¹ r` is the Mahalanobis cost.
+//!
+//! # Perturbations (one per Jacobian block)
+//!
+//! Each block `∂r/∂δx` is the derivative at `δx = 0` of `r(x ⊕ δx)`, with ([`NavState`]):
+//!
+//! | block | perturbation |
+//! |---|---|
+//! | `phi_i`, `phi_j` | `R ← R·Exp(δφ)` (right, body frame) [rad] |
+//! | `p_i`, `p_j` | `p ← p + R·δp` (body frame — to first order GTSAM's `Pose3` retract `[dw, dt]`, `dt` in body) [m] |
+//! | `v_i`, `v_j` | `v ← v + δv` (world frame, GTSAM's `ImuFactor` velocity) [m/s] |
+//! | `bg_i`, `ba_i` | `b_g,i ← b_g,i + δb_g` [rad/s], `b_a,i ← b_a,i + δb_a` [m/s²] |
+//! | `bg_j`, `ba_j` | same for the bias at j (combined factor only; zero in [`ImuFactor`]) |
+//!
+//! Analytic blocks (Forster 2017, supplementary material, Sec. "Jacobians of the residual"),
+//! with `E = Exp(r_φ)`, `Jr⁻¹ = Jr⁻¹(r_φ)`, `δb_g = b_g − b̂_g` (w.r.t. the integration bias
+//! `bias_hat`) and `J_R^g = ∂ΔR/∂b_g` etc.:
+//!
+//! ```text
+//! ∂r_φ/∂δφ_i = −Jr⁻¹ R_jᵀ R_i          ∂r_φ/∂δφ_j = Jr⁻¹
+//! ∂r_φ/∂δb_g = −Jr⁻¹ Eᵀ Jr(J_R^g δb_g) J_R^g
+//! ∂r_v/∂δφ_i = [R_iᵀ (v_j − v_i − g Δt)]×
+//! ∂r_v/∂δv_i = −R_iᵀ   ∂r_v/∂δv_j = R_iᵀ   ∂r_v/∂δb_g = −J_v^g   ∂r_v/∂δb_a = −J_v^a
+//! ∂r_p/∂δφ_i = [R_iᵀ (p_j − p_i − v_i Δt − ½ g Δt²)]×
+//! ∂r_p/∂δp_i = −I   ∂r_p/∂δv_i = −R_iᵀ Δt   ∂r_p/∂δp_j = R_iᵀ R_j
+//! ∂r_p/∂δb_g = −J_p^g   ∂r_p/∂δb_a = −J_p^a
+//! ```
+//!
+//! all other blocks are zero. Every block is checked against central differences on the
+//! manifold in `preint/tests/factor.rs`.
+//!
+//! # Whitening
+//!
+//! The square-root information `U` is the **upper** Cholesky factor of `Σ⁻¹` (`Σ⁻¹ = UᵀU`,
+//! positive diagonal; GTSAM's `noiseModel::Gaussian` convention). It is computed without
+//! forming `Σ⁻¹`: with `P` the order-reversing permutation, `P Σ P = L Lᵀ` and `U = P L⁻¹ P`.
+//! Whitened residual `U r`, whitened Jacobians `U J`, and `chi2 = ‖U r‖² = rᵀ Σ⁻¹ r`.
+//!
+//! # Relation to GTSAM (`ImuFactor`, `ImuFactorErrorMode::ComponentWise`)
+//!
+//! GTSAM's error is `e = [Log(R_jᵀ R̂_j), R_jᵀ(p̂_j − p_j), R_jᵀ(v̂_j − v_j)]` in the order
+//! [rot, pos, vel] with `(R̂_j, p̂_j, v̂_j)` = [`predict`]. Hence, with `M = R_jᵀ R_i`,
+//! `e_rot = −r_φ`, `e_pos = −M r_p`, `e_vel = −M r_v`, i.e.
+//! `r = −diag(I, Mᵀ, Mᵀ) e` after reordering. Jacobians map as
+//! `∂e/∂x = −diag(I, M, M)·∂r/∂x` except for the rotations, which also move `M`:
+//! `∂e_{pos,vel}/∂δφ_i += M [r_{p,v}]×` and `∂e_{pos,vel}/∂δφ_j −= [M r_{p,v}]×`; GTSAM's bias
+//! order is [b_a, b_g]. Tested against GTSAM 4.3 fixtures in `preint/tests/factor_gtsam.rs`.
+
+use crate::measurement::PreintegratedImu;
+use crate::navstate::{NavState, predict};
+use crate::sample::ImuBias;
+use lie::{SO3, hat};
+use nalgebra::{DMatrix, Matrix3, SMatrix, SVector};
+use thiserror::Error;
+
+/// Why a factor could not be built.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum FactorError {
+    /// A field of the preintegrated measurement is NaN or infinite.
+    #[error("preintegrated measurement has a non-finite {field}")]
+    NonFinite {
+        /// Which field (`"delta_r"`, `"delta_v"`, `"cov"`, …).
+        field: &'static str,
+    },
+    /// `delta_t` is zero or negative.
+    #[error("preintegrated measurement has non-positive Δt = {delta_t} s")]
+    NonPositiveDeltaT {
+        /// The offending Δt [s].
+        delta_t: f64,
+    },
+    /// The covariance is not (numerically) symmetric positive definite, so it has no
+    /// square-root information (e.g. a preintegration computed without noise, or with a zero
+    /// bias random walk for the combined factor).
+    #[error(
+        "the {dim}×{dim} covariance is not positive definite (Cholesky failed at pivot {pivot})"
+    )]
+    CovarianceNotPositiveDefinite {
+        /// Dimension of the covariance (9 or 15).
+        dim: usize,
+        /// First pivot (0-based, in the reversed order used internally) that failed, or `dim`
+        /// if the factor overflowed.
+        pivot: usize,
+    },
+}
+
+/// Upper Cholesky factor `U` of `Σ⁻¹` (`Σ⁻¹ = UᵀU`, positive diagonal), computed as
+/// `U = P L⁻¹ P` from `P Σ P = L Lᵀ` (`P` reverses the order), see the module docs.
+///
+/// `Σ` is symmetrised (`½(Σ + Σᵀ)`) first. Errors: [`FactorError::NonFinite`] for NaN/∞,
+/// [`FactorError::CovarianceNotPositiveDefinite`] if a pivot is not strictly positive.
+pub fn sqrt_information<const N: usize>(
+    cov: &SMatrix<f64, N, N>,
+) -> Result<SMatrix<f64, N, N>, FactorError> {
+    if !cov.iter().all(|x| x.is_finite()) {
+        return Err(FactorError::NonFinite { field: "cov" });
+    }
+    // Reversed, symmetrised copy.
+    let rev = DMatrix::from_fn(N, N, |r, c| {
+        0.5 * (cov[(N - 1 - r, N - 1 - c)] + cov[(N - 1 - c, N - 1 - r)])
+    });
+    // Plain Cholesky with an explicit pivot check (nalgebra's only reports failure).
+    let mut l = DMatrix::<f64>::zeros(N, N);
+    for j in 0..N {
+        let mut d = rev[(j, j)];
+        for k in 0..j {
+            d -= l[(j, k)] * l[(j, k)];
+        }
+        if d.is_nan() || d <= 0.0 {
+            return Err(FactorError::CovarianceNotPositiveDefinite { dim: N, pivot: j });
+        }
+        let djj = d.sqrt();
+        l[(j, j)] = djj;
+        for i in j + 1..N {
+            let mut s = rev[(i, j)];
+            for k in 0..j {
+                s -= l[(i, k)] * l[(j, k)];
+            }
+            l[(i, j)] = s / djj;
+        }
+    }
+    // L⁻¹ (lower) by forward substitution on the identity.
+    let mut linv = DMatrix::<f64>::zeros(N, N);
+    for c in 0..N {
+        for i in c..N {
+            let mut s = if i == c { 1.0 } else { 0.0 };
+            for k in c..i {
+                s -= l[(i, k)] * linv[(k, c)];
+            }
+            linv[(i, c)] = s / l[(i, i)];
+        }
+    }
+    let u = SMatrix::<f64, N, N>::from_fn(|r, c| linv[(N - 1 - r, N - 1 - c)]);
+    if !u.iter().all(|x| x.is_finite()) {
+        return Err(FactorError::CovarianceNotPositiveDefinite { dim: N, pivot: N });
+    }
+    Ok(u)
+}
+
+/// Jacobians of an `R`-dimensional IMU residual (rows in the residual's order: [r_φ, r_v, r_p]
+/// for [`ImuFactor`], [r_φ, r_v, r_p, r_bg, r_ba] for [`CombinedImuFactor`]), one `R×3` block
+/// per perturbation; the perturbation of each block is in the module docs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FactorJacobians<const R: usize> {
+    /// `∂r/∂δφ_i`, `R_i ← R_i Exp(δφ_i)` [1/rad].
+    pub phi_i: SMatrix<f64, R, 3>,
+    /// `∂r/∂δp_i`, `p_i ← p_i + R_i δp_i` (body frame) [1/m].
+    pub p_i: SMatrix<f64, R, 3>,
+    /// `∂r/∂δv_i`, `v_i ← v_i + δv_i` (world frame) [s/m].
+    pub v_i: SMatrix<f64, R, 3>,
+    /// `∂r/∂δφ_j`, `R_j ← R_j Exp(δφ_j)`.
+    pub phi_j: SMatrix<f64, R, 3>,
+    /// `∂r/∂δp_j`, `p_j ← p_j + R_j δp_j` (body frame).
+    pub p_j: SMatrix<f64, R, 3>,
+    /// `∂r/∂δv_j`, `v_j ← v_j + δv_j` (world frame).
+    pub v_j: SMatrix<f64, R, 3>,
+    /// `∂r/∂δb_g,i` (gyro bias at i) [1/(rad/s)].
+    pub bg_i: SMatrix<f64, R, 3>,
+    /// `∂r/∂δb_a,i` (accelerometer bias at i) [1/(m/s²)].
+    pub ba_i: SMatrix<f64, R, 3>,
+    /// `∂r/∂δb_g,j` (identically zero for [`ImuFactor`]).
+    pub bg_j: SMatrix<f64, R, 3>,
+    /// `∂r/∂δb_a,j` (identically zero for [`ImuFactor`]).
+    pub ba_j: SMatrix<f64, R, 3>,
+}
+
+/// Jacobians of the 9-dim [`ImuFactor`] residual.
+pub type ImuFactorJacobians = FactorJacobians<9>;
+/// Jacobians of the 15-dim [`CombinedImuFactor`] residual.
+pub type CombinedImuFactorJacobians = FactorJacobians<15>;
+
+impl<const R: usize> FactorJacobians<R> {
+    fn zeros() -> Self {
+        let z = SMatrix::<f64, R, 3>::zeros();
+        Self {
+            phi_i: z,
+            p_i: z,
+            v_i: z,
+            phi_j: z,
+            p_j: z,
+            v_j: z,
+            bg_i: z,
+            ba_i: z,
+            bg_j: z,
+            ba_j: z,
+        }
+    }
+
+    fn cat3(
+        a: &SMatrix<f64, R, 3>,
+        b: &SMatrix<f64, R, 3>,
+        c: &SMatrix<f64, R, 3>,
+    ) -> SMatrix<f64, R, 9> {
+        let mut m = SMatrix::<f64, R, 9>::zeros();
+        m.fixed_columns_mut::<3>(0).copy_from(a);
+        m.fixed_columns_mut::<3>(3).copy_from(b);
+        m.fixed_columns_mut::<3>(6).copy_from(c);
+        m
+    }
+
+    fn cat2(a: &SMatrix<f64, R, 3>, b: &SMatrix<f64, R, 3>) -> SMatrix<f64, R, 6> {
+        let mut m = SMatrix::<f64, R, 6>::zeros();
+        m.fixed_columns_mut::<3>(0).copy_from(a);
+        m.fixed_columns_mut::<3>(3).copy_from(b);
+        m
+    }
+
+    /// `∂r/∂δx_i` for the [`NavState`] tangent at i, columns **[δφ_i, δp_i, δv_i]**.
+    pub fn state_i(&self) -> SMatrix<f64, R, 9> {
+        Self::cat3(&self.phi_i, &self.p_i, &self.v_i)
+    }
+
+    /// `∂r/∂δx_j` for the [`NavState`] tangent at j, columns **[δφ_j, δp_j, δv_j]**.
+    pub fn state_j(&self) -> SMatrix<f64, R, 9> {
+        Self::cat3(&self.phi_j, &self.p_j, &self.v_j)
+    }
+
+    /// `∂r/∂δb_i`, columns **[δb_g, δb_a]**.
+    pub fn bias_i(&self) -> SMatrix<f64, R, 6> {
+        Self::cat2(&self.bg_i, &self.ba_i)
+    }
+
+    /// `∂r/∂δb_j`, columns **[δb_g, δb_a]** (zero for [`ImuFactor`]).
+    pub fn bias_j(&self) -> SMatrix<f64, R, 6> {
+        Self::cat2(&self.bg_j, &self.ba_j)
+    }
+
+    /// Every block left-multiplied by `w` (e.g. the square-root information `U`).
+    pub fn left_mul(&self, w: &SMatrix<f64, R, R>) -> Self {
+        Self {
+            phi_i: w * self.phi_i,
+            p_i: w * self.p_i,
+            v_i: w * self.v_i,
+            phi_j: w * self.phi_j,
+            p_j: w * self.p_j,
+            v_j: w * self.v_j,
+            bg_i: w * self.bg_i,
+            ba_i: w * self.ba_i,
+            bg_j: w * self.bg_j,
+            ba_j: w * self.ba_j,
+        }
+    }
+}
+
+fn check_pim(pim: &PreintegratedImu) -> Result<(), FactorError> {
+    let fin = |s: &[f64]| s.iter().all(|x| x.is_finite());
+    let j = &pim.jac;
+    let checks: [(&'static str, bool); 8] = [
+        ("delta_r", fin(pim.delta_r.matrix().as_slice())),
+        ("delta_v", fin(pim.delta_v.as_slice())),
+        ("delta_p", fin(pim.delta_p.as_slice())),
+        ("delta_t", pim.delta_t.is_finite()),
+        ("gravity", fin(pim.gravity.as_slice())),
+        (
+            "bias_hat",
+            fin(pim.bias_hat.gyro.as_slice()) && fin(pim.bias_hat.acc.as_slice()),
+        ),
+        (
+            "jac",
+            [j.d_r_d_bg, j.d_v_d_bg, j.d_v_d_ba, j.d_p_d_bg, j.d_p_d_ba]
+                .iter()
+                .all(|m| fin(m.as_slice())),
+        ),
+        ("cov", fin(pim.cov.as_slice())),
+    ];
+    if let Some((field, _)) = checks.iter().find(|(_, ok)| !ok) {
+        return Err(FactorError::NonFinite { field });
+    }
+    if pim.delta_t <= 0.0 {
+        return Err(FactorError::NonPositiveDeltaT {
+            delta_t: pim.delta_t,
+        });
+    }
+    Ok(())
+}
+
+/// The 9-dim residual and its Jacobians (module docs).
+fn residual9(
+    pim: &PreintegratedImu,
+    xi: &NavState,
+    xj: &NavState,
+    bias_i: &ImuBias,
+) -> (SVector<f64, 9>, ImuFactorJacobians) {
+    let dbg = bias_i.gyro - pim.bias_hat.gyro;
+    let dba = bias_i.acc - pim.bias_hat.acc;
+    let jb = &pim.jac;
+    let (exp_db, jr_db) = SO3::exp_jr(&(jb.d_r_d_bg * dbg));
+    let dr = pim.delta_r.compose(&exp_db);
+    let dv = pim.delta_v + jb.d_v_d_bg * dbg + jb.d_v_d_ba * dba;
+    let dp = pim.delta_p + jb.d_p_d_bg * dbg + jb.d_p_d_ba * dba;
+
+    let dt = pim.delta_t;
+    let g = pim.gravity;
+    let ri_t = xi.r.inverse();
+    let ri_t_rj = ri_t.compose(&xj.r);
+    let e = dr.inverse().compose(&ri_t_rj);
+    let (r_phi, jr_inv) = e.log_jac();
+    let wv = ri_t.act(&(xj.v - xi.v - g * dt));
+    let wp = ri_t.act(&(xj.p - xi.p - xi.v * dt - g * (0.5 * dt * dt)));
+    let r_v = wv - dv;
+    let r_p = wp - dp;
+
+    let mut r = SVector::<f64, 9>::zeros();
+    r.fixed_rows_mut::<3>(0).copy_from(&r_phi);
+    r.fixed_rows_mut::<3>(3).copy_from(&r_v);
+    r.fixed_rows_mut::<3>(6).copy_from(&r_p);
+
+    let ri_tm = *ri_t.matrix();
+    let mut jac = ImuFactorJacobians::zeros();
+    // Rows 0..3: r_φ; 3..6: r_v; 6..9: r_p.
+    jac.phi_i
+        .fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&(-jr_inv * ri_t_rj.matrix().transpose()));
+    jac.phi_i.fixed_view_mut::<3, 3>(3, 0).copy_from(&hat(&wv));
+    jac.phi_i.fixed_view_mut::<3, 3>(6, 0).copy_from(&hat(&wp));
+    jac.p_i
+        .fixed_view_mut::<3, 3>(6, 0)
+        .copy_from(&(-Matrix3::identity()));
+    jac.v_i.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-ri_tm));
+    jac.v_i
+        .fixed_view_mut::<3, 3>(6, 0)
+        .copy_from(&(-ri_tm * dt));
+    jac.phi_j.fixed_view_mut::<3, 3>(0, 0).copy_from(&jr_inv);
+    jac.p_j
+        .fixed_view_mut::<3, 3>(6, 0)
+        .copy_from(ri_t_rj.matrix());
+    jac.v_j.fixed_view_mut::<3, 3>(3, 0).copy_from(&ri_tm);
+    jac.bg_i
+        .fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&(-jr_inv * e.matrix().transpose() * jr_db * jb.d_r_d_bg));
+    jac.bg_i
+        .fixed_view_mut::<3, 3>(3, 0)
+        .copy_from(&(-jb.d_v_d_bg));
+    jac.bg_i
+        .fixed_view_mut::<3, 3>(6, 0)
+        .copy_from(&(-jb.d_p_d_bg));
+    jac.ba_i
+        .fixed_view_mut::<3, 3>(3, 0)
+        .copy_from(&(-jb.d_v_d_ba));
+    jac.ba_i
+        .fixed_view_mut::<3, 3>(6, 0)
+        .copy_from(&(-jb.d_p_d_ba));
+    (r, jac)
+}
+
+/// Forster's IMU factor between `(NavState_i, NavState_j, bias_i)` (module docs for the
+/// residual [r_φ, r_v, r_p], perturbations and Jacobians). It reads only a
+/// [`PreintegratedImu`] and weights the residual with its 9×9 covariance `cov`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImuFactor {
+    pim: PreintegratedImu,
+    sqrt_info: SMatrix<f64, 9, 9>,
+}
+
+impl ImuFactor {
+    /// Builds the factor; computes the square-root information of `pim.cov`.
+    ///
+    /// Errors: [`FactorError::NonFinite`], [`FactorError::NonPositiveDeltaT`],
+    /// [`FactorError::CovarianceNotPositiveDefinite`] (e.g. a noise-free preintegration).
+    pub fn new(pim: PreintegratedImu) -> Result<Self, FactorError> {
+        check_pim(&pim)?;
+        let sqrt_info = sqrt_information(&pim.cov)?;
+        Ok(Self { pim, sqrt_info })
+    }
+
+    /// The preintegrated measurement this factor reads.
+    pub fn preintegrated(&self) -> &PreintegratedImu {
+        &self.pim
+    }
+
+    /// Square-root information `U` (upper triangular, `cov⁻¹ = UᵀU`), order [δφ, δv, δp].
+    pub fn sqrt_information(&self) -> &SMatrix<f64, 9, 9> {
+        &self.sqrt_info
+    }
+
+    /// Predicted state at j ([`predict`], Forster eq. 33) for the bias `bias_i`.
+    pub fn predict(&self, state_i: &NavState, bias_i: &ImuBias) -> NavState {
+        predict(&self.pim, state_i, bias_i)
+    }
+
+    /// Residual `r = [r_φ [rad], r_v [m/s], r_p [m]]` (Forster eq. 45 with eq. 44 bias
+    /// correction). Non-finite states give non-finite residuals (no panic).
+    pub fn residual(
+        &self,
+        state_i: &NavState,
+        state_j: &NavState,
+        bias_i: &ImuBias,
+    ) -> SVector<f64, 9> {
+        residual9(&self.pim, state_i, state_j, bias_i).0
+    }
+
+    /// Residual and its analytic Jacobians (blocks and perturbations in the module docs).
+    pub fn evaluate(
+        &self,
+        state_i: &NavState,
+        state_j: &NavState,
+        bias_i: &ImuBias,
+    ) -> (SVector<f64, 9>, ImuFactorJacobians) {
+        residual9(&self.pim, state_i, state_j, bias_i)
+    }
+
+    /// Whitened residual `U r` and Jacobians `U J` (`U` = [`sqrt_information`](Self::sqrt_information)).
+    pub fn evaluate_whitened(
+        &self,
+        state_i: &NavState,
+        state_j: &NavState,
+        bias_i: &ImuBias,
+    ) -> (SVector<f64, 9>, ImuFactorJacobians) {
+        let (r, j) = residual9(&self.pim, state_i, state_j, bias_i);
+        (self.sqrt_info * r, j.left_mul(&self.sqrt_info))
+    }
+
+    /// Squared Mahalanobis norm `rᵀ cov⁻¹ r = ‖U r‖²` (dimensionless; χ² with 9 dof).
+    pub fn chi2(&self, state_i: &NavState, state_j: &NavState, bias_i: &ImuBias) -> f64 {
+        (self.sqrt_info * self.residual(state_i, state_j, bias_i)).norm_squared()
+    }
+
+    /// Least-squares cost `½ chi2` (GTSAM's `NonlinearFactor::error`).
+    pub fn cost(&self, state_i: &NavState, state_j: &NavState, bias_i: &ImuBias) -> f64 {
+        0.5 * self.chi2(state_i, state_j, bias_i)
+    }
+}
+
+/// The combined IMU factor between `(NavState_i, NavState_j, b_i, b_j)`: residual
+/// `[r_φ, r_v, r_p, b_g,j − b_g,i, b_a,j − b_a,i]` (15-dim; the first nine as in [`ImuFactor`],
+/// evaluated with `b_i`), weighted by the combined covariance `cov15`
+/// [δφ, δv, δp, δb_g, δb_a] which includes the bias random walk over the window and its
+/// correlation with the deltas (GTSAM `CombinedImuFactor` semantics).
+///
+/// Jacobians: the first nine rows as in [`ImuFactor`]; the bias rows are `−I` w.r.t. `δb_i`
+/// and `+I` w.r.t. `δb_j` (additive bias perturbations, order [b_g, b_a]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CombinedImuFactor {
+    pim: PreintegratedImu,
+    sqrt_info: SMatrix<f64, 15, 15>,
+}
+
+impl CombinedImuFactor {
+    /// Builds the factor; computes the square-root information of `pim.cov15`.
+    ///
+    /// Errors as [`ImuFactor::new`]; a zero bias random walk makes `cov15` singular
+    /// ([`FactorError::CovarianceNotPositiveDefinite`] with `dim = 15`).
+    pub fn new(pim: PreintegratedImu) -> Result<Self, FactorError> {
+        check_pim(&pim)?;
+        if !pim.cov15.iter().all(|x| x.is_finite()) {
+            return Err(FactorError::NonFinite { field: "cov15" });
+        }
+        let sqrt_info = sqrt_information(&pim.cov15)?;
+        Ok(Self { pim, sqrt_info })
+    }
+
+    /// The preintegrated measurement this factor reads.
+    pub fn preintegrated(&self) -> &PreintegratedImu {
+        &self.pim
+    }
+
+    /// Square-root information `U` of `cov15` (upper triangular, `cov15⁻¹ = UᵀU`).
+    pub fn sqrt_information(&self) -> &SMatrix<f64, 15, 15> {
+        &self.sqrt_info
+    }
+
+    /// Residual `[r_φ, r_v, r_p, r_bg, r_ba]` (rad, m/s, m, rad/s, m/s²).
+    pub fn residual(
+        &self,
+        state_i: &NavState,
+        state_j: &NavState,
+        bias_i: &ImuBias,
+        bias_j: &ImuBias,
+    ) -> SVector<f64, 15> {
+        self.evaluate(state_i, state_j, bias_i, bias_j).0
+    }
+
+    /// Residual and analytic Jacobians (the bias-at-j blocks are filled here).
+    pub fn evaluate(
+        &self,
+        state_i: &NavState,
+        state_j: &NavState,
+        bias_i: &ImuBias,
+        bias_j: &ImuBias,
+    ) -> (SVector<f64, 15>, CombinedImuFactorJacobians) {
+        let (r9, j9) = residual9(&self.pim, state_i, state_j, bias_i);
+        let mut r = SVector::<f64, 15>::zeros();
+        r.fixed_rows_mut::<9>(0).copy_from(&r9);
+        r.fixed_rows_mut::<3>(9)
+            .copy_from(&(bias_j.gyro - bias_i.gyro));
+        r.fixed_rows_mut::<3>(12)
+            .copy_from(&(bias_j.acc - bias_i.acc));
+        let ext = |m: &SMatrix<f64, 9, 3>| {
+            let mut o = SMatrix::<f64, 15, 3>::zeros();
+            o.fixed_rows_mut::<9>(0).copy_from(m);
+            o
+        };
+        let id = Matrix3::identity();
+        let mut j = CombinedImuFactorJacobians {
+            phi_i: ext(&j9.phi_i),
+            p_i: ext(&j9.p_i),
+            v_i: ext(&j9.v_i),
+            phi_j: ext(&j9.phi_j),
+            p_j: ext(&j9.p_j),
+            v_j: ext(&j9.v_j),
+            bg_i: ext(&j9.bg_i),
+            ba_i: ext(&j9.ba_i),
+            bg_j: SMatrix::zeros(),
+            ba_j: SMatrix::zeros(),
+        };
+        j.bg_i.fixed_view_mut::<3, 3>(9, 0).copy_from(&(-id));
+        j.ba_i.fixed_view_mut::<3, 3>(12, 0).copy_from(&(-id));
+        j.bg_j.fixed_view_mut::<3, 3>(9, 0).copy_from(&id);
+        j.ba_j.fixed_view_mut::<3, 3>(12, 0).copy_from(&id);
+        (r, j)
+    }
+
+    /// Whitened residual `U r` and Jacobians `U J`.
+    pub fn evaluate_whitened(
+        &self,
+        state_i: &NavState,
+        state_j: &NavState,
+        bias_i: &ImuBias,
+        bias_j: &ImuBias,
+    ) -> (SVector<f64, 15>, CombinedImuFactorJacobians) {
+        let (r, j) = self.evaluate(state_i, state_j, bias_i, bias_j);
+        (self.sqrt_info * r, j.left_mul(&self.sqrt_info))
+    }
+
+    /// `rᵀ cov15⁻¹ r` (χ² with 15 dof).
+    pub fn chi2(
+        &self,
+        state_i: &NavState,
+        state_j: &NavState,
+        bias_i: &ImuBias,
+        bias_j: &ImuBias,
+    ) -> f64 {
+        (self.sqrt_info * self.residual(state_i, state_j, bias_i, bias_j)).norm_squared()
+    }
+
+    /// `½ chi2`.
+    pub fn cost(
+        &self,
+        state_i: &NavState,
+        state_j: &NavState,
+        bias_i: &ImuBias,
+        bias_j: &ImuBias,
+    ) -> f64 {
+        0.5 * self.chi2(state_i, state_j, bias_i, bias_j)
+    }
+}

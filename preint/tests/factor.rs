@@ -1,0 +1,508 @@
+//! ImuFactor / CombinedImuFactor / NavState / predict: hand-computed values, every Jacobian block
+//! against central differences on the manifold, whitening, typed errors.
+
+use lie::{Manifold, SO3};
+use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, SVector, Vector3};
+use preint::factor::{FactorJacobians, sqrt_information};
+use preint::{
+    BiasJacobians, CombinedImuFactor, Cov9, Cov15, FactorError, ImuBias, ImuFactor, NavState,
+    PreintegratedImu, predict,
+};
+
+/// xorshift64* — deterministic, no dev-dependency.
+struct Rng(u64);
+impl Rng {
+    fn u(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545F4914F6CDD1D) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn s(&mut self) -> f64 {
+        2.0 * self.u() - 1.0
+    }
+    fn v3(&mut self, a: f64) -> Vector3<f64> {
+        Vector3::new(self.s(), self.s(), self.s()) * a
+    }
+    fn m3(&mut self, a: f64) -> Matrix3<f64> {
+        Matrix3::from_fn(|_, _| self.s() * a)
+    }
+    fn rot(&mut self) -> SO3 {
+        // Angle up to ~2.5 rad.
+        SO3::exp(&self.v3(1.4))
+    }
+    fn spd<const N: usize>(&mut self, scale: f64) -> SMatrix<f64, N, N> {
+        let a = SMatrix::<f64, N, N>::from_fn(|_, _| self.s());
+        (a * a.transpose() + SMatrix::<f64, N, N>::identity() * 0.1) * scale
+    }
+}
+
+fn random_pim(rng: &mut Rng, delta_r: SO3) -> PreintegratedImu {
+    PreintegratedImu {
+        t_i_ns: 1_000_000_000,
+        t_j_ns: 1_700_000_000,
+        delta_t: 0.7,
+        delta_r,
+        delta_v: rng.v3(3.0),
+        delta_p: rng.v3(2.0),
+        cov: rng.spd::<9>(1e-4),
+        cov15: rng.spd::<15>(1e-4),
+        jac: BiasJacobians {
+            d_r_d_bg: rng.m3(0.7),
+            d_v_d_bg: rng.m3(2.0),
+            d_v_d_ba: rng.m3(0.7),
+            d_p_d_bg: rng.m3(1.0),
+            d_p_d_ba: rng.m3(0.3),
+        },
+        bias_hat: ImuBias::new(rng.v3(0.01), rng.v3(0.1)),
+        gravity: Vector3::new(0.0, 0.0, -9.81),
+    }
+}
+
+fn random_state(rng: &mut Rng) -> NavState {
+    NavState::new(rng.rot(), rng.v3(5.0), rng.v3(2.0))
+}
+
+/// A state_j near the prediction (small residual) with a given offset in the NavState chart.
+fn state_j_near(
+    pim: &PreintegratedImu,
+    xi: &NavState,
+    b: &ImuBias,
+    off: &SVector<f64, 9>,
+) -> NavState {
+    predict(pim, xi, b).retract(off)
+}
+
+/// Variables of the combined factor, perturbed block by block through their retractions:
+/// (x_i, x_j, b_i, b_j), tangent [φ_i, p_i, v_i, φ_j, p_j, v_j, bg_i, ba_i, bg_j, ba_j].
+type Vars = (NavState, NavState, ImuBias, ImuBias);
+
+fn retract_vars(x: &Vars, d: &SVector<f64, 30>) -> Vars {
+    let s = |k: usize| d.fixed_rows::<3>(k).into_owned();
+    let mut t9 = SVector::<f64, 9>::zeros();
+    t9.copy_from(&d.fixed_rows::<9>(0));
+    let xi = x.0.retract(&t9);
+    t9.copy_from(&d.fixed_rows::<9>(9));
+    let xj = x.1.retract(&t9);
+    (
+        xi,
+        xj,
+        ImuBias::new(x.2.gyro + s(18), x.2.acc + s(21)),
+        ImuBias::new(x.3.gyro + s(24), x.3.acc + s(27)),
+    )
+}
+
+/// Central differences: column k = (f(x ⊕ h e_k) − f(x ⊖ h e_k)) / 2h (residuals are vectors, so
+/// `local` on the output is a subtraction).
+fn numeric<const R: usize>(x: &Vars, f: impl Fn(&Vars) -> SVector<f64, R>, h: f64) -> DMatrix<f64> {
+    let mut j = DMatrix::zeros(R, 30);
+    for k in 0..30 {
+        let mut d = SVector::<f64, 30>::zeros();
+        d[k] = h;
+        let fp = f(&retract_vars(x, &d));
+        let fm = f(&retract_vars(x, &(-d)));
+        j.column_mut(k).copy_from(&((fp - fm) / (2.0 * h)));
+    }
+    j
+}
+
+fn analytic<const R: usize>(j: &FactorJacobians<R>) -> DMatrix<f64> {
+    let blocks = [
+        j.phi_i, j.p_i, j.v_i, j.phi_j, j.p_j, j.v_j, j.bg_i, j.ba_i, j.bg_j, j.ba_j,
+    ];
+    let mut m = DMatrix::zeros(R, 30);
+    for (b, blk) in blocks.iter().enumerate() {
+        m.view_mut((0, 3 * b), (R, 3)).copy_from(blk);
+    }
+    m
+}
+
+const NAMES: [&str; 10] = [
+    "phi_i", "p_i", "v_i", "phi_j", "p_j", "v_j", "bg_i", "ba_i", "bg_j", "ba_j",
+];
+
+fn assert_jac_close(ana: &DMatrix<f64>, num: &DMatrix<f64>, tol: f64, what: &str) {
+    for c in 0..ana.ncols() {
+        for r in 0..ana.nrows() {
+            let (a, n) = (ana[(r, c)], num[(r, c)]);
+            assert!(
+                (a - n).abs() <= tol * (1.0 + a.abs()),
+                "{what}: block {} row {r} col {}: analytic {a:e} numeric {n:e}",
+                NAMES[c / 3],
+                c % 3
+            );
+        }
+    }
+}
+
+fn check_all_jacobians(pim: &PreintegratedImu, vars: &Vars, what: &str) {
+    let f9 = ImuFactor::new(pim.clone()).unwrap();
+    let (_, j9) = f9.evaluate(&vars.0, &vars.1, &vars.2);
+    let num9 = numeric(vars, |v| f9.residual(&v.0, &v.1, &v.2), 1e-5);
+    assert_jac_close(&analytic(&j9), &num9, 2e-7, what);
+
+    let f15 = CombinedImuFactor::new(pim.clone()).unwrap();
+    let (_, j15) = f15.evaluate(&vars.0, &vars.1, &vars.2, &vars.3);
+    let num15 = numeric(vars, |v| f15.residual(&v.0, &v.1, &v.2, &v.3), 1e-5);
+    assert_jac_close(&analytic(&j15), &num15, 2e-7, what);
+}
+
+#[test]
+fn jacobians_match_central_differences_random_states() {
+    let mut rng = Rng(0x9E3779B97F4A7C15);
+    for case in 0..25 {
+        let pim = {
+            let r = rng.rot();
+            random_pim(&mut rng, r)
+        };
+        let xi = random_state(&mut rng);
+        // Non-zero bias change: J δb_g up to ~0.07 rad.
+        let bi = ImuBias::new(
+            pim.bias_hat.gyro + rng.v3(0.1),
+            pim.bias_hat.acc + rng.v3(0.5),
+        );
+        let bj = ImuBias::new(bi.gyro + rng.v3(0.01), bi.acc + rng.v3(0.05));
+        // Residuals far from zero too: random offsets up to 0.8 rad / 1 m.
+        let off = SVector::<f64, 9>::from_fn(|_, _| rng.s() * 0.5);
+        let xj = state_j_near(&pim, &xi, &bi, &off);
+        check_all_jacobians(&pim, &(xi, xj, bi, bj), &format!("random case {case}"));
+    }
+}
+
+#[test]
+fn jacobians_with_relative_rotation_near_pi() {
+    let mut rng = Rng(42);
+    for (k, angle) in [std::f64::consts::PI - 1e-3, std::f64::consts::PI - 1e-7]
+        .into_iter()
+        .enumerate()
+    {
+        let axis = Vector3::new(0.3, -0.5, 0.8).normalize();
+        let pim = random_pim(&mut rng, SO3::exp(&(axis * angle)));
+        let xi = random_state(&mut rng);
+        let bi = ImuBias::new(pim.bias_hat.gyro + rng.v3(0.02), pim.bias_hat.acc);
+        let off = SVector::<f64, 9>::from_fn(|_, _| rng.s() * 0.01);
+        let xj = state_j_near(&pim, &xi, &bi, &off);
+        // R_iᵀ R_j really is ~π away.
+        let rel = xi.r.inverse().compose(&xj.r).log().norm();
+        assert!(rel > 3.0, "relative rotation {rel}");
+        check_all_jacobians(&pim, &(xi, xj, bi, bi), &format!("near-pi case {k}"));
+    }
+}
+
+#[test]
+fn jacobians_with_rotation_residual_of_large_angle() {
+    // r_φ itself of 2.8 rad (inside the chart, away from the Log cut at π).
+    let mut rng = Rng(7);
+    let pim = {
+        let r = rng.rot();
+        random_pim(&mut rng, r)
+    };
+    let xi = random_state(&mut rng);
+    let bi = ImuBias::new(pim.bias_hat.gyro + rng.v3(0.05), pim.bias_hat.acc);
+    let mut off = SVector::<f64, 9>::zeros();
+    off.fixed_rows_mut::<3>(0)
+        .copy_from(&(Vector3::new(1.0, 2.0, -0.5).normalize() * 2.8));
+    let xj = state_j_near(&pim, &xi, &bi, &off);
+    let r = ImuFactor::new(pim.clone()).unwrap().residual(&xi, &xj, &bi);
+    assert!((r.fixed_rows::<3>(0).norm() - 2.8).abs() < 1e-9);
+    check_all_jacobians(&pim, &(xi, xj, bi, bi), "large r_phi");
+}
+
+#[test]
+fn jacobians_near_identity() {
+    // ΔR = I, R_j = R_i, bias = bias_hat, state_j = prediction + 1e-9: every Log at θ → 0.
+    let mut rng = Rng(3);
+    let pim = random_pim(&mut rng, SO3::identity());
+    let xi = NavState::new(SO3::identity(), rng.v3(1.0), rng.v3(1.0));
+    let bi = pim.bias_hat;
+    let off = SVector::<f64, 9>::from_fn(|_, _| rng.s() * 1e-9);
+    let xj = state_j_near(&pim, &xi, &bi, &off);
+    check_all_jacobians(&pim, &(xi, xj, bi, bi), "near identity");
+}
+
+#[test]
+fn residual_is_zero_at_the_prediction_and_equals_the_chart_offset_to_first_order() {
+    let mut rng = Rng(11);
+    let pim = {
+        let r = rng.rot();
+        random_pim(&mut rng, r)
+    };
+    let xi = random_state(&mut rng);
+    let b = ImuBias::new(
+        pim.bias_hat.gyro + rng.v3(0.05),
+        pim.bias_hat.acc + rng.v3(0.2),
+    );
+    let f = ImuFactor::new(pim.clone()).unwrap();
+    let xj = predict(&pim, &xi, &b);
+    assert!(f.residual(&xi, &xj, &b).amax() < 1e-12);
+    // Rotation residual offset: R_j ← R̂_j Exp(δ) gives r_φ = δ exactly.
+    let d = Vector3::new(0.01, -0.02, 0.03);
+    let xj2 = NavState::new(xj.r.plus(&d), xj.p, xj.v);
+    let r = f.residual(&xi, &xj2, &b);
+    assert!((r.fixed_rows::<3>(0) - d).amax() < 1e-14);
+    assert!(r.fixed_rows::<6>(3).amax() < 1e-12);
+}
+
+#[test]
+fn predict_free_fall_and_rest_by_hand() {
+    // Free fall: the IMU measures zero specific force → ΔR = I, Δv = Δp = 0.
+    let pim = PreintegratedImu {
+        t_i_ns: 0,
+        t_j_ns: 2_000_000_000,
+        delta_t: 2.0,
+        delta_r: SO3::identity(),
+        delta_v: Vector3::zeros(),
+        delta_p: Vector3::zeros(),
+        cov: Cov9::identity(),
+        cov15: Cov15::identity(),
+        jac: BiasJacobians::default(),
+        bias_hat: ImuBias::zero(),
+        gravity: Vector3::new(0.0, 0.0, -9.81),
+    };
+    let xi = NavState::new(
+        SO3::identity(),
+        Vector3::new(1.0, 2.0, 3.0),
+        Vector3::new(1.0, 0.0, 0.0),
+    );
+    let xj = predict(&pim, &xi, &ImuBias::zero());
+    assert!((xj.v - Vector3::new(1.0, 0.0, -19.62)).amax() < 1e-12);
+    // p_j = p_i + v_i Δt + ½ g Δt² = (1 + 2, 2, 3 − 19.62)
+    assert!((xj.p - Vector3::new(3.0, 2.0, 3.0 - 19.62)).amax() < 1e-12);
+
+    // At rest, body rotated 90° about world x: body y = world z, so the accelerometer reads
+    // +9.81 on body y; Δv = (0, 9.81, 0)·Δt, Δp = ½(0, 9.81, 0)·Δt².
+    let rx = SO3::exp(&Vector3::new(std::f64::consts::FRAC_PI_2, 0.0, 0.0));
+    let rest = PreintegratedImu {
+        delta_v: Vector3::new(0.0, 9.81 * 2.0, 0.0),
+        delta_p: Vector3::new(0.0, 0.5 * 9.81 * 4.0, 0.0),
+        ..pim.clone()
+    };
+    let xi = NavState::new(rx, Vector3::new(1.0, 2.0, 3.0), Vector3::zeros());
+    let xj = predict(&rest, &xi, &ImuBias::zero());
+    assert!(xj.v.amax() < 1e-12, "{:?}", xj.v);
+    assert!((xj.p - xi.p).amax() < 1e-12, "{:?}", xj.p);
+    assert!(xj.r.minus(&rx).norm() < 1e-15);
+
+    // Bias correction by hand: Δv(b) = Δv + ∂Δv/∂b_a δb_a with ∂Δv/∂b_a = −Δt I.
+    let biased = PreintegratedImu {
+        jac: BiasJacobians {
+            d_v_d_ba: -Matrix3::identity() * 2.0,
+            ..BiasJacobians::default()
+        },
+        ..rest
+    };
+    let b = ImuBias::new(Vector3::zeros(), Vector3::new(0.0, 0.0, 0.1));
+    let xj = predict(&biased, &xi, &b);
+    // v_j = R_i (0, 0, −0.2): R_x(90°) maps body z to world −y, so v_j = (0, 0.2, 0).
+    assert!(
+        (xj.v - Vector3::new(0.0, 0.2, 0.0)).amax() < 1e-12,
+        "{:?}",
+        xj.v
+    );
+}
+
+#[test]
+fn navstate_retract_local_roundtrip_and_perturbation_frames() {
+    let mut rng = Rng(5);
+    let x = random_state(&mut rng);
+    let d = SVector::<f64, 9>::from_fn(|_, _| rng.s() * 0.3);
+    let y = x.retract(&d);
+    assert!((x.local(&y) - d).amax() < 1e-14);
+    // Position perturbation is in the body frame, velocity in the world frame.
+    let mut dp = SVector::<f64, 9>::zeros();
+    dp[3] = 1.0;
+    let y = x.retract(&dp);
+    assert!((y.p - x.p - x.r.matrix().column(0)).amax() < 1e-15);
+    let mut dv = SVector::<f64, 9>::zeros();
+    dv[6] = 1.0;
+    assert!((x.retract(&dv).v - x.v - Vector3::x()).amax() < 1e-15);
+    // Manifold impl agrees.
+    let yy = Manifold::retract(&x, d.as_slice());
+    let mut out = [0.0; 9];
+    Manifold::local(&x, &yy, &mut out);
+    assert!(
+        (DVector::from_column_slice(&out) - DVector::from_column_slice(d.as_slice())).amax()
+            < 1e-14
+    );
+    assert_eq!(Manifold::dim(&x), 9);
+}
+
+#[test]
+fn whitening_is_upper_cholesky_of_information() {
+    let mut rng = Rng(13);
+    let pim = {
+        let r = rng.rot();
+        random_pim(&mut rng, r)
+    };
+    let f = ImuFactor::new(pim.clone()).unwrap();
+    let u = *f.sqrt_information();
+    for r in 0..9 {
+        assert!(u[(r, r)] > 0.0);
+        for c in 0..r {
+            assert_eq!(u[(r, c)], 0.0, "U must be upper triangular");
+        }
+    }
+    // UᵀU Σ = I.
+    let prod = u.transpose() * u * pim.cov;
+    assert!((prod - Cov9::identity()).amax() < 1e-9, "{prod}");
+    // Unique: equals the transposed lower Cholesky factor of Σ⁻¹ (computed by nalgebra).
+    let info = pim.cov.try_inverse().unwrap();
+    let l = nalgebra::Cholesky::new(info).unwrap().l();
+    assert!((u - l.transpose()).amax() < 1e-8 * u.amax());
+
+    let xi = random_state(&mut rng);
+    let b = pim.bias_hat;
+    let xj = state_j_near(&pim, &xi, &b, &SVector::from_fn(|_, _| rng.s() * 0.01));
+    let (r, j) = f.evaluate(&xi, &xj, &b);
+    let (rw, jw) = f.evaluate_whitened(&xi, &xj, &b);
+    assert!((rw - u * r).amax() < 1e-12 * rw.amax());
+    assert!((jw.state_i() - u * j.state_i()).amax() < 1e-12 * jw.state_i().amax());
+    assert!((jw.bias_i() - u * j.bias_i()).amax() < 1e-12 * jw.bias_i().amax());
+    let chi2_ref = r.dot(&pim.cov.lu().solve(&r).unwrap());
+    assert!((f.chi2(&xi, &xj, &b) - chi2_ref).abs() < 1e-9 * chi2_ref);
+    assert!((f.cost(&xi, &xj, &b) - 0.5 * chi2_ref).abs() < 1e-9 * chi2_ref);
+}
+
+#[test]
+fn chi2_by_hand_with_diagonal_covariance() {
+    let mut rng = Rng(17);
+    let mut pim = random_pim(&mut rng, SO3::identity());
+    let sig = [0.01, 0.02, 0.03, 0.1, 0.2, 0.3, 1.0, 2.0, 3.0];
+    pim.cov = Cov9::from_diagonal(&SVector::<f64, 9>::from_fn(|i, _| sig[i] * sig[i]));
+    let f = ImuFactor::new(pim.clone()).unwrap();
+    let u = f.sqrt_information();
+    for i in 0..9 {
+        assert!((u[(i, i)] - 1.0 / sig[i]).abs() < 1e-12 / sig[i]);
+    }
+    // r = (0.01, 0, 0, 0, 0.2, 0, 0, 0, 3): chi2 = 1 + 1 + 1 = 3.
+    let xi = NavState::identity();
+    let xj0 = predict(&pim, &xi, &pim.bias_hat);
+    let xj = NavState::new(
+        xj0.r.plus(&Vector3::new(0.01, 0.0, 0.0)),
+        xj0.p + Vector3::new(0.0, 0.0, 3.0),
+        xj0.v + Vector3::new(0.0, 0.2, 0.0),
+    );
+    assert!((f.chi2(&xi, &xj, &pim.bias_hat) - 3.0).abs() < 1e-9);
+}
+
+#[test]
+fn typed_errors_instead_of_panics() {
+    let mut rng = Rng(19);
+    let pim = {
+        let r = rng.rot();
+        random_pim(&mut rng, r)
+    };
+    // Singular (noise-free) covariance.
+    let z = PreintegratedImu {
+        cov: Cov9::zeros(),
+        ..pim.clone()
+    };
+    assert!(matches!(
+        ImuFactor::new(z),
+        Err(FactorError::CovarianceNotPositiveDefinite { dim: 9, .. })
+    ));
+    // Rank-deficient but non-zero.
+    let mut c = pim.cov;
+    c.row_mut(4).fill(0.0);
+    c.column_mut(4).fill(0.0);
+    let z = PreintegratedImu {
+        cov: c,
+        ..pim.clone()
+    };
+    assert!(matches!(
+        ImuFactor::new(z),
+        Err(FactorError::CovarianceNotPositiveDefinite { dim: 9, .. })
+    ));
+    // Indefinite.
+    assert!(matches!(
+        sqrt_information(&(-Cov9::identity())),
+        Err(FactorError::CovarianceNotPositiveDefinite { .. })
+    ));
+    let mut c = pim.cov;
+    c[(2, 3)] = f64::NAN;
+    let z = PreintegratedImu {
+        cov: c,
+        ..pim.clone()
+    };
+    assert_eq!(
+        ImuFactor::new(z),
+        Err(FactorError::NonFinite { field: "cov" })
+    );
+    let z = PreintegratedImu {
+        delta_v: Vector3::new(f64::INFINITY, 0.0, 0.0),
+        ..pim.clone()
+    };
+    assert_eq!(
+        ImuFactor::new(z),
+        Err(FactorError::NonFinite { field: "delta_v" })
+    );
+    let z = PreintegratedImu {
+        delta_t: 0.0,
+        ..pim.clone()
+    };
+    assert!(matches!(
+        ImuFactor::new(z),
+        Err(FactorError::NonPositiveDeltaT { .. })
+    ));
+    // Combined factor: zero bias random walk → singular cov15.
+    let mut c15 = pim.cov15;
+    c15.view_mut((9, 0), (6, 15)).fill(0.0);
+    c15.view_mut((0, 9), (15, 6)).fill(0.0);
+    let z = PreintegratedImu {
+        cov15: c15,
+        ..pim.clone()
+    };
+    assert!(matches!(
+        CombinedImuFactor::new(z),
+        Err(FactorError::CovarianceNotPositiveDefinite { dim: 15, .. })
+    ));
+    // Non-finite state: non-finite residual, no panic.
+    let f = ImuFactor::new(pim.clone()).unwrap();
+    let bad = NavState::new(
+        SO3::identity(),
+        Vector3::new(f64::NAN, 0.0, 0.0),
+        Vector3::zeros(),
+    );
+    assert!(
+        !f.residual(&bad, &bad, &pim.bias_hat)
+            .iter()
+            .all(|x| x.is_finite())
+    );
+}
+
+#[test]
+fn combined_factor_bias_rows_and_whitening() {
+    let mut rng = Rng(23);
+    let pim = {
+        let r = rng.rot();
+        random_pim(&mut rng, r)
+    };
+    let f = CombinedImuFactor::new(pim.clone()).unwrap();
+    let f9 = ImuFactor::new(pim.clone()).unwrap();
+    let xi = random_state(&mut rng);
+    let bi = ImuBias::new(rng.v3(0.01), rng.v3(0.1));
+    let bj = ImuBias::new(
+        bi.gyro + Vector3::new(1e-3, 2e-3, 3e-3),
+        bi.acc + Vector3::new(-0.1, 0.0, 0.2),
+    );
+    let xj = state_j_near(&pim, &xi, &bi, &SVector::from_fn(|_, _| rng.s() * 0.01));
+    let r = f.residual(&xi, &xj, &bi, &bj);
+    assert_eq!(
+        r.fixed_rows::<9>(0).into_owned(),
+        f9.residual(&xi, &xj, &bi)
+    );
+    assert!(
+        (r.fixed_rows::<6>(9)
+            - SVector::<f64, 6>::from_column_slice(&[1e-3, 2e-3, 3e-3, -0.1, 0.0, 0.2]))
+        .amax()
+            < 1e-15
+    );
+    let u = f.sqrt_information();
+    assert!((u.transpose() * u * pim.cov15 - Cov15::identity()).amax() < 1e-9);
+    let chi2_ref = r.dot(&pim.cov15.lu().solve(&r).unwrap());
+    assert!((f.chi2(&xi, &xj, &bi, &bj) - chi2_ref).abs() < 1e-9 * chi2_ref);
+    let (rw, jw) = f.evaluate_whitened(&xi, &xj, &bi, &bj);
+    let (_, j) = f.evaluate(&xi, &xj, &bi, &bj);
+    assert!((rw - u * r).amax() < 1e-12 * rw.amax());
+    assert!((jw.bias_j() - u * j.bias_j()).amax() < 1e-12 * jw.bias_j().amax());
+}

@@ -1,0 +1,283 @@
+//! Each scheme: convergence order on an analytic trajectory, bias Jacobians against central
+//! finite differences of re-integration, covariance (9 and 15) against a seeded Monte Carlo.
+
+mod common;
+
+use common::*;
+use lie::SO3;
+use nalgebra::{Cholesky, DMatrix, DVector, Matrix3, SMatrix};
+use preint::{ImuBias, ImuSample, Level, PreintParams, PreintegratedImu, Preintegrator, Scheme};
+
+const SCHEMES: [Scheme; 3] = [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4];
+
+fn run(params: &PreintParams, bias: &ImuBias, s: &[ImuSample]) -> PreintegratedImu {
+    let mut pi = Preintegrator::new(params.clone(), *bias).unwrap();
+    pi.integrate_slice(s).unwrap();
+    pi.finish().unwrap()
+}
+
+fn params(scheme: Scheme, level: Level) -> PreintParams {
+    PreintParams::default()
+        .with_scheme(scheme)
+        .with_level(level)
+        .with_gravity(gravity())
+}
+
+#[test]
+fn convergence_orders_on_analytic_motion() {
+    let scene = Scene::smooth();
+    let (r, v, p) = scene.exact(0.0, 1.0);
+    for (scheme, rates, lo, hi) in [
+        (Scheme::Euler, &[100.0, 200.0, 400.0, 800.0][..], 0.9, 1.1),
+        (Scheme::Midpoint, &[50.0, 100.0, 200.0, 400.0][..], 1.9, 2.1),
+        (Scheme::Rk4, &[25.0, 50.0, 100.0, 200.0][..], 3.7, 4.5),
+    ] {
+        let prm = params(scheme, Level::Deltas);
+        let mut hs = vec![];
+        let mut errs = [vec![], vec![], vec![]];
+        for &rate in rates {
+            let step = (1e9 / rate) as i64;
+            let m = run(&prm, &ImuBias::zero(), &scene.samples(step, 1_000_000_000));
+            let e = errors(&m, &r, &v, &p);
+            hs.push(1.0 / rate);
+            errs[0].push(e.0);
+            errs[1].push(e.1);
+            errs[2].push(e.2);
+        }
+        for (name, e) in ["rotation", "velocity", "position"].iter().zip(&errs) {
+            let slope = loglog_slope(&hs, e);
+            eprintln!("{scheme:?} {name}: slope {slope:.3}, errors {e:?}");
+            assert!(
+                slope >= lo && slope <= hi,
+                "{scheme:?} {name} slope {slope} not in [{lo}, {hi}]"
+            );
+        }
+    }
+}
+
+/// Central differences: error ≤ ε²/6·|f'''| + 2·u·|f|/ε. With ε = 1e-4 (rad/s or m/s²) and
+/// deltas of order 1 over 1 s the truncation is ~1e-9 and round-off ~1e-12, so 1e-6 relative
+/// (Frobenius, per Jacobian) leaves margin while a wrong term (≥1e-3 relative) fails.
+#[test]
+fn bias_jacobians_match_central_differences() {
+    let scene = Scene::smooth();
+    let samples = scene.samples(5_000_000, 1_000_000_000);
+    let b0 = ImuBias::new(V3::new(0.01, -0.02, 0.015), V3::new(0.1, -0.05, 0.2));
+    for scheme in SCHEMES {
+        let prm = params(scheme, Level::Covariance);
+        let m0 = run(&prm, &b0, &samples);
+        let eps = 1e-4;
+        let mut num = SMatrix::<f64, 9, 6>::zeros();
+        for i in 0..6 {
+            let shifted = |s: f64| {
+                let mut b = b0;
+                if i < 3 {
+                    b.gyro[i] += s;
+                } else {
+                    b.acc[i - 3] += s;
+                }
+                run(&prm, &b, &samples)
+            };
+            let (mp, mm) = (shifted(eps), shifted(-eps));
+            let col_r =
+                (mp.delta_r.minus(&m0.delta_r) - mm.delta_r.minus(&m0.delta_r)) / (2.0 * eps);
+            let col_v = (mp.delta_v - mm.delta_v) / (2.0 * eps);
+            let col_p = (mp.delta_p - mm.delta_p) / (2.0 * eps);
+            num.fixed_view_mut::<3, 1>(0, i).copy_from(&col_r);
+            num.fixed_view_mut::<3, 1>(3, i).copy_from(&col_v);
+            num.fixed_view_mut::<3, 1>(6, i).copy_from(&col_p);
+        }
+        let j = &m0.jac;
+        let blocks: [(&str, Matrix3<f64>, Matrix3<f64>); 6] = [
+            ("dR/dbg", j.d_r_d_bg, num.fixed_view::<3, 3>(0, 0).into()),
+            (
+                "dR/dba",
+                Matrix3::zeros(),
+                num.fixed_view::<3, 3>(0, 3).into(),
+            ),
+            ("dv/dbg", j.d_v_d_bg, num.fixed_view::<3, 3>(3, 0).into()),
+            ("dv/dba", j.d_v_d_ba, num.fixed_view::<3, 3>(3, 3).into()),
+            ("dp/dbg", j.d_p_d_bg, num.fixed_view::<3, 3>(6, 0).into()),
+            ("dp/dba", j.d_p_d_ba, num.fixed_view::<3, 3>(6, 3).into()),
+        ];
+        for (name, ana, fd) in blocks {
+            let err = (ana - fd).norm();
+            let scale = fd.norm().max(1e-9);
+            eprintln!("{scheme:?} {name}: |analytic − FD| = {err:.2e} (|FD| = {scale:.2e})");
+            assert!(
+                err <= 1e-6 * scale.max(1.0),
+                "{scheme:?} {name}: {err} vs {scale}"
+            );
+            assert!(
+                err <= 1e-6 * scale || name == "dR/dba",
+                "{scheme:?} {name}: rel {}",
+                err / scale
+            );
+        }
+    }
+}
+
+/// Noisy samples: white noise of covariance Σ/Δt per sample and, if `walk`, a bias random walk
+/// (steps of covariance Σ_rw·Δt). Returns the samples and the final bias deviation b_N − b_0.
+fn noisy(
+    clean: &[ImuSample],
+    prm: &PreintParams,
+    walk: bool,
+    rng: &mut Gauss,
+) -> (Vec<ImuSample>, V3, V3) {
+    let h = (clean[1].t_ns - clean[0].t_ns) as f64 * 1e-9;
+    let lg = Cholesky::new(prm.gyro_cov / h).unwrap().l();
+    let la = Cholesky::new(prm.acc_cov / h).unwrap().l();
+    let lbg = Cholesky::new(prm.gyro_bias_rw_cov * h).unwrap().l();
+    let lba = Cholesky::new(prm.acc_bias_rw_cov * h).unwrap().l();
+    let (mut bg, mut ba) = (V3::zeros(), V3::zeros());
+    let mut out = Vec::with_capacity(clean.len());
+    for (k, s) in clean.iter().enumerate() {
+        out.push(ImuSample::new(
+            s.t_ns,
+            s.gyro + bg + rng.correlated(&lg),
+            s.acc + ba + rng.correlated(&la),
+        ));
+        if walk && k + 1 < clean.len() {
+            bg += rng.correlated(&lbg);
+            ba += rng.correlated(&lba);
+        }
+    }
+    // The last sample's bias is b_N (Euler never uses it; midpoint/rk4 use it in the last
+    // interval, a one-step difference the model neglects).
+    (out, bg, ba)
+}
+
+/// Mean NEES of `errs` (rows) under `cov`, and the largest entry of |S − I| where S is the
+/// sample covariance of the whitened errors.
+fn consistency(errs: &[DVector<f64>], cov: &DMatrix<f64>) -> (f64, f64) {
+    let n = cov.nrows();
+    let l = Cholesky::new(cov.clone())
+        .expect("covariance not positive definite")
+        .l();
+    let mut s = DMatrix::<f64>::zeros(n, n);
+    let mut nees = 0.0;
+    for e in errs {
+        let z = l.solve_lower_triangular(e).unwrap();
+        nees += z.norm_squared();
+        s += &z * z.transpose();
+    }
+    let m = errs.len() as f64;
+    s /= m;
+    (nees / m, (s - DMatrix::<f64>::identity(n, n)).amax())
+}
+
+/// Mean NEES over N runs of a correct d-dim covariance: χ²_{dN}/N; band at ±3.29σ
+/// (two-sided 0.1 %), σ = √(2d/N). Whitened sample covariance entries have σ ≤ √(2/N); 5σ.
+fn assert_consistent(what: &str, errs: &[DVector<f64>], cov: &DMatrix<f64>) {
+    let d = cov.nrows() as f64;
+    let n = errs.len() as f64;
+    let (nees, dev) = consistency(errs, cov);
+    let half = 3.29 * (2.0 * d / n).sqrt();
+    eprintln!(
+        "{what}: mean NEES {nees:.3} (band {:.2}–{:.2}), max |S − I| {dev:.3}",
+        d - half,
+        d + half
+    );
+    assert!(
+        (nees - d).abs() <= half,
+        "{what}: mean NEES {nees} outside {d} ± {half}"
+    );
+    assert!(
+        dev <= 5.0 * (2.0 / n).sqrt(),
+        "{what}: whitened covariance off by {dev}"
+    );
+}
+
+fn err9(m: &PreintegratedImu, m0: &PreintegratedImu) -> DVector<f64> {
+    let r = m.delta_r.minus(&m0.delta_r);
+    let v = m.delta_v - m0.delta_v;
+    let p = m.delta_p - m0.delta_p;
+    DVector::from_iterator(9, r.iter().chain(v.iter()).chain(p.iter()).copied())
+}
+
+#[test]
+fn covariance_matches_monte_carlo() {
+    let scene = Scene::smooth();
+    let clean = scene.samples(5_000_000, 1_000_000_000);
+    let bias = ImuBias::zero();
+    // EuRoC densities ×10 (still linear regime), anisotropic accelerometer to exercise the
+    // general path as well.
+    for (scheme, aniso) in [
+        (Scheme::Euler, false),
+        (Scheme::Midpoint, false),
+        (Scheme::Midpoint, true),
+        (Scheme::Rk4, false),
+    ] {
+        let mut prm = params(scheme, Level::Covariance);
+        prm.gyro_cov *= 100.0;
+        prm.acc_cov *= 100.0;
+        if aniso {
+            prm.acc_cov = Matrix3::new(4.0, 1.0, 0.5, 1.0, 2.0, -0.3, 0.5, -0.3, 1.0) * 1e-4;
+        }
+        let m0 = run(&prm, &bias, &clean);
+        let fast = prm.clone().with_level(Level::Deltas);
+        let mut rng = Gauss::new(42 + scheme as u64);
+        let errs: Vec<_> = (0..300)
+            .map(|_| {
+                err9(
+                    &run(&fast, &bias, &noisy(&clean, &prm, false, &mut rng).0),
+                    &m0,
+                )
+            })
+            .collect();
+        let cov = DMatrix::from_fn(9, 9, |i, j| m0.cov[(i, j)]);
+        assert_consistent(&format!("{scheme:?} aniso={aniso} cov9"), &errs, &cov);
+    }
+}
+
+#[test]
+fn combined_covariance_matches_monte_carlo_with_bias_walk() {
+    let scene = Scene::smooth();
+    let clean = scene.samples(5_000_000, 1_000_000_000);
+    let bias = ImuBias::zero();
+    for scheme in [Scheme::Euler, Scheme::Midpoint] {
+        let mut prm = params(scheme, Level::Combined);
+        prm.gyro_cov *= 100.0;
+        prm.acc_cov *= 100.0;
+        // Random walk large enough to dominate the white noise over 1 s, so the cross terms
+        // matter.
+        prm.gyro_bias_rw_cov *= 1e4;
+        prm.acc_bias_rw_cov *= 1e3;
+        let m0 = run(&prm, &bias, &clean);
+        let fast = prm.clone().with_level(Level::Deltas);
+        let mut rng = Gauss::new(7 + scheme as u64);
+        let errs: Vec<_> = (0..300)
+            .map(|_| {
+                let (s, bg, ba) = noisy(&clean, &prm, true, &mut rng);
+                let e = err9(&run(&fast, &bias, &s), &m0);
+                DVector::from_iterator(15, e.iter().chain(bg.iter()).chain(ba.iter()).copied())
+            })
+            .collect();
+        let cov = DMatrix::from_fn(15, 15, |i, j| m0.cov15[(i, j)]);
+        assert_consistent(&format!("{scheme:?} cov15"), &errs, &cov);
+        // Without the cross terms the same errors are inconsistent (the test has power).
+        let mut no_cross = cov.clone();
+        no_cross.view_mut((0, 9), (9, 6)).fill(0.0);
+        no_cross.view_mut((9, 0), (6, 9)).fill(0.0);
+        let (_, dev) = consistency(&errs, &no_cross);
+        assert!(
+            dev > 5.0 * (2.0f64 / 300.0).sqrt(),
+            "cross terms undetectable: {dev}"
+        );
+    }
+}
+
+#[test]
+fn rk4_and_midpoint_agree_with_exact_rotation_for_constant_rate() {
+    // Constant body rate: every scheme's ΔR is exact (Exp(ωT)), independent of the step.
+    let w = V3::new(0.4, -1.1, 2.0);
+    let s: Vec<_> = (0..=100)
+        .map(|k| ImuSample::new(k * 10_000_000, w, V3::new(0.0, 0.0, 9.81)))
+        .collect();
+    for scheme in SCHEMES {
+        let m = run(&params(scheme, Level::Deltas), &ImuBias::zero(), &s);
+        let e = m.delta_r.minus(&SO3::exp(&w));
+        assert!(e.norm() < 1e-13, "{scheme:?}: {e}");
+    }
+}
