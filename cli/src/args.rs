@@ -20,15 +20,12 @@ pub fn vec3(s: &str) -> Result<Vector3<f64>, String> {
     Ok(Vector3::new(v[0], v[1], v[2]))
 }
 
-/// Parses a comma-separated list of positive finite numbers (e.g. rates in Hz).
-pub fn positive_list(s: &str) -> Result<Vec<f64>, String> {
-    s.split(',')
-        .map(str::trim)
-        .map(|p| match p.parse::<f64>() {
-            Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
-            _ => Err(format!("`{p}` is not a positive number (in `{s}`)")),
-        })
-        .collect()
+/// Parses one positive finite number (e.g. a rate in Hz; lists use clap's `value_delimiter`).
+pub fn positive(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+        _ => Err(format!("`{s}` is not a positive number")),
+    }
 }
 
 #[cfg(test)]
@@ -42,8 +39,9 @@ mod tests {
         assert!(vec3("1,2").unwrap_err().contains("three"));
         assert!(vec3("1,x,3").unwrap_err().contains("`x`"));
         assert!(vec3("1,inf,3").is_err());
-        assert_eq!(positive_list("25,50.5").unwrap(), vec![25.0, 50.5]);
-        assert!(positive_list("25,-50").is_err());
-        assert!(positive_list("0").is_err());
+        assert_eq!(positive("50.5").unwrap(), 50.5);
+        assert!(positive("-50").is_err());
+        assert!(positive("0").is_err());
+        assert!(positive("nan").is_err());
     }
 }

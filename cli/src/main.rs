@@ -124,7 +124,7 @@ pub enum Command {
         #[arg(long, default_value = "aggressive")]
         scene: String,
         /// Rates [Hz], comma-separated.
-        #[arg(long, value_parser = args::positive_list, default_value = "25,50,100,200,400,800,1600,3200")]
+        #[arg(long, value_delimiter = ',', value_parser = args::positive, default_value = "25,50,100,200,400,800,1600,3200")]
         rates: Vec<f64>,
         /// Window length [s].
         #[arg(long, default_value_t = 1.0)]

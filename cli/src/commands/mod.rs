@@ -33,12 +33,16 @@ pub fn run(cli: &Cli) -> Result<Output, CliError> {
         Command::Speed { .. } => speed::run(&cli.command),
         Command::Allan { .. } => allan::run(&cli.command),
         Command::Advise { .. } => advise::run(&cli.command),
+        Command::BenchSteps { .. } => bench_steps::run(&cli.command),
+        Command::Simulate { .. } => simulate::run(&cli.command),
         other => Err(CliError::Usage(format!("not available in this build: {other:?}"))),
     }
 }
 
 pub mod advise;
 pub mod allan;
+pub mod bench_steps;
+pub mod simulate;
 pub mod integrate;
 pub mod speed;
 
