@@ -27,13 +27,6 @@ impl Series {
             dashed: false,
         }
     }
-    /// Markers only.
-    pub fn markers(name: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
-        Self {
-            line: false,
-            ..Self::line(name, points)
-        }
-    }
     /// A thin reference line without markers.
     pub fn reference(name: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
         Self {
@@ -214,7 +207,7 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let p = dir.join("c.svg");
         let c = Chart { title: "t", x_label: "x [s]", y_label: "y [m]", log_x: true, log_y: true };
-        draw(&p, &c, &[Series::line("a", vec![(1.0, 1.0), (10.0, 0.1)]), Series::markers("b", vec![(2.0, 0.5)])]).unwrap();
+        draw(&p, &c, &[Series::line("a", vec![(1.0, 1.0), (10.0, 0.1)]), Series::reference("b", vec![(2.0, 0.5), (3.0, 0.4)])]).unwrap();
         let svg = std::fs::read_to_string(&p).unwrap();
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
         assert!(svg.contains("x [s]") && svg.contains("y [m]"));

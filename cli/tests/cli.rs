@@ -143,3 +143,28 @@ fn bench_steps_orders_and_charts() {
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
     }
 }
+
+#[test]
+fn report_writes_a_page_and_every_chart_it_references() {
+    let d = tmp("report");
+    let out = json(&["report", "--out", d.to_str().unwrap()]);
+    let html = std::fs::read_to_string(d.join("index.html")).unwrap();
+    assert!(html.starts_with("<!DOCTYPE html>") && html.trim_end().ends_with("</html>"));
+    // Every figure names its chart file; each must exist beside the page and be a whole SVG,
+    // and the page embeds it.
+    let names: Vec<&str> = html.split("data-file=\"").skip(1).map(|s| s.split('"').next().unwrap()).collect();
+    assert!(names.len() >= 6, "{names:?}");
+    for n in &names {
+        let svg = std::fs::read_to_string(d.join(n)).unwrap_or_else(|e| panic!("{n}: {e}"));
+        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"), "{n}");
+    }
+    assert_eq!(html.matches("<svg").count(), names.len());
+    for section in ["Accuracy against cost", "Monte Carlo NEES", "gimbal lock", "Bias calibration", "Allan deviation"] {
+        assert!(html.contains(section), "missing section {section}");
+    }
+    // The NEES it reports is a real number near 9 for every scheme.
+    for (k, v) in out["summary"]["nees"].as_object().unwrap() {
+        let v = v.as_f64().unwrap();
+        assert!((7.5..10.5).contains(&v), "{k}: {v}");
+    }
+}

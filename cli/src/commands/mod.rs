@@ -35,13 +35,16 @@ pub fn run(cli: &Cli) -> Result<Output, CliError> {
         Command::Advise { .. } => advise::run(&cli.command),
         Command::BenchSteps { .. } => bench_steps::run(&cli.command),
         Command::Simulate { .. } => simulate::run(&cli.command),
-        other => Err(CliError::Usage(format!("not available in this build: {other:?}"))),
+        Command::Calibrate { .. } => calibrate::run(&cli.command),
+        Command::Report { .. } => report::run(&cli.command),
     }
 }
 
 pub mod advise;
 pub mod allan;
 pub mod bench_steps;
+pub mod calibrate;
+pub mod report;
 pub mod simulate;
 pub mod integrate;
 pub mod speed;
