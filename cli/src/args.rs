@@ -7,11 +7,15 @@ use nalgebra::Vector3;
 pub fn vec3(s: &str) -> Result<Vector3<f64>, String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     if parts.len() != 3 {
-        return Err(format!("expected three comma-separated numbers x,y,z, got `{s}`"));
+        return Err(format!(
+            "expected three comma-separated numbers x,y,z, got `{s}`"
+        ));
     }
     let mut v = [0.0; 3];
     for (i, p) in parts.iter().enumerate() {
-        let x: f64 = p.parse().map_err(|_| format!("`{p}` is not a number (in `{s}`)"))?;
+        let x: f64 = p
+            .parse()
+            .map_err(|_| format!("`{p}` is not a number (in `{s}`)"))?;
         if !x.is_finite() {
             return Err(format!("`{p}` is not finite (in `{s}`)"));
         }
@@ -34,7 +38,10 @@ mod tests {
 
     #[test]
     fn vectors_and_lists() {
-        assert_eq!(vec3("-0.01,0.002,0").unwrap(), Vector3::new(-0.01, 0.002, 0.0));
+        assert_eq!(
+            vec3("-0.01,0.002,0").unwrap(),
+            Vector3::new(-0.01, 0.002, 0.0)
+        );
         assert_eq!(vec3(" 1, 2 ,3").unwrap(), Vector3::new(1.0, 2.0, 3.0));
         assert!(vec3("1,2").unwrap_err().contains("three"));
         assert!(vec3("1,x,3").unwrap_err().contains("`x`"));

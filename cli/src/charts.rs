@@ -75,7 +75,10 @@ fn range(vals: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
         return (1.0, 10.0);
     }
     if log {
-        let (l, h) = (lo.log10().floor(), hi.log10().ceil().max(lo.log10().floor() + 1.0));
+        let (l, h) = (
+            lo.log10().floor(),
+            hi.log10().ceil().max(lo.log10().floor() + 1.0),
+        );
         (10f64.powf(l), 10f64.powf(h))
     } else {
         let pad = ((hi - lo) * 0.05).max(1e-12);
@@ -106,8 +109,12 @@ pub fn draw(path: &Path, chart: &Chart, series: &[Series]) -> Result<(), String>
                 .map_err(|e| e.to_string())?;
             for (i, s) in series.iter().enumerate() {
                 let color = PALETTE[i % PALETTE.len()];
-                let pts: Vec<(f64, f64)> =
-                    s.points.iter().copied().filter(|p| usable(chart, p)).collect();
+                let pts: Vec<(f64, f64)> = s
+                    .points
+                    .iter()
+                    .copied()
+                    .filter(|p| usable(chart, p))
+                    .collect();
                 let style = if s.dashed {
                     color.stroke_width(1)
                 } else {
@@ -145,20 +152,25 @@ pub fn draw(path: &Path, chart: &Chart, series: &[Series]) -> Result<(), String>
         .x_label_area_size(48)
         .y_label_area_size(78);
     match (chart.log_x, chart.log_y) {
-        (true, true) => body!(b
-            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
-            .map_err(|e| e.to_string())?),
-        (true, false) => body!(b
-            .build_cartesian_2d((x0..x1).log_scale(), y0..y1)
-            .map_err(|e| e.to_string())?),
-        (false, true) => body!(b
-            .build_cartesian_2d(x0..x1, (y0..y1).log_scale())
-            .map_err(|e| e.to_string())?),
-        (false, false) => body!(b
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(|e| e.to_string())?),
+        (true, true) => body!(
+            b.build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+                .map_err(|e| e.to_string())?
+        ),
+        (true, false) => body!(
+            b.build_cartesian_2d((x0..x1).log_scale(), y0..y1)
+                .map_err(|e| e.to_string())?
+        ),
+        (false, true) => body!(
+            b.build_cartesian_2d(x0..x1, (y0..y1).log_scale())
+                .map_err(|e| e.to_string())?
+        ),
+        (false, false) => body!(
+            b.build_cartesian_2d(x0..x1, y0..y1)
+                .map_err(|e| e.to_string())?
+        ),
     }
-    root.present().map_err(|e| format!("{}: {e}", path.display()))?;
+    root.present()
+        .map_err(|e| format!("{}: {e}", path.display()))?;
     Ok(())
 }
 
@@ -179,7 +191,12 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
     let mut idx: Vec<usize> = (0..points.len())
         .filter(|&i| points[i].0.is_finite() && points[i].1.is_finite())
         .collect();
-    idx.sort_by(|&a, &b| points[a].0.total_cmp(&points[b].0).then(points[a].1.total_cmp(&points[b].1)));
+    idx.sort_by(|&a, &b| {
+        points[a]
+            .0
+            .total_cmp(&points[b].0)
+            .then(points[a].1.total_cmp(&points[b].1))
+    });
     let mut best = f64::INFINITY;
     let mut front = Vec::new();
     for i in idx {
@@ -197,7 +214,14 @@ mod tests {
 
     #[test]
     fn pareto_front_keeps_only_undominated_points() {
-        let pts = [(1.0, 10.0), (2.0, 5.0), (3.0, 7.0), (4.0, 1.0), (5.0, 1.0), (0.5, f64::NAN)];
+        let pts = [
+            (1.0, 10.0),
+            (2.0, 5.0),
+            (3.0, 7.0),
+            (4.0, 1.0),
+            (5.0, 1.0),
+            (0.5, f64::NAN),
+        ];
         assert_eq!(pareto_front(&pts), vec![0, 1, 3]);
     }
 
@@ -206,8 +230,22 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("preint-chart-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let p = dir.join("c.svg");
-        let c = Chart { title: "t", x_label: "x [s]", y_label: "y [m]", log_x: true, log_y: true };
-        draw(&p, &c, &[Series::line("a", vec![(1.0, 1.0), (10.0, 0.1)]), Series::reference("b", vec![(2.0, 0.5), (3.0, 0.4)])]).unwrap();
+        let c = Chart {
+            title: "t",
+            x_label: "x [s]",
+            y_label: "y [m]",
+            log_x: true,
+            log_y: true,
+        };
+        draw(
+            &p,
+            &c,
+            &[
+                Series::line("a", vec![(1.0, 1.0), (10.0, 0.1)]),
+                Series::reference("b", vec![(2.0, 0.5), (3.0, 0.4)]),
+            ],
+        )
+        .unwrap();
         let svg = std::fs::read_to_string(&p).unwrap();
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
         assert!(svg.contains("x [s]") && svg.contains("y [m]"));

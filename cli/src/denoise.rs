@@ -17,7 +17,13 @@ fn butter(fc: f64, fs: f64) -> [f64; 5] {
     let (s, c) = w0.sin_cos();
     let alpha = s / (2.0 * std::f64::consts::FRAC_1_SQRT_2);
     let a0 = 1.0 + alpha;
-    [(1.0 - c) / 2.0 / a0, (1.0 - c) / a0, (1.0 - c) / 2.0 / a0, -2.0 * c / a0, (1.0 - alpha) / a0]
+    [
+        (1.0 - c) / 2.0 / a0,
+        (1.0 - c) / a0,
+        (1.0 - c) / 2.0 / a0,
+        -2.0 * c / a0,
+        (1.0 - alpha) / a0,
+    ]
 }
 
 fn pass(x: &mut [f64], k: &[f64; 5]) {
@@ -49,7 +55,10 @@ fn residual_fraction(fc: f64, fs: f64) -> f64 {
     let mut acc = 0.0;
     for i in 0..n {
         let w = PI * (i as f64 + 0.5) / n as f64;
-        let (z1, z2) = (nalgebra::Complex::new(w.cos(), -w.sin()), nalgebra::Complex::new((2.0 * w).cos(), -(2.0 * w).sin()));
+        let (z1, z2) = (
+            nalgebra::Complex::new(w.cos(), -w.sin()),
+            nalgebra::Complex::new((2.0 * w).cos(), -(2.0 * w).sin()),
+        );
         let h = (z1 * k[1] + z2 * k[2] + k[0]) / (z1 * k[3] + z2 * k[4] + 1.0);
         let h2 = h.norm_sqr();
         acc += (1.0 - h2) * (1.0 - h2);
@@ -64,7 +73,11 @@ fn variance(x: &[f64]) -> f64 {
 
 /// The denoised stream and the cutoffs [Hz] chosen for (gyro, accelerometer); `None` when no
 /// cutoff below 0.45·f_s explains the residual as noise (the stream is then left unfiltered).
-pub fn denoise(samples: &[ImuSample], gyro_density: f64, acc_density: f64) -> (Vec<ImuSample>, [Option<f64>; 2]) {
+pub fn denoise(
+    samples: &[ImuSample],
+    gyro_density: f64,
+    acc_density: f64,
+) -> (Vec<ImuSample>, [Option<f64>; 2]) {
     let n = samples.len();
     let dt = (samples[n - 1].t_ns - samples[0].t_ns) as f64 * 1e-9 / (n - 1) as f64;
     let fs = 1.0 / dt;
@@ -72,7 +85,12 @@ pub fn denoise(samples: &[ImuSample], gyro_density: f64, acc_density: f64) -> (V
     let mut cut = [None, None];
     for (sensor, density) in [(0usize, gyro_density), (1, acc_density)] {
         let chans: Vec<Vec<f64>> = (0..3)
-            .map(|a| samples.iter().map(|s| if sensor == 0 { s.gyro[a] } else { s.acc[a] }).collect())
+            .map(|a| {
+                samples
+                    .iter()
+                    .map(|s| if sensor == 0 { s.gyro[a] } else { s.acc[a] })
+                    .collect()
+            })
             .collect();
         let noise_var = density * density / dt;
         let mut fc = 0.1;
@@ -86,7 +104,11 @@ pub fn denoise(samples: &[ImuSample], gyro_density: f64, acc_density: f64) -> (V
             if ok {
                 for (k, s) in out.iter_mut().enumerate() {
                     for a in 0..3 {
-                        if sensor == 0 { s.gyro[a] = filtered[a][k] } else { s.acc[a] = filtered[a][k] }
+                        if sensor == 0 {
+                            s.gyro[a] = filtered[a][k]
+                        } else {
+                            s.acc[a] = filtered[a][k]
+                        }
                     }
                 }
                 cut[sensor] = Some(fc);
@@ -112,12 +134,21 @@ mod tests {
     #[test]
     fn passes_slow_signal_and_removes_fast() {
         let fs = 200.0;
-        let slow: Vec<f64> = (0..4000).map(|k| (2.0 * PI * 0.5 * k as f64 / fs).sin()).collect();
-        let fast: Vec<f64> = (0..4000).map(|k| (2.0 * PI * 60.0 * k as f64 / fs).sin()).collect();
+        let slow: Vec<f64> = (0..4000)
+            .map(|k| (2.0 * PI * 0.5 * k as f64 / fs).sin())
+            .collect();
+        let fast: Vec<f64> = (0..4000)
+            .map(|k| (2.0 * PI * 60.0 * k as f64 / fs).sin())
+            .collect();
         let fs_ = filtfilt(&slow, 5.0, fs);
         let ff = filtfilt(&fast, 5.0, fs);
         let mid = 1000..3000;
-        assert!(slow[mid.clone()].iter().zip(&fs_[mid.clone()]).all(|(a, b)| (a - b).abs() < 1e-3));
+        assert!(
+            slow[mid.clone()]
+                .iter()
+                .zip(&fs_[mid.clone()])
+                .all(|(a, b)| (a - b).abs() < 1e-3)
+        );
         assert!(ff[mid].iter().all(|v| v.abs() < 1e-2));
     }
 }

@@ -13,7 +13,9 @@ pub struct Page {
 
 /// Escapes text for HTML.
 pub fn esc(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
 }
 
 impl Page {
@@ -58,7 +60,10 @@ impl Page {
     /// Embeds an SVG file written earlier (inline, with a caption).
     pub fn svg(&mut self, path: &Path, caption: &str) -> Result<&mut Self, String> {
         let svg = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("chart.svg");
+        let name = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or("chart.svg");
         let _ = writeln!(
             self.body,
             "<figure data-file=\"{}\">{}<figcaption>{}</figcaption></figure>",

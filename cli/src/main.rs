@@ -3,11 +3,14 @@
 //! Every subcommand prints a human summary, or one JSON object on stdout with `--json`.
 //! Errors go to stderr with a non-zero exit code and name the file, line and problem.
 
+// Channel loops index several parallel arrays (axes, curves, fits) by the same index.
+#![allow(clippy::needless_range_loop)]
+
 mod args;
-mod html;
 mod charts;
 mod commands;
 mod denoise;
+mod html;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;

@@ -1,4 +1,5 @@
 //! Readers and writers: lossless round trips, and typed errors that name the line and problem.
+#![allow(clippy::excessive_precision)] // literals copied verbatim from the EuRoC file
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use preint::io::*;

@@ -22,7 +22,9 @@ use super::speed::{ns_per_sample, synthetic_stream};
 use super::{CliError, Output};
 use crate::Command;
 use preint::io::{check_si_units, read_euroc_imu};
-use preint::{ImuBias, ImuNoise, ImuSample, Level, PreintParams, PreintegratedImu, Scheme, preintegrate};
+use preint::{
+    ImuBias, ImuNoise, ImuSample, Level, PreintParams, PreintegratedImu, Scheme, preintegrate,
+};
 use serde_json::json;
 use std::fmt::Write as _;
 
@@ -54,7 +56,12 @@ fn errors(a: &PreintegratedImu, b: &PreintegratedImu) -> [f64; 3] {
 }
 
 fn sigma(m: &PreintegratedImu) -> [f64; 3] {
-    let tr = |k: usize| (0..3).map(|i| m.cov[(3 * k + i, 3 * k + i)]).sum::<f64>().sqrt();
+    let tr = |k: usize| {
+        (0..3)
+            .map(|i| m.cov[(3 * k + i, 3 * k + i)])
+            .sum::<f64>()
+            .sqrt()
+    };
     [tr(0), tr(1), tr(2)]
 }
 
@@ -81,7 +88,9 @@ pub fn evaluate(
     let margin = 64 * (span / (n as i64 - 1).max(1));
     let usable = span - w_ns - 2 * margin;
     if usable < 0 {
-        return Err(CliError::Usage("recording too short for this window".into()));
+        return Err(CliError::Usage(
+            "recording too short for this window".into(),
+        ));
     }
     let nw = (usable / w_ns + 1).clamp(1, 24);
     let starts: Vec<i64> = (0..nw)
@@ -106,15 +115,26 @@ pub fn evaluate(
                 // Keyframes on the decimated grid so no boundary interpolation enters.
                 let i0 = dec.partition_point(|s| s.t_ns < t0);
                 let t_i = dec[i0].t_ns;
-                let j0 = dec.partition_point(|s| s.t_ns < t_i + w_ns).min(dec.len() - 1);
+                let j0 = dec
+                    .partition_point(|s| s.t_ns < t_i + w_ns)
+                    .min(dec.len() - 1);
                 let t_j = dec[j0].t_ns;
-                let reference = preintegrate(&params(Scheme::Rk4, Level::Deltas), &bias, samples, t_i, t_j).map_err(fail)?;
-                let m = preintegrate(&params(scheme, Level::Covariance), &bias, &dec, t_i, t_j).map_err(fail)?;
+                let reference = preintegrate(
+                    &params(Scheme::Rk4, Level::Deltas),
+                    &bias,
+                    samples,
+                    t_i,
+                    t_j,
+                )
+                .map_err(fail)?;
+                let m = preintegrate(&params(scheme, Level::Covariance), &bias, &dec, t_i, t_j)
+                    .map_err(fail)?;
                 let mut e = errors(&m, &reference);
                 if d == 1 && scheme == Scheme::Rk4 {
                     // Richardson estimate of the reference's own error.
                     let half: Vec<ImuSample> = samples.iter().step_by(2).copied().collect();
-                    let coarse = preintegrate(&params(Scheme::Rk4, Level::Deltas), &bias, &half, t_i, t_j);
+                    let coarse =
+                        preintegrate(&params(Scheme::Rk4, Level::Deltas), &bias, &half, t_i, t_j);
                     if let Ok(c) = coarse {
                         e = errors(&c, &reference).map(|x| x / 15.0);
                     }
@@ -128,7 +148,15 @@ pub fn evaluate(
             let rate = 1.0 / (dt_s * d as f64);
             let cost = ns_per_sample(scheme, Level::Covariance, &bench, 3)? * rate;
             let acceptable = (0..3).all(|k| err[k] < fraction * sig[k]);
-            out.push(Candidate { scheme, decimation: d, rate_hz: rate, disc_err: err, noise_sigma: sig, cost_ns_per_s: cost, acceptable });
+            out.push(Candidate {
+                scheme,
+                decimation: d,
+                rate_hz: rate,
+                disc_err: err,
+                noise_sigma: sig,
+                cost_ns_per_s: cost,
+                acceptable,
+            });
         }
         d *= 2;
     }
@@ -137,18 +165,31 @@ pub fn evaluate(
 
 /// The cheapest acceptable candidate, if any.
 pub fn recommend(c: &[Candidate]) -> Option<&Candidate> {
-    c.iter().filter(|c| c.acceptable).min_by(|a, b| a.cost_ns_per_s.total_cmp(&b.cost_ns_per_s))
+    c.iter()
+        .filter(|c| c.acceptable)
+        .min_by(|a, b| a.cost_ns_per_s.total_cmp(&b.cost_ns_per_s))
 }
 
 pub fn run(cmd: &Command) -> Result<Output, CliError> {
-    let Command::Advise { imu, noise, window, fraction } = cmd else { unreachable!() };
+    let Command::Advise {
+        imu,
+        noise,
+        window,
+        fraction,
+    } = cmd
+    else {
+        unreachable!()
+    };
     if !(fraction.is_finite() && *fraction > 0.0) {
-        return Err(CliError::Usage(format!("--fraction must be positive, got {fraction}")));
+        return Err(CliError::Usage(format!(
+            "--fraction must be positive, got {fraction}"
+        )));
     }
     let noise = noise_or_default(Some(noise))?;
     let samples = read_euroc_imu(imu)?;
     check_si_units(&samples, &imu.display().to_string())?;
-    let (signal, cutoffs) = crate::denoise::denoise(&samples, noise.gyro_noise_density, noise.acc_noise_density);
+    let (signal, cutoffs) =
+        crate::denoise::denoise(&samples, noise.gyro_noise_density, noise.acc_noise_density);
     let cands = evaluate(&signal, &noise, 9.81, *window, *fraction)?;
     let rec = recommend(&cands);
     let rows: Vec<_> = cands
@@ -167,23 +208,75 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         "method": "white noise removed by a zero-phase low-pass whose cutoff makes the residual match the noise density; reference = rk4 at the recording's rate; disc_err = max over windows of the distance to it; noise_sigma = sqrt(trace) of each covariance block",
     });
     let mut h = String::new();
-    let _ = writeln!(h, "{}: {} samples; window {window} s; threshold {fraction}·σ", imu.display(), samples.len());
-    let fmt_cut = |c: Option<f64>| c.map_or("none (residual is not white noise at any cutoff)".to_string(), |c| format!("{c:.2} Hz"));
-    let _ = writeln!(h, "signal/noise separation: zero-phase low-pass at gyro {}, accelerometer {}", fmt_cut(cutoffs[0]), fmt_cut(cutoffs[1]));
-    let _ = writeln!(h, "{:<9} {:>9} {:>11} {:>11} {:>11} {:>11} {:>11} {:>11} {:>12}", "scheme", "rate Hz",
-                     "rot err", "rot σ", "vel err", "vel σ", "pos err", "pos σ", "µs/s data");
+    let _ = writeln!(
+        h,
+        "{}: {} samples; window {window} s; threshold {fraction}·σ",
+        imu.display(),
+        samples.len()
+    );
+    let fmt_cut = |c: Option<f64>| {
+        c.map_or(
+            "none (residual is not white noise at any cutoff)".to_string(),
+            |c| format!("{c:.2} Hz"),
+        )
+    };
+    let _ = writeln!(
+        h,
+        "signal/noise separation: zero-phase low-pass at gyro {}, accelerometer {}",
+        fmt_cut(cutoffs[0]),
+        fmt_cut(cutoffs[1])
+    );
+    let _ = writeln!(
+        h,
+        "{:<9} {:>9} {:>11} {:>11} {:>11} {:>11} {:>11} {:>11} {:>12}",
+        "scheme",
+        "rate Hz",
+        "rot err",
+        "rot σ",
+        "vel err",
+        "vel σ",
+        "pos err",
+        "pos σ",
+        "µs/s data"
+    );
     for c in &cands {
-        let _ = writeln!(h, "{:<9} {:>9.1} {:>11.2e} {:>11.2e} {:>11.2e} {:>11.2e} {:>11.2e} {:>11.2e} {:>12.1}{}",
-            scheme_name(c.scheme), c.rate_hz, c.disc_err[0], c.noise_sigma[0], c.disc_err[1], c.noise_sigma[1],
-            c.disc_err[2], c.noise_sigma[2], c.cost_ns_per_s * 1e-3, if c.acceptable { "  ok" } else { "" });
+        let _ = writeln!(
+            h,
+            "{:<9} {:>9.1} {:>11.2e} {:>11.2e} {:>11.2e} {:>11.2e} {:>11.2e} {:>11.2e} {:>12.1}{}",
+            scheme_name(c.scheme),
+            c.rate_hz,
+            c.disc_err[0],
+            c.noise_sigma[0],
+            c.disc_err[1],
+            c.noise_sigma[1],
+            c.disc_err[2],
+            c.noise_sigma[2],
+            c.cost_ns_per_s * 1e-3,
+            if c.acceptable { "  ok" } else { "" }
+        );
     }
     match rec {
-        Some(c) => { let _ = writeln!(h, "recommended: {} at {:.1} Hz (cheapest whose discretisation error < {fraction}·σ on rotation, velocity and position)", scheme_name(c.scheme), c.rate_hz); }
-        None => { let _ = writeln!(h, "no scheme keeps the discretisation error below {fraction}·σ at these rates: use rk4 at the full rate, or record faster"); }
+        Some(c) => {
+            let _ = writeln!(
+                h,
+                "recommended: {} at {:.1} Hz (cheapest whose discretisation error < {fraction}·σ on rotation, velocity and position)",
+                scheme_name(c.scheme),
+                c.rate_hz
+            );
+        }
+        None => {
+            let _ = writeln!(
+                h,
+                "no scheme keeps the discretisation error below {fraction}·σ at these rates: use rk4 at the full rate, or record faster"
+            );
+        }
     }
     if cutoffs.iter().any(Option::is_none) {
-        let _ = writeln!(h, "note: the signal above the motion band is not white noise of the stated density (vibration, or a \
-                             density set too low): the errors above include that high-frequency content.");
+        let _ = writeln!(
+            h,
+            "note: the signal above the motion band is not white noise of the stated density (vibration, or a \
+                             density set too low): the errors above include that high-frequency content."
+        );
     }
     Ok(Output { human: h, json })
 }

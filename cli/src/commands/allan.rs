@@ -26,12 +26,16 @@ pub fn allan_chart(a: &ImuAllan, sensor: usize, path: &Path) -> Result<(), CliEr
         let f = &a.fits[ch];
         series.push(Series::reference(
             format!("{} N/√τ", AXES[ch]),
-            taus.iter().map(|&t| (t, f.white_density / t.sqrt())).collect(),
+            taus.iter()
+                .map(|&t| (t, f.white_density / t.sqrt()))
+                .collect(),
         ));
         if !f.random_walk_is_bound {
             series.push(Series::reference(
                 format!("{} K√(τ/3)", AXES[ch]),
-                taus.iter().map(|&t| (t, f.random_walk * (t / 3.0).sqrt())).collect(),
+                taus.iter()
+                    .map(|&t| (t, f.random_walk * (t / 3.0).sqrt()))
+                    .collect(),
             ));
         }
     }
@@ -40,18 +44,32 @@ pub fn allan_chart(a: &ImuAllan, sensor: usize, path: &Path) -> Result<(), CliEr
     } else {
         ("Allan deviation: accelerometer", "σ(τ) [m/s²]")
     };
-    draw(path, &Chart { title, x_label: "τ [s]", y_label: y, log_x: true, log_y: true }, &series)
-        .map_err(CliError::Failed)
+    draw(
+        path,
+        &Chart {
+            title,
+            x_label: "τ [s]",
+            y_label: y,
+            log_x: true,
+            log_y: true,
+        },
+        &series,
+    )
+    .map_err(CliError::Failed)
 }
 
 pub fn run(cmd: &Command) -> Result<Output, CliError> {
-    let Command::Allan { imu, out } = cmd else { unreachable!() };
+    let Command::Allan { imu, out } = cmd else {
+        unreachable!()
+    };
     let samples = read_euroc_imu(imu)?;
-    let a = ImuAllan::from_samples(&samples, 10).map_err(|e| CliError::Failed(format!("{}: {e}", imu.display())))?;
+    let a = ImuAllan::from_samples(&samples, 10)
+        .map_err(|e| CliError::Failed(format!("{}: {e}", imu.display())))?;
     let noise = a.to_imu_noise();
     let mut files = Vec::new();
     if let Some(dir) = out {
-        std::fs::create_dir_all(dir).map_err(|e| CliError::Failed(format!("{}: {e}", dir.display())))?;
+        std::fs::create_dir_all(dir)
+            .map_err(|e| CliError::Failed(format!("{}: {e}", dir.display())))?;
         for (sensor, name) in [(0, "allan_gyro.svg"), (1, "allan_acc.svg")] {
             let p = dir.join(name);
             allan_chart(&a, sensor, &p)?;
@@ -85,14 +103,42 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         "per_axis": per_axis,
         "files": files,
     });
-    let mut h = format!("{}: {} samples at {:.1} Hz ({:.0} s)\n", imu.display(), samples.len(), 1.0 / a.dt, a.dt * samples.len() as f64);
-    let _ = writeln!(h, "{:<8} {:>16} {:>16} {:>16}", "axis", "noise density", "random walk", "bias instab.");
+    let mut h = format!(
+        "{}: {} samples at {:.1} Hz ({:.0} s)\n",
+        imu.display(),
+        samples.len(),
+        1.0 / a.dt,
+        a.dt * samples.len() as f64
+    );
+    let _ = writeln!(
+        h,
+        "{:<8} {:>16} {:>16} {:>16}",
+        "axis", "noise density", "random walk", "bias instab."
+    );
     for c in 0..6 {
         let f = &a.fits[c];
-        let _ = writeln!(h, "{:<8} {:>16.4e} {:>15.4e}{} {:>16.4e}", AXES[c], f.white_density, f.random_walk,
-                         if f.random_walk_is_bound { "≤" } else { " " }, f.bias_instability);
+        let _ = writeln!(
+            h,
+            "{:<8} {:>16.4e} {:>15.4e}{} {:>16.4e}",
+            AXES[c],
+            f.white_density,
+            f.random_walk,
+            if f.random_walk_is_bound { "≤" } else { " " },
+            f.bias_instability
+        );
     }
-    let _ = writeln!(h, "units: gyro rad/s/√Hz, rad/s²/√Hz, rad/s; acc m/s²/√Hz, m/s³/√Hz, m/s². ≤: upper bound (no +½ slope in the data)");
-    let _ = writeln!(h, "imu.yaml uses the maximum over the axes.{}", if files.is_empty() { String::new() } else { format!(" Wrote {}", files.join(", ")) });
+    let _ = writeln!(
+        h,
+        "units: gyro rad/s/√Hz, rad/s²/√Hz, rad/s; acc m/s²/√Hz, m/s³/√Hz, m/s². ≤: upper bound (no +½ slope in the data)"
+    );
+    let _ = writeln!(
+        h,
+        "imu.yaml uses the maximum over the axes.{}",
+        if files.is_empty() {
+            String::new()
+        } else {
+            format!(" Wrote {}", files.join(", "))
+        }
+    );
     Ok(Output { human: h, json })
 }

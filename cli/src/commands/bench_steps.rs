@@ -46,10 +46,15 @@ impl Row {
 /// Errors of every scheme at every rate on `scene_name` (noise-free), plus measured costs.
 pub fn measure(scene_name: &str, rates: &[f64], window_s: f64) -> Result<Vec<Row>, CliError> {
     let scene = sim::scene_by_name(scene_name).ok_or_else(|| {
-        CliError::Usage(format!("unknown scene `{scene_name}`; expected one of {}", sim::SCENE_NAMES.join(", ")))
+        CliError::Usage(format!(
+            "unknown scene `{scene_name}`; expected one of {}",
+            sim::SCENE_NAMES.join(", ")
+        ))
     })?;
     if !(window_s.is_finite() && window_s > 0.0) {
-        return Err(CliError::Usage(format!("--window must be positive, got {window_s}")));
+        return Err(CliError::Usage(format!(
+            "--window must be positive, got {window_s}"
+        )));
     }
     let g = Vector3::new(0.0, 0.0, -9.81);
     let t_i: i64 = 1_000_000_000;
@@ -58,7 +63,10 @@ pub fn measure(scene_name: &str, rates: &[f64], window_s: f64) -> Result<Vec<Row
     let bench = synthetic_stream(50_000);
     let mut cost = std::collections::HashMap::new();
     for s in [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4] {
-        cost.insert(scheme_name(s), ns_per_sample(s, Level::Covariance, &bench, 3)?);
+        cost.insert(
+            scheme_name(s),
+            ns_per_sample(s, Level::Covariance, &bench, 3)?,
+        );
     }
     let mut rows = Vec::new();
     for &rate in rates {
@@ -69,13 +77,27 @@ pub fn measure(scene_name: &str, rates: &[f64], window_s: f64) -> Result<Vec<Row
         // Grid covering the window plus four samples each side (rk4 needs neighbours).
         let k0 = t_i / step - 4;
         let k1 = t_j / step + 5;
-        let samples: Vec<_> = (k0..=k1).map(|k| ideal_sample(scene.as_ref(), k * step, &g)).collect();
+        let samples: Vec<_> = (k0..=k1)
+            .map(|k| ideal_sample(scene.as_ref(), k * step, &g))
+            .collect();
         for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4] {
-            let params = PreintParams::from_noise(&ImuNoise::euroc()).with_scheme(scheme).with_level(Level::Deltas).with_gravity(g);
+            let params = PreintParams::from_noise(&ImuNoise::euroc())
+                .with_scheme(scheme)
+                .with_level(Level::Deltas)
+                .with_gravity(g);
             let m = preintegrate(&params, &ImuBias::zero(), &samples, t_i, t_j)
                 .map_err(|e| CliError::Failed(format!("{scheme:?} at {rate} Hz: {e}")))?;
-            let err = [m.delta_r.minus(&r_true).norm(), (m.delta_v - v_true).norm(), (m.delta_p - p_true).norm()];
-            rows.push(Row { scheme, rate, ns_per_sample: cost[scheme_name(scheme)], err });
+            let err = [
+                m.delta_r.minus(&r_true).norm(),
+                (m.delta_v - v_true).norm(),
+                (m.delta_p - p_true).norm(),
+            ];
+            rows.push(Row {
+                scheme,
+                rate,
+                ns_per_sample: cost[scheme_name(scheme)],
+                err,
+            });
         }
     }
     Ok(rows)
@@ -92,7 +114,10 @@ pub fn order(rows: &[Row], scheme: Scheme, comp: usize) -> Option<f64> {
         return None;
     }
     let n = pts.len() as f64;
-    let (mx, my) = (pts.iter().map(|p| p.0).sum::<f64>() / n, pts.iter().map(|p| p.1).sum::<f64>() / n);
+    let (mx, my) = (
+        pts.iter().map(|p| p.0).sum::<f64>() / n,
+        pts.iter().map(|p| p.1).sum::<f64>() / n,
+    );
     let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
     let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
     Some(-sxy / sxx)
@@ -101,43 +126,85 @@ pub fn order(rows: &[Row], scheme: Scheme, comp: usize) -> Option<f64> {
 /// Writes the accuracy-vs-cost chart (position error; Pareto front marked) and the
 /// error-vs-rate chart (all three components for each scheme). Returns the paths.
 pub fn charts(rows: &[Row], scene: &str, dir: &Path) -> Result<Vec<String>, CliError> {
-    std::fs::create_dir_all(dir).map_err(|e| CliError::Failed(format!("{}: {e}", dir.display())))?;
+    std::fs::create_dir_all(dir)
+        .map_err(|e| CliError::Failed(format!("{}: {e}", dir.display())))?;
     let schemes = [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4];
     let mut series: Vec<Series> = schemes
         .iter()
         .map(|&s| {
             Series::line(
                 scheme_name(s),
-                rows.iter().filter(|r| r.scheme == s).map(|r| (r.cost_per_s() * 1e-3, r.err[2])).collect(),
+                rows.iter()
+                    .filter(|r| r.scheme == s)
+                    .map(|r| (r.cost_per_s() * 1e-3, r.err[2]))
+                    .collect(),
             )
         })
         .collect();
-    let pts: Vec<(f64, f64)> = rows.iter().map(|r| (r.cost_per_s() * 1e-3, r.err[2])).collect();
+    let pts: Vec<(f64, f64)> = rows
+        .iter()
+        .map(|r| (r.cost_per_s() * 1e-3, r.err[2]))
+        .collect();
     let front: Vec<(f64, f64)> = pareto_front(&pts).into_iter().map(|i| pts[i]).collect();
     series.push(Series::reference("Pareto front", front));
     let p1 = dir.join(format!("accuracy_vs_cost_{scene}.svg"));
     let title = format!("{scene}: position error after 1 s vs cost");
-    draw(&p1, &Chart { title: &title, x_label: "cost [µs per second of IMU data]", y_label: "position error [m]", log_x: true, log_y: true }, &series)
-        .map_err(CliError::Failed)?;
+    draw(
+        &p1,
+        &Chart {
+            title: &title,
+            x_label: "cost [µs per second of IMU data]",
+            y_label: "position error [m]",
+            log_x: true,
+            log_y: true,
+        },
+        &series,
+    )
+    .map_err(CliError::Failed)?;
     let mut series = Vec::new();
     for &s in &schemes {
         for c in [0, 2] {
             let ord = order(rows, s, c).map_or(String::new(), |o| format!(", slope {o:.2}"));
             series.push(Series::line(
-                format!("{} {}{ord}", scheme_name(s), if c == 0 { "rot" } else { "pos" }),
-                rows.iter().filter(|r| r.scheme == s).map(|r| (r.rate, r.err[c])).collect(),
+                format!(
+                    "{} {}{ord}",
+                    scheme_name(s),
+                    if c == 0 { "rot" } else { "pos" }
+                ),
+                rows.iter()
+                    .filter(|r| r.scheme == s)
+                    .map(|r| (r.rate, r.err[c]))
+                    .collect(),
             ));
         }
     }
     let p2 = dir.join(format!("convergence_{scene}.svg"));
     let title = format!("{scene}: error vs rate (noise-free, 1 s window)");
-    draw(&p2, &Chart { title: &title, x_label: "rate [Hz]", y_label: "error [rad or m]", log_x: true, log_y: true }, &series)
-        .map_err(CliError::Failed)?;
+    draw(
+        &p2,
+        &Chart {
+            title: &title,
+            x_label: "rate [Hz]",
+            y_label: "error [rad or m]",
+            log_x: true,
+            log_y: true,
+        },
+        &series,
+    )
+    .map_err(CliError::Failed)?;
     Ok(vec![p1.display().to_string(), p2.display().to_string()])
 }
 
 pub fn run(cmd: &Command) -> Result<Output, CliError> {
-    let Command::BenchSteps { scene, rates, window, out } = cmd else { unreachable!() };
+    let Command::BenchSteps {
+        scene,
+        rates,
+        window,
+        out,
+    } = cmd
+    else {
+        unreachable!()
+    };
     let rows = measure(scene, rates, *window)?;
     let files = match out {
         Some(dir) => charts(&rows, scene, dir)?,
@@ -155,15 +222,38 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
     let json = json!({"scene": scene, "window_s": window, "rows": json_rows, "fitted_order": orders,
         "units": {"rot_err": "rad", "vel_err": "m/s", "pos_err": "m", "ns_per_sample": "ns (with covariance and bias Jacobians)"},
         "files": files});
-    let mut h = format!("{scene}: noise-free, window [1 s, {} s], errors against the exact deltas\n", 1.0 + window);
-    let _ = writeln!(h, "{:<9} {:>8} {:>11} {:>12} {:>11} {:>11} {:>11}", "scheme", "rate Hz", "ns/sample", "µs/s data", "rot [rad]", "vel [m/s]", "pos [m]");
+    let mut h = format!(
+        "{scene}: noise-free, window [1 s, {} s], errors against the exact deltas\n",
+        1.0 + window
+    );
+    let _ = writeln!(
+        h,
+        "{:<9} {:>8} {:>11} {:>12} {:>11} {:>11} {:>11}",
+        "scheme", "rate Hz", "ns/sample", "µs/s data", "rot [rad]", "vel [m/s]", "pos [m]"
+    );
     for r in &rows {
-        let _ = writeln!(h, "{:<9} {:>8.1} {:>11.1} {:>12.1} {:>11.2e} {:>11.2e} {:>11.2e}", scheme_name(r.scheme), r.rate,
-                         r.ns_per_sample, r.cost_per_s() * 1e-3, r.err[0], r.err[1], r.err[2]);
+        let _ = writeln!(
+            h,
+            "{:<9} {:>8.1} {:>11.1} {:>12.1} {:>11.2e} {:>11.2e} {:>11.2e}",
+            scheme_name(r.scheme),
+            r.rate,
+            r.ns_per_sample,
+            r.cost_per_s() * 1e-3,
+            r.err[0],
+            r.err[1],
+            r.err[2]
+        );
     }
     for s in [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4] {
         let f = |c| order(&rows, s, c).map_or("-".into(), |o: f64| format!("{o:.2}"));
-        let _ = writeln!(h, "fitted order {:<9} rot {} vel {} pos {}", scheme_name(s), f(0), f(1), f(2));
+        let _ = writeln!(
+            h,
+            "fitted order {:<9} rot {} vel {} pos {}",
+            scheme_name(s),
+            f(0),
+            f(1),
+            f(2)
+        );
     }
     if !files.is_empty() {
         let _ = writeln!(h, "wrote {}", files.join(", "));

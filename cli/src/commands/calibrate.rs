@@ -18,8 +18,8 @@ use preint::io::{check_si_units, read_euroc_groundtruth, read_euroc_imu};
 use preint::{ImuSample, PreintParams, Scheme};
 use serde_json::{Value, json};
 use solver::bias::{
-    KnownPose, KnownPoseOptions, MultiPoseOptions, StaticOptions, StillOptions, calibrate_known_poses,
-    calibrate_multi_pose, calibrate_static, detect_still_intervals,
+    KnownPose, KnownPoseOptions, MultiPoseOptions, StaticOptions, StillOptions,
+    calibrate_known_poses, calibrate_multi_pose, calibrate_static, detect_still_intervals,
 };
 
 fn fail(e: impl std::fmt::Display) -> CliError {
@@ -34,7 +34,10 @@ fn opt3(v: Option<Vector3<f64>>) -> Value {
 fn distinct_attitudes(samples: &[ImuSample], ivs: &[solver::bias::StillInterval]) -> usize {
     let mut dirs: Vec<Vector3<f64>> = Vec::new();
     for iv in ivs {
-        let m: Vector3<f64> = samples[iv.start..iv.end].iter().map(|s| s.acc).sum::<Vector3<f64>>();
+        let m: Vector3<f64> = samples[iv.start..iv.end]
+            .iter()
+            .map(|s| s.acc)
+            .sum::<Vector3<f64>>();
         let d = m.normalize();
         if dirs.iter().all(|e| e.dot(&d) < 20f64.to_radians().cos()) {
             dirs.push(d);
@@ -44,7 +47,15 @@ fn distinct_attitudes(samples: &[ImuSample], ivs: &[solver::bias::StillInterval]
 }
 
 pub fn run(cmd: &Command) -> Result<Output, CliError> {
-    let Command::Calibrate { imu, poses, noise, gravity } = cmd else { unreachable!() };
+    let Command::Calibrate {
+        imu,
+        poses,
+        noise,
+        gravity,
+    } = cmd
+    else {
+        unreachable!()
+    };
     let noise = noise_or_default(noise.as_ref())?;
     let samples = read_euroc_imu(imu)?;
     check_si_units(&samples, &imu.display().to_string())?;
@@ -58,7 +69,11 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         let mut kp: Vec<KnownPose> = Vec::new();
         for s in gt.iter().filter(|s| s.t_ns >= t0 && s.t_ns <= t1) {
             if kp.last().is_none_or(|l| s.t_ns - l.t_ns >= 500_000_000) {
-                kp.push(KnownPose { t_ns: s.t_ns, r: s.rotation(), p: s.p });
+                kp.push(KnownPose {
+                    t_ns: s.t_ns,
+                    r: s.rotation(),
+                    p: s.p,
+                });
             }
         }
         if kp.len() < 3 {
@@ -67,8 +82,11 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
                 pfile.display()
             )));
         }
-        let params = PreintParams::from_noise(&noise).with_scheme(Scheme::Midpoint).with_gravity(g);
-        let c = calibrate_known_poses(&samples, &kp, &KnownPoseOptions::new(params)).map_err(fail)?;
+        let params = PreintParams::from_noise(&noise)
+            .with_scheme(Scheme::Midpoint)
+            .with_gravity(g);
+        let c =
+            calibrate_known_poses(&samples, &kp, &KnownPoseOptions::new(params)).map_err(fail)?;
         let json = json!({
             "model": "known-poses", "poses": kp.len(),
             "gyro_bias": list(&c.bias.gyro), "gyro_bias_std": list(&c.gyro_bias_std),
@@ -79,16 +97,34 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         });
         let human = format!(
             "known-pose calibration ({} poses from {}):\n  b_g = [{:.6}, {:.6}, {:.6}] ± [{:.1e}, {:.1e}, {:.1e}] rad/s\n  b_a = [{:.4}, {:.4}, {:.4}] ± [{:.1e}, {:.1e}, {:.1e}] m/s²\n  gravity tilt {:.3}°, χ²/dof = {:.2}, {} iterations\n",
-            kp.len(), pfile.display(), c.bias.gyro.x, c.bias.gyro.y, c.bias.gyro.z, c.gyro_bias_std.x, c.gyro_bias_std.y,
-            c.gyro_bias_std.z, c.bias.acc.x, c.bias.acc.y, c.bias.acc.z, c.acc_bias_std.x, c.acc_bias_std.y, c.acc_bias_std.z,
-            c.gravity_tilt.to_degrees(), c.chi2 / c.dof.max(1) as f64, c.iterations
+            kp.len(),
+            pfile.display(),
+            c.bias.gyro.x,
+            c.bias.gyro.y,
+            c.bias.gyro.z,
+            c.gyro_bias_std.x,
+            c.gyro_bias_std.y,
+            c.gyro_bias_std.z,
+            c.bias.acc.x,
+            c.bias.acc.y,
+            c.bias.acc.z,
+            c.acc_bias_std.x,
+            c.acc_bias_std.y,
+            c.acc_bias_std.z,
+            c.gravity_tilt.to_degrees(),
+            c.chi2 / c.dof.max(1) as f64,
+            c.iterations
         );
         return Ok(Output { human, json });
     }
 
-    let still = detect_still_intervals(&samples, &StillOptions::from_noise(&noise, rate)).map_err(fail)?;
+    let still =
+        detect_still_intervals(&samples, &StillOptions::from_noise(&noise, rate)).map_err(fail)?;
     if distinct_attitudes(&samples, &still) >= 3 {
-        let opts = MultiPoseOptions { gravity: g, ..Default::default() };
+        let opts = MultiPoseOptions {
+            gravity: g,
+            ..Default::default()
+        };
         let c = calibrate_multi_pose(&samples, &noise, &opts).map_err(fail)?;
         let fits: Vec<Value> = c.fits.iter().map(|f| json!({"model": format!("{:?}", f.model), "chi2": f.chi2,
             "params": f.params, "bic": f.bic, "identifiable": f.identifiable, "converged": f.converged})).collect();
@@ -105,14 +141,34 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         });
         let human = format!(
             "multi-position calibration: {} still intervals; model {:?} ({})\n  b_g = [{:.6}, {:.6}, {:.6}] ± [{:.1e}, {:.1e}, {:.1e}] rad/s\n  b_a = [{:.4}, {:.4}, {:.4}] ± [{:.1e}, {:.1e}, {:.1e}] m/s²\n",
-            c.intervals.len(), c.model, c.reason, c.gyro_bias.x, c.gyro_bias.y, c.gyro_bias.z, c.gyro_bias_std.x,
-            c.gyro_bias_std.y, c.gyro_bias_std.z, c.acc_bias.x, c.acc_bias.y, c.acc_bias.z, c.acc_bias_std.x,
-            c.acc_bias_std.y, c.acc_bias_std.z
+            c.intervals.len(),
+            c.model,
+            c.reason,
+            c.gyro_bias.x,
+            c.gyro_bias.y,
+            c.gyro_bias.z,
+            c.gyro_bias_std.x,
+            c.gyro_bias_std.y,
+            c.gyro_bias_std.z,
+            c.acc_bias.x,
+            c.acc_bias.y,
+            c.acc_bias.z,
+            c.acc_bias_std.x,
+            c.acc_bias_std.y,
+            c.acc_bias_std.z
         );
         return Ok(Output { human, json });
     }
 
-    let c = calibrate_static(&samples, &noise, &StaticOptions { gravity: g, ..Default::default() }).map_err(fail)?;
+    let c = calibrate_static(
+        &samples,
+        &noise,
+        &StaticOptions {
+            gravity: g,
+            ..Default::default()
+        },
+    )
+    .map_err(fail)?;
     let json = json!({
         "model": "static-single-attitude",
         "gyro_bias": list(&c.gyro_bias), "gyro_bias_std": list(&c.gyro_bias_std),
@@ -125,8 +181,18 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
     });
     let human = format!(
         "static calibration (one attitude, {:.1} s):\n  b_g = [{:.6}, {:.6}, {:.6}] ± [{:.1e}, {:.1e}, {:.1e}] rad/s\n  roll {:.4}° ± {:.1e}°, pitch {:.4}° ± {:.1e}°\n  b_a: not estimated ({})\n",
-        c.duration_s, c.gyro_bias.x, c.gyro_bias.y, c.gyro_bias.z, c.gyro_bias_std.x, c.gyro_bias_std.y, c.gyro_bias_std.z,
-        c.roll.to_degrees(), c.roll_std.to_degrees(), c.pitch.to_degrees(), c.pitch_std.to_degrees(), c.acc_bias_note
+        c.duration_s,
+        c.gyro_bias.x,
+        c.gyro_bias.y,
+        c.gyro_bias.z,
+        c.gyro_bias_std.x,
+        c.gyro_bias_std.y,
+        c.gyro_bias_std.z,
+        c.roll.to_degrees(),
+        c.roll_std.to_degrees(),
+        c.pitch.to_degrees(),
+        c.pitch_std.to_degrees(),
+        c.acc_bias_note
     );
     Ok(Output { human, json })
 }

@@ -54,7 +54,9 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
     };
     let scheme = parse_scheme(scheme)?;
     if !(gravity.is_finite() && *gravity >= 0.0) {
-        return Err(CliError::Usage(format!("--gravity must be a non-negative number, got {gravity}")));
+        return Err(CliError::Usage(format!(
+            "--gravity must be a non-negative number, got {gravity}"
+        )));
     }
     let noise = noise_or_default(noise.as_ref())?;
     let samples = read_euroc_imu(imu)?;
@@ -70,7 +72,10 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         .with_gravity(Vector3::new(0.0, 0.0, -gravity));
     let m = preintegrate(&params, &bias, &samples, t_i, t_j)
         .map_err(|e| CliError::Failed(format!("{}: {e}", imu.display())))?;
-    let n_used = samples.iter().filter(|s| s.t_ns >= t_i && s.t_ns <= t_j).count();
+    let n_used = samples
+        .iter()
+        .filter(|s| s.t_ns >= t_i && s.t_ns <= t_j)
+        .count();
     let jac = &m.jac;
     let json = json!({
         "scheme": scheme_name(scheme),
@@ -96,11 +101,33 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         },
     });
     let mut h = String::new();
-    let _ = writeln!(h, "{}: {} samples, scheme {}, Δt = {:.9} s", imu.display(), n_used, scheme_name(scheme), m.delta_t);
+    let _ = writeln!(
+        h,
+        "{}: {} samples, scheme {}, Δt = {:.9} s",
+        imu.display(),
+        n_used,
+        scheme_name(scheme),
+        m.delta_t
+    );
     let phi = m.delta_r.log();
-    let _ = writeln!(h, "ΔR = Exp([{:.9}, {:.9}, {:.9}]) (rotation vector, rad; |φ| = {:.6}°)", phi.x, phi.y, phi.z, phi.norm().to_degrees());
-    let _ = writeln!(h, "Δv = [{:.9}, {:.9}, {:.9}] m/s (body frame i, gravity excluded)", m.delta_v.x, m.delta_v.y, m.delta_v.z);
-    let _ = writeln!(h, "Δp = [{:.9}, {:.9}, {:.9}] m", m.delta_p.x, m.delta_p.y, m.delta_p.z);
+    let _ = writeln!(
+        h,
+        "ΔR = Exp([{:.9}, {:.9}, {:.9}]) (rotation vector, rad; |φ| = {:.6}°)",
+        phi.x,
+        phi.y,
+        phi.z,
+        phi.norm().to_degrees()
+    );
+    let _ = writeln!(
+        h,
+        "Δv = [{:.9}, {:.9}, {:.9}] m/s (body frame i, gravity excluded)",
+        m.delta_v.x, m.delta_v.y, m.delta_v.z
+    );
+    let _ = writeln!(
+        h,
+        "Δp = [{:.9}, {:.9}, {:.9}] m",
+        m.delta_p.x, m.delta_p.y, m.delta_p.z
+    );
     let sd: Vec<f64> = (0..9).map(|i| m.cov[(i, i)].sqrt()).collect();
     let _ = writeln!(
         h,
@@ -109,7 +136,13 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
     );
     let _ = writeln!(h, "covariance, tangent order [δφ, δv, δp]:");
     h.push_str(&fmt_matrix(&m.cov, "  "));
-    for (name, j) in [("∂ΔR/∂b_g", &jac.d_r_d_bg), ("∂Δv/∂b_g", &jac.d_v_d_bg), ("∂Δv/∂b_a", &jac.d_v_d_ba), ("∂Δp/∂b_g", &jac.d_p_d_bg), ("∂Δp/∂b_a", &jac.d_p_d_ba)] {
+    for (name, j) in [
+        ("∂ΔR/∂b_g", &jac.d_r_d_bg),
+        ("∂Δv/∂b_g", &jac.d_v_d_bg),
+        ("∂Δv/∂b_a", &jac.d_v_d_ba),
+        ("∂Δp/∂b_g", &jac.d_p_d_bg),
+        ("∂Δp/∂b_a", &jac.d_p_d_ba),
+    ] {
         let _ = writeln!(h, "{name}:");
         h.push_str(&fmt_matrix(j, "  "));
     }

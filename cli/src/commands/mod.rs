@@ -44,9 +44,9 @@ pub mod advise;
 pub mod allan;
 pub mod bench_steps;
 pub mod calibrate;
+pub mod integrate;
 pub mod report;
 pub mod simulate;
-pub mod integrate;
 pub mod speed;
 
 /// A 3×3 (or any) matrix as a JSON list of rows.

@@ -7,9 +7,22 @@ use preint::io::read_kalibr_yaml;
 use serde_json::json;
 
 pub fn run(cmd: &Command) -> Result<Output, CliError> {
-    let Command::Simulate { scene, rate, duration, noise, seed, out } = cmd else { unreachable!() };
+    let Command::Simulate {
+        scene,
+        rate,
+        duration,
+        noise,
+        seed,
+        out,
+    } = cmd
+    else {
+        unreachable!()
+    };
     let sc = sim::scene_by_name(scene).ok_or_else(|| {
-        CliError::Usage(format!("unknown scene `{scene}`; expected one of {}", sim::SCENE_NAMES.join(", ")))
+        CliError::Usage(format!(
+            "unknown scene `{scene}`; expected one of {}",
+            sim::SCENE_NAMES.join(", ")
+        ))
     })?;
     let noise_model: Option<ImuNoise> = match noise.as_deref() {
         Some("none") => None,
@@ -20,8 +33,10 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         Some(n) => sim::SimConfig::with_noise(n),
         None => sim::SimConfig::noise_free(),
     };
-    let data = sim::simulate(sc.as_ref(), *rate, *duration, &cfg, *seed).map_err(|e| CliError::Failed(e.to_string()))?;
-    std::fs::create_dir_all(out).map_err(|e| CliError::Failed(format!("{}: {e}", out.display())))?;
+    let data = sim::simulate(sc.as_ref(), *rate, *duration, &cfg, *seed)
+        .map_err(|e| CliError::Failed(e.to_string()))?;
+    std::fs::create_dir_all(out)
+        .map_err(|e| CliError::Failed(format!("{}: {e}", out.display())))?;
     let yaml_noise = noise_model.unwrap_or(ImuNoise::zero(*rate));
     let files: Vec<String> = sim::write_dataset(out, &data, &yaml_noise)
         .map_err(|e| CliError::Failed(e.to_string()))?
@@ -35,7 +50,11 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
     let human = format!(
         "simulated `{scene}`: {} samples at {rate} Hz over {duration} s (seed {seed}, noise {}); wrote {}\n",
         data.samples.len(),
-        if noise_model.is_some() { "on, bias random walk on" } else { "off" },
+        if noise_model.is_some() {
+            "on, bias random walk on"
+        } else {
+            "off"
+        },
         files.join(", ")
     );
     Ok(Output { human, json })

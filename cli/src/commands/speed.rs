@@ -21,23 +21,39 @@ pub fn synthetic_stream(n: usize) -> Vec<ImuSample> {
             let t = k as f64 * 0.005;
             ImuSample::new(
                 k as i64 * 5_000_000,
-                Vector3::new(0.3 * (1.1 * t).sin(), 0.2 * (0.7 * t).cos(), 0.5 * (0.3 * t).sin() + 0.1),
-                Vector3::new(0.5 * (0.9 * t).sin(), 0.3 * (1.3 * t).cos(), 9.81 + 0.2 * (0.5 * t).sin()),
+                Vector3::new(
+                    0.3 * (1.1 * t).sin(),
+                    0.2 * (0.7 * t).cos(),
+                    0.5 * (0.3 * t).sin() + 0.1,
+                ),
+                Vector3::new(
+                    0.5 * (0.9 * t).sin(),
+                    0.3 * (1.3 * t).cos(),
+                    9.81 + 0.2 * (0.5 * t).sin(),
+                ),
             )
         })
         .collect()
 }
 
 /// Best-of-`runs` ns/sample of one scheme and level over `samples`.
-pub fn ns_per_sample(scheme: Scheme, level: Level, samples: &[ImuSample], runs: usize) -> Result<f64, CliError> {
-    let mut params = PreintParams::from_noise(&ImuNoise::euroc()).with_scheme(scheme).with_level(level);
+pub fn ns_per_sample(
+    scheme: Scheme,
+    level: Level,
+    samples: &[ImuSample],
+    runs: usize,
+) -> Result<f64, CliError> {
+    let mut params = PreintParams::from_noise(&ImuNoise::euroc())
+        .with_scheme(scheme)
+        .with_level(level);
     params.keep_samples = false;
     let mut best = f64::INFINITY;
     for _ in 0..runs {
         let mut p = Preintegrator::new(params.clone(), ImuBias::zero())
             .map_err(|e| CliError::Failed(e.to_string()))?;
         let t0 = Instant::now();
-        p.integrate_slice(samples).map_err(|e| CliError::Failed(e.to_string()))?;
+        p.integrate_slice(samples)
+            .map_err(|e| CliError::Failed(e.to_string()))?;
         let m = p.finish().map_err(|e| CliError::Failed(e.to_string()))?;
         let dt = t0.elapsed().as_secs_f64();
         std::hint::black_box(&m);
@@ -47,19 +63,35 @@ pub fn ns_per_sample(scheme: Scheme, level: Level, samples: &[ImuSample], runs: 
 }
 
 pub fn run(cmd: &Command) -> Result<Output, CliError> {
-    let Command::Speed { samples } = cmd else { unreachable!() };
+    let Command::Speed { samples } = cmd else {
+        unreachable!()
+    };
     if *samples < 10 {
         return Err(CliError::Usage("--samples must be at least 10".into()));
     }
     let stream = synthetic_stream(*samples);
     let mut rows = Vec::new();
-    let mut h = format!("{} samples, best of 5 runs, ns per sample (this machine):\n", samples);
-    let _ = writeln!(h, "{:<10} {:>12} {:>16} {:>14}", "scheme", "deltas only", "+cov+bias jac", "+15x15 cov");
+    let mut h = format!(
+        "{} samples, best of 5 runs, ns per sample (this machine):\n",
+        samples
+    );
+    let _ = writeln!(
+        h,
+        "{:<10} {:>12} {:>16} {:>14}",
+        "scheme", "deltas only", "+cov+bias jac", "+15x15 cov"
+    );
     for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4] {
         let d = ns_per_sample(scheme, Level::Deltas, &stream, 5)?;
         let c = ns_per_sample(scheme, Level::Covariance, &stream, 5)?;
         let c15 = ns_per_sample(scheme, Level::Combined, &stream, 5)?;
-        let _ = writeln!(h, "{:<10} {:>12.1} {:>16.1} {:>14.1}", scheme_name(scheme), d, c, c15);
+        let _ = writeln!(
+            h,
+            "{:<10} {:>12.1} {:>16.1} {:>14.1}",
+            scheme_name(scheme),
+            d,
+            c,
+            c15
+        );
         rows.push(json!({"scheme": scheme_name(scheme), "ns_per_sample": {"deltas": d, "covariance": c, "combined": c15}}));
     }
     let json = json!({"samples": samples, "rate_hz": 200.0, "schemes": rows,
