@@ -49,6 +49,21 @@ pub mod report;
 pub mod simulate;
 pub mod speed;
 
+/// A progress bar on stderr with `len` steps, or `None` when stderr is not a terminal (CI,
+/// pipes, `--json` consumers see nothing extra).
+pub fn progress(len: u64, what: &str) -> Option<indicatif::ProgressBar> {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let pb = indicatif::ProgressBar::new(len);
+    if let Ok(style) = indicatif::ProgressStyle::with_template("{prefix} [{bar:30}] {pos}/{len} {msg} ({elapsed})") {
+        pb.set_style(style.progress_chars("=> "));
+    }
+    pb.set_prefix(what.to_string());
+    Some(pb)
+}
+
 /// A 3×3 (or any) matrix as a JSON list of rows.
 pub fn rows<R: nalgebra::Dim, C: nalgebra::Dim, S: nalgebra::RawStorage<f64, R, C>>(
     m: &nalgebra::Matrix<f64, R, C, S>,
