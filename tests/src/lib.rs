@@ -1,0 +1,184 @@
+//! # evidence — shared helpers of the cross-crate evidence suite
+//!
+//! The tests live in `tests/tests/*.rs`, one file per topic; each file's header says what it
+//! asserts and why each bound is what it is. This library only holds helpers that compute
+//! *nothing* that is asserted against: a seeded Gaussian generator (so the suite does not depend
+//! on a particular `rand` version's stream), paths, statistics (median, log-log slope) and the
+//! JSON writer for `target/evidence/`.
+//!
+//! Environment:
+//! - `PREINT_FULL=1` runs the heavy Monte Carlo / long-stream cases at full size (see each test).
+//! - `EVIDENCE_OUT=DIR` writes the JSON records to `DIR` instead of `<workspace>/target/evidence`.
+
+use lie::SO3;
+use std::path::PathBuf;
+
+/// `<workspace>/tests/data` (real recordings, see its README).
+pub fn data_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data")
+}
+
+/// True when `PREINT_FULL=1` (full-size heavy runs).
+pub fn full_run() -> bool {
+    std::env::var("PREINT_FULL").is_ok_and(|v| v == "1")
+}
+
+/// Directory for JSON records: `$EVIDENCE_OUT` or `<workspace>/target/evidence` (created).
+pub fn out_dir() -> PathBuf {
+    let dir = std::env::var_os("EVIDENCE_OUT")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target/evidence"));
+    std::fs::create_dir_all(&dir).expect("create evidence output directory");
+    dir
+}
+
+/// Writes `value` pretty-printed to `out_dir()/name` and returns the path.
+pub fn write_json(name: &str, value: &serde_json::Value) -> PathBuf {
+    let path = out_dir().join(name);
+    std::fs::write(&path, serde_json::to_string_pretty(value).unwrap() + "\n")
+        .expect("write evidence JSON");
+    path
+}
+
+/// Rotation angle [rad] of `aᵀ b` (geodesic distance on SO(3)).
+pub fn rot_angle(a: &SO3, b: &SO3) -> f64 {
+    a.inverse().compose(b).log().norm()
+}
+
+/// Median (of a copy); NaN-free input expected. Panics on empty input.
+pub fn median(v: &[f64]) -> f64 {
+    quantile(v, 0.5)
+}
+
+/// Empirical quantile with linear interpolation between order statistics.
+pub fn quantile(v: &[f64], q: f64) -> f64 {
+    assert!(!v.is_empty(), "quantile of an empty set");
+    let mut s = v.to_vec();
+    s.sort_by(|a, b| a.partial_cmp(b).expect("NaN in quantile input"));
+    let x = q * (s.len() - 1) as f64;
+    let (lo, hi) = (x.floor() as usize, x.ceil() as usize);
+    s[lo] + (s[hi] - s[lo]) * (x - lo as f64)
+}
+
+/// Mean of a slice.
+pub fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len() as f64
+}
+
+/// Least-squares slope of `log y` against `log x`.
+pub fn loglog_slope(x: &[f64], y: &[f64]) -> f64 {
+    assert_eq!(x.len(), y.len());
+    assert!(x.len() >= 2, "need at least two points for a slope");
+    let lx: Vec<f64> = x.iter().map(|v| v.ln()).collect();
+    let ly: Vec<f64> = y.iter().map(|v| v.ln()).collect();
+    let (mx, my) = (mean(&lx), mean(&ly));
+    let sxy: f64 = lx.iter().zip(&ly).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let sxx: f64 = lx.iter().map(|a| (a - mx) * (a - mx)).sum();
+    sxy / sxx
+}
+
+/// Wraps an angle to (−π, π].
+pub fn wrap_pi(a: f64) -> f64 {
+    let t = std::f64::consts::TAU;
+    let mut r = a.rem_euclid(t);
+    if r > std::f64::consts::PI {
+        r -= t;
+    }
+    r
+}
+
+/// Deterministic Gaussian generator: xoshiro256** seeded by SplitMix64, Box–Muller normals.
+/// Self-contained so the Monte Carlo results do not change with a dependency's version.
+#[derive(Clone, Debug)]
+pub struct Gauss {
+    s: [u64; 4],
+    spare: Option<f64>,
+}
+
+impl Gauss {
+    /// A generator from a 64-bit seed.
+    pub fn new(seed: u64) -> Self {
+        let mut z = seed;
+        let mut next = || {
+            z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut x = z;
+            x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            x ^ (x >> 31)
+        };
+        Self {
+            s: [next(), next(), next(), next()],
+            spare: None,
+        }
+    }
+
+    /// Next raw 64-bit value (xoshiro256**).
+    pub fn next_u64(&mut self) -> u64 {
+        let s = &mut self.s;
+        let r = s[1].wrapping_mul(5).rotate_left(7).wrapping_mul(9);
+        let t = s[1] << 17;
+        s[2] ^= s[0];
+        s[3] ^= s[1];
+        s[1] ^= s[2];
+        s[0] ^= s[3];
+        s[2] ^= t;
+        s[3] = s[3].rotate_left(45);
+        r
+    }
+
+    /// Uniform in (0, 1).
+    pub fn uniform(&mut self) -> f64 {
+        ((self.next_u64() >> 11) as f64 + 0.5) * (1.0 / (1u64 << 53) as f64)
+    }
+
+    /// Standard normal.
+    pub fn normal(&mut self) -> f64 {
+        if let Some(z) = self.spare.take() {
+            return z;
+        }
+        let (u1, u2) = (self.uniform(), self.uniform());
+        let r = (-2.0 * u1.ln()).sqrt();
+        let (s, c) = (std::f64::consts::TAU * u2).sin_cos();
+        self.spare = Some(r * s);
+        r * c
+    }
+
+    /// A vector of three independent normals scaled by `sigma`.
+    pub fn normal3(&mut self, sigma: f64) -> nalgebra::Vector3<f64> {
+        nalgebra::Vector3::new(self.normal(), self.normal(), self.normal()) * sigma
+    }
+}
+
+/// χ² quantiles used by the suite (tabulated values, e.g. scipy.stats.chi2.ppf).
+pub mod chi2 {
+    /// χ²₉ 0.99 quantile.
+    pub const Q99_DOF9: f64 = 21.665_994;
+    /// χ²₃ 0.99 quantile.
+    pub const Q99_DOF3: f64 = 11.344_867;
+    /// χ²₁₅ 0.99 quantile.
+    pub const Q99_DOF15: f64 = 30.577_914;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gauss_has_unit_variance() {
+        let mut g = Gauss::new(7);
+        let n = 200_000;
+        let xs: Vec<f64> = (0..n).map(|_| g.normal()).collect();
+        let m = mean(&xs);
+        let var = xs.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (n - 1) as f64;
+        // Std of the mean is 1/√n ≈ 0.0022; of the variance √(2/n) ≈ 0.0032: 5σ bounds.
+        assert!(m.abs() < 0.012, "mean {m}");
+        assert!((var - 1.0).abs() < 0.016, "variance {var}");
+    }
+
+    #[test]
+    fn slope_of_a_power_law() {
+        let x = [1.0, 2.0, 4.0, 8.0];
+        let y: Vec<f64> = x.iter().map(|v: &f64| 3.0 * v.powf(-2.5)).collect();
+        assert!((loglog_slope(&x, &y) + 2.5).abs() < 1e-12);
+    }
+}
