@@ -138,9 +138,9 @@ impl RowCtx<'_> {
     fn increasing(&self, prev: Option<i64>, t: i64) -> Result<(), IoError> {
         match prev {
             Some(p) if t == p => Err(self.err(format!("duplicate timestamp {t} ns"))),
-            Some(p) if t < p => Err(self.err(format!(
-                "timestamp {t} ns decreases (previous row {p} ns)"
-            ))),
+            Some(p) if t < p => {
+                Err(self.err(format!("timestamp {t} ns decreases (previous row {p} ns)")))
+            }
             _ => Ok(()),
         }
     }
@@ -333,8 +333,22 @@ pub fn euroc_groundtruth_string(states: &[GroundTruthState]) -> String {
     for x in states {
         let q = x.q.quaternion();
         let vals = [
-            x.p.x, x.p.y, x.p.z, q.w, q.i, q.j, q.k, x.v.x, x.v.y, x.v.z, x.bias.gyro.x,
-            x.bias.gyro.y, x.bias.gyro.z, x.bias.acc.x, x.bias.acc.y, x.bias.acc.z,
+            x.p.x,
+            x.p.y,
+            x.p.z,
+            q.w,
+            q.i,
+            q.j,
+            q.k,
+            x.v.x,
+            x.v.y,
+            x.v.z,
+            x.bias.gyro.x,
+            x.bias.gyro.y,
+            x.bias.gyro.z,
+            x.bias.acc.x,
+            x.bias.acc.y,
+            x.bias.acc.z,
         ];
         let _ = write!(s, "{}", x.t_ns);
         for v in vals {

@@ -24,9 +24,9 @@ pub mod scheme;
 pub mod window;
 
 pub use error::PreintError;
-pub use params::{Level, PreintParams, Scheme};
-pub use preintegrator::{BiasUpdate, Preintegrator};
-pub use window::preintegrate;
 pub use factor::{CombinedImuFactor, FactorError, ImuFactor};
 pub use merge::{MergeError, merge};
 pub use navstate::{NavState, predict};
+pub use params::{Level, PreintParams, Scheme};
+pub use preintegrator::{BiasUpdate, Preintegrator};
+pub use window::preintegrate;

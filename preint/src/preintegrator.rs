@@ -92,22 +92,20 @@ impl Core {
                 Scheme::Euler => {
                     let n0 = *self.node(k);
                     let h = span_s(n0.t_ns, self.node(k + 1).t_ns);
+                    let r0 = self.d.r;
                     if let Some((tr, inp)) = euler::step::<LIN>(&mut self.d, &n0, h, k) {
-                        self.propagate(cfg, noise, &tr, &[inp]);
+                        let cp = 0.5 * h * h;
+                        self.e.step_euler(&tr, &inp, &r0, cp, noise, &cfg.walk);
+                        self.int_cov(cfg, &tr);
                     }
                 }
                 Scheme::Midpoint => {
                     let (n0, n1) = (*self.node(k), *self.node(k + 1));
                     let h = span_s(n0.t_ns, n1.t_ns);
-                    let (s0, s1) = if LIN {
-                        (self.cell_scale(k, total), self.cell_scale(k + 1, total))
-                    } else {
-                        (0.0, 0.0)
-                    };
-                    if let Some((tr, inp)) =
-                        midpoint::step::<LIN>(&mut self.d, &n0, &n1, h, k, s0, s1)
-                    {
-                        self.propagate(cfg, noise, &tr, &inp);
+                    if let Some((tr, g)) = midpoint::step::<LIN>(&mut self.d, &n0, &n1, h) {
+                        let s0 = self.cell_scale(k, total);
+                        self.e.step_mid(&tr, &g, s0, noise, &cfg.walk);
+                        self.int_cov(cfg, &tr);
                     }
                 }
                 Scheme::Rk4 => {
@@ -141,9 +139,23 @@ impl Core {
         }
     }
 
+    /// Midpoint, end of the window (`fin`, exactly `self.n` nodes): the last sample's noise.
+    #[inline]
+    fn finish_tail<N: NoiseQ>(&mut self, cfg: &Cfg, noise: &N) {
+        if cfg.scheme == Scheme::Midpoint && self.n >= 2 {
+            let s = self.cell_scale(self.n - 1, self.n);
+            self.e.finish_mid(noise, s);
+        }
+    }
+
     #[inline(always)]
     fn propagate<N: NoiseQ>(&mut self, cfg: &Cfg, noise: &N, tr: &Transition, inp: &[Input]) {
         self.e.step(tr, inp, noise, &cfg.walk);
+        self.int_cov(cfg, tr);
+    }
+
+    #[inline(always)]
+    fn int_cov(&mut self, cfg: &Cfg, tr: &Transition) {
         if let Some(ic) = &cfg.int_cov {
             // GTSAM: integration noise added to δp in the body-(k+1) chart, i.e.
             // ΔR_k+1 Σ_int ΔR_k+1ᵀ h in frame i.
@@ -357,8 +369,18 @@ impl Preintegrator {
     fn run(core: &mut Core, cfg: &Cfg, noise: &NoiseKind, lin: bool, fin: bool) {
         match (lin, noise) {
             (false, _) => core.advance::<IsoQ, false>(cfg, &IsoQ { g: 0.0, a: 0.0 }, fin),
-            (true, NoiseKind::Iso(q)) => core.advance::<IsoQ, true>(cfg, q, fin),
-            (true, NoiseKind::Gen(q)) => core.advance::<GenQ, true>(cfg, q, fin),
+            (true, NoiseKind::Iso(q)) => {
+                core.advance::<IsoQ, true>(cfg, q, fin);
+                if fin {
+                    core.finish_tail(cfg, q);
+                }
+            }
+            (true, NoiseKind::Gen(q)) => {
+                core.advance::<GenQ, true>(cfg, q, fin);
+                if fin {
+                    core.finish_tail(cfg, q);
+                }
+            }
         }
     }
 

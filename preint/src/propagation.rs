@@ -171,6 +171,29 @@ fn add_sym(p: &mut Sym9, w: &Blk96, g: &Blk96) {
 pub(crate) trait NoiseQ: Copy {
     /// `Γ Q` for `Q = s · diag(Σ_g, Σ_a)`.
     fn gq(&self, g: &Blk96, s: f64) -> Blk96;
+    /// `P += Γ Q Γᵀ` for one sample's gain in [`NGain`] form; with `GV = false` the gyro
+    /// rows of v and p are taken as zero.
+    fn add_gqg<const GV: bool>(&self, p: &mut Sym9, g: &NGain, s: f64);
+}
+
+/// One sample's noise gain whose accelerometer blocks are `R·cv` (v row) and `R·cp` (p row),
+/// `R` a rotation, so that `Γ_a Q_a Γ_aᵀ = (cv, cp)² · R Σ_a Rᵀ s`.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct NGain {
+    pub rg: M3,
+    pub vg: M3,
+    pub pg: M3,
+    pub r: M3,
+    pub cv: f64,
+    pub cp: f64,
+}
+
+/// Adds `m·(cv², cv·cp, cp²)` to the v–v, v–p and p–p blocks.
+#[inline(always)]
+fn add_acc(p: &mut Sym9, m: &M3, cv: f64, cp: f64) {
+    p.vv += m * (cv * cv);
+    p.vp += m * (cv * cp);
+    p.pp += m * (cp * cp);
 }
 
 /// Isotropic `Σ_g = g I`, `Σ_a = a I`: scalar products only.
@@ -192,6 +215,37 @@ impl NoiseQ for IsoQ {
             pa: x.pa * a,
         }
     }
+
+    #[inline(always)]
+    fn add_gqg<const GV: bool>(&self, p: &mut Sym9, g: &NGain, s: f64) {
+        // ΔR Σ_a ΔRᵀ = a I: the accelerometer noise adds to diagonals only.
+        let gs = self.g * s;
+        p.rr += (g.rg * g.rg.transpose()) * gs;
+        if GV {
+            p.rv += (g.rg * g.vg.transpose()) * gs;
+            p.rp += (g.rg * g.pg.transpose()) * gs;
+            p.vv += (g.vg * g.vg.transpose()) * gs;
+            p.vp += (g.vg * g.pg.transpose()) * gs;
+            p.pp += (g.pg * g.pg.transpose()) * gs;
+        }
+        let as_ = self.a * s;
+        let (dv, dvp, dp) = (
+            as_ * (g.cv * g.cv),
+            as_ * (g.cv * g.cp),
+            as_ * (g.cp * g.cp),
+        );
+        for i in 0..3 {
+            p.vv[(i, i)] += dv;
+            p.vp[(i, i)] += dvp;
+            p.pp[(i, i)] += dp;
+        }
+    }
+}
+
+/// `½(m + mᵀ)`.
+#[inline(always)]
+fn sym(m: M3) -> M3 {
+    (m + m.transpose()) * 0.5
 }
 
 /// General (anisotropic) `Σ_g`, `Σ_a`.
@@ -205,6 +259,23 @@ impl NoiseQ for GenQ {
     #[inline(always)]
     fn gq(&self, x: &Blk96, s: f64) -> Blk96 {
         x.mul_diag(&(self.g * s), &(self.a * s))
+    }
+
+    #[inline(always)]
+    fn add_gqg<const GV: bool>(&self, p: &mut Sym9, g: &NGain, s: f64) {
+        let qs = self.g * s;
+        let wr = g.rg * qs;
+        p.rr += sym(wr * g.rg.transpose());
+        if GV {
+            let wv = g.vg * qs;
+            p.rv += wr * g.vg.transpose();
+            p.rp += wr * g.pg.transpose();
+            p.vv += sym(wv * g.vg.transpose());
+            p.vp += wv * g.pg.transpose();
+            p.pp += sym((g.pg * qs) * g.pg.transpose());
+        }
+        let ra = sym(g.r * (self.a * s) * g.r.transpose());
+        add_acc(p, &ra, g.cv, g.cp);
     }
 }
 
@@ -242,6 +313,9 @@ pub(crate) struct ErrorState {
     pub pbb_g: M3,
     pub pbb_a: M3,
     pending: [Pending; SLOTS],
+    /// Midpoint: gain of the last interval's end sample (its noise is not yet in `p`, which
+    /// holds the covariance of `e − Γ n_end`; [`ErrorState::finish_mid`] adds it).
+    mid: NGain,
 }
 
 impl Default for ErrorState {
@@ -257,6 +331,7 @@ impl Default for ErrorState {
                 id: usize::MAX,
                 x: Blk96::default(),
             }; SLOTS],
+            mid: NGain::default(),
         }
     }
 }
@@ -269,7 +344,124 @@ pub(crate) struct BiasWalk {
     pub a: M3,
 }
 
+/// A midpoint interval's gains: both samples share the gyro gains `(rg, vg, pg)`; the
+/// accelerometer gains are `r0·(cv, cp)` (sample k) and `r1·(cv, cp)` (sample k+1).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct MidGain {
+    pub rg: M3,
+    pub vg: M3,
+    pub pg: M3,
+    pub r0: M3,
+    pub r1: M3,
+    pub cv: f64,
+    pub cp: f64,
+}
+
 impl ErrorState {
+    /// Propagates through an interval with a single input whose noise gain is `ng` (white
+    /// noise added once, no cross-covariance kept); `gsum` is the total gain for the bias
+    /// Jacobians and the combined terms.
+    #[inline(always)]
+    fn step_one<N: NoiseQ, const GV: bool>(
+        &mut self,
+        tr: &Transition,
+        ng: &NGain,
+        scale: f64,
+        gsum: &Blk96,
+        noise: &N,
+        walk: &BiasWalk,
+    ) {
+        let v = if walk.combined {
+            self.p_walk = tr.conjugate(&self.p_walk);
+            Some(tr.apply(&self.c))
+        } else {
+            None
+        };
+        self.p = tr.conjugate(&self.p);
+        noise.add_gqg::<GV>(&mut self.p, ng, scale);
+        if let Some(v) = v {
+            let half = gsum.mul_diag(&self.pbb_g, &self.pbb_a).scale(0.5);
+            let v = v.add(&half);
+            add_sym(&mut self.p_walk, &v, gsum);
+            self.c = v.add(&half);
+        }
+        self.pbb_g += walk.g * tr.h;
+        self.pbb_a += walk.a * tr.h;
+        let aj = tr.apply(&self.j);
+        self.j = aj.add(&gsum.scale(-1.0));
+    }
+
+    /// Euler interval: one input with zero gyro gains in the v and p rows and accelerometer
+    /// gains `r0·(h, ½h²)` (`gain.va = r0 h`, `gain.pa = r0 ½h²`).
+    #[inline(always)]
+    pub(crate) fn step_euler<N: NoiseQ>(
+        &mut self,
+        tr: &Transition,
+        inp: &Input,
+        r0: &M3,
+        cp: f64,
+        noise: &N,
+        walk: &BiasWalk,
+    ) {
+        let ng = NGain {
+            rg: inp.gain.rg,
+            vg: M3::zeros(),
+            pg: M3::zeros(),
+            r: *r0,
+            cv: tr.h,
+            cp,
+        };
+        self.step_one::<N, false>(tr, &ng, inp.scale, &inp.gain, noise, walk);
+    }
+
+    /// Midpoint interval. With `f_k = e_k − Γ_k−1,1 n_k` (independent of `n_k`),
+    /// `f_k+1 = A f_k + (A Γ_k−1,1 + Γ_k,0) n_k`: each sample's noise enters once, through
+    /// the merged gain; `s0` is sample k's noise scale.
+    #[inline(always)]
+    pub(crate) fn step_mid<N: NoiseQ>(
+        &mut self,
+        tr: &Transition,
+        g: &MidGain,
+        s0: f64,
+        noise: &N,
+        walk: &BiasWalk,
+    ) {
+        let m = &self.mid;
+        let h = tr.h;
+        let ng = NGain {
+            rg: m.rg + g.rg,
+            vg: m.vg - skew_mul(&tr.u1, &m.rg) + g.vg,
+            pg: m.pg + m.vg * h - skew_mul(&tr.u2, &m.rg) + g.pg,
+            r: g.r0,
+            cv: m.cv + g.cv,
+            cp: m.cp + h * m.cv + g.cp,
+        };
+        let gsum = Blk96 {
+            rg: g.rg + g.rg,
+            vg: g.vg + g.vg,
+            pg: g.pg + g.pg,
+            va: g.r0 * g.cv + g.r1 * g.cv,
+            pa: g.r0 * g.cp + g.r1 * g.cp,
+        };
+        self.mid = NGain {
+            rg: g.rg,
+            vg: g.vg,
+            pg: g.pg,
+            r: g.r1,
+            cv: g.cv,
+            cp: g.cp,
+        };
+        self.step_one::<N, true>(tr, &ng, s0, &gsum, noise, walk);
+    }
+
+    /// Midpoint, end of the window: adds the last sample's noise (scale `s` [1/s]).
+    #[inline]
+    pub(crate) fn finish_mid<N: NoiseQ>(&mut self, noise: &N, s: f64) {
+        let m = self.mid;
+        noise.add_gqg::<true>(&mut self.p, &m, s);
+        self.mid = NGain::default();
+    }
+
     /// Propagates through one interval (see module doc for the equations).
     #[inline(always)]
     pub(crate) fn step<N: NoiseQ>(

@@ -10,7 +10,11 @@ const HEADER: &str = "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_
 
 fn parse_err(text: &str) -> (u64, String) {
     match parse_euroc_imu(text, "imu.csv") {
-        Err(IoError::Parse { line, msg, source_name }) => {
+        Err(IoError::Parse {
+            line,
+            msg,
+            source_name,
+        }) => {
             assert_eq!(source_name, "imu.csv");
             (line, msg)
         }
@@ -20,7 +24,9 @@ fn parse_err(text: &str) -> (u64, String) {
 
 #[test]
 fn reads_euroc_rows_exactly() {
-    let text = format!("{HEADER}1403715273262142976,-0.099134701513277898,0.14730578886832138,0.02722713633111154,8.1476917083333333,-0.37592158333333331,-2.4026292499999999\n1403715273267142912,1e-3,2,3,4,5,6\n");
+    let text = format!(
+        "{HEADER}1403715273262142976,-0.099134701513277898,0.14730578886832138,0.02722713633111154,8.1476917083333333,-0.37592158333333331,-2.4026292499999999\n1403715273267142912,1e-3,2,3,4,5,6\n"
+    );
     let s = parse_euroc_imu(&text, "x").unwrap();
     assert_eq!(s.len(), 2);
     assert_eq!(s[0].t_ns, 1403715273262142976);
@@ -35,7 +41,10 @@ fn malformed_rows_name_line_and_problem() {
     let ok = "1000,0,0,0,0,0,9.81\n";
     let (line, msg) = parse_err(&format!("{HEADER}{ok}2000,0,0,0,0,9.81\n"));
     assert_eq!(line, 3);
-    assert!(msg.contains("expected 7 columns") && msg.contains("found 6"), "{msg}");
+    assert!(
+        msg.contains("expected 7 columns") && msg.contains("found 6"),
+        "{msg}"
+    );
 
     let (line, msg) = parse_err(&format!("{HEADER}{ok}2000,0,abc,0,0,0,9.81\n"));
     assert_eq!(line, 3);
@@ -61,7 +70,10 @@ fn malformed_rows_name_line_and_problem() {
     assert_eq!(line, 2);
     assert!(msg.contains("integer nanoseconds"), "{msg}");
 
-    assert!(matches!(parse_euroc_imu(HEADER, "e.csv"), Err(IoError::Empty { .. })));
+    assert!(matches!(
+        parse_euroc_imu(HEADER, "e.csv"),
+        Err(IoError::Empty { .. })
+    ));
     let err = read_euroc_imu(std::path::Path::new("/nonexistent/imu.csv")).unwrap_err();
     assert!(err.to_string().contains("/nonexistent/imu.csv"));
 }
@@ -70,18 +82,31 @@ fn malformed_rows_name_line_and_problem() {
 fn unit_check_flags_g_and_deg_per_s() {
     let mk = |w: f64, a: f64| -> Vec<ImuSample> {
         (0..10)
-            .map(|k| ImuSample::new(k * 5_000_000, Vector3::new(w, 0.0, 0.0), Vector3::new(0.0, 0.0, a)))
+            .map(|k| {
+                ImuSample::new(
+                    k * 5_000_000,
+                    Vector3::new(w, 0.0, 0.0),
+                    Vector3::new(0.0, 0.0, a),
+                )
+            })
             .collect()
     };
     assert!(check_si_units(&mk(0.1, 9.81), "ok").is_ok());
-    let e = check_si_units(&mk(0.1, 1.0), "g.csv").unwrap_err().to_string();
+    let e = check_si_units(&mk(0.1, 1.0), "g.csv")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("9.80665") && e.contains("g.csv"), "{e}");
-    let e = check_si_units(&mk(57.0, 9.81), "deg.csv").unwrap_err().to_string();
+    let e = check_si_units(&mk(57.0, 9.81), "deg.csv")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("deg/s"), "{e}");
 }
 
 fn finite() -> impl Strategy<Value = f64> {
-    prop_oneof![-1e3..1e3f64, any::<f64>().prop_filter("finite", |x| x.is_finite())]
+    prop_oneof![
+        -1e3..1e3f64,
+        any::<f64>().prop_filter("finite", |x| x.is_finite())
+    ]
 }
 
 proptest! {
@@ -123,23 +148,41 @@ fn groundtruth_errors() {
     assert_eq!(gt[0].rotation().matrix(), &nalgebra::Matrix3::identity());
     assert_eq!(gt[0].bias.acc, Vector3::new(0.1, 0.2, 0.3));
     let bad_q = "1000,1,2,3,2,0,0,0,0.1,0.2,0.3,0.01,0.02,0.03,0.1,0.2,0.3\n";
-    let e = parse_euroc_groundtruth(&format!("#h\n{bad_q}"), "gt.csv").unwrap_err().to_string();
+    let e = parse_euroc_groundtruth(&format!("#h\n{bad_q}"), "gt.csv")
+        .unwrap_err()
+        .to_string();
     assert!(e.starts_with("gt.csv:2:") && e.contains("norm 2"), "{e}");
-    let e = parse_euroc_groundtruth("1000,1,2\n", "gt.csv").unwrap_err().to_string();
+    let e = parse_euroc_groundtruth("1000,1,2\n", "gt.csv")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("expected 17 columns"), "{e}");
 }
 
 #[test]
 fn kalibr_yaml_round_trip_and_errors() {
     let n = ImuNoise::euroc();
-    assert_eq!(parse_kalibr_yaml(&kalibr_yaml_string(&n), "imu.yaml").unwrap(), n);
+    assert_eq!(
+        parse_kalibr_yaml(&kalibr_yaml_string(&n), "imu.yaml").unwrap(),
+        n
+    );
     // The EuRoC sensor.yaml style, with comments and extra keys.
     let text = "#Accelerometers\naccelerometer_noise_density: 2.0000e-3   # [ m / s^2 / sqrt(Hz) ]\naccelerometer_random_walk: 3.0000e-3\n\
                 gyroscope_noise_density: 1.6968e-04\ngyroscope_random_walk: 1.9393e-05\nrostopic: /imu0\nupdate_rate: 200.0\n";
     assert_eq!(parse_kalibr_yaml(text, "s.yaml").unwrap(), n);
     let missing = text.replace("update_rate: 200.0\n", "");
-    assert!(matches!(parse_kalibr_yaml(&missing, "s.yaml"), Err(IoError::MissingKey { key: "update_rate", .. })));
+    assert!(matches!(
+        parse_kalibr_yaml(&missing, "s.yaml"),
+        Err(IoError::MissingKey {
+            key: "update_rate",
+            ..
+        })
+    ));
     let negative = text.replace("1.6968e-04", "-1.6968e-04");
-    let e = parse_kalibr_yaml(&negative, "s.yaml").unwrap_err().to_string();
-    assert!(e.starts_with("s.yaml:4:") && e.contains("gyroscope_noise_density"), "{e}");
+    let e = parse_kalibr_yaml(&negative, "s.yaml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("s.yaml:4:") && e.contains("gyroscope_noise_density"),
+        "{e}"
+    );
 }

@@ -256,9 +256,15 @@ fn merge_equals_whole_window_crate_preintegrator_euler() {
     let run = |t_a, t_b| {
         let x = preintegrate(&params, &bias, &s, t_a, t_b).unwrap();
         let white = preintegrate(&p9, &bias, &s, t_a, t_b).unwrap().cov;
-        assert!((x.cov - white).amax() <= 1e-15 * white.amax(), "cov includes the bias random walk");
+        assert!(
+            (x.cov - white).amax() <= 1e-15 * white.amax(),
+            "cov includes the bias random walk"
+        );
         let walk = x.cov15.fixed_view::<9, 9>(0, 0) - x.cov;
-        assert!(walk.amax() > 1e-6 * white.amax(), "cov15 lost the random-walk part");
+        assert!(
+            walk.amax() > 1e-6 * white.amax(),
+            "cov15 lost the random-walk part"
+        );
         x
     };
     let (a, b, whole) = (run(t0, tk), run(tk, t1), run(t0, t1));

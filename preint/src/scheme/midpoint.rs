@@ -12,22 +12,18 @@
 //! which [`crate::propagation`] tracks through its cross-covariance.
 
 use super::{Deltas, Node};
-use crate::propagation::{Blk96, Input, Transition, skew_mul};
+use crate::propagation::{MidGain, Transition, skew_mul};
 use lie::so3::{RodriguesCoeffs, i_plus_hat_hat2};
 
-/// One midpoint interval between nodes `n0` (index `id0`, noise scale `s0` [1/s]) and `n1`
-/// (`s1`). Uses `d.u_last = ΔR_k a_k` and sets it to `ΔR_k+1 a_k+1`.
+/// One midpoint interval between nodes `n0` and `n1` of length `h` [s]. Uses
+/// `d.u_last = ΔR_k a_k` and sets it to `ΔR_k+1 a_k+1`.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn step<const LIN: bool>(
     d: &mut Deltas,
     n0: &Node,
     n1: &Node,
     h: f64,
-    id0: usize,
-    s0: f64,
-    s1: f64,
-) -> Option<(Transition, [Input; 2])> {
+) -> Option<(Transition, MidGain)> {
     let th = (n0.w + n1.w) * (0.5 * h);
     let k = RodriguesCoeffs::new(&th);
     let e = i_plus_hat_hat2(&th, k.a, k.b);
@@ -47,37 +43,20 @@ pub(crate) fn step<const LIN: bool>(
     let jr = i_plus_hat_hat2(&th, -k.b, k.c);
     let g = r1 * jr * (0.5 * h);
     let su = skew_mul(&u1, &g);
-    let vg = su * (-0.5 * h);
-    let pg = su * (-0.25 * h * h);
-    let gain0 = Blk96 {
-        rg: g,
-        vg,
-        pg,
-        va: r0 * (0.5 * h),
-        pa: r0 * (0.25 * h * h),
-    };
-    let gain1 = Blk96 {
-        va: r1 * (0.5 * h),
-        pa: r1 * (0.25 * h * h),
-        ..gain0
-    };
     Some((
         Transition {
             h,
             u1: abar * h,
             u2: abar * hh,
         },
-        [
-            Input {
-                id: id0,
-                scale: s0,
-                gain: gain0,
-            },
-            Input {
-                id: id0 + 1,
-                scale: s1,
-                gain: gain1,
-            },
-        ],
+        MidGain {
+            rg: g,
+            vg: su * (-0.5 * h),
+            pg: su * (-0.25 * h * h),
+            r0,
+            r1,
+            cv: 0.5 * h,
+            cp: 0.25 * h * h,
+        },
     ))
 }
