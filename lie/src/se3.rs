@@ -124,12 +124,13 @@ impl SE3 {
     /// `Exp(ξ)`, ξ = [ρ, θ]: `(Exp(θ), Jl(θ) ρ)` (Solà eq. 172).
     pub fn exp(xi: &Vector6<f64>) -> Self {
         let (rho, theta) = split(xi);
-        // Jl(θ)ρ = ρ + b θ×ρ + c θ×(θ×ρ) with the coefficients of Jl.
-        let (b, c) = so3::jac_coeffs(theta.norm_squared());
+        // One set of coefficients (one sqrt and one sin_cos above θ = 1) for both parts:
+        // R = I + a θ̂ + b θ̂² (Rodrigues), Jl(θ)ρ = ρ + b θ×ρ + c θ×(θ×ρ).
+        let k = so3::RodriguesCoeffs::new(&theta);
         let tr = theta.cross(&rho);
         Self {
-            r: SO3::exp(&theta),
-            t: rho + tr * b + theta.cross(&tr) * c,
+            r: SO3::from_matrix_unchecked(so3::i_plus_hat_hat2(&theta, k.a, k.b)),
+            t: rho + tr * k.b + theta.cross(&tr) * k.c,
         }
     }
 

@@ -8,7 +8,13 @@
 //!
 //! Numerics: every trigonometric coefficient is evaluated as a Taylor polynomial in θ² below
 //! θ = 1 (truncation error below 1e-17 relative) and in closed form above, written so that no
-//! subtraction cancels more than a few bits (e.g. `1 − cos θ = 2 sin²(θ/2)`). `Log` goes through
+//! subtraction cancels more than a few bits (above θ = 1, `cos θ ≤ 0.55`, so `1 − cos θ` loses
+//! at most one bit; `θ − sin θ` at most three). The closed forms take one `sin_cos` (a single
+//! libm `sincos`), one `sqrt` and no more divisions than coefficients. Measured relative errors
+//! against 60-digit mpmath values at 423 angles in [1e-8, π] (`tests/so3.rs`,
+//! `coefficients_within_a_few_eps_on_dense_angles`; ε = 2⁻⁵²): series branches ≤ 0.7 ε; closed
+//! forms `sin θ/θ` ≤ 0.8 ε, `(1 − cos θ)/θ²` ≤ 1.1 ε, `(θ − sin θ)/θ³` ≤ 1.8 ε; `D` ≤ 9.2 ε
+//! (closed form from θ = ½). `Log` goes through
 //! Shepperd's quaternion extraction and `atan2`, so it is exact near θ = 0 and at θ = π, where a
 //! formula that divides by `sin θ` fails.
 
@@ -123,9 +129,11 @@ pub fn exp_coeffs(theta2: f64) -> (f64, f64) {
     } else if theta2 < SERIES_BELOW * SERIES_BELOW {
         (horner(theta2, &A_SERIES), horner(theta2, &B_SERIES))
     } else {
+        // θ ≥ 1: cos θ ≤ 0.55, so 1 − cos θ ≥ 0.45 cancels at most one bit. One `sin_cos`
+        // (a single libm `sincos` call) instead of sin θ and sin(θ/2).
         let theta = theta2.sqrt();
-        let sh = (0.5 * theta).sin();
-        (theta.sin() / theta, 2.0 * sh * sh / theta2)
+        let (s, c) = theta.sin_cos();
+        (s / theta, (1.0 - c) / theta2)
     }
 }
 
@@ -141,11 +149,8 @@ pub fn jac_coeffs(theta2: f64) -> (f64, f64) {
         (horner(theta2, &B_SERIES), horner(theta2, &C_SERIES))
     } else {
         let theta = theta2.sqrt();
-        let sh = (0.5 * theta).sin();
-        (
-            2.0 * sh * sh / theta2,
-            (theta - theta.sin()) / (theta2 * theta),
-        )
+        let (s, c) = theta.sin_cos();
+        ((1.0 - c) / theta2, (theta - s) / (theta2 * theta))
     }
 }
 
@@ -188,11 +193,10 @@ impl RodriguesCoeffs {
             }
         } else {
             let theta = theta2.sqrt();
-            let s = theta.sin();
-            let sh = (0.5 * theta).sin();
+            let (s, c) = theta.sin_cos();
             Self {
                 a: s / theta,
-                b: 2.0 * sh * sh / theta2,
+                b: (1.0 - c) / theta2,
                 c: (theta - s) / (theta2 * theta),
             }
         }
@@ -213,8 +217,9 @@ pub fn d_coeff(theta2: f64) -> f64 {
     } else {
         let theta = theta2.sqrt();
         let half = 0.5 * theta;
-        // (1 + cos θ)/sin θ = cot(θ/2)
-        (1.0 - half * half.cos() / half.sin()) / theta2
+        // (1 + cos θ)/sin θ = cot(θ/2), from one `sin_cos` of θ/2.
+        let (s, c) = half.sin_cos();
+        (1.0 - half * c / s) / theta2
     }
 }
 
@@ -272,8 +277,18 @@ impl SO3 {
         Self { m }
     }
 
-    /// The nearest rotation (Frobenius norm) to `m`, by SVD polar decomposition with the
-    /// determinant forced to +1. Use it to re-orthonormalise a drifted matrix.
+    /// The nearest rotation (Frobenius norm) to `m`: the rotation `R` with `RᵀM` symmetric
+    /// (and, for `det M > 0`, positive definite: the polar factor), determinant forced to +1
+    /// (for `det M < 0` the sign of the smallest singular direction is flipped). Use it to
+    /// re-orthonormalise a drifted matrix.
+    ///
+    /// Computed by SVD, then refined by Newton steps on the optimality condition, because
+    /// nalgebra 0.33's 3×3 SVD leaves `U Σ Vᵀ − M` up to ~4e-12 when two singular values are
+    /// close (measured), which puts `U Vᵀ` that far from the polar factor. With `P = R₀ᵀM`,
+    /// `S = sym(P)`, the first-order condition `skew(Exp(−δ)P) = 0` gives
+    /// `δ = 2 ((tr S) I − S)⁻¹ vee(P)` and `R = R₀ Exp(δ)`; the error then drops quadratically
+    /// (to ~1e-15, tests/so3.rs). If that linear system is singular (two smallest singular
+    /// values equal for `det M < 0`: the nearest rotation is not unique) the SVD result is kept.
     pub fn from_matrix(m: &Matrix3<f64>) -> Self {
         let svd = m.svd(true, true);
         let (u, vt) = (svd.u.unwrap(), svd.v_t.unwrap());
@@ -283,7 +298,20 @@ impl SO3 {
             u2.column_mut(2).neg_mut();
             r = u2 * vt;
         }
-        Self { m: r }
+        let mut out = Self { m: r };
+        for _ in 0..2 {
+            let p = out.m.transpose() * m;
+            let s = (p + p.transpose()) * 0.5;
+            let a = Matrix3::from_diagonal_element(s.trace()) - s;
+            let Some(delta) = a.lu().solve(&(vee(&p) * 2.0)) else {
+                break;
+            };
+            if !(delta.iter().all(|x| x.is_finite()) && delta.norm() < 0.1) {
+                break;
+            }
+            out = out.compose(&Self::exp(&delta));
+        }
+        out
     }
 
     /// From a unit quaternion (Hamilton, `w + xi + yj + zk`, body→world when used as attitude).

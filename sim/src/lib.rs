@@ -15,7 +15,7 @@
 //!   numbers, see the module docs for the exact seeding and draw order) and [`write_dataset`]
 //!   (EuRoC `imu.csv`, `groundtruth.csv`, Kalibr `imu.yaml`).
 //! - [`deadreckon`]: [`dead_reckon`] with Euler / midpoint rules and quaternion / matrix-Exp /
-//!   ZYX-Euler-angle attitude.
+//!   ZYX-Euler-angle attitude; [`euler_zyx_angles`], the raw Euler-angle states.
 
 pub mod deadreckon;
 pub mod deltas;
@@ -23,7 +23,7 @@ pub mod imu;
 pub mod scene;
 pub mod scenes;
 
-pub use deadreckon::{Attitude, Rule, dead_reckon, euler_zyx_of, rotation_error};
+pub use deadreckon::{Attitude, Rule, dead_reckon, euler_zyx_angles, euler_zyx_of, rotation_error};
 pub use deltas::exact_deltas;
 pub use imu::{
     SimConfig, SimError, SimOutput, period_ns, rng_from_seed, scale_misalignment, simulate,

@@ -105,19 +105,119 @@ fn gimbal_lock_scene_reaches_pitch_90_degrees_exactly() {
     assert!(pitch.abs() < 1.4, "{pitch}");
 }
 
-#[test]
-fn aggressive_scene_is_aggressive() {
-    let scene = scene_by_name("aggressive").unwrap();
-    let (mut w, mut a) = (0.0f64, 0.0f64);
-    for k in 0..2000 {
-        let s = scene.state(k as f64 * 0.01);
-        w = w.max(s.omega_b.norm());
-        a = a.max(s.a.norm());
+/// Amplitude `|X_k|·2/N` of DFT bin `k` of `x`.
+fn dft_amplitude(x: &[f64], k: usize) -> f64 {
+    let n = x.len() as f64;
+    let (mut re, mut im) = (0.0, 0.0);
+    for (j, v) in x.iter().enumerate() {
+        let (s, c) = (std::f64::consts::TAU * (k * j) as f64 / n).sin_cos();
+        re += v * c;
+        im -= v * s;
     }
-    assert!(
-        w > 2.0 && a > 5.0,
-        "peak rate {w} rad/s, peak acceleration {a} m/s²"
+    2.0 * (re * re + im * im).sqrt() / n
+}
+
+#[test]
+fn aggressive_scene_has_its_documented_bandwidth_rates_and_pitch_bound() {
+    let scene = scene_by_name("aggressive").unwrap();
+    // Every frequency in the table is a multiple of 0.05 Hz, so all signals but the yaw ramp
+    // are 20 s-periodic, and ω_b, a (which do not depend on yaw) repeat every 20 s: one
+    // period sampled at 1 kHz finds the peaks to ~(2π·3.1 Hz·1 ms)²/8 ≈ 5e-5 relative.
+    let (mut w, mut a, mut pitch) = (0.0f64, [0.0f64; 3], 0.0f64);
+    for k in 0..=20_000 {
+        let s = scene.state(k as f64 * 1e-3);
+        w = w.max(s.omega_b.norm());
+        for (peak, v) in a.iter_mut().zip(s.a.iter()) {
+            *peak = peak.max(v.abs());
+        }
+        pitch = pitch.max(sim::euler_zyx_of(&s.r_wb).y.abs());
+    }
+    println!(
+        "aggressive: peak |a| per axis {a:.3?} m/s², peak |ω_b| {w:.3} rad/s, max |pitch| {pitch:.4} rad"
     );
+    // The rustdoc's numbers (EulerScene::aggressive), to the 3 digits it states.
+    for (i, want) in [16.4, 15.5, 9.33].into_iter().enumerate() {
+        assert!(
+            (a[i] - want).abs() < 0.01 * want,
+            "axis {i}: peak |a| {} vs documented {want}",
+            a[i]
+        );
+    }
+    assert!((w - 4.31).abs() < 0.01, "peak |ω_b| {w} vs documented 4.31");
+    // |pitch| ≤ 0.3 + 0.07 = 0.37 rad by construction, and the bound is nearly reached.
+    assert!(pitch <= 0.37 && pitch > 0.36, "max |pitch| {pitch}");
+
+    // Bandwidth: position and Euler angles (yaw minus its 0.3 rad/s ramp) are sums of
+    // sinusoids of at most 3.1 Hz. 20 s at 100 Hz puts every table frequency on a DFT bin
+    // (0.05 Hz apart; 3.1 Hz = bin 62): bins above 62 must be empty to round-off, while bin 62
+    // carries y's documented 0.015 m term.
+    let n = 2000;
+    let mut sig: Vec<Vec<f64>> = (0..6).map(|_| Vec::with_capacity(n)).collect();
+    for k in 0..n {
+        let t = k as f64 * 0.01;
+        let s = scene.state(t);
+        let e = sim::euler_zyx_of(&s.r_wb);
+        let wrap = |x: f64| {
+            (x + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
+        };
+        for (i, v) in [s.p.x, s.p.y, s.p.z, e.x, e.y, wrap(e.z - 0.3 * t)]
+            .into_iter()
+            .enumerate()
+        {
+            sig[i].push(v);
+        }
+    }
+    let mut out_of_band = 0.0f64;
+    for x in &sig {
+        for k in 63..=n / 2 {
+            out_of_band = out_of_band.max(dft_amplitude(x, k));
+        }
+    }
+    let y_31 = dft_amplitude(&sig[1], 62);
+    let yaw_30 = dft_amplitude(&sig[5], 60);
+    println!(
+        "aggressive: largest DFT amplitude above 3.1 Hz {out_of_band:.1e}; y at 3.1 Hz {y_31:.6} m, yaw at 3.0 Hz {yaw_30:.6} rad"
+    );
+    assert!(out_of_band < 1e-12, "energy above 3.1 Hz: {out_of_band:e}");
+    assert!((y_31 - 0.015).abs() < 1e-12 && (yaw_30 - 0.05).abs() < 1e-12);
+}
+
+#[test]
+fn gimbal_lock_scene_flips_the_zyx_branch_with_bounded_euler_rates() {
+    // At the lock the canonical ZYX roll and yaw (pitch ≤ 90°) jump by π while pitch touches
+    // 90° and turns back; R is smooth. The Euler rates Θ̇ = E(Θ)ω_b of the exact trajectory
+    // stay bounded on both sides: at the lock ω_b = (0, π²/16, π/8) lies in the range of
+    // W(φ, π/2) for exactly the roll the trajectory has there, tan φ = −2/π.
+    let scene = sim::GimbalLockScene;
+    let (before, after) = (scene.state(2.0 - 1e-6), scene.state(2.0 + 1e-6));
+    let (eb, ea) = (
+        sim::euler_zyx_of(&before.r_wb),
+        sim::euler_zyx_of(&after.r_wb),
+    );
+    let pi = std::f64::consts::PI;
+    assert!(
+        ((ea.x - eb.x) - pi).abs() < 1e-6 && ((ea.z - eb.z) - pi).abs() < 1e-6,
+        "{eb:?} → {ea:?}"
+    );
+    assert!(
+        (eb.x - (-2.0 / pi).atan()).abs() < 1e-6,
+        "roll at the lock {}",
+        eb.x
+    );
+    let mut max_rate = 0.0f64;
+    for k in 0..=300_000 {
+        let t = k as f64 * 1e-5;
+        // Within 1e-6 s of the lock the angles extracted from R are inaccurate
+        // (asin near 1 has condition ~1/√ε); exactly at it they are not unique.
+        if (t - 2.0).abs() < 1e-6 {
+            continue;
+        }
+        let s = scene.state(t);
+        let e = sim::euler_zyx_of(&s.r_wb);
+        max_rate = max_rate.max((sim::scene::body_rate_to_euler_rate(&e) * s.omega_b).amax());
+    }
+    println!("gimbal-lock: max exact Euler rate on [0, 3] s {max_rate:.3} rad/s");
+    assert!(max_rate < 0.85, "{max_rate}");
 }
 
 #[test]
