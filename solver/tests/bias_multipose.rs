@@ -1,31 +1,26 @@
-//! Still-interval detection and multi-pose calibration on synthetic multi-position data.
-//!
-//! Generator (the `sim` multi-pose-static model, written out here): the IMU rests in K
-//! attitudes for `still_s` seconds each and rotates between them about a fixed body axis a with
-//! the smooth rest-to-rest profile θ(t) = Θ(t/T − sin(2πt/T)/2π) over T = `move_s` (ω = a·θ̇, no
-//! translation). Readings: ω_m = S_g ω + b_g + n_g, a_m = S_a R(t)ᵀ(0, 0, 9.81) + b_a + n_a.
+//! Still-interval detection and multi-pose calibration on `sim` data: the protocol is a
+//! [`MultiPoseStaticScene`] (12 attitudes held 4 s, joined by 2 s quintic-blend rotations about
+//! body x, y, z and diagonal axes, so that every gyro scale and misalignment is excited), the
+//! IMU model `sim::simulate` (EuRoC white-noise densities, constant biases, the scale /
+//! misalignment matrices under test). The truth (biases, S_a, S_g, attitudes, still spans) is
+//! the simulation's input, never computed by the code under test.
 
 use lie::SO3;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, SVector, Vector3};
 use preint::{ImuBias, ImuNoise, ImuSample, PreintParams, Scheme, preintegrate};
-use rand::rngs::StdRng;
-use rand::{RngExt, SeedableRng};
-use rand_distr::StandardNormal;
+use sim::{MultiPoseStaticScene, SimConfig, scale_misalignment, simulate};
 use solver::bias::multipose::rotation_preintegration;
 use solver::bias::{
-    BiasError, MultiPoseModel, MultiPoseOptions, StillOptions, calibrate_multi_pose,
-    detect_still_intervals,
+    BiasError, MultiPoseCalibration, MultiPoseModel, MultiPoseOptions, StillOptions,
+    calibrate_multi_pose, detect_still_intervals,
 };
 
 const RATE: f64 = 200.0;
 
-/// Rotation steps (body axis, angle [rad]) of the protocol: 11 moves, 12 attitudes covering
-/// rotations about every body axis (so that each gyro scale is observable) and diagonals.
+/// Rotation steps (body axis, angle [rad]): 11 moves, 12 attitudes.
 fn moves() -> Vec<(Vector3<f64>, f64)> {
     let h = std::f64::consts::FRAC_PI_2;
-    let x = Vector3::x();
-    let y = Vector3::y();
-    let z = Vector3::z();
+    let (x, y, z) = (Vector3::x(), Vector3::y(), Vector3::z());
     let d = Vector3::new(1.0, 1.0, 1.0).normalize();
     vec![
         (x, h),
@@ -42,87 +37,19 @@ fn moves() -> Vec<(Vector3<f64>, f64)> {
     ]
 }
 
-struct Truth {
-    bias: ImuBias,
-    s_a: Vector3<f64>,
-    s_g: Vector3<f64>,
-    /// (start, end) of every still span [ns].
-    still: Vec<(i64, i64)>,
+fn scene() -> MultiPoseStaticScene {
+    let mut poses = vec![SO3::exp(&Vector3::new(0.1, -0.05, 0.3))];
+    for (a, th) in moves() {
+        let next = poses.last().unwrap().compose(&SO3::exp(&(a * th)));
+        poses.push(next);
+    }
+    MultiPoseStaticScene::new(poses, 4.0, 2.0, Vector3::new(0.5, -0.2, 1.0)).unwrap()
 }
 
-fn multipose_data(
-    seed: u64,
-    noise: &ImuNoise,
-    s_a: Vector3<f64>,
-    s_g: Vector3<f64>,
-) -> (Vec<ImuSample>, Truth) {
-    let bias = ImuBias::new(
+fn truth_bias() -> ImuBias {
+    ImuBias::new(
         Vector3::new(0.003, -0.002, 0.005),
         Vector3::new(0.05, -0.08, 0.1),
-    );
-    let (still_s, move_s) = (4.0, 2.0);
-    let dt = 1.0 / RATE;
-    let mut rng = StdRng::seed_from_u64(seed);
-    let mut gauss = || -> Vector3<f64> {
-        Vector3::new(
-            rng.sample(StandardNormal),
-            rng.sample(StandardNormal),
-            rng.sample(StandardNormal),
-        )
-    };
-    let (sg_n, sa_n) = (
-        noise.gyro_noise_density / dt.sqrt(),
-        noise.acc_noise_density / dt.sqrt(),
-    );
-    let sa_m = Matrix3::from_diagonal(&(Vector3::repeat(1.0) + s_a));
-    let sg_m = Matrix3::from_diagonal(&(Vector3::repeat(1.0) + s_g));
-    let up = Vector3::new(0.0, 0.0, 9.81);
-    let mut out = Vec::new();
-    let mut still = Vec::new();
-    let mut r = SO3::exp(&Vector3::new(0.1, -0.05, 0.3));
-    let mut k: i64 = 0;
-    let mut push = |r_t: &SO3, w: Vector3<f64>, k: &mut i64, out: &mut Vec<ImuSample>| {
-        let t_ns = (*k as f64 * dt * 1e9).round() as i64;
-        let gyro = sg_m * w + bias.gyro + gauss() * sg_n;
-        let acc = sa_m * r_t.inverse().act(&up) + bias.acc + gauss() * sa_n;
-        out.push(ImuSample::new(t_ns, gyro, acc));
-        *k += 1;
-    };
-    let ms = moves();
-    for i in 0..=ms.len() {
-        let n_still = (still_s * RATE) as usize;
-        let t0 = (k as f64 * dt * 1e9).round() as i64;
-        for _ in 0..n_still {
-            push(&r, Vector3::zeros(), &mut k, &mut out);
-        }
-        still.push((t0, ((k - 1) as f64 * dt * 1e9).round() as i64));
-        if i == ms.len() {
-            break;
-        }
-        let (a, th) = ms[i];
-        let n_move = (move_s * RATE) as usize;
-        let tp = 2.0 * std::f64::consts::PI;
-        for j in 0..n_move {
-            let s = j as f64 / n_move as f64;
-            let theta = th * (s - (tp * s).sin() / tp);
-            let rate = th / move_s * (1.0 - (tp * s).cos());
-            push(
-                &r.compose(&SO3::exp(&(a * theta))),
-                a * rate,
-                &mut k,
-                &mut out,
-            );
-        }
-        r = r.compose(&SO3::exp(&(a * th)));
-    }
-    (
-        out,
-        Truth {
-            bias,
-            s_a,
-            s_g,
-            still,
-        },
     )
 }
 
@@ -134,29 +61,112 @@ fn white() -> ImuNoise {
     }
 }
 
+/// `diag(1 + s)·(I + M)`, `M` off-diagonal with `m = (M01, M02, M10, M12, M20, M21)`,
+/// written out here (the solver's parametrisation of S_g, module docs).
+fn gyro_matrix(s: Vector3<f64>, m: [f64; 6]) -> Matrix3<f64> {
+    Matrix3::from_diagonal(&s.add_scalar(1.0))
+        * Matrix3::new(1.0, m[0], m[1], m[2], 1.0, m[3], m[4], m[5], 1.0)
+}
+
+fn data(seed: u64, s_a: Matrix3<f64>, s_g: Matrix3<f64>) -> Vec<ImuSample> {
+    let sc = scene();
+    let cfg = SimConfig {
+        noise: white(),
+        initial_bias: truth_bias(),
+        bias_random_walk: false,
+        acc_scale: s_a,
+        gyro_scale: s_g,
+        ..SimConfig::default()
+    };
+    simulate(&sc, RATE, sc.duration_s(), &cfg, seed)
+        .unwrap()
+        .samples
+}
+
+/// Roll and pitch of `R_wb = Rz(y)Ry(p)Rx(r)` from its third row (independent of the solver's
+/// `roll_pitch_of_up`).
+fn roll_pitch(r: &SO3) -> (f64, f64) {
+    let m = r.matrix();
+    (m[(2, 1)].atan2(m[(2, 2)]), (-m[(2, 0)]).asin())
+}
+
+fn within(est: f64, truth: f64, sd: f64, what: &str) {
+    assert!(
+        (est - truth).abs() <= 3.0 * sd,
+        "{what}: {est} vs {truth} (σ {sd}, {:.1}σ)",
+        (est - truth) / sd
+    );
+}
+
+fn check_biases(c: &MultiPoseCalibration) {
+    let b = truth_bias();
+    for i in 0..3 {
+        within(c.gyro_bias[i], b.gyro[i], c.gyro_bias_std[i], "b_g");
+        within(c.acc_bias[i], b.acc[i], c.acc_bias_std[i], "b_a");
+    }
+}
+
+fn check_attitudes(c: &MultiPoseCalibration) {
+    let sc = scene();
+    assert_eq!(c.roll_pitch.len(), sc.poses().len());
+    for (k, (p, rp)) in sc.poses().iter().zip(&c.roll_pitch).enumerate() {
+        let (roll, pitch) = roll_pitch(p);
+        within(rp.0, roll, rp.2, &format!("roll {k}"));
+        within(rp.1, pitch, rp.3, &format!("pitch {k}"));
+    }
+}
+
+/// The reason names the winner, its BIC, the runner-up's and their difference; the BIC values
+/// are `χ² + k·ln m` recomputed here, and the winner has the lowest BIC of the eligible fits.
+fn check_reason(c: &MultiPoseCalibration) {
+    for f in &c.fits {
+        let bic = f.chi2 + f.params as f64 * (f.residuals as f64).ln();
+        assert!((f.bic - bic).abs() < 1e-9 * bic.abs(), "{f:?}");
+        assert!(
+            c.reason
+                .contains(&format!("{}: BIC {:.1}", f.model.name(), f.bic)),
+            "{}",
+            c.reason
+        );
+    }
+    let mut eligible: Vec<_> = c.fits.iter().filter(|f| f.eligible()).collect();
+    eligible.sort_by(|a, b| a.bic.total_cmp(&b.bic));
+    let (w, r) = (eligible[0], eligible[1]);
+    assert_eq!(w.model, c.model);
+    // White noise of the stated densities and constant biases: no goodness-of-fit warning.
+    assert!(!c.reason.contains("WARNING"), "{}", c.reason);
+    assert!(c.reason.starts_with(&format!(
+        "{} has the lowest BIC of the eligible models, {:.1}, which is {:.1} below the runner-up {} ({:.1})",
+        w.model.name(),
+        w.bic,
+        r.bic - w.bic,
+        r.model.name(),
+        r.bic
+    )), "{}", c.reason);
+}
+
 #[test]
 fn still_intervals_match_the_protocol() {
     let noise = white();
-    let (s, truth) = multipose_data(1, &noise, Vector3::zeros(), Vector3::zeros());
+    let s = data(1, Matrix3::identity(), Matrix3::identity());
     let ivs = detect_still_intervals(&s, &StillOptions::from_noise(&noise, RATE)).unwrap();
-    assert_eq!(ivs.len(), truth.still.len(), "{ivs:?}");
-    for (iv, (a, b)) in ivs.iter().zip(&truth.still) {
+    let truth = scene().static_intervals();
+    assert_eq!(ivs.len(), truth.len(), "{ivs:?}");
+    for (iv, (a, b)) in ivs.iter().zip(&truth) {
+        let (a, b) = ((a * 1e9) as i64, (b * 1e9) as i64);
         // Inside the true still span, and covering it but for ≤ ½ window (0.25 s) at each side
-        // adjoining a motion (plus a sample).
-        assert!(
-            iv.t_start_ns >= *a && iv.t_end_ns <= *b,
-            "{iv:?} vs {a}..{b}"
-        );
+        // (plus a sample).
+        assert!(iv.t_start_ns >= a && iv.t_end_ns <= b, "{iv:?} vs {a}..{b}");
         assert!(iv.t_start_ns - a <= 260_000_000 && b - iv.t_end_ns <= 260_000_000);
     }
 }
 
 #[test]
 fn still_detection_synthetic_edges_and_errors() {
-    // Pure white noise: one interval from sample h to N−1−h.
+    // The first 4 s are still: one interval from sample h = 50 to N − 1 − h.
     let noise = white();
-    let (s, _) = multipose_data(2, &noise, Vector3::zeros(), Vector3::zeros());
-    let quiet = &s[..800]; // 4 s still
+    let s = data(2, Matrix3::identity(), Matrix3::identity());
+    let quiet = &s[..800];
     let ivs = detect_still_intervals(quiet, &StillOptions::from_noise(&noise, RATE)).unwrap();
     assert_eq!(ivs.len(), 1);
     assert_eq!((ivs[0].start, ivs[0].end), (50, 750));
@@ -185,7 +195,7 @@ fn still_detection_synthetic_edges_and_errors() {
 #[test]
 fn link_rotation_matches_preint_midpoint() {
     let noise = white();
-    let (s, _) = multipose_data(3, &noise, Vector3::zeros(), Vector3::zeros());
+    let s = data(3, Matrix3::identity(), Matrix3::identity());
     let seg = &s[700..1300];
     let bg = Vector3::new(0.002, -0.001, 0.003);
     let (dr, jb, _) = rotation_preintegration(seg, &bg, &Vector3::zeros());
@@ -202,79 +212,201 @@ fn link_rotation_matches_preint_midpoint() {
     assert!((jb - pim.jac.d_r_d_bg).amax() < 1e-10);
 }
 
-fn check_within_3_sigma(c: &solver::bias::MultiPoseCalibration, t: &Truth) {
-    for i in 0..3 {
-        let (eg, ea) = (
-            c.gyro_bias[i] - t.bias.gyro[i],
-            c.acc_bias[i] - t.bias.acc[i],
-        );
-        println!(
-            "axis {i}: b_g err {eg:.2e} (σ {:.2e}), b_a err {ea:.2e} (σ {:.2e})",
-            c.gyro_bias_std[i], c.acc_bias_std[i]
-        );
-        assert!(eg.abs() <= 3.0 * c.gyro_bias_std[i]);
-        assert!(ea.abs() <= 3.0 * c.acc_bias_std[i]);
-    }
-}
-
+/// 20 seeds without scale or misalignment: "bias only" is chosen in ≥ 19; b_g, b_a and every
+/// interval's roll and pitch are within 3σ of the truth in ≥ 95 % of the cases and the
+/// empirical spread is within 30 % of the reported σ (60 values per bias component: sampling
+/// error ≈ 9 %; 480 attitude angles: ≈ 3 %, band 15 %).
 #[test]
-fn bias_only_chosen_without_scale_error() {
+fn bias_only_monte_carlo_biases_and_attitudes_within_3_sigma() {
     let noise = white();
-    let (s, truth) = multipose_data(11, &noise, Vector3::zeros(), Vector3::zeros());
-    let c = calibrate_multi_pose(&s, &noise, &MultiPoseOptions::default()).unwrap();
-    println!("{}", c.reason);
-    assert_eq!(c.intervals.len(), 12);
-    assert_eq!(c.model, MultiPoseModel::BiasOnly);
-    assert!(c.fits.iter().all(|f| f.identifiable));
-    check_within_3_sigma(&c, &truth);
-    // The fit is consistent with the noise: χ²/dof near 1.
-    assert!((c.chi2 / c.dof as f64) < 2.0);
+    let sc = scene();
+    let (mut right, trials) = (0, 20);
+    let (mut zb, mut za) = (Vec::new(), Vec::new());
+    for seed in 0..trials {
+        let s = data(100 + seed, Matrix3::identity(), Matrix3::identity());
+        let c = calibrate_multi_pose(&s, &noise, &MultiPoseOptions::default()).unwrap();
+        assert_eq!(c.intervals.len(), 12);
+        right += (c.model == MultiPoseModel::BiasOnly) as usize;
+        let b = truth_bias();
+        for i in 0..3 {
+            zb.push((c.gyro_bias[i] - b.gyro[i]) / c.gyro_bias_std[i]);
+            zb.push((c.acc_bias[i] - b.acc[i]) / c.acc_bias_std[i]);
+        }
+        for (p, rp) in sc.poses().iter().zip(&c.roll_pitch) {
+            let (roll, pitch) = roll_pitch(p);
+            za.push((rp.0 - roll) / rp.2);
+            za.push((rp.1 - pitch) / rp.3);
+        }
+        if seed == 0 {
+            println!("{}", c.reason);
+            check_reason(&c);
+            assert!(c.acc_scale.is_none() && c.gyro_misalignment.is_none());
+        }
+    }
+    let cov = |z: &[f64]| z.iter().filter(|z| z.abs() <= 3.0).count() as f64 / z.len() as f64;
+    let rms = |z: &[f64]| (z.iter().map(|z| z * z).sum::<f64>() / z.len() as f64).sqrt();
+    println!(
+        "bias-only chosen {right}/{trials}; biases within 3σ {:.1} % (ratio {:.3}); roll/pitch within 3σ {:.1} % (ratio {:.3})",
+        100.0 * cov(&zb),
+        rms(&zb),
+        100.0 * cov(&za),
+        rms(&za)
+    );
+    assert!(right >= 19, "{right}");
+    assert!(cov(&zb) >= 0.95 && cov(&za) >= 0.95);
+    assert!((0.7..=1.3).contains(&rms(&zb)), "{}", rms(&zb));
+    assert!((0.85..=1.15).contains(&rms(&za)), "{}", rms(&za));
 }
 
 #[test]
-fn scale_chosen_with_one_percent_scale_error() {
+fn scale_chosen_with_one_percent_scale_error_not_misalignment() {
     let noise = white();
     let sa = Vector3::new(0.01, -0.01, 0.01);
     let sg = Vector3::new(-0.01, 0.01, 0.01);
-    let (s, truth) = multipose_data(12, &noise, sa, sg);
+    let s = data(
+        12,
+        Matrix3::from_diagonal(&sa.add_scalar(1.0)),
+        Matrix3::from_diagonal(&sg.add_scalar(1.0)),
+    );
     let c = calibrate_multi_pose(&s, &noise, &MultiPoseOptions::default()).unwrap();
     println!("{}", c.reason);
     assert_eq!(c.model, MultiPoseModel::Scale);
-    check_within_3_sigma(&c, &truth);
+    check_reason(&c);
+    check_biases(&c);
+    check_attitudes(&c);
     let (ea, es) = (c.acc_scale.unwrap(), c.acc_scale_std.unwrap());
-    for i in 0..3 {
-        assert!(
-            (ea[i] - truth.s_a[i]).abs() <= 3.0 * es[i],
-            "s_a {ea:?} ± {es:?}"
-        );
-    }
     let (eg, gs) = (c.gyro_scale.unwrap(), c.gyro_scale_std.unwrap());
     for i in 0..3 {
-        assert!(
-            (eg[i] - truth.s_g[i]).abs() <= 3.0 * gs[i],
-            "s_g {eg:?} ± {gs:?}"
-        );
+        within(ea[i], sa[i], es[i], "s_a");
+        within(eg[i], sg[i], gs[i], "s_g");
     }
+    // The misalignment models fit no better than their extra parameters' BIC penalty.
+    let full = c
+        .fits
+        .iter()
+        .find(|f| f.model == MultiPoseModel::ScaleMisalignment)
+        .unwrap();
+    assert!(full.identifiable && full.converged);
+    assert!(full.bic > c.fits.iter().find(|f| f.model == c.model).unwrap().bic + 10.0);
 }
 
 #[test]
 fn acc_scale_alone_is_preferred_to_full_scale() {
     let noise = white();
-    let (s, _) = multipose_data(
+    let s = data(
         13,
-        &noise,
-        Vector3::new(0.01, 0.01, -0.01),
-        Vector3::zeros(),
+        Matrix3::from_diagonal(&Vector3::new(1.01, 1.01, 0.99)),
+        Matrix3::identity(),
     );
     let c = calibrate_multi_pose(&s, &noise, &MultiPoseOptions::default()).unwrap();
     println!("{}", c.reason);
     assert_eq!(c.model, MultiPoseModel::AccScale);
+    check_reason(&c);
+}
+
+/// The full Tedaldi / imu_tk model is chosen when the simulation has accelerometer
+/// misalignment (sim's lower-triangular form) and a general gyro matrix; every parameter,
+/// both biases and every roll/pitch come out within 3σ of the simulation's truth.
+#[test]
+fn scale_misalignment_chosen_with_misalignment() {
+    let noise = white();
+    let (sa, ma) = (
+        Vector3::new(0.004, -0.006, 0.005),
+        Vector3::new(0.01, -0.008, 0.012),
+    );
+    let (sg, mg) = (
+        Vector3::new(0.005, -0.004, 0.006),
+        [0.008, -0.006, 0.005, 0.01, -0.007, 0.004],
+    );
+    let s = data(21, scale_misalignment(&sa, &ma), gyro_matrix(sg, mg));
+    let c = calibrate_multi_pose(&s, &noise, &MultiPoseOptions::default()).unwrap();
+    println!("{}", c.reason);
+    assert_eq!(c.model, MultiPoseModel::ScaleMisalignment);
+    check_reason(&c);
+    check_biases(&c);
+    check_attitudes(&c);
+    let (e, sd) = (c.acc_scale.unwrap(), c.acc_scale_std.unwrap());
+    let (m, msd) = (c.acc_misalignment.unwrap(), c.acc_misalignment_std.unwrap());
+    for i in 0..3 {
+        within(e[i], sa[i], sd[i], "s_a");
+        within(m[i], ma[i], msd[i], "m_a");
+    }
+    let (e, sd) = (c.gyro_scale.unwrap(), c.gyro_scale_std.unwrap());
+    for i in 0..3 {
+        within(e[i], sg[i], sd[i], "s_g");
+    }
+    let (m, msd): (SVector<f64, 6>, SVector<f64, 6>) = (
+        c.gyro_misalignment.unwrap(),
+        c.gyro_misalignment_std.unwrap(),
+    );
+    for i in 0..6 {
+        within(m[i], mg[i], msd[i], "m_g");
+    }
+    println!(
+        "σ: s_a {:.1e}, m_a {:.1e}, s_g {:.1e}, m_g {:.1e} (first components)",
+        c.acc_scale_std.unwrap()[0],
+        c.acc_misalignment_std.unwrap()[0],
+        c.gyro_scale_std.unwrap()[0],
+        msd[0]
+    );
+    // The matrices the calibration reports are the simulated ones.
+    assert!((c.acc_scale_matrix() - scale_misalignment(&sa, &ma)).amax() < 1e-3);
+    assert!((c.gyro_scale_matrix() - gyro_matrix(sg, mg)).amax() < 1e-3);
+}
+
+/// Accelerometer misalignment and scale only: the model with exactly those terms wins.
+#[test]
+fn acc_misalignment_chosen_without_gyro_errors() {
+    let noise = white();
+    let s = data(
+        22,
+        scale_misalignment(
+            &Vector3::new(0.005, 0.004, -0.006),
+            &Vector3::new(-0.01, 0.006, 0.009),
+        ),
+        Matrix3::identity(),
+    );
+    let c = calibrate_multi_pose(&s, &noise, &MultiPoseOptions::default()).unwrap();
+    println!("{}", c.reason);
+    assert_eq!(c.model, MultiPoseModel::AccMisalignment);
+    check_reason(&c);
+}
+
+/// `sim`'s default `multi-pose-static` scene (33 s) with EuRoC's bias random walk: b_a drifts
+/// by ≈ σ_ba√33 s ≈ 0.017 m/s² while each interval mean has σ ≈ 1e-3 m/s², so the
+/// constant-bias models misfit (bias-only χ²/dof ≈ 3) and richer models absorb the drift. The
+/// reason must say so; with the random walk switched off the same scene gives bias-only
+/// without a warning.
+#[test]
+fn drifting_biases_are_flagged_in_the_reason() {
+    let sc = MultiPoseStaticScene::default();
+    for rw in [true, false] {
+        let cfg = SimConfig {
+            noise: ImuNoise::euroc(),
+            bias_random_walk: rw,
+            ..SimConfig::default()
+        };
+        let s = simulate(&sc, RATE, sc.duration_s(), &cfg, 12)
+            .unwrap()
+            .samples;
+        let c = calibrate_multi_pose(&s, &ImuNoise::euroc(), &MultiPoseOptions::default()).unwrap();
+        println!(
+            "random walk {rw}: {:?}, χ²/dof {:.2}: {}",
+            c.model,
+            c.chi2 / c.dof as f64,
+            c.reason
+        );
+        assert_eq!(c.reason.contains("WARNING: χ²/dof"), rw, "{}", c.reason);
+        if !rw {
+            assert_eq!(c.model, MultiPoseModel::BiasOnly);
+        }
+    }
 }
 
 #[test]
-fn too_few_intervals_is_a_typed_error() {
+fn too_few_intervals_and_non_converged_models_are_typed_errors() {
     let noise = white();
-    let (s, _) = multipose_data(4, &noise, Vector3::zeros(), Vector3::zeros());
+    let s = data(4, Matrix3::identity(), Matrix3::identity());
     // The first still span and part of the first move: one interval.
     assert!(matches!(
         calibrate_multi_pose(&s[..1000], &noise, &MultiPoseOptions::default()),
@@ -283,4 +415,16 @@ fn too_few_intervals_is_a_typed_error() {
             ..
         })
     ));
+    // No iterations allowed: no model converges, so none may win.
+    let none = MultiPoseOptions {
+        max_iters: 0,
+        ..MultiPoseOptions::default()
+    };
+    match calibrate_multi_pose(&s, &noise, &none) {
+        Err(BiasError::InvalidParameter { name, reason }) => {
+            assert_eq!(name, "samples");
+            assert!(reason.contains("not converged"), "{reason}");
+        }
+        other => panic!("{other:?}"),
+    }
 }

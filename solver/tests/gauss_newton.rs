@@ -331,3 +331,93 @@ fn bad_problems_give_typed_errors() {
         Err(solver::GnError::InvalidOption(_))
     ));
 }
+
+/// Records the `cholesky` flag of every iteration.
+#[derive(Clone, Default)]
+struct PathLog(Arc<Mutex<Vec<bool>>>);
+impl<X> Observe<GnState<X>> for PathLog {
+    fn observe_iter(&mut self, _: &GnState<X>, kv: &KV) -> Result<(), argmin::core::Error> {
+        let c = kv.get("cholesky").and_then(|v| v.get_bool());
+        self.0
+            .lock()
+            .unwrap()
+            .push(c.expect("the solver emits `cholesky`"));
+        Ok(())
+    }
+}
+
+/// A well-conditioned problem is solved by Cholesky at every iteration; the collinear (rank 5)
+/// problem falls back to the eigen path at every iteration (module docs of `gauss_newton`).
+#[test]
+fn cholesky_path_when_well_conditioned_eigen_path_when_deficient() {
+    let mut rng = StdRng::seed_from_u64(5);
+    let r = SO3::exp(&Vector3::new(0.5, -0.4, 0.9));
+    let good = make_align(&mut rng, &r, &Vector3::new(1.0, 0.0, 2.0), 0.01);
+    let log = PathLog::default();
+    let res = Executor::new(good, GaussNewton::default())
+        .configure(|s| s.param((SO3::identity(), Vector3::zeros())).max_iters(50))
+        .add_observer(log.clone(), ObserverMode::Always)
+        .run()
+        .unwrap();
+    let sol = finish(res).unwrap();
+    assert!(sol.stop.converged(), "{:?}", sol.stop);
+    let paths = log.0.lock().unwrap().clone();
+    assert!(!paths.is_empty() && paths.iter().all(|c| *c), "{paths:?}");
+
+    let a = Vector3::new(1.0, 2.0, 2.0) / 3.0;
+    let p: Vec<_> = [-2.0, -1.0, 0.5, 1.5, 3.0].iter().map(|s| a * *s).collect();
+    let q = p.iter().map(|p| r.act(p)).collect();
+    let log = PathLog::default();
+    let res = Executor::new(Align { p, q, sigma: 0.01 }, GaussNewton::default())
+        .configure(|s| s.param((SO3::identity(), Vector3::zeros())).max_iters(50))
+        .add_observer(log.clone(), ObserverMode::Always)
+        .run()
+        .unwrap();
+    let sol = finish(res).unwrap();
+    assert_eq!(sol.rank, 5);
+    let paths = log.0.lock().unwrap().clone();
+    assert!(!paths.is_empty() && paths.iter().all(|c| !*c), "{paths:?}");
+}
+
+/// A Jacobian with the wrong sign makes every LM step go uphill: every step is rejected, μ
+/// grows until the step is ≈ 0. That is **not** convergence: the solver must report
+/// `DampingExhausted` (it used to report `StepNorm`, i.e. converged).
+#[test]
+fn rejected_steps_with_huge_damping_are_not_convergence() {
+    struct Wrong;
+    impl LeastSquares for Wrong {
+        type State = Vector3<f64>;
+        fn residual_jacobian(&self, x: &Vector3<f64>) -> (DVector<f64>, DMatrix<f64>) {
+            let r = DVector::from_column_slice((x - Vector3::new(1.0, 2.0, 3.0)).as_slice());
+            (r, -DMatrix::identity(3, 3))
+        }
+    }
+    let sol = solve(Wrong, Vector3::zeros(), GaussNewton::default(), 500).unwrap();
+    assert_eq!(sol.stop, StopReason::DampingExhausted);
+    assert!(!sol.stop.converged());
+    assert!(sol.iterations < 500, "{}", sol.iterations);
+    assert_eq!(sol.estimate, Vector3::zeros());
+}
+
+/// At an exact optimum (zero residual after one step of a linear problem) LM stops with a
+/// convergence reason, not `DampingExhausted`, even though round-off may reject steps.
+#[test]
+fn optimum_of_a_linear_problem_is_converged() {
+    let prob = NumericLeastSquares::new(|x: &Vector3<f64>| {
+        DVector::from_column_slice(&[
+            2.0 * x[0] - x[1] - 1.0,
+            x[1] + 3.0 * x[2] - 2.0,
+            x[0] + x[2] + 0.5,
+            x[0] - x[1] + x[2],
+        ])
+    });
+    let sol = solve(
+        prob,
+        Vector3::new(5.0, -3.0, 2.0),
+        GaussNewton::default(),
+        100,
+    )
+    .unwrap();
+    assert!(sol.stop.converged(), "{:?}", sol.stop);
+    assert!(sol.iterations < 20, "{}", sol.iterations);
+}

@@ -5,14 +5,18 @@
 //!   accelerometer bias is reported unobservable unless a prior is given.
 //! - [`multipose`]: several static attitudes linked by gyro preintegration (Tedaldi et al. 2014,
 //!   imu_tk) → gyro and accelerometer bias, attitude of each still interval, optional scale
-//!   factors chosen by BIC.
-//! - [`known_poses`]: segments with known poses → biases, velocities and gravity direction from
-//!   preintegration factors (ORB-SLAM3 inertial-only initialisation, VINS-Mono gyro bias).
+//!   factors and misalignments (accelerometer lower-triangular, gyro full), the model chosen
+//!   by BIC among the identifiable, converged candidates.
+//! - [`known_poses`]: segments with known, optionally noisy poses → biases, velocities and
+//!   gravity direction from preintegration factors (ORB-SLAM3 inertial-only initialisation,
+//!   VINS-Mono gyro bias), the pose noise propagated into every residual block with the
+//!   correlation between factors that share a pose.
 //!
 //! Conventions (`docs/ARCHITECTURE.md`): world z up, gravity `g = (0, 0, −9.81)` m/s² by
 //! default; the accelerometer measures specific force `a_m = R_wbᵀ(a_w − g) + b_a + n_a` (so at
-//! rest `a_m = R_wbᵀ(−g) + b_a`, +9.81 on the up axis); gyro `ω_m = ω_b + b_g + n_g`; rotation
-//! perturbations on the right `R ← R·Exp(δφ)`; bias order **[b_g, b_a]**; integer-ns time.
+//! rest `a_m = R_wbᵀ(−g) + b_a`, +9.81 on the up axis; [`multipose`] adds `S_a`, `S_g`); gyro
+//! `ω_m = ω_b + b_g + n_g`; rotation perturbations on the right `R ← R·Exp(δφ)`; bias order
+//! **[b_g, b_a]**; integer-ns time.
 //! Noise figures are Kalibr densities ([`preint::ImuNoise`]): a mean of white noise of density σ
 //! over `T` seconds has standard deviation `σ/√T`.
 //!
@@ -49,7 +53,7 @@ pub enum BiasError {
     NonFinite {
         /// Sample index.
         index: usize,
-        /// Its timestamp [ns].
+        /// Its timestamp \[ns\].
         t_ns: i64,
     },
     /// Timestamps are not strictly increasing.
@@ -57,7 +61,7 @@ pub enum BiasError {
     NotIncreasing {
         /// Sample index.
         index: usize,
-        /// Its timestamp [ns].
+        /// Its timestamp \[ns\].
         t_ns: i64,
     },
     /// A noise density or option is out of its domain.
@@ -143,12 +147,12 @@ pub(crate) fn check_gravity(g: &Vector3<f64>) -> Result<f64, BiasError> {
 }
 
 /// Sufficient statistics of a run of samples: per-axis means and sample variances of ω and a,
-/// the count N and the mean sample period (`(t_last − t_first)/(N − 1)`) [s].
+/// the count N and the mean sample period (`(t_last − t_first)/(N − 1)`) \[s\].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SegmentStats {
     /// Number of samples N.
     pub count: usize,
-    /// Mean sample period Δt [s].
+    /// Mean sample period Δt \[s\].
     pub dt: f64,
     /// Mean gyro reading ω̄ [rad/s].
     pub gyro_mean: Vector3<f64>,
@@ -203,14 +207,14 @@ impl SegmentStats {
         }
     }
 
-    /// Effective averaging time `T = N·Δt` [s]: the mean of N samples of white noise of
+    /// Effective averaging time `T = N·Δt` \[s\]: the mean of N samples of white noise of
     /// density σ has standard deviation `σ/√T` (per-sample std `σ/√Δt`).
     pub fn averaging_time(&self) -> f64 {
         self.count as f64 * self.dt
     }
 }
 
-/// Roll and pitch [rad] (Z-Y-X Euler angles, `R_wb = Rz(yaw)·Ry(pitch)·Rx(roll)`) of the body
+/// Roll and pitch \[rad\] (Z-Y-X Euler angles, `R_wb = Rz(yaw)·Ry(pitch)·Rx(roll)`) of the body
 /// "up" unit vector `u = R_wbᵀ·ẑ`: `u = (−sin p, sin r cos p, cos r cos p)`, so
 /// `roll = atan2(u_y, u_z)`, `pitch = atan2(−u_x, √(u_y² + u_z²))`. Also returns
 /// `∂(roll, pitch)/∂u` (2×3).
@@ -231,7 +235,7 @@ pub fn roll_pitch_of_up(u: &Vector3<f64>) -> (f64, f64, Matrix2x3<f64>) {
     (roll, pitch, j)
 }
 
-/// The zero-yaw attitude `R_wb = Ry(pitch)·Rx(roll)` [rad].
+/// The zero-yaw attitude `R_wb = Ry(pitch)·Rx(roll)` \[rad\].
 pub fn attitude_from_roll_pitch(roll: f64, pitch: f64) -> SO3 {
     SO3::exp(&Vector3::new(0.0, pitch, 0.0)).compose(&SO3::exp(&Vector3::new(roll, 0.0, 0.0)))
 }

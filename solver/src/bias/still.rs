@@ -35,13 +35,13 @@ use preint::{ImuNoise, ImuSample};
 /// Options of [`detect_still_intervals`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StillOptions {
-    /// Length of the moving window [s] (default 0.5).
+    /// Length of the moving window \[s\] (default 0.5).
     pub window_s: f64,
     /// Threshold on the mean per-axis gyro variance `V_ω` [(rad/s)²].
     pub gyro_var_max: f64,
     /// Threshold on the mean per-axis accelerometer variance `V_a` [(m/s²)²].
     pub acc_var_max: f64,
-    /// Minimum length of a still interval [s] (default 1.0).
+    /// Minimum length of a still interval \[s\] (default 1.0).
     pub min_duration_s: f64,
 }
 
@@ -69,9 +69,9 @@ pub struct StillInterval {
     pub start: usize,
     /// One past the last sample index.
     pub end: usize,
-    /// Timestamp of the first sample [ns].
+    /// Timestamp of the first sample \[ns\].
     pub t_start_ns: i64,
-    /// Timestamp of the last sample [ns].
+    /// Timestamp of the last sample \[ns\].
     pub t_end_ns: i64,
 }
 
@@ -84,7 +84,7 @@ impl StillInterval {
     pub fn is_empty(&self) -> bool {
         self.end <= self.start
     }
-    /// Duration from the first to the last sample [s].
+    /// Duration from the first to the last sample \[s\].
     pub fn duration_s(&self) -> f64 {
         (self.t_end_ns - self.t_start_ns) as f64 * 1e-9
     }
