@@ -74,6 +74,15 @@ pub enum PreintError {
         /// Last sample time [ns] (`i64::MIN` if there are none).
         last_ns: i64,
     },
+    /// Re-integration was asked for, but `PreintParams::keep_samples` is off so the samples
+    /// were not stored.
+    #[error(
+        "cannot re-integrate: keep_samples is off, so the {count} integrated sample(s) were not stored"
+    )]
+    SamplesNotKept {
+        /// Number of samples integrated (and not stored).
+        count: usize,
+    },
     /// A parameter is invalid (non-finite, negative variance, non-positive threshold…).
     #[error("invalid parameter {name}: {reason}")]
     InvalidParameter {

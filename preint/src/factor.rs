@@ -63,6 +63,7 @@
 
 use crate::measurement::PreintegratedImu;
 use crate::navstate::{NavState, predict};
+use crate::params::Level;
 use crate::sample::ImuBias;
 use lie::{SO3, hat};
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector};
@@ -95,6 +96,19 @@ pub enum FactorError {
         /// First pivot (0-based, in the reversed order used internally) that failed, or `dim`
         /// if the factor overflowed.
         pivot: usize,
+    },
+    /// The measurement was computed at a [`Level`] that lacks the covariance the factor
+    /// weights with: [`ImuFactor`] needs [`Level::Covariance`] or more, [`CombinedImuFactor`]
+    /// needs [`Level::Combined`] (at `Level::Covariance`, `cov15` has no random-walk effect
+    /// on the deltas and no delta–bias cross blocks).
+    #[error(
+        "the measurement was preintegrated at level {got:?}; this factor needs {needed:?} (set PreintParams::level)"
+    )]
+    LevelTooLow {
+        /// Level the factor needs.
+        needed: Level,
+        /// Level of the measurement.
+        got: Level,
     },
 }
 
@@ -369,9 +383,16 @@ pub struct ImuFactor {
 impl ImuFactor {
     /// Builds the factor; computes the square-root information of `pim.cov`.
     ///
-    /// Errors: [`FactorError::NonFinite`], [`FactorError::NonPositiveDeltaT`],
+    /// Errors: [`FactorError::LevelTooLow`] for a [`Level::Deltas`] measurement,
+    /// [`FactorError::NonFinite`], [`FactorError::NonPositiveDeltaT`],
     /// [`FactorError::CovarianceNotPositiveDefinite`] (e.g. a noise-free preintegration).
     pub fn new(pim: PreintegratedImu) -> Result<Self, FactorError> {
+        if pim.level < Level::Covariance {
+            return Err(FactorError::LevelTooLow {
+                needed: Level::Covariance,
+                got: pim.level,
+            });
+        }
         check_pim(&pim)?;
         let sqrt_info = sqrt_information(&pim.cov)?;
         Ok(Self { pim, sqrt_info })
@@ -452,9 +473,16 @@ pub struct CombinedImuFactor {
 impl CombinedImuFactor {
     /// Builds the factor; computes the square-root information of `pim.cov15`.
     ///
-    /// Errors as [`ImuFactor::new`]; a zero bias random walk makes `cov15` singular
+    /// Errors: [`FactorError::LevelTooLow`] unless `pim.level` is [`Level::Combined`]; else as
+    /// [`ImuFactor::new`]; a zero bias random walk makes `cov15` singular
     /// ([`FactorError::CovarianceNotPositiveDefinite`] with `dim = 15`).
     pub fn new(pim: PreintegratedImu) -> Result<Self, FactorError> {
+        if pim.level != Level::Combined {
+            return Err(FactorError::LevelTooLow {
+                needed: Level::Combined,
+                got: pim.level,
+            });
+        }
         check_pim(&pim)?;
         if !pim.cov15.iter().all(|x| x.is_finite()) {
             return Err(FactorError::NonFinite { field: "cov15" });

@@ -12,8 +12,8 @@ pub mod navstate;
 pub mod noise;
 pub mod sample;
 
-pub use measurement::{BiasJacobians, Cov9, Cov15, PreintegratedImu};
-pub use noise::ImuNoise;
+pub use measurement::{BiasJacobians, Cov9, Cov15, EdgeNoise, EdgeSource, PreintegratedImu};
+pub use noise::{CellRule, ImuNoise};
 pub use sample::{ImuBias, ImuSample, dt_seconds};
 
 pub mod error;

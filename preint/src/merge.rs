@@ -18,8 +18,27 @@
 //! Σ = A Σ_a Aᵀ + B Σ_b Bᵀ
 //! ```
 //!
-//! (the white noises of the two windows are independent). Bias Jacobians (9×6, columns
-//! [b_g, b_a]) compose the same way: `J = A J_a + B J_b`.
+//! plus, when the windows share stream samples, their covariance (below). Bias Jacobians
+//! (9×6, columns [b_g, b_a]) compose the same way: `J = A J_a + B J_b`.
+//!
+//! # Shared samples
+//!
+//! Consecutive windows of one stream share the samples around their common keyframe `t_k`:
+//! the sample at `t_k`, or the samples an interpolated boundary sample is made of, and for rk4
+//! the stencil neighbours ([`crate::window`]). Each window records those samples with their
+//! gains `G` on its error ([`crate::measurement::EdgeNoise`]); for a sample `s` in both,
+//! the white part of the merged covariance gains
+//!
+//! ```text
+//! A G_a Q G_bᵀ Bᵀ + B G_b Q G_aᵀ Aᵀ   (Q = the sample's noise covariance)
+//! ```
+//!
+//! and, if the two windows gave the sample different cells (samples pushed into two
+//! preintegrators directly: each saw only one of the sample's neighbours), the terms
+//! `A G_a (Q − Q_a) G_aᵀ Aᵀ + B G_b (Q − Q_b) G_bᵀ Bᵀ` replace each window's one-sided cell
+//! `Q_a`, `Q_b` by the cell from both neighbours, `Q`. Samples are identified by timestamp, so
+//! both windows must come from the same stream (and the same noise densities and cell rule;
+//! otherwise no sample is taken as shared).
 //!
 //! Combined 15×15 covariance [δφ, δv, δp, δb_g, δb_a] with `δb = b_t − b_i` (bias random walk):
 //! at `t_k` the bias has drifted by `δb_a` (a's last six components), which window b sees as
@@ -30,16 +49,26 @@
 //! F_a = [[A, −B J_b], [0, I₆]],   G_b = [[B, 0], [0, I₆]],   Σ15 = F_a Σ15_a F_aᵀ + G_b Σ15_b G_bᵀ
 //! ```
 //!
+//! plus the shared-sample terms in its 9×9 block. For [`Level::Covariance`] measurements
+//! (`cov15` without the random walk's effect on the deltas) the result is
+//! `diag(Σ, Σ_bb,a + Σ_bb,b)`: no cross blocks are invented.
+//!
 //! # Exactness
 //!
-//! For the `euler` scheme (each interval uses one sample) the merge equals integrating the
-//! whole window to round-off: deltas, covariances and Jacobians (tested in
-//! `preint/tests/merge.rs`). For `midpoint` and the high-order scheme, the samples near `t_k`
-//! enter intervals of both windows, so the merged covariance neglects their noise correlation
-//! across the boundary and the high-order edge stencils differ from the interior ones: the
-//! merge is then a (close) approximation, not an identity.
+//! The merged covariance is the exact first-order covariance of the composed deltas under the
+//! noise model of [`crate::noise`] (tested against numeric differentiation with respect to
+//! every stream sample in `preint/tests/linearisation.rs`). For windows split at a stream
+//! sample, merging equals integrating the whole window at once to round-off — deltas,
+//! covariances and Jacobians — for every scheme when the windows come from
+//! [`crate::window::preintegrate`], and for Euler and midpoint also when the samples were
+//! pushed into preintegrators directly (direct rk4 windows use one-sided edge stencils, so
+//! their composition differs from the whole window by the O(h⁴) integration error; the merge
+//! is still the exact covariance of that composition). For a split between samples the
+//! composition equals the whole stream with the boundary sample inserted
+//! ([`crate::window`]).
 
-use crate::measurement::{BiasJacobians, Cov9, Cov15, PreintegratedImu};
+use crate::measurement::{BiasJacobians, Cov9, Cov15, EdgeNoise, EdgeSource, PreintegratedImu};
+use crate::params::Level;
 use lie::hat;
 use nalgebra::{Matrix3, SMatrix};
 use thiserror::Error;
@@ -64,6 +93,15 @@ pub enum MergeError {
     /// The two windows use different gravity vectors (compared exactly).
     #[error("windows use different gravity vectors")]
     GravityMismatch,
+    /// The two windows were computed at different [`Level`]s (e.g. one without the combined
+    /// covariance): the merged `cov15` would mix models.
+    #[error("windows were computed at different levels ({a:?} and {b:?})")]
+    LevelMismatch {
+        /// Level of the first window.
+        a: Level,
+        /// Level of the second window.
+        b: Level,
+    },
 }
 
 type M96 = SMatrix<f64, 9, 6>;
@@ -93,9 +131,12 @@ fn mat_to_jac(m: &M96) -> BiasJacobians {
 /// formulas of the module docs. `Δt` is recomputed from the integer timestamps
 /// (`(t_j − t_i)·1e-9` s) when both inputs' `delta_t` agree with theirs, else summed.
 ///
+/// The result's `edge_noise` holds a's start-side and b's end-side samples (with their gains
+/// on the merged error), so merged windows merge exactly again.
+///
 /// Errors: [`MergeError::NotConsecutive`] if `a.t_j_ns != b.t_i_ns`,
 /// [`MergeError::BiasMismatch`] / [`MergeError::GravityMismatch`] if `bias_hat` / `gravity`
-/// differ (exact comparison).
+/// differ (exact comparison), [`MergeError::LevelMismatch`] if `level` differs.
 pub fn merge(a: &PreintegratedImu, b: &PreintegratedImu) -> Result<PreintegratedImu, MergeError> {
     if a.t_j_ns != b.t_i_ns {
         return Err(MergeError::NotConsecutive {
@@ -108,6 +149,12 @@ pub fn merge(a: &PreintegratedImu, b: &PreintegratedImu) -> Result<Preintegrated
     }
     if a.gravity != b.gravity {
         return Err(MergeError::GravityMismatch);
+    }
+    if a.level != b.level {
+        return Err(MergeError::LevelMismatch {
+            a: a.level,
+            b: b.level,
+        });
     }
     let ra = *a.delta_r.matrix();
     let dtb = b.delta_t;
@@ -125,17 +172,33 @@ pub fn merge(a: &PreintegratedImu, b: &PreintegratedImu) -> Result<Preintegrated
     bm.fixed_view_mut::<3, 3>(3, 3).copy_from(&ra);
     bm.fixed_view_mut::<3, 3>(6, 6).copy_from(&ra);
 
-    let cov: Cov9 = am * a.cov * am.transpose() + bm * b.cov * bm.transpose();
+    let (shared, edge_noise) = shared_noise(a, b, &am, &bm);
+    let cov: Cov9 = am * a.cov * am.transpose() + bm * b.cov * bm.transpose() + shared;
     let ja = jac_to_mat(&a.jac);
     let jb = jac_to_mat(&b.jac);
     let jac = mat_to_jac(&(am * ja + bm * jb));
 
-    let mut fa = Cov15::identity();
-    fa.fixed_view_mut::<9, 9>(0, 0).copy_from(&am);
-    fa.fixed_view_mut::<9, 6>(0, 9).copy_from(&(-bm * jb));
-    let mut gb = Cov15::identity();
-    gb.fixed_view_mut::<9, 9>(0, 0).copy_from(&bm);
-    let cov15: Cov15 = fa * a.cov15 * fa.transpose() + gb * b.cov15 * gb.transpose();
+    let cov15: Cov15 = match a.level {
+        Level::Combined => {
+            let mut fa = Cov15::identity();
+            fa.fixed_view_mut::<9, 9>(0, 0).copy_from(&am);
+            fa.fixed_view_mut::<9, 6>(0, 9).copy_from(&(-bm * jb));
+            let mut gb = Cov15::identity();
+            gb.fixed_view_mut::<9, 9>(0, 0).copy_from(&bm);
+            let mut c = fa * a.cov15 * fa.transpose() + gb * b.cov15 * gb.transpose();
+            let blk = c.fixed_view::<9, 9>(0, 0) + shared;
+            c.fixed_view_mut::<9, 9>(0, 0).copy_from(&blk);
+            c
+        }
+        Level::Covariance => {
+            let mut c = Cov15::zeros();
+            c.fixed_view_mut::<9, 9>(0, 0).copy_from(&cov);
+            let bb = a.cov15.fixed_view::<6, 6>(9, 9) + b.cov15.fixed_view::<6, 6>(9, 9);
+            c.fixed_view_mut::<6, 6>(9, 9).copy_from(&bb);
+            c
+        }
+        Level::Deltas => Cov15::zeros(),
+    };
 
     let summed = a.delta_t + b.delta_t;
     let from_ns = crate::sample::dt_seconds(a.t_i_ns, b.t_j_ns);
@@ -153,5 +216,62 @@ pub fn merge(a: &PreintegratedImu, b: &PreintegratedImu) -> Result<Preintegrated
         jac,
         bias_hat: a.bias_hat,
         gravity: a.gravity,
+        level: a.level,
+        edge_noise,
     })
+}
+
+type M9 = SMatrix<f64, 9, 9>;
+
+/// The covariance added by the samples `a` and `b` share (module docs) and the merged
+/// window's edge sources.
+fn shared_noise(a: &PreintegratedImu, b: &PreintegratedImu, am: &M9, bm: &M9) -> (M9, EdgeNoise) {
+    let (ea, eb) = (&a.edge_noise, &b.edge_noise);
+    let mut add = M9::zeros();
+    if !ea.same_model(eb) {
+        return (add, EdgeNoise::default());
+    }
+    let mut out = EdgeNoise::new(ea.gyro_cov, ea.acc_cov, ea.cell_rule);
+    let in_a = |t: i64| ea.find(t).is_some();
+    let times = ea.sources().iter().map(|s| s.t_ns);
+    let times = times.chain(eb.sources().iter().map(|s| s.t_ns).filter(|&t| !in_a(t)));
+    for t_ns in times {
+        let (ra, rb) = (ea.find(t_ns), eb.find(t_ns));
+        let ga = ra.map(|r| am * r.gain);
+        let gb = rb.map(|r| bm * r.gain);
+        // The sample's intervals as the merged window sees them.
+        let left_s = match (ra, rb) {
+            (Some(r), _) if r.left_s > 0.0 => r.left_s,
+            (_, Some(r)) => r.left_s,
+            (Some(r), None) => r.left_s,
+            (None, None) => 0.0,
+        };
+        let right_s = match (ra, rb) {
+            (_, Some(r)) if r.right_s > 0.0 => r.right_s,
+            (Some(r), _) => r.right_s,
+            (None, Some(r)) => r.right_s,
+            (None, None) => 0.0,
+        };
+        if let (Some(ra), Some(rb), Some(ga), Some(gb)) = (ra, rb, ga, gb) {
+            let q = ea.sample_cov(left_s, right_s);
+            let dqa = q - ea.sample_cov(ra.left_s, ra.right_s);
+            let dqb = q - eb.sample_cov(rb.left_s, rb.right_s);
+            let x = ga * q * gb.transpose();
+            add += x + x.transpose() + ga * dqa * ga.transpose() + gb * dqb * gb.transpose();
+        }
+        let start = ra.is_some_and(|r| r.start);
+        let end = rb.is_some_and(|r| r.end);
+        if start || end {
+            let zero = SMatrix::<f64, 9, 6>::zeros();
+            out.push(EdgeSource {
+                t_ns,
+                gain: ga.unwrap_or(zero) + gb.unwrap_or(zero),
+                left_s,
+                right_s,
+                start,
+                end,
+            });
+        }
+    }
+    (add, out)
 }

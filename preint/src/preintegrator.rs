@@ -3,14 +3,18 @@
 //!
 //! The window is `[first sample, last sample]` pushed; keyframe times between samples are
 //! handled by [`crate::window::preintegrate`], which inserts interpolated boundary samples.
-//! Intervals are processed with a small lag (midpoint: 1 sample, rk4: 3 samples) because a
-//! sample's noise covariance depends on its time cell (see [`Preintegrator`]); the tail is
-//! integrated by [`Preintegrator::finish`], which does not consume the preintegrator.
+//! Intervals are processed with a small lag (Euler and midpoint: 1 sample, rk4: 3 samples)
+//! because a sample's noise is added once it is no longer used and needs its time cell (see
+//! [`Preintegrator`] and the internal `propagation` module); the tail is integrated by
+//! [`Preintegrator::finish`], which does not consume the preintegrator.
 
 use crate::error::PreintError;
-use crate::measurement::{BiasJacobians, Cov9, Cov15, PreintegratedImu};
+use crate::measurement::{BiasJacobians, Cov9, Cov15, EdgeNoise, EdgeSource, PreintegratedImu};
+use crate::noise::{CellRule, walk_scale, white_scale};
 use crate::params::{CovShape, Level, PreintParams, Scheme};
-use crate::propagation::{BiasWalk, ErrorState, GenQ, Input, IsoQ, M3, NoiseQ, Transition};
+use crate::propagation::{
+    BiasWalk, Blk96, ErrorState, GenQ, Input, IsoQ, M3, NO_ID, NoiseQ, SLOTS, Sym9, Transition, V3,
+};
 use crate::sample::{ImuBias, ImuSample};
 use crate::scheme::{Deltas, Node, euler, midpoint, rk4, span_s};
 use lie::SO3;
@@ -18,6 +22,10 @@ use lie::SO3;
 const RING: usize = 8;
 /// ΔR is re-orthonormalised (`R ← ½R(3I − RᵀR)`) every this many intervals.
 const RENORM_EVERY: usize = 1024;
+/// Most edge samples whose gains are collected (rk4: context, 3 first, 3 last, context).
+const CAPS: usize = 8;
+/// Most distinct noise sources of the edge samples (each is a combination of ≤ 4).
+const ACC: usize = 16;
 
 #[derive(Clone, Copy, Debug)]
 enum NoiseKind {
@@ -25,62 +33,205 @@ enum NoiseKind {
     Gen(GenQ),
 }
 
+/// A stream sample referenced by a window edge, with its intervals [s] to its stream
+/// neighbours (0 if none).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Src {
+    pub t_ns: i64,
+    pub left_s: f64,
+    pub right_s: f64,
+}
+
+/// What the window path knows about one edge of a window (see [`crate::window`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Side {
+    /// Stream samples referenced here: the boundary sample's stencil first, then the rk4
+    /// context sample and the neighbours whose stream intervals the window does not see.
+    pub src: [Src; 8],
+    pub n_src: usize,
+    /// The boundary sample is `Σ w[i]·src[i]` for `i < nw`; `nw = 0`: no window information
+    /// (the boundary is a pushed sample like any other).
+    pub w: [f64; 4],
+    pub nw: usize,
+    /// rk4 context sample just outside the window (raw reading).
+    pub ctx: Option<ImuSample>,
+}
+
+impl Side {
+    fn find(&self, t_ns: i64) -> Option<&Src> {
+        self.src[..self.n_src].iter().find(|s| s.t_ns == t_ns)
+    }
+}
+
+/// Window-path information for both edges.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct WindowSpec {
+    pub start: Side,
+    pub end: Side,
+}
+
+/// The gain of an edge sample collected when it was retired.
+#[derive(Clone, Copy, Debug, Default)]
+struct Cap {
+    /// Extended index (context before = 0 when present).
+    ext: usize,
+    /// Gain on the error at time `t_ns` (rotated coordinates).
+    g: Blk96,
+    /// Deltas at `t_ns`.
+    v: V3,
+    p: V3,
+    t_ns: i64,
+    /// Timestamp of the sample itself.
+    node_t: i64,
+    /// Intervals to its window neighbours [s] (0 if none).
+    left: f64,
+    right: f64,
+}
+
 #[derive(Clone, Debug)]
 struct Core {
     ring: [Node; RING],
+    /// Window samples pushed.
     n: usize,
+    /// 1 if a context sample precedes the window (it is `ring[0]`, extended index 0).
+    cb: usize,
+    ctx_after: Option<Node>,
+    /// Window intervals integrated.
     done: usize,
     d: Deltas,
     e: ErrorState,
+    caps: [Cap; CAPS],
+    ncap: usize,
 }
 
 /// Static configuration of the loop, fixed at construction.
 #[derive(Clone, Copy, Debug)]
 struct Cfg {
     scheme: Scheme,
+    rule: CellRule,
     walk: BiasWalk,
     int_cov: Option<CovShape>,
+    /// Number of first / last window samples whose gains are collected.
+    e0: usize,
+    e1: usize,
 }
 
 impl Core {
+    /// Sample at extended index `i` (window sample `j` is `j + cb`; `cb + n` is the context
+    /// after, if any).
     #[inline(always)]
-    fn node(&self, i: usize) -> &Node {
-        &self.ring[i % RING]
+    fn ext(&self, i: usize) -> Node {
+        match self.ctx_after {
+            Some(c) if i == self.cb + self.n => c,
+            _ => self.ring[i % RING],
+        }
     }
 
-    /// `1/cell` [1/s] of node `j`: the mean length of its adjacent intervals in the window
-    /// (`total` nodes if known). Uniform sampling at Δt gives `1/Δt`, i.e. per-sample noise
-    /// `Σ/Δt`.
+    /// Window sample `j`.
     #[inline(always)]
-    fn cell_scale(&self, j: usize, total: usize) -> f64 {
-        let t = |i: usize| self.node(i).t_ns;
-        let span_ns = match (j > 0, j + 1 < total) {
-            (true, true) => span_s(t(j - 1), t(j + 1)) * 0.5,
-            (false, true) => span_s(t(j), t(j + 1)),
-            (true, false) => span_s(t(j - 1), t(j)),
-            (false, false) => 1.0,
+    fn node(&self, j: usize) -> &Node {
+        &self.ring[(j + self.cb) % RING]
+    }
+
+    /// Intervals [s] from window sample `j` to its window neighbours (0 if none; `total`
+    /// samples if known).
+    #[inline(always)]
+    fn intervals(&self, j: usize, total: usize) -> (f64, f64) {
+        let t = self.node(j).t_ns;
+        let left = if j > 0 {
+            span_s(self.node(j - 1).t_ns, t)
+        } else {
+            0.0
         };
-        1.0 / span_ns
+        let right = if j + 1 < total {
+            span_s(t, self.node(j + 1).t_ns)
+        } else {
+            0.0
+        };
+        (left, right)
     }
 
-    /// Integrates every interval that is ready; with `fin`, all remaining intervals (the
-    /// window then has exactly `self.n` nodes).
+    /// Whether the sample at extended index `ext` is an edge sample (its gain is collected
+    /// instead of its noise being added): a context sample, one of the first `e0`, or (at
+    /// the end, `fin`) one of the last `e1` window samples.
+    #[inline(always)]
+    fn is_edge(&self, cfg: &Cfg, ext: usize, fin: bool) -> bool {
+        if ext < self.cb || ext >= self.cb + self.n {
+            return true;
+        }
+        let j = ext - self.cb;
+        j < cfg.e0 || (fin && j + cfg.e1 >= self.n)
+    }
+
+    /// Stores the gain `g` (on the error at `t_now`, deltas `self.d`) of edge sample `ext`.
+    #[inline(never)]
+    fn capture(&mut self, ext: usize, g: Blk96, t_now: i64, left: f64, right: f64) -> bool {
+        if self.ncap == CAPS {
+            return false;
+        }
+        self.caps[self.ncap] = Cap {
+            ext,
+            g,
+            v: self.d.v,
+            p: self.d.p,
+            t_ns: t_now,
+            node_t: self.ext(ext).t_ns,
+            left,
+            right,
+        };
+        self.ncap += 1;
+        true
+    }
+
+    /// rk4: retires the pending samples with extended index below `below` (their gains are on
+    /// the error at window sample `at`).
+    #[inline(always)]
+    fn retire_below<N: NoiseQ>(
+        &mut self,
+        cfg: &Cfg,
+        noise: &N,
+        below: usize,
+        at: usize,
+        fin: bool,
+    ) {
+        let total = if fin { self.n } else { usize::MAX };
+        for slot in 0..SLOTS {
+            let id = self.e.pend[slot].id;
+            if id == NO_ID || id >= below {
+                continue;
+            }
+            let pd = self.e.take_pending(slot);
+            let (left, right) = if id >= self.cb && id < self.cb + self.n {
+                self.intervals(id - self.cb, total)
+            } else {
+                (0.0, 0.0)
+            };
+            let t_now = self.node(at).t_ns;
+            if !(self.is_edge(cfg, id, fin) && self.capture(id, pd.g, t_now, left, right)) {
+                let s = white_scale(cfg.rule.cell_s(left, right));
+                self.e.add_noise(&pd.g, s, noise);
+            }
+        }
+    }
+
+    /// Integrates every interval that is ready; with `fin`, all remaining intervals and the
+    /// remaining noise (the window then has exactly `self.n` samples).
     #[inline(always)]
     fn advance<N: NoiseQ, const LIN: bool>(&mut self, cfg: &Cfg, noise: &N, fin: bool) {
         let n = self.n;
+        let cb = self.cb;
         loop {
             let k = self.done;
             if k + 1 >= n {
-                return;
+                break;
             }
             let ready = fin
                 || match cfg.scheme {
-                    Scheme::Euler => true,
-                    Scheme::Midpoint => k + 2 < n,
-                    Scheme::Rk4 => k.max(1) + 3 < n,
+                    Scheme::Euler | Scheme::Midpoint => k + 2 < n,
+                    Scheme::Rk4 => (k + cb).max(1) + 3 <= cb + n,
                 };
             if !ready {
-                return;
+                break;
             }
             // In streaming mode `n` is a lower bound of the window size that is large enough
             // for every cell and stencil used here; with `fin` it is exact.
@@ -91,11 +242,28 @@ impl Core {
             match cfg.scheme {
                 Scheme::Euler => {
                     let n0 = *self.node(k);
-                    let h = span_s(n0.t_ns, self.node(k + 1).t_ns);
+                    let t1 = self.node(k + 1).t_ns;
+                    let h = span_s(n0.t_ns, t1);
                     let r0 = self.d.r;
-                    if let Some((tr, inp)) = euler::step::<LIN>(&mut self.d, &n0, h, k) {
-                        let cp = 0.5 * h * h;
-                        self.e.step_euler(&tr, &inp, &r0, cp, noise, &cfg.walk);
+                    if let Some((tr, gain)) = euler::step::<LIN>(&mut self.d, &n0, h) {
+                        let edge = self.is_edge(cfg, k + cb, fin);
+                        // The held interval `h` decides the cell (`CellRule::Held`); the left
+                        // interval is only recorded for edge samples.
+                        let s = if edge {
+                            0.0
+                        } else {
+                            white_scale(cfg.rule.cell_s(0.0, h))
+                        };
+                        self.e.step_euler(&tr, &gain, &r0, s, noise, &cfg.walk);
+                        let (left, right) = if edge {
+                            self.intervals(k, total)
+                        } else {
+                            (0.0, h)
+                        };
+                        if edge && !self.capture(k + cb, gain, t1, left, right) {
+                            let s = white_scale(cfg.rule.cell_s(left, right));
+                            self.e.add_noise(&gain, s, noise);
+                        }
                         self.int_cov(cfg, &tr);
                     }
                 }
@@ -103,31 +271,42 @@ impl Core {
                     let (n0, n1) = (*self.node(k), *self.node(k + 1));
                     let h = span_s(n0.t_ns, n1.t_ns);
                     if let Some((tr, g)) = midpoint::step::<LIN>(&mut self.d, &n0, &n1, h) {
-                        let s0 = self.cell_scale(k, total);
-                        self.e.step_mid(&tr, &g, s0, noise, &cfg.walk);
+                        let (left, right) = self.intervals(k, total);
+                        let edge = self.is_edge(cfg, k + cb, fin);
+                        let s0 = if edge {
+                            0.0
+                        } else {
+                            white_scale(cfg.rule.cell_s(left, right))
+                        };
+                        let ng = self.e.step_mid(&tr, &g, s0, noise, &cfg.walk);
+                        if edge && !self.capture(k + cb, ng.blk(), n1.t_ns, left, right) {
+                            let s = white_scale(cfg.rule.cell_s(left, right));
+                            self.e.add_noise(&ng.blk(), s, noise);
+                        }
                         self.int_cov(cfg, &tr);
                     }
                 }
                 Scheme::Rk4 => {
-                    let m = n.min(4);
+                    let ke = k + cb;
+                    let len = cb + n + usize::from(fin && self.ctx_after.is_some());
+                    let m = len.min(4);
                     let s0 = if fin {
-                        k.saturating_sub(1).min(n - m)
+                        ke.saturating_sub(1).min(len - m)
                     } else {
-                        k.saturating_sub(1)
+                        ke.saturating_sub(1)
                     };
+                    if LIN {
+                        self.retire_below(cfg, noise, s0, k, fin);
+                    }
                     let mut st = [Node::default(); 4];
-                    let mut scales = [0.0; 4];
-                    for j in 0..m {
-                        st[j] = *self.node(s0 + j);
-                        if LIN {
-                            scales[j] = self.cell_scale(s0 + j, total);
-                        }
+                    for (j, x) in st.iter_mut().enumerate().take(m) {
+                        *x = self.ext(s0 + j);
                     }
                     let mut out = [Input::default(); 4];
-                    if let Some(tr) =
-                        rk4::step::<LIN>(&mut self.d, &st[..m], k - s0, s0, &scales, &mut out)
+                    if let Some(tr) = rk4::step::<LIN>(&mut self.d, &st[..m], ke - s0, s0, &mut out)
                     {
-                        self.propagate(cfg, noise, &tr, &out[..m]);
+                        self.e.step_multi(&tr, &out[..m], &cfg.walk);
+                        self.int_cov(cfg, &tr);
                     }
                 }
             }
@@ -137,21 +316,22 @@ impl Core {
                 self.d.r = r * (M3::identity() * 3.0 - r.transpose() * r) * 0.5;
             }
         }
-    }
-
-    /// Midpoint, end of the window (`fin`, exactly `self.n` nodes): the last sample's noise.
-    #[inline]
-    fn finish_tail<N: NoiseQ>(&mut self, cfg: &Cfg, noise: &N) {
-        if cfg.scheme == Scheme::Midpoint && self.n >= 2 {
-            let s = self.cell_scale(self.n - 1, self.n);
-            self.e.finish_mid(noise, s);
+        if fin && LIN && n >= 2 {
+            match cfg.scheme {
+                Scheme::Euler => {}
+                Scheme::Midpoint => {
+                    // The last sample: its gain is pending on the final error.
+                    let g = self.e.take_mid().blk();
+                    let (left, right) = self.intervals(n - 1, n);
+                    let t = self.node(n - 1).t_ns;
+                    if !self.capture(cb + n - 1, g, t, left, right) {
+                        let s = white_scale(cfg.rule.cell_s(left, right));
+                        self.e.add_noise(&g, s, noise);
+                    }
+                }
+                Scheme::Rk4 => self.retire_below(cfg, noise, usize::MAX, n - 1, true),
+            }
         }
-    }
-
-    #[inline(always)]
-    fn propagate<N: NoiseQ>(&mut self, cfg: &Cfg, noise: &N, tr: &Transition, inp: &[Input]) {
-        self.e.step(tr, inp, noise, &cfg.walk);
-        self.int_cov(cfg, tr);
     }
 
     #[inline(always)]
@@ -159,16 +339,17 @@ impl Core {
         if let Some(ic) = &cfg.int_cov {
             // GTSAM: integration noise added to δp in the body-(k+1) chart, i.e.
             // ΔR_k+1 Σ_int ΔR_k+1ᵀ h in frame i.
+            let ws = walk_scale(tr.h);
             match ic {
                 CovShape::Isotropic(s) => {
-                    let add = s * tr.h;
+                    let add = s * ws;
                     for i in 0..3 {
                         self.e.p.pp[(i, i)] += add;
                     }
                 }
                 CovShape::General(m) => {
                     let r = &self.d.r;
-                    self.e.p.pp += r * m * r.transpose() * tr.h;
+                    self.e.p.pp += r * m * r.transpose() * ws;
                 }
             }
         }
@@ -191,10 +372,21 @@ impl Core {
 /// assert!((m.delta_r.log().z - 0.1).abs() < 1e-12);
 /// ```
 ///
-/// Noise model: sample j carries white noise of covariance `diag(Σ_g, Σ_a)/c_j`, where the cell
-/// `c_j` is the interval held by the sample for Euler (GTSAM), and the mean length of the
-/// sample's adjacent intervals for midpoint and rk4 (`Δt` for uniform sampling, matching
-/// [`ImuNoise`](crate::ImuNoise)'s per-sample `σ/√Δt`).
+/// Noise model ([`crate::noise`]): sample j carries independent white noise of covariance
+/// `diag(Σ_g, Σ_a)·white_scale(c_j)`, where the cell `c_j` follows from the intervals to its
+/// neighbours by the scheme's [`CellRule`]: the interval held by the sample for Euler (GTSAM),
+/// the mean length of its adjacent intervals for midpoint and rk4 (`Δt` for uniform
+/// sampling, matching [`ImuNoise`](crate::ImuNoise)'s per-sample `σ/√Δt`). The pushed samples
+/// are the stream: the first sample has no left neighbour and the last no right one. Each
+/// sample's noise is added exactly once, with the sum of its gains over every interval that
+/// uses it (the internal `propagation` module).
+///
+/// Memory: with `keep_samples` (the default) every pushed sample is also stored for
+/// re-integration. [`Preintegrator::new`] starts with an empty `Vec`, which then grows
+/// geometrically (amortised O(1), about log₂ N reallocations for N samples);
+/// [`Preintegrator::with_capacity`] reserves the room up front, and with `keep_samples = false`
+/// nothing is stored. In those two cases [`Preintegrator::integrate`] never allocates
+/// (`preint/tests/no_alloc.rs`).
 #[derive(Clone, Debug)]
 pub struct Preintegrator {
     params: PreintParams,
@@ -202,6 +394,8 @@ pub struct Preintegrator {
     noise: NoiseKind,
     cfg: Cfg,
     lin: bool,
+    spec: WindowSpec,
+    check_gaps: bool,
     samples: Vec<ImuSample>,
     first_t_ns: i64,
     last_t_ns: i64,
@@ -210,17 +404,32 @@ pub struct Preintegrator {
 
 impl Preintegrator {
     /// A preintegrator with bias estimate `bias_hat` ([b_g rad/s, b_a m/s²]); validates
-    /// `params` and decides the noise path (isotropic closed form or general) once.
+    /// `params` and decides the noise path (isotropic closed form or general) once. With
+    /// `keep_samples`, the stored samples live in a `Vec` that grows as samples arrive (see
+    /// the type docs; use [`Preintegrator::with_capacity`] to avoid reallocations).
     pub fn new(params: PreintParams, bias_hat: ImuBias) -> Result<Self, PreintError> {
         Self::with_capacity(params, bias_hat, 0)
     }
 
     /// As [`Preintegrator::new`], reserving room for `capacity` stored samples so that
-    /// `integrate` never allocates (when `keep_samples` is set).
+    /// `integrate` never allocates for the first `capacity` samples (when `keep_samples` is
+    /// set; without it nothing is stored and nothing allocated).
     pub fn with_capacity(
         params: PreintParams,
         bias_hat: ImuBias,
         capacity: usize,
+    ) -> Result<Self, PreintError> {
+        Self::build(params, bias_hat, capacity, WindowSpec::default(), true)
+    }
+
+    /// The window path's constructor: `spec` describes the window edges, `check_gaps = false`
+    /// skips the gap check (the stream was checked instead).
+    pub(crate) fn build(
+        params: PreintParams,
+        bias_hat: ImuBias,
+        capacity: usize,
+        spec: WindowSpec,
+        check_gaps: bool,
     ) -> Result<Self, PreintError> {
         params.validate()?;
         let finite = |v: &nalgebra::Vector3<f64>| v.iter().all(|x| x.is_finite());
@@ -240,8 +449,13 @@ impl Preintegrator {
                 a: params.acc_cov,
             }),
         };
+        let (e0, e1) = match params.scheme {
+            Scheme::Euler | Scheme::Midpoint => (2, 2),
+            Scheme::Rk4 => (3, 3),
+        };
         let cfg = Cfg {
             scheme: params.scheme,
+            rule: params.scheme.cell_rule(),
             walk: BiasWalk {
                 combined: params.level == Level::Combined,
                 g: params.gyro_bias_rw_cov,
@@ -252,27 +466,47 @@ impl Preintegrator {
                 .as_ref()
                 .map(CovShape::of)
                 .filter(|c| *c != CovShape::Isotropic(0.0)),
+            e0,
+            e1,
         };
         let samples = if params.keep_samples {
             Vec::with_capacity(capacity)
         } else {
             Vec::new()
         };
+        let rk4 = params.scheme == Scheme::Rk4;
+        let corrected = |s: &ImuSample| Node {
+            t_ns: s.t_ns,
+            w: s.gyro - bias_hat.gyro,
+            a: s.acc - bias_hat.acc,
+        };
+        let ctx_before = spec.start.ctx.filter(|_| rk4).map(|s| corrected(&s));
+        let ctx_after = spec.end.ctx.filter(|_| rk4).map(|s| corrected(&s));
+        let mut ring = [Node::default(); RING];
+        if let Some(c) = ctx_before {
+            ring[0] = c;
+        }
         Ok(Self {
             lin: params.level != Level::Deltas,
             params,
             bias_hat,
             noise,
             cfg,
+            spec,
+            check_gaps,
             samples,
             first_t_ns: 0,
             last_t_ns: 0,
             core: Core {
-                ring: [Node::default(); RING],
+                ring,
                 n: 0,
+                cb: usize::from(ctx_before.is_some()),
+                ctx_after,
                 done: 0,
                 d: Deltas::default(),
                 e: ErrorState::default(),
+                caps: [Cap::default(); CAPS],
+                ncap: 0,
             },
         })
     }
@@ -334,7 +568,7 @@ impl Preintegrator {
             }
             // i128: a gap that overflows i64 is reported as i64::MAX.
             let gap = s.t_ns as i128 - prev as i128;
-            if gap > self.params.max_gap_ns as i128 {
+            if self.check_gaps && gap > self.params.max_gap_ns as i128 {
                 let gap = i64::try_from(gap).unwrap_or(i64::MAX);
                 return Err(PreintError::GapTooLarge {
                     index,
@@ -350,13 +584,14 @@ impl Preintegrator {
         if self.params.keep_samples {
             self.samples.push(*s);
         }
-        self.core.ring[index % RING] = Node {
+        let core = &mut self.core;
+        core.ring[(index + core.cb) % RING] = Node {
             t_ns: s.t_ns,
             w: s.gyro - self.bias_hat.gyro,
             a: s.acc - self.bias_hat.acc,
         };
-        self.core.n += 1;
-        Self::run(&mut self.core, &self.cfg, &self.noise, self.lin, false);
+        core.n += 1;
+        Self::run(core, &self.cfg, &self.noise, self.lin, false);
         Ok(())
     }
 
@@ -369,26 +604,17 @@ impl Preintegrator {
     fn run(core: &mut Core, cfg: &Cfg, noise: &NoiseKind, lin: bool, fin: bool) {
         match (lin, noise) {
             (false, _) => core.advance::<IsoQ, false>(cfg, &IsoQ { g: 0.0, a: 0.0 }, fin),
-            (true, NoiseKind::Iso(q)) => {
-                core.advance::<IsoQ, true>(cfg, q, fin);
-                if fin {
-                    core.finish_tail(cfg, q);
-                }
-            }
-            (true, NoiseKind::Gen(q)) => {
-                core.advance::<GenQ, true>(cfg, q, fin);
-                if fin {
-                    core.finish_tail(cfg, q);
-                }
-            }
+            (true, NoiseKind::Iso(q)) => core.advance::<IsoQ, true>(cfg, q, fin),
+            (true, NoiseKind::Gen(q)) => core.advance::<GenQ, true>(cfg, q, fin),
         }
     }
 
     /// The measurement over `[first sample, last sample]`: deltas, 9×9 covariance
     /// [δφ, δv, δp] and bias Jacobians in the Forster chart, and the 15×15 combined covariance
     /// [δφ, δv, δp, δb_g, δb_a] (with [`Level::Covariance`] its delta–bias cross blocks are
-    /// zero; with [`Level::Deltas`] covariances and Jacobians are zero). Integrates the
-    /// remaining intervals on a copy, so more samples may be added afterwards.
+    /// zero and its 9×9 block is `cov`; with [`Level::Deltas`] covariances and Jacobians are
+    /// zero). Integrates the remaining intervals on a copy, so more samples may be added
+    /// afterwards.
     pub fn finish(&self) -> Result<PreintegratedImu, PreintError> {
         if self.core.n < 2 {
             return Err(PreintError::TooFewSamples { count: self.core.n });
@@ -398,6 +624,98 @@ impl Preintegrator {
         Ok(self.output(&core))
     }
 
+    /// Noise of the edge samples ([`crate::propagation`]): carries each collected gain to the
+    /// end of the window, splits interpolated boundary samples into the stream samples
+    /// they are made of, and adds each stream sample's noise once, with its own cell. Returns
+    /// the sources with their gains in the chart.
+    fn resolve_edges(&self, core: &Core, p: &mut Sym9) -> EdgeNoise {
+        let n = core.n;
+        let cb = core.cb;
+        let t_end = core.node(n - 1).t_ns;
+        let (v_end, p_end) = (core.d.v, core.d.p);
+        // (key, gain, left, right, start, end)
+        let mut acc = [(0i64, Blk96::default(), 0.0, 0.0, false, false); ACC];
+        let mut na = 0;
+        let mut extra = Sym9::default();
+        let mut add = |key: i64, g: Blk96, left: f64, right: f64, start: bool, end: bool| {
+            if let Some(a) = acc[..na].iter_mut().find(|a| a.0 == key) {
+                a.1 = a.1.add(&g);
+                a.4 |= start;
+                a.5 |= end;
+            } else if na < ACC {
+                acc[na] = (key, g, left, right, start, end);
+                na += 1;
+            } else {
+                // Unreachable by construction (≤ 10 distinct sources); never panic.
+                let s = white_scale(self.cfg.rule.cell_s(left, right));
+                self.add_full(&mut extra, &g, s);
+            }
+        };
+        let spec = &self.spec;
+        let lookup =
+            |t: i64, left: f64, right: f64| match spec.start.find(t).or_else(|| spec.end.find(t)) {
+                Some(s) => (s.left_s, s.right_s),
+                None => (left, right),
+            };
+        for cap in &core.caps[..core.ncap] {
+            let tr = Transition::between(span_s(cap.t_ns, t_end), &cap.v, &cap.p, &v_end, &p_end);
+            let g = tr.apply(&cap.g);
+            let start = cap.ext < cb + self.cfg.e0;
+            let end = cap.ext + self.cfg.e1 >= cb + n;
+            let side = if cap.ext == cb && spec.start.nw > 0 {
+                Some(&spec.start)
+            } else if cap.ext == cb + n - 1 && spec.end.nw > 0 {
+                Some(&spec.end)
+            } else {
+                None
+            };
+            match side {
+                Some(sd) => {
+                    for i in 0..sd.nw {
+                        let s = &sd.src[i];
+                        add(s.t_ns, g.scale(sd.w[i]), s.left_s, s.right_s, start, end);
+                    }
+                }
+                None => {
+                    let (l, r) = lookup(cap.node_t, cap.left, cap.right);
+                    add(cap.node_t, g, l, r, start, end);
+                }
+            }
+        }
+        let mut out = EdgeNoise::new(self.params.gyro_cov, self.params.acc_cov, self.cfg.rule);
+        let rt = core.d.r.transpose();
+        for &(t_ns, g, left_s, right_s, start, end) in &acc[..na] {
+            let s = white_scale(self.cfg.rule.cell_s(left_s, right_s));
+            self.add_full(p, &g, s);
+            out.push(EdgeSource {
+                t_ns,
+                gain: g.chart(&rt),
+                left_s,
+                right_s,
+                start,
+                end,
+            });
+        }
+        for (a, b) in [
+            (&mut p.rr, &extra.rr),
+            (&mut p.rv, &extra.rv),
+            (&mut p.rp, &extra.rp),
+            (&mut p.vv, &extra.vv),
+            (&mut p.vp, &extra.vp),
+            (&mut p.pp, &extra.pp),
+        ] {
+            *a += b;
+        }
+        out
+    }
+
+    fn add_full(&self, p: &mut Sym9, g: &Blk96, s: f64) {
+        match &self.noise {
+            NoiseKind::Iso(q) => q.add_full(p, g, s),
+            NoiseKind::Gen(q) => q.add_full(p, g, s),
+        }
+    }
+
     fn output(&self, core: &Core) -> PreintegratedImu {
         let r = core.d.r;
         let rt = r.transpose();
@@ -405,9 +723,12 @@ impl Preintegrator {
         let mut cov = Cov9::zeros();
         let mut cov15 = Cov15::zeros();
         let mut jac = BiasJacobians::default();
+        let mut edge_noise = EdgeNoise::default();
         if self.lin {
+            let mut p = e.p;
+            edge_noise = self.resolve_edges(core, &mut p);
             // Rotated error coordinates → the documented chart.
-            let to_chart = |p: &crate::propagation::Sym9| {
+            let to_chart = |p: &Sym9| {
                 let mut m = Cov9::zeros();
                 let blocks = [
                     (0, 0, rt * p.rr * r),
@@ -425,7 +746,7 @@ impl Preintegrator {
                 }
                 (m + m.transpose()) * 0.5
             };
-            cov = to_chart(&e.p);
+            cov = to_chart(&p);
             let cov_walk = to_chart(&e.p_walk);
             jac = BiasJacobians {
                 d_r_d_bg: rt * e.j.rg,
@@ -464,6 +785,8 @@ impl Preintegrator {
             jac,
             bias_hat: self.bias_hat,
             gravity: self.params.gravity,
+            level: self.params.level,
+            edge_noise,
         }
     }
 
@@ -471,7 +794,12 @@ impl Preintegrator {
     /// and `‖δb_a‖ ≤ reintegrate_acc_threshold` (δb = bias − bias_hat), the first-order
     /// correction [`PreintegratedImu::corrected`] (Forster eq. 44; covariance and Jacobians
     /// kept, `bias_hat` set to `bias`); otherwise the stored samples are re-integrated with
-    /// `bias` (if `keep_samples` is off, the first-order correction is returned regardless).
+    /// `bias`.
+    ///
+    /// Without `keep_samples` there is nothing to re-integrate: the first-order correction is
+    /// returned whatever the size of δb, with `reintegrated: false` (callers that need the
+    /// accuracy of re-integration above the thresholds must keep the samples; the size of the
+    /// first-order error is documented at [`crate::params::DEFAULT_REINTEGRATE_GYRO`]).
     pub fn measurement_for_bias(&self, bias: &ImuBias) -> Result<BiasUpdate, PreintError> {
         let dbg = (bias.gyro - self.bias_hat.gyro).norm();
         let dba = (bias.acc - self.bias_hat.acc).norm();
@@ -497,12 +825,23 @@ impl Preintegrator {
         })
     }
 
-    /// Replaces the bias estimate by `bias` and re-integrates the stored samples (a no-op on
-    /// the deltas if `keep_samples` is off and nothing is stored: the window restarts empty).
+    /// Replaces the bias estimate by `bias` and re-integrates the stored samples.
+    ///
+    /// Errors: [`PreintError::SamplesNotKept`] if `keep_samples` is off and samples were
+    /// integrated (nothing to re-integrate; the preintegrator is left unchanged), and the
+    /// errors of [`Preintegrator::new`] for a non-finite `bias`.
     pub fn reintegrate(&mut self, bias: &ImuBias) -> Result<(), PreintError> {
-        let samples = std::mem::take(&mut self.samples);
-        let mut fresh = Preintegrator::with_capacity(self.params.clone(), *bias, samples.len())?;
-        fresh.integrate_slice(&samples)?;
+        if !self.params.keep_samples && self.core.n > 0 {
+            return Err(PreintError::SamplesNotKept { count: self.core.n });
+        }
+        let mut fresh = Preintegrator::build(
+            self.params.clone(),
+            *bias,
+            self.samples.len(),
+            self.spec,
+            self.check_gaps,
+        )?;
+        fresh.integrate_slice(&self.samples)?;
         *self = fresh;
         Ok(())
     }

@@ -11,21 +11,46 @@
 //! e_k+1 = A_k e_k + Σ_j Γ_kj n_j,   A_k = [[I, 0, 0], [−[U1]×, I, 0], [−[U2]×, h I, I]]
 //! ```
 //!
-//! where `U1 = ∫ ΔR(t) a(t) dt` and `U2 = ∫ (h − s) ΔR(s) a(s) ds` over the interval (as the
-//! scheme discretises them). A sample used by several intervals (midpoint: 2, rk4: up to 4)
-//! keeps its cross-covariance `X_j = Cov(e, n_j)`; with `Z_j = A X_j` and
-//! `W_j = Z_j + ½ Γ_j Q_j`:
+//! where `U1 = ∫ ΔR(t) a(t) dt` and `U2 = ∫ (h − s) ΔR(s) a(s) ds` over the interval, as the
+//! scheme discretises them; for every scheme here they are exactly the increments
+//! `U1 = Δv_k+1 − Δv_k`, `U2 = Δp_k+1 − Δp_k − Δv_k h`.
+//!
+//! # Pending gains: each sample's noise enters once
+//!
+//! A sample is used by every interval whose stencil holds it (Euler 1, midpoint 2, rk4 up to 4),
+//! so its noise must not be added once per interval. Write the error after interval k as
+//! `e = f + Σ_{j pending} G_j n_j`, the pending samples being those a later interval still
+//! uses, `G_j` their accumulated gains and `f` independent of them. Then per interval
 //!
 //! ```text
-//! P ← A P Aᵀ + Σ_j (W_j Γ_jᵀ + Γ_j W_jᵀ),   X_j ← W_j + ½ Γ_j Q_j
+//! P_f ← A P_f Aᵀ,   G_j ← A G_j + Γ_kj   (a sample first used here starts at G_j = Γ_kj),
 //! ```
 //!
-//! which equals `A P Aᵀ + Σ_j (A X_j Γ_jᵀ + Γ_j X_jᵀ Aᵀ + Γ_j Q_j Γ_jᵀ)`. Bias Jacobians:
-//! every sample sees `−δb`, so `J ← A J − Σ_j Γ_j`. Combined covariance (bias deviation `δb`
+//! and a sample no later interval uses is *retired*: `P_f += G_j Q_j G_jᵀ`, with
+//! `Q_j = diag(Σ_g, Σ_a)·white_scale(c_j)` ([`crate::noise`]). At the end every pending sample
+//! is retired. No cross-covariance is kept; the result is the exact first-order covariance
+//! `Σ_j G_j Q_j G_jᵀ`. Euler has no pending sample; midpoint has one (sample k+1, whose
+//! *merged gain* `A Γ_k,1 + Γ_k+1,0` is added when interval k+1 is done, see
+//! [`ErrorState::step_mid`]); rk4 has up to four ([`ErrorState::step_multi`]).
+//!
+//! # Transition between any two nodes
+//!
+//! Products of such transitions keep the form: from node k to node m,
+//! `Φ = [[I, 0, 0], [−[V]×, I, 0], [−[W]×, T I, I]]` with `T = t_m − t_k`, `V = Δv_m − Δv_k`,
+//! `W = Δp_m − Δp_k − Δv_k T` (compose two steps and use the increments above). So a gain
+//! known at node k is carried to the end of the window from the deltas alone
+//! ([`Transition::between`]), which is how the gains of the samples near the window edges are
+//! collected without per-interval work.
+//!
+//! # Bias Jacobians and the combined covariance
+//!
+//! Every sample sees `−δb`, so `J ← A J − Σ_j Γ_kj`. Combined covariance (bias deviation `δb`
 //! constant over an interval, then a random-walk step): `C = Cov(e, δb)`,
-//! `V = A C + ½ Γ_Σ P_bb`, `P += V Γ_Σᵀ + Γ_Σ Vᵀ`, `C ← V + ½ Γ_Σ P_bb`, `P_bb += Σ_rw h`.
+//! `V = A C + ½ Γ_Σ P_bb`, `P += V Γ_Σᵀ + Γ_Σ Vᵀ`, `C ← V + ½ Γ_Σ P_bb`,
+//! `P_bb += Σ_rw·walk_scale(h)`, with `Γ_Σ = Σ_j Γ_kj`.
 
-use nalgebra::{Matrix3, Vector3};
+use crate::noise::walk_scale;
+use nalgebra::{Matrix3, SMatrix, Vector3};
 
 pub(crate) type M3 = Matrix3<f64>;
 pub(crate) type V3 = Vector3<f64>;
@@ -43,7 +68,7 @@ pub(crate) struct Blk96 {
 
 impl Blk96 {
     #[inline(always)]
-    fn add(&self, o: &Self) -> Self {
+    pub(crate) fn add(&self, o: &Self) -> Self {
         Self {
             rg: self.rg + o.rg,
             vg: self.vg + o.vg,
@@ -53,7 +78,7 @@ impl Blk96 {
         }
     }
     #[inline(always)]
-    fn scale(&self, s: f64) -> Self {
+    pub(crate) fn scale(&self, s: f64) -> Self {
         Self {
             rg: self.rg * s,
             vg: self.vg * s,
@@ -72,6 +97,17 @@ impl Blk96 {
             va: self.va * qa,
             pa: self.pa * qa,
         }
+    }
+    /// The dense 9×6 matrix with the ψ rows premultiplied by `rt` (rotated coordinates → the
+    /// chart `δφ = ΔRᵀ ψ` when `rt = ΔRᵀ`).
+    pub(crate) fn chart(&self, rt: &M3) -> SMatrix<f64, 9, 6> {
+        let mut m = SMatrix::<f64, 9, 6>::zeros();
+        m.fixed_view_mut::<3, 3>(0, 0).copy_from(&(rt * self.rg));
+        m.fixed_view_mut::<3, 3>(3, 0).copy_from(&self.vg);
+        m.fixed_view_mut::<3, 3>(6, 0).copy_from(&self.pg);
+        m.fixed_view_mut::<3, 3>(3, 3).copy_from(&self.va);
+        m.fixed_view_mut::<3, 3>(6, 3).copy_from(&self.pa);
+        m
     }
 }
 
@@ -101,7 +137,8 @@ fn mul_skew(m: &M3, u: &V3) -> M3 {
     -skew_mul(u, &m.transpose()).transpose()
 }
 
-/// The transition of one interval: `h` [s], `U1` [m/s], `U2` [m] (see module doc).
+/// The transition of one interval, or of several (see module doc): duration `h` [s], `U1`
+/// [m/s], `U2` [m].
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Transition {
     pub h: f64,
@@ -110,9 +147,20 @@ pub(crate) struct Transition {
 }
 
 impl Transition {
+    /// `Φ` from a node with deltas `(v0, p0)` to a later node `h` [s] after it with deltas
+    /// `(v1, p1)` (module doc, "Transition between any two nodes").
+    #[inline]
+    pub(crate) fn between(h: f64, v0: &V3, p0: &V3, v1: &V3, p1: &V3) -> Self {
+        Self {
+            h,
+            u1: v1 - v0,
+            u2: p1 - p0 - v0 * h,
+        }
+    }
+
     /// `A X` for a 9×6 block matrix.
     #[inline(always)]
-    fn apply(&self, x: &Blk96) -> Blk96 {
+    pub(crate) fn apply(&self, x: &Blk96) -> Blk96 {
         Blk96 {
             rg: x.rg,
             vg: x.vg - skew_mul(&self.u1, &x.rg),
@@ -166,14 +214,14 @@ fn add_sym(p: &mut Sym9, w: &Blk96, g: &Blk96) {
     p.pp += t + t.transpose();
 }
 
-/// Per-sample white-noise covariance `Q_j = s_j · diag(Σ_g, Σ_a)`, `s_j` = 1 / (the sample's
-/// time cell) [1/s]. Monomorphised once per noise shape.
+/// Per-sample white-noise covariance `Q_j = s_j · diag(Σ_g, Σ_a)` with
+/// `s_j = white_scale(c_j)` [1/s] ([`crate::noise`]). Monomorphised once per noise shape.
 pub(crate) trait NoiseQ: Copy {
-    /// `Γ Q` for `Q = s · diag(Σ_g, Σ_a)`.
-    fn gq(&self, g: &Blk96, s: f64) -> Blk96;
     /// `P += Γ Q Γᵀ` for one sample's gain in [`NGain`] form; with `GV = false` the gyro
     /// rows of v and p are taken as zero.
     fn add_gqg<const GV: bool>(&self, p: &mut Sym9, g: &NGain, s: f64);
+    /// `P += G Q Gᵀ` for a general gain.
+    fn add_full(&self, p: &mut Sym9, g: &Blk96, s: f64);
 }
 
 /// One sample's noise gain whose accelerometer blocks are `R·cv` (v row) and `R·cp` (p row),
@@ -186,6 +234,20 @@ pub(crate) struct NGain {
     pub r: M3,
     pub cv: f64,
     pub cp: f64,
+}
+
+impl NGain {
+    /// The same gain as a general 9×6 block matrix.
+    #[inline]
+    pub(crate) fn blk(&self) -> Blk96 {
+        Blk96 {
+            rg: self.rg,
+            vg: self.vg,
+            pg: self.pg,
+            va: self.r * self.cv,
+            pa: self.r * self.cp,
+        }
+    }
 }
 
 /// Adds `m·(cv², cv·cp, cp²)` to the v–v, v–p and p–p blocks.
@@ -204,18 +266,6 @@ pub(crate) struct IsoQ {
 }
 
 impl NoiseQ for IsoQ {
-    #[inline(always)]
-    fn gq(&self, x: &Blk96, s: f64) -> Blk96 {
-        let (g, a) = (self.g * s, self.a * s);
-        Blk96 {
-            rg: x.rg * g,
-            vg: x.vg * g,
-            pg: x.pg * g,
-            va: x.va * a,
-            pa: x.pa * a,
-        }
-    }
-
     #[inline(always)]
     fn add_gqg<const GV: bool>(&self, p: &mut Sym9, g: &NGain, s: f64) {
         // ΔR Σ_a ΔRᵀ = a I: the accelerometer noise adds to diagonals only.
@@ -240,6 +290,17 @@ impl NoiseQ for IsoQ {
             p.pp[(i, i)] += dp;
         }
     }
+
+    #[inline(always)]
+    fn add_full(&self, p: &mut Sym9, g: &Blk96, s: f64) {
+        let (gs, as_) = (self.g * s, self.a * s);
+        p.rr += (g.rg * g.rg.transpose()) * gs;
+        p.rv += (g.rg * g.vg.transpose()) * gs;
+        p.rp += (g.rg * g.pg.transpose()) * gs;
+        p.vv += (g.vg * g.vg.transpose()) * gs + (g.va * g.va.transpose()) * as_;
+        p.vp += (g.vg * g.pg.transpose()) * gs + (g.va * g.pa.transpose()) * as_;
+        p.pp += (g.pg * g.pg.transpose()) * gs + (g.pa * g.pa.transpose()) * as_;
+    }
 }
 
 /// `½(m + mᵀ)`.
@@ -257,11 +318,6 @@ pub(crate) struct GenQ {
 
 impl NoiseQ for GenQ {
     #[inline(always)]
-    fn gq(&self, x: &Blk96, s: f64) -> Blk96 {
-        x.mul_diag(&(self.g * s), &(self.a * s))
-    }
-
-    #[inline(always)]
     fn add_gqg<const GV: bool>(&self, p: &mut Sym9, g: &NGain, s: f64) {
         let qs = self.g * s;
         let wr = g.rg * qs;
@@ -277,23 +333,37 @@ impl NoiseQ for GenQ {
         let ra = sym(g.r * (self.a * s) * g.r.transpose());
         add_acc(p, &ra, g.cv, g.cp);
     }
+
+    #[inline(always)]
+    fn add_full(&self, p: &mut Sym9, g: &Blk96, s: f64) {
+        let (qg, qa) = (self.g * s, self.a * s);
+        let (wr, wv, wp) = (g.rg * qg, g.vg * qg, g.pg * qg);
+        let (xv, xp) = (g.va * qa, g.pa * qa);
+        p.rr += sym(wr * g.rg.transpose());
+        p.rv += wr * g.vg.transpose();
+        p.rp += wr * g.pg.transpose();
+        p.vv += sym(wv * g.vg.transpose() + xv * g.va.transpose());
+        p.vp += wv * g.pg.transpose() + xv * g.pa.transpose();
+        p.pp += sym(wp * g.pg.transpose() + xp * g.pa.transpose());
+    }
 }
 
-/// Cross-covariance of the error with one still-used sample's noise.
+/// A pending sample (module doc): its index and accumulated gain.
 #[derive(Clone, Copy, Debug)]
-struct Pending {
-    id: usize,
-    x: Blk96,
+pub(crate) struct Pending {
+    pub id: usize,
+    pub g: Blk96,
 }
 
-/// Number of pending-sample slots (≥ the largest stencil).
-const SLOTS: usize = 4;
+/// No sample in a pending slot.
+pub(crate) const NO_ID: usize = usize::MAX;
+/// Number of pending-sample slots (≥ the largest stencil); sample `id` lives in `id % SLOTS`.
+pub(crate) const SLOTS: usize = 4;
 
-/// One sample's contribution to an interval: its index, `s_j` [1/s] and its gain `Γ_j`.
+/// One sample's contribution to an interval: its index and its gain `Γ_kj`.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Input {
     pub id: usize,
-    pub scale: f64,
     pub gain: Blk96,
 }
 
@@ -301,8 +371,9 @@ pub(crate) struct Input {
 /// rotated coordinates.
 #[derive(Clone, Debug)]
 pub(crate) struct ErrorState {
-    /// Covariance of the deltas from white measurement noise only (what `PreintegratedImu::cov`
-    /// and the `ImuFactor` use, as GTSAM's `ImuFactor`).
+    /// Covariance of the deltas from the white measurement noise of the retired samples
+    /// (`P_f` of the module doc; what `PreintegratedImu::cov` holds once every sample is
+    /// retired, as GTSAM's `ImuFactor`).
     pub p: Sym9,
     /// The part of the deltas' covariance driven by the bias random walk during the window
     /// (combined level only); `p + p_walk` is the 9×9 block of the 15×15 covariance. Kept apart
@@ -312,9 +383,9 @@ pub(crate) struct ErrorState {
     pub c: Blk96,
     pub pbb_g: M3,
     pub pbb_a: M3,
-    pending: [Pending; SLOTS],
-    /// Midpoint: gain of the last interval's end sample (its noise is not yet in `p`, which
-    /// holds the covariance of `e − Γ n_end`; [`ErrorState::finish_mid`] adds it).
+    /// rk4: pending samples.
+    pub pend: [Pending; SLOTS],
+    /// Midpoint: gain of the last interval's end sample (its noise is not yet in `p`).
     mid: NGain,
 }
 
@@ -327,9 +398,9 @@ impl Default for ErrorState {
             c: Blk96::default(),
             pbb_g: M3::zeros(),
             pbb_a: M3::zeros(),
-            pending: [Pending {
-                id: usize::MAX,
-                x: Blk96::default(),
+            pend: [Pending {
+                id: NO_ID,
+                g: Blk96::default(),
             }; SLOTS],
             mid: NGain::default(),
         }
@@ -358,65 +429,64 @@ pub(crate) struct MidGain {
 }
 
 impl ErrorState {
-    /// Propagates through an interval with a single input whose noise gain is `ng` (white
-    /// noise added once, no cross-covariance kept); `gsum` is the total gain for the bias
-    /// Jacobians and the combined terms.
+    /// `A C` before the conjugation (C is untouched by it), and `p_walk ← A p_walk Aᵀ`.
     #[inline(always)]
-    fn step_one<N: NoiseQ, const GV: bool>(
-        &mut self,
-        tr: &Transition,
-        ng: &NGain,
-        scale: f64,
-        gsum: &Blk96,
-        noise: &N,
-        walk: &BiasWalk,
-    ) {
-        let v = if walk.combined {
+    fn walk_pre(&mut self, tr: &Transition, walk: &BiasWalk) -> Option<Blk96> {
+        if walk.combined {
             self.p_walk = tr.conjugate(&self.p_walk);
             Some(tr.apply(&self.c))
         } else {
             None
-        };
-        self.p = tr.conjugate(&self.p);
-        noise.add_gqg::<GV>(&mut self.p, ng, scale);
-        if let Some(v) = v {
+        }
+    }
+
+    /// Combined terms, bias-walk step and bias Jacobians for an interval of total gain `gsum`.
+    #[inline(always)]
+    fn tail(&mut self, tr: &Transition, ac: Option<Blk96>, gsum: &Blk96, walk: &BiasWalk) {
+        if let Some(v) = ac {
             let half = gsum.mul_diag(&self.pbb_g, &self.pbb_a).scale(0.5);
             let v = v.add(&half);
             add_sym(&mut self.p_walk, &v, gsum);
             self.c = v.add(&half);
         }
-        self.pbb_g += walk.g * tr.h;
-        self.pbb_a += walk.a * tr.h;
+        let ws = walk_scale(tr.h);
+        self.pbb_g += walk.g * ws;
+        self.pbb_a += walk.a * ws;
         let aj = tr.apply(&self.j);
         self.j = aj.add(&gsum.scale(-1.0));
     }
 
-    /// Euler interval: one input with zero gyro gains in the v and p rows and accelerometer
-    /// gains `r0·(h, ½h²)` (`gain.va = r0 h`, `gain.pa = r0 ½h²`).
+    /// Euler interval: sample k (gain `gain`: `rg`, `va = r0 h`, `pa = r0 ½h²`, zero gyro
+    /// gains in the v and p rows) is used once, so it is retired at once with noise scale
+    /// `scale` [1/s] (0 when the caller collects its gain instead).
     #[inline(always)]
     pub(crate) fn step_euler<N: NoiseQ>(
         &mut self,
         tr: &Transition,
-        inp: &Input,
+        gain: &Blk96,
         r0: &M3,
-        cp: f64,
+        scale: f64,
         noise: &N,
         walk: &BiasWalk,
     ) {
         let ng = NGain {
-            rg: inp.gain.rg,
+            rg: gain.rg,
             vg: M3::zeros(),
             pg: M3::zeros(),
             r: *r0,
             cv: tr.h,
-            cp,
+            cp: 0.5 * tr.h * tr.h,
         };
-        self.step_one::<N, false>(tr, &ng, inp.scale, &inp.gain, noise, walk);
+        let ac = self.walk_pre(tr, walk);
+        self.p = tr.conjugate(&self.p);
+        noise.add_gqg::<false>(&mut self.p, &ng, scale);
+        self.tail(tr, ac, gain, walk);
     }
 
     /// Midpoint interval. With `f_k = e_k − Γ_k−1,1 n_k` (independent of `n_k`),
-    /// `f_k+1 = A f_k + (A Γ_k−1,1 + Γ_k,0) n_k`: each sample's noise enters once, through
-    /// the merged gain; `s0` is sample k's noise scale.
+    /// `f_k+1 = A f_k + (A Γ_k−1,1 + Γ_k,0) n_k`: sample k is retired here through its merged
+    /// gain, with noise scale `s0` [1/s] (0 when the caller collects the gain instead).
+    /// Returns that merged gain (on the error after this interval).
     #[inline(always)]
     pub(crate) fn step_mid<N: NoiseQ>(
         &mut self,
@@ -425,7 +495,7 @@ impl ErrorState {
         s0: f64,
         noise: &N,
         walk: &BiasWalk,
-    ) {
+    ) -> NGain {
         let m = &self.mid;
         let h = tr.h;
         let ng = NGain {
@@ -451,61 +521,64 @@ impl ErrorState {
             cv: g.cv,
             cp: g.cp,
         };
-        self.step_one::<N, true>(tr, &ng, s0, &gsum, noise, walk);
-    }
-
-    /// Midpoint, end of the window: adds the last sample's noise (scale `s` [1/s]).
-    #[inline]
-    pub(crate) fn finish_mid<N: NoiseQ>(&mut self, noise: &N, s: f64) {
-        let m = self.mid;
-        noise.add_gqg::<true>(&mut self.p, &m, s);
-        self.mid = NGain::default();
-    }
-
-    /// Propagates through one interval (see module doc for the equations).
-    #[inline(always)]
-    pub(crate) fn step<N: NoiseQ>(
-        &mut self,
-        tr: &Transition,
-        inputs: &[Input],
-        noise: &N,
-        walk: &BiasWalk,
-    ) {
-        // X_j, C are untouched by the conjugation, so A X_j and A C can be formed afterwards.
-        let v = if walk.combined {
-            self.p_walk = tr.conjugate(&self.p_walk);
-            Some(tr.apply(&self.c))
-        } else {
-            None
-        };
+        let ac = self.walk_pre(tr, walk);
         self.p = tr.conjugate(&self.p);
-        let mut gsum = inputs[0].gain;
-        for (k, inp) in inputs.iter().enumerate() {
-            if k > 0 {
-                gsum = gsum.add(&inp.gain);
+        noise.add_gqg::<true>(&mut self.p, &ng, s0);
+        self.tail(tr, ac, &gsum, walk);
+        ng
+    }
+
+    /// Midpoint, end of the window: removes and returns the last sample's pending gain.
+    #[inline]
+    pub(crate) fn take_mid(&mut self) -> NGain {
+        std::mem::take(&mut self.mid)
+    }
+
+    /// Interval with several samples that may be pending (rk4): `P ← A P Aᵀ`, every pending
+    /// gain `G ← A G`, then `G_j += Γ_kj` for the inputs (new samples start at `Γ_kj`).
+    /// Samples no longer used must have been retired ([`ErrorState::take_pending`]) first.
+    #[inline(always)]
+    pub(crate) fn step_multi(&mut self, tr: &Transition, inputs: &[Input], walk: &BiasWalk) {
+        let ac = self.walk_pre(tr, walk);
+        self.p = tr.conjugate(&self.p);
+        for slot in self.pend.iter_mut() {
+            if slot.id != NO_ID {
+                slot.g = tr.apply(&slot.g);
             }
-            let slot = &mut self.pending[inp.id % SLOTS];
-            let half_gq = noise.gq(&inp.gain, inp.scale).scale(0.5);
-            let wk = if slot.id == inp.id {
-                tr.apply(&slot.x).add(&half_gq)
+        }
+        let mut gsum = Blk96::default();
+        for inp in inputs {
+            gsum = gsum.add(&inp.gain);
+            let slot = &mut self.pend[inp.id % SLOTS];
+            if slot.id == inp.id {
+                slot.g = slot.g.add(&inp.gain);
             } else {
-                half_gq
-            };
-            add_sym(&mut self.p, &wk, &inp.gain);
-            *slot = Pending {
-                id: inp.id,
-                x: wk.add(&half_gq),
-            };
+                debug_assert_eq!(slot.id, NO_ID, "pending sample not retired");
+                *slot = Pending {
+                    id: inp.id,
+                    g: inp.gain,
+                };
+            }
         }
-        if let Some(v) = v {
-            let half = gsum.mul_diag(&self.pbb_g, &self.pbb_a).scale(0.5);
-            let v = v.add(&half);
-            add_sym(&mut self.p_walk, &v, &gsum);
-            self.c = v.add(&half);
-        }
-        self.pbb_g += walk.g * tr.h;
-        self.pbb_a += walk.a * tr.h;
-        let aj = tr.apply(&self.j);
-        self.j = aj.add(&gsum.scale(-1.0));
+        self.tail(tr, ac, &gsum, walk);
+    }
+
+    /// Removes the pending sample of slot `slot` and returns it (its gain is on the current
+    /// error).
+    #[inline(always)]
+    pub(crate) fn take_pending(&mut self, slot: usize) -> Pending {
+        std::mem::replace(
+            &mut self.pend[slot],
+            Pending {
+                id: NO_ID,
+                g: Blk96::default(),
+            },
+        )
+    }
+
+    /// Retires a sample: `P += G Q Gᵀ` with `Q = diag(Σ_g, Σ_a)·s`.
+    #[inline(always)]
+    pub(crate) fn add_noise<N: NoiseQ>(&mut self, g: &Blk96, s: f64, noise: &N) {
+        noise.add_full(&mut self.p, g, s);
     }
 }

@@ -5,8 +5,8 @@ use lie::{Manifold, SO3};
 use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, SVector, Vector3};
 use preint::factor::{FactorJacobians, sqrt_information};
 use preint::{
-    BiasJacobians, CombinedImuFactor, Cov9, Cov15, FactorError, ImuBias, ImuFactor, NavState,
-    PreintegratedImu, predict,
+    BiasJacobians, CombinedImuFactor, Cov9, Cov15, EdgeNoise, FactorError, ImuBias, ImuFactor,
+    Level, NavState, PreintegratedImu, predict,
 };
 
 /// xorshift64* — deterministic, no dev-dependency.
@@ -56,6 +56,8 @@ fn random_pim(rng: &mut Rng, delta_r: SO3) -> PreintegratedImu {
         },
         bias_hat: ImuBias::new(rng.v3(0.01), rng.v3(0.1)),
         gravity: Vector3::new(0.0, 0.0, -9.81),
+        level: Level::Combined,
+        edge_noise: EdgeNoise::default(),
     }
 }
 
@@ -258,6 +260,8 @@ fn predict_free_fall_and_rest_by_hand() {
         jac: BiasJacobians::default(),
         bias_hat: ImuBias::zero(),
         gravity: Vector3::new(0.0, 0.0, -9.81),
+        level: Level::Combined,
+        edge_noise: EdgeNoise::default(),
     };
     let xi = NavState::new(
         SO3::identity(),
@@ -505,4 +509,52 @@ fn combined_factor_bias_rows_and_whitening() {
     let (_, j) = f.evaluate(&xi, &xj, &bi, &bj);
     assert!((rw - u * r).amax() < 1e-12 * rw.amax());
     assert!((jw.bias_j() - u * j.bias_j()).amax() < 1e-12 * jw.bias_j().amax());
+}
+
+/// A factor needs the covariance it weights with: `CombinedImuFactor` rejects a
+/// `Level::Covariance` measurement (its `cov15` lacks the random walk's effect on the deltas
+/// and the cross blocks, yet is positive definite, so a Cholesky check alone would accept it),
+/// `ImuFactor` rejects `Level::Deltas`.
+#[test]
+fn factors_check_the_level() {
+    use preint::{ImuSample, PreintParams, Scheme, preintegrate};
+    let s: Vec<_> = (0..101i64)
+        .map(|k| {
+            let t = k as f64 * 0.01;
+            ImuSample::new(
+                k * 10_000_000,
+                Vector3::new(0.3 * t.sin(), 0.1, -0.2),
+                Vector3::new(0.2, t.cos(), 9.81),
+            )
+        })
+        .collect();
+    let run = |level: Level| {
+        let p = PreintParams::default()
+            .with_scheme(Scheme::Midpoint)
+            .with_level(level);
+        preintegrate(&p, &ImuBias::zero(), &s, 0, 1_000_000_000).unwrap()
+    };
+    let cov = run(Level::Covariance);
+    assert!(
+        sqrt_information(&cov.cov15).is_ok(),
+        "cov15 is positive definite"
+    );
+    assert_eq!(
+        CombinedImuFactor::new(cov.clone()),
+        Err(FactorError::LevelTooLow {
+            needed: Level::Combined,
+            got: Level::Covariance
+        })
+    );
+    assert!(ImuFactor::new(cov).is_ok());
+    assert!(CombinedImuFactor::new(run(Level::Combined)).is_ok());
+    let e = ImuFactor::new(run(Level::Deltas)).unwrap_err();
+    assert_eq!(
+        e,
+        FactorError::LevelTooLow {
+            needed: Level::Covariance,
+            got: Level::Deltas
+        }
+    );
+    assert!(e.to_string().contains("Deltas"), "{e}");
 }

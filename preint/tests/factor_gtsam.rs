@@ -21,7 +21,10 @@
 
 use lie::{SO3, hat, jl_inv};
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
-use preint::{BiasJacobians, Cov9, Cov15, ImuBias, ImuFactor, NavState, PreintegratedImu, predict};
+use preint::{
+    BiasJacobians, Cov9, Cov15, EdgeNoise, ImuBias, ImuFactor, Level, NavState, PreintegratedImu,
+    predict,
+};
 use std::path::PathBuf;
 
 // ------------------------------------------------------------------ minimal JSON reader
@@ -218,6 +221,8 @@ fn load_case(name: &str) -> Case {
         },
         bias_hat,
         gravity: out.at("n_gravity").v3(),
+        level: Level::Covariance,
+        edge_noise: EdgeNoise::default(),
     };
     let f = params.at("factor");
     Case {

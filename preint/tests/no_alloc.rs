@@ -1,19 +1,42 @@
 //! No heap allocation per sample: a counting global allocator watches `integrate`.
+//!
+//! - `with_capacity(n)` (samples kept) and `keep_samples = false` (with `new`): no allocation
+//!   at all while integrating, and none in `finish`.
+//! - `new` with `keep_samples = true` (the default): the stored-sample `Vec` grows
+//!   geometrically, so the count is a handful of reallocations (≤ log₂ n + 1), not one per
+//!   sample.
 
 use nalgebra::Vector3;
 use preint::{ImuBias, ImuSample, Level, PreintParams, Preintegrator, Scheme};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 struct Counting;
-static ALLOCS: AtomicUsize = AtomicUsize::new(0);
-thread_local! { static ON: Cell<bool> = const { Cell::new(false) }; }
+// Per thread, so that tests running in parallel do not count each other's allocations.
+thread_local! {
+    static ON: Cell<bool> = const { Cell::new(false) };
+    static COUNT: Cell<usize> = const { Cell::new(0) };
+}
+
+/// The allocation counter of this thread.
+struct Allocs;
+impl Allocs {
+    fn store(&self, v: usize) {
+        COUNT.with(|c| c.set(v));
+    }
+    fn load(&self) -> usize {
+        COUNT.with(|c| c.get())
+    }
+    fn bump(&self) {
+        COUNT.with(|c| c.set(c.get() + 1));
+    }
+}
+static ALLOCS: Allocs = Allocs;
 
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, l: Layout) -> *mut u8 {
         if ON.with(|c| c.get()) {
-            ALLOCS.fetch_add(1, Ordering::Relaxed);
+            ALLOCS.bump();
         }
         unsafe { System.alloc(l) }
     }
@@ -22,7 +45,7 @@ unsafe impl GlobalAlloc for Counting {
     }
     unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
         if ON.with(|c| c.get()) {
-            ALLOCS.fetch_add(1, Ordering::Relaxed);
+            ALLOCS.bump();
         }
         unsafe { System.realloc(p, l, n) }
     }
@@ -53,13 +76,13 @@ fn integrate_does_not_allocate() {
                 prm.keep_samples = keep;
                 let mut pi =
                     Preintegrator::with_capacity(prm, ImuBias::zero(), n as usize).unwrap();
-                ALLOCS.store(0, Ordering::Relaxed);
+                ALLOCS.store(0);
                 ON.with(|c| c.set(true));
                 for s in &samples {
                     pi.integrate(s).unwrap();
                 }
                 ON.with(|c| c.set(false));
-                let count = ALLOCS.load(Ordering::Relaxed);
+                let count = ALLOCS.load();
                 assert_eq!(
                     count, 0,
                     "{scheme:?} {level:?} keep={keep}: {count} allocations"
@@ -69,10 +92,43 @@ fn integrate_does_not_allocate() {
                 let m = pi.finish().unwrap();
                 let v: Vec<u8> = Vec::with_capacity(std::hint::black_box(8));
                 ON.with(|c| c.set(false));
-                assert_eq!(ALLOCS.load(Ordering::Relaxed), 1);
+                assert_eq!(ALLOCS.load(), 1);
                 drop(v);
                 assert!(m.delta_v.norm().is_finite());
             }
+        }
+    }
+}
+
+#[test]
+fn new_allocates_only_for_stored_samples_and_only_amortised() {
+    let n = 10_000usize;
+    let samples: Vec<_> = (0..n as i64).map(sample).collect();
+    for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4] {
+        for keep in [false, true] {
+            let mut prm = PreintParams::default()
+                .with_scheme(scheme)
+                .with_level(Level::Combined);
+            prm.keep_samples = keep;
+            let mut pi = Preintegrator::new(prm, ImuBias::zero()).unwrap();
+            ALLOCS.store(0);
+            ON.with(|c| c.set(true));
+            for s in &samples {
+                pi.integrate(s).unwrap();
+            }
+            ON.with(|c| c.set(false));
+            let count = ALLOCS.load();
+            eprintln!("{scheme:?} new, keep_samples={keep}: {count} allocations for {n} samples");
+            if keep {
+                let bound = (n as f64).log2().ceil() as usize + 1;
+                assert!(
+                    count >= 1 && count <= bound,
+                    "{scheme:?}: {count} > {bound}"
+                );
+            } else {
+                assert_eq!(count, 0, "{scheme:?}: {count} allocations");
+            }
+            assert_eq!(pi.samples().len(), if keep { n } else { 0 });
         }
     }
 }

@@ -281,3 +281,41 @@ fn rk4_and_midpoint_agree_with_exact_rotation_for_constant_rate() {
         assert!(e.norm() < 1e-13, "{scheme:?}: {e}");
     }
 }
+
+/// Windows cut between samples by `preintegrate` (interpolated boundary samples whose noise
+/// is that of the stream samples) and their merge, against a seeded Monte Carlo of the stream
+/// noise: the window's and the merged 9×9 covariances are consistent with the spread of the
+/// merged deltas.
+#[test]
+fn window_and_merged_covariances_match_monte_carlo() {
+    let scene = Scene::smooth();
+    let clean = scene.samples(5_000_000, 1_200_000_000);
+    let bias = ImuBias::zero();
+    let (a, b, c) = (102_500_000, 601_234_567, 1_100_000_001);
+    for scheme in SCHEMES {
+        let mut prm = params(scheme, Level::Covariance);
+        prm.gyro_cov *= 100.0;
+        prm.acc_cov *= 100.0;
+        let win = |p: &PreintParams, s: &[ImuSample], t0, t1| {
+            preint::preintegrate(p, &bias, s, t0, t1).unwrap()
+        };
+        let m0 = preint::merge(&win(&prm, &clean, a, b), &win(&prm, &clean, b, c)).unwrap();
+        let w0 = win(&prm, &clean, a, b);
+        let fast = prm.clone().with_level(Level::Deltas);
+        let mut rng = Gauss::new(99 + scheme as u64);
+        let (mut em, mut ew) = (vec![], vec![]);
+        for _ in 0..300 {
+            let s = noisy(&clean, &prm, false, &mut rng).0;
+            let (x, y) = (win(&fast, &s, a, b), win(&fast, &s, b, c));
+            ew.push(err9(&x, &w0));
+            em.push(err9(&preint::merge(&x, &y).unwrap(), &m0));
+        }
+        let cov = |m: &PreintegratedImu| DMatrix::from_fn(9, 9, |i, j| m.cov[(i, j)]);
+        assert_consistent(
+            &format!("{scheme:?} window between samples"),
+            &ew,
+            &cov(&w0),
+        );
+        assert_consistent(&format!("{scheme:?} merged windows"), &em, &cov(&m0));
+    }
+}

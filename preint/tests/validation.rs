@@ -113,6 +113,97 @@ fn too_few_samples_and_bad_params() {
     assert!(Preintegrator::new(PreintParams::default(), bad_bias).is_err());
 }
 
+/// The window path (`preintegrate`, `check_samples`) names the offending *stream* sample (its
+/// index in the slice given and its time) for duplicate and decreasing timestamps, gaps and
+/// non-finite values, for every scheme.
+#[test]
+fn window_path_errors_name_the_stream_sample() {
+    let stream: Vec<_> = (0..40).map(|k| s(1_000_000_000 + k * 5_000_000)).collect();
+    let (t_i, t_j) = (1_012_000_000, 1_150_000_000);
+    for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4] {
+        let prm = PreintParams::default().with_scheme(scheme);
+        let run = |x: &[ImuSample]| preint::preintegrate(&prm, &ImuBias::zero(), x, t_i, t_j);
+        assert!(run(&stream).is_ok());
+        let mut dup = stream.clone();
+        dup[9].t_ns = dup[8].t_ns;
+        let e = run(&dup).unwrap_err();
+        assert_eq!(
+            e,
+            PreintError::DuplicateTimestamp {
+                index: 9,
+                t_ns: 1_040_000_000
+            }
+        );
+        assert!(
+            e.to_string().contains("sample 9 (t = 1040000000 ns)"),
+            "{e}"
+        );
+        let mut dec = stream.clone();
+        dec[20].t_ns = dec[19].t_ns - 1;
+        let e = run(&dec).unwrap_err();
+        assert_eq!(
+            e,
+            PreintError::DecreasingTimestamp {
+                index: 20,
+                t_ns: 1_094_999_999,
+                prev_t_ns: 1_095_000_000
+            }
+        );
+        assert!(
+            e.to_string().contains("sample 20 (t = 1094999999 ns)"),
+            "{e}"
+        );
+        // A gap: samples 11..=15 missing (30 ms), maximum 20 ms.
+        let gap: Vec<_> = stream
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| !(11..=15).contains(k))
+            .map(|(_, x)| *x)
+            .collect();
+        let mut prm_gap = prm.clone();
+        prm_gap.max_gap_ns = 20_000_000;
+        let e = preint::preintegrate(&prm_gap, &ImuBias::zero(), &gap, t_i, t_j).unwrap_err();
+        assert_eq!(
+            e,
+            PreintError::GapTooLarge {
+                index: 11,
+                t_ns: 1_080_000_000,
+                gap_ns: 30_000_000,
+                max_gap_ns: 20_000_000
+            }
+        );
+        assert!(
+            e.to_string().contains("sample 11 (t = 1080000000 ns)"),
+            "{e}"
+        );
+        // The same gap is fine under the default maximum (250 ms).
+        assert!(preint::preintegrate(&prm, &ImuBias::zero(), &gap, t_i, t_j).is_ok());
+        // Just outside the window: the stencil neighbours are checked too (index 1 is two
+        // samples before t_i).
+        let mut near = stream.clone();
+        near[1].acc.x = f64::INFINITY;
+        assert_eq!(
+            run(&near),
+            Err(PreintError::NonFinite {
+                index: 1,
+                t_ns: 1_005_000_000,
+                field: "acc"
+            })
+        );
+    }
+    // check_samples on its own, with a range.
+    let mut dup = stream.clone();
+    dup[30].t_ns = dup[29].t_ns;
+    assert_eq!(preint::window::check_samples(&dup, 0..29, i64::MAX), Ok(()));
+    assert_eq!(
+        preint::window::check_samples(&dup, 25..35, i64::MAX),
+        Err(PreintError::DuplicateTimestamp {
+            index: 30,
+            t_ns: dup[30].t_ns
+        })
+    );
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(200))]
     /// Garbage in (any f64 including NaN/∞, any timestamps): typed errors or finite output.

@@ -4,20 +4,21 @@
 //! `Δv_k+1 = Δv_k + ΔR_k a_k h` (Forster eq. 35). Linearisation in rotated coordinates
 //! `ψ = ΔR δφ` (Forster eq. 59 conjugated by ΔR): `U1 = u h`, `U2 = ½ u h²` with
 //! `u = ΔR_k a_k`; gain of sample k: ψ ← `ΔR_k+1 Jr(ω_k h) h` (gyro), v ← `ΔR_k h`,
-//! p ← `½ ΔR_k h²` (accelerometer). Noise of sample k: `Σ / h` (GTSAM).
+//! p ← `½ ΔR_k h²` (accelerometer). Sample k is used by interval k only; its cell is the
+//! interval it is held over ([`crate::noise::CellRule::Held`]), so its noise is `Σ / h` (GTSAM).
 
 use super::{Deltas, Node};
-use crate::propagation::{Blk96, Input, M3, Transition};
+use crate::propagation::{Blk96, M3, Transition};
 use lie::so3::{RodriguesCoeffs, i_plus_hat_hat2};
 
-/// One Euler interval of length `h` [s] holding node `n0` (index `id`).
+/// One Euler interval of length `h` [s] holding node `n0`; with `LIN`, its transition and the
+/// gain of `n0`.
 #[inline(always)]
 pub(crate) fn step<const LIN: bool>(
     d: &mut Deltas,
     n0: &Node,
     h: f64,
-    id: usize,
-) -> Option<(Transition, Input)> {
+) -> Option<(Transition, Blk96)> {
     let th = n0.w * h;
     let k = RodriguesCoeffs::new(&th);
     let e = i_plus_hat_hat2(&th, k.a, k.b);
@@ -44,10 +45,6 @@ pub(crate) fn step<const LIN: bool>(
             u1: u * h,
             u2: u * h2,
         },
-        Input {
-            id,
-            scale: 1.0 / h,
-            gain,
-        },
+        gain,
     ))
 }

@@ -8,8 +8,10 @@
 //! `δv_k+1 = δv_k + h/2 (δu0 + δu1)`, `δp_k+1 = δp_k + h δv_k + h²/4 (δu0 + δu1)`.
 //! Hence `U1 = ā h`, `U2 = ½ ā h²`, and both samples share the gyro gains
 //! `(G, −h/2 [u1]×G, −h²/4 [u1]×G)`; accelerometer gains `(h/2, h²/4)·ΔR_k` for sample k and
-//! `(h/2, h²/4)·ΔR_k+1` for sample k+1. Sample k+1's noise is shared with the next interval,
-//! which [`crate::propagation`] tracks through its cross-covariance.
+//! `(h/2, h²/4)·ΔR_k+1` for sample k+1. Sample k+1's noise also enters the next interval:
+//! the internal `propagation` module keeps its gain pending and adds the sample's noise once,
+//! through the merged gain `A_k+1 Γ_k,1 + Γ_k+1,0`, when interval k+1 is done (no
+//! cross-covariance is kept).
 
 use super::{Deltas, Node};
 use crate::propagation::{MidGain, Transition, skew_mul};

@@ -1,5 +1,5 @@
 //! Integration schemes: one interval `[t_k, t_k+1]` of the deltas and, when asked, its
-//! linearisation (transition and per-sample gains, see [`crate::propagation`]).
+//! linearisation (transition and per-sample gains, see the internal `propagation` module).
 //!
 //! Every scheme works on bias-corrected samples `ω = ω_m − b̂_g`, `a = a_m − b̂_a` and updates
 //! `ΔR_k+1 = ΔR_k Exp(Ω_k)`, `Δv`, `Δp` in frame i (gravity excluded, Forster eq. 33).

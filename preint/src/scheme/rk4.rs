@@ -1,12 +1,17 @@
 //! High-order scheme (`Scheme::Rk4`): 4th-order Magnus for ΔR, Simpson for Δv and Δp, with
 //! ω(t) and a(t) given by the Lagrange polynomial through a stencil of up to four samples.
 //!
-//! Interval `[t_k, t_k+1]`, `h`, stencil `{k−1, k, k+1, k+2}` (cubic). At the window edges the
-//! stencil is one-sided, `{0, 1, 2, 3}` for the first interval and `{N−4, …, N−1}` for the
-//! last, which keeps the interpolation error O(h⁴); windows of 2 or 3 samples use a linear or
-//! quadratic polynomial. No sample outside the window is used: when a keyframe time falls
-//! between samples, [`crate::window::preintegrate`] inserts a boundary sample interpolated
-//! with a cubic through the surrounding stream samples, so the edge stays 4th order.
+//! Interval `[t_k, t_k+1]`, `h`, stencil `{k−1, k, k+1, k+2}` (cubic). The stencil runs over the
+//! window's samples extended by one *context* sample on each side when there is one: the
+//! window path ([`crate::window::preintegrate`]) passes the stream samples just outside the
+//! window, so the edge intervals use the same centred stencils as an integration of the whole
+//! stream would, and consecutive windows compose exactly (see [`crate::window`]). Without a
+//! context sample (a stream end, or samples pushed into a [`crate::Preintegrator`] directly)
+//! the stencil is one-sided, `{0, 1, 2, 3}` for the first interval and `{N−4, …, N−1}` for the
+//! last, which keeps the interpolation error O(h⁴); fewer than four samples in all give a
+//! linear or quadratic polynomial. A context sample only shapes the polynomial: its noise and
+//! bias enter like any other stencil sample's, but no interval outside the window is
+//! integrated.
 //!
 //! With Gauss–Legendre nodes `c₁,₂ = ½ ∓ √3/6` and `κ = √3/12`:
 //! `Ω = h/2 (ω(c₁h) + ω(c₂h)) + κ h² ω(c₁h) × ω(c₂h)` (4th-order Magnus for the right-invariant
@@ -55,15 +60,14 @@ fn combo(l: &[f64; 4], st: &[Node], f: impl Fn(&Node) -> V3) -> V3 {
 }
 
 /// One interval `[st[kk].t, st[kk+1].t]` with stencil `st` (2–4 nodes, the first has index
-/// `id0`, noise scales `scales[j]` [1/s]). Uses and updates `d.u_last`. Writes the gains of
-/// the stencil samples into `out[..st.len()]`.
+/// `id0`). Uses and updates `d.u_last`. With `LIN`, writes the gains of the stencil samples
+/// into `out[..st.len()]` and returns the transition.
 #[inline(always)]
 pub(crate) fn step<const LIN: bool>(
     d: &mut Deltas,
     st: &[Node],
     kk: usize,
     id0: usize,
-    scales: &[f64; 4],
     out: &mut [Input; 4],
 ) -> Option<Transition> {
     let n = st.len();
@@ -136,7 +140,6 @@ pub(crate) fn step<const LIN: bool>(
         }
         out[j] = Input {
             id: id0 + j,
-            scale: scales[j],
             gain: Blk96 {
                 rg: fd1 * l1[j] + fd2 * l2[j],
                 vg: (hmj * 4.0 + hej) * (-h6),
