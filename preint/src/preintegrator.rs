@@ -214,6 +214,107 @@ impl Core {
         }
     }
 
+    /// Euler interval `k` (out of line: it keeps the per-interval code small enough for the
+    /// compiler to inline the fixed-size matrix operations).
+    #[inline(never)]
+    fn euler_interval<N: NoiseQ, const LIN: bool>(
+        &mut self,
+        cfg: &Cfg,
+        noise: &N,
+        k: usize,
+        total: usize,
+        fin: bool,
+    ) {
+        let cb = self.cb;
+        let n0 = *self.node(k);
+        let t1 = self.node(k + 1).t_ns;
+        let h = span_s(n0.t_ns, t1);
+        let r0 = self.d.r;
+        if let Some((tr, gain)) = euler::step::<LIN>(&mut self.d, &n0, h) {
+            let edge = self.is_edge(cfg, k + cb, fin);
+            // The held interval `h` decides the cell (`CellRule::Held`); the left
+            // interval is only recorded for edge samples.
+            let s = if edge {
+                0.0
+            } else {
+                white_scale(cfg.rule.cell_s(0.0, h))
+            };
+            self.e.step_euler(&tr, &gain, &r0, s, noise, &cfg.walk);
+            let (left, right) = if edge {
+                self.intervals(k, total)
+            } else {
+                (0.0, h)
+            };
+            if edge && !self.capture(k + cb, gain, t1, left, right) {
+                let s = white_scale(cfg.rule.cell_s(left, right));
+                self.e.add_noise(&gain, s, noise);
+            }
+            self.int_cov(cfg, &tr);
+        }
+    }
+
+    /// Midpoint interval `k` (out of line, see [`Core::euler_interval`]).
+    #[inline(never)]
+    fn midpoint_interval<N: NoiseQ, const LIN: bool>(
+        &mut self,
+        cfg: &Cfg,
+        noise: &N,
+        k: usize,
+        total: usize,
+        fin: bool,
+    ) {
+        let cb = self.cb;
+        let (n0, n1) = (*self.node(k), *self.node(k + 1));
+        let h = span_s(n0.t_ns, n1.t_ns);
+        if let Some((tr, g)) = midpoint::step::<LIN>(&mut self.d, &n0, &n1, h) {
+            let (left, right) = self.intervals(k, total);
+            let edge = self.is_edge(cfg, k + cb, fin);
+            let s0 = if edge {
+                0.0
+            } else {
+                white_scale(cfg.rule.cell_s(left, right))
+            };
+            let ng = self.e.step_mid(&tr, &g, s0, noise, &cfg.walk);
+            if edge && !self.capture(k + cb, ng.blk(), n1.t_ns, left, right) {
+                let s = white_scale(cfg.rule.cell_s(left, right));
+                self.e.add_noise(&ng.blk(), s, noise);
+            }
+            self.int_cov(cfg, &tr);
+        }
+    }
+
+    /// rk4 interval `k` (out of line, see [`Core::euler_interval`]).
+    #[inline(never)]
+    fn rk4_interval<N: NoiseQ, const LIN: bool>(
+        &mut self,
+        cfg: &Cfg,
+        noise: &N,
+        k: usize,
+        fin: bool,
+    ) {
+        let (n, cb) = (self.n, self.cb);
+        let ke = k + cb;
+        let len = cb + n + usize::from(fin && self.ctx_after.is_some());
+        let m = len.min(4);
+        let s0 = if fin {
+            ke.saturating_sub(1).min(len - m)
+        } else {
+            ke.saturating_sub(1)
+        };
+        if LIN {
+            self.retire_below(cfg, noise, s0, k, fin);
+        }
+        let mut st = [Node::default(); 4];
+        for (j, x) in st.iter_mut().enumerate().take(m) {
+            *x = self.ext(s0 + j);
+        }
+        let mut out = [Input::default(); 4];
+        if let Some(tr) = rk4::step::<LIN>(&mut self.d, &st[..m], ke - s0, s0, &mut out) {
+            self.e.step_multi(&tr, &out[..m], &cfg.walk);
+            self.int_cov(cfg, &tr);
+        }
+    }
+
     /// Integrates every interval that is ready; with `fin`, all remaining intervals and the
     /// remaining noise (the window then has exactly `self.n` samples).
     #[inline(always)]
@@ -240,75 +341,9 @@ impl Core {
                 self.d.u_last = self.node(0).a;
             }
             match cfg.scheme {
-                Scheme::Euler => {
-                    let n0 = *self.node(k);
-                    let t1 = self.node(k + 1).t_ns;
-                    let h = span_s(n0.t_ns, t1);
-                    let r0 = self.d.r;
-                    if let Some((tr, gain)) = euler::step::<LIN>(&mut self.d, &n0, h) {
-                        let edge = self.is_edge(cfg, k + cb, fin);
-                        // The held interval `h` decides the cell (`CellRule::Held`); the left
-                        // interval is only recorded for edge samples.
-                        let s = if edge {
-                            0.0
-                        } else {
-                            white_scale(cfg.rule.cell_s(0.0, h))
-                        };
-                        self.e.step_euler(&tr, &gain, &r0, s, noise, &cfg.walk);
-                        let (left, right) = if edge {
-                            self.intervals(k, total)
-                        } else {
-                            (0.0, h)
-                        };
-                        if edge && !self.capture(k + cb, gain, t1, left, right) {
-                            let s = white_scale(cfg.rule.cell_s(left, right));
-                            self.e.add_noise(&gain, s, noise);
-                        }
-                        self.int_cov(cfg, &tr);
-                    }
-                }
-                Scheme::Midpoint => {
-                    let (n0, n1) = (*self.node(k), *self.node(k + 1));
-                    let h = span_s(n0.t_ns, n1.t_ns);
-                    if let Some((tr, g)) = midpoint::step::<LIN>(&mut self.d, &n0, &n1, h) {
-                        let (left, right) = self.intervals(k, total);
-                        let edge = self.is_edge(cfg, k + cb, fin);
-                        let s0 = if edge {
-                            0.0
-                        } else {
-                            white_scale(cfg.rule.cell_s(left, right))
-                        };
-                        let ng = self.e.step_mid(&tr, &g, s0, noise, &cfg.walk);
-                        if edge && !self.capture(k + cb, ng.blk(), n1.t_ns, left, right) {
-                            let s = white_scale(cfg.rule.cell_s(left, right));
-                            self.e.add_noise(&ng.blk(), s, noise);
-                        }
-                        self.int_cov(cfg, &tr);
-                    }
-                }
-                Scheme::Rk4 => {
-                    let ke = k + cb;
-                    let len = cb + n + usize::from(fin && self.ctx_after.is_some());
-                    let m = len.min(4);
-                    let s0 = if fin {
-                        ke.saturating_sub(1).min(len - m)
-                    } else {
-                        ke.saturating_sub(1)
-                    };
-                    if LIN {
-                        self.retire_below(cfg, noise, s0, k, fin);
-                    }
-                    let mut st = [Node::default(); 4];
-                    for (j, x) in st.iter_mut().enumerate().take(m) {
-                        *x = self.ext(s0 + j);
-                    }
-                    let mut out = [Input::default(); 4];
-                    if let Some(tr) = rk4::step::<LIN>(&mut self.d, &st[..m], ke - s0, s0, &mut out)
-                    {
-                        self.e.step_multi(&tr, &out[..m], &cfg.walk);
-                        self.int_cov(cfg, &tr);
-                    }
-                }
+                Scheme::Euler => self.euler_interval::<N, LIN>(cfg, noise, k, total, fin),
+                Scheme::Midpoint => self.midpoint_interval::<N, LIN>(cfg, noise, k, total, fin),
+                Scheme::Rk4 => self.rk4_interval::<N, LIN>(cfg, noise, k, fin),
             }
             self.done += 1;
             if self.done.is_multiple_of(RENORM_EVERY) {
