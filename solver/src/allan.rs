@@ -19,24 +19,44 @@
 //!
 //! # Fits (per channel)
 //! The model is `σ²(τ) = N²/τ + (2 ln2/π)B² + K²τ/3` (white noise, bias instability, rate
-//! random walk).
+//! random walk). Allan variances of independent noises **add**, so every term alone lies
+//! below the curve: `N²/τ ≤ σ²(τ)` and `K²τ/3 ≤ σ²(τ)` at every τ. The fits enforce this.
+//! Only reliable points (≥ 8 clusters) are used; below that the estimate has too few degrees
+//! of freedom for its error `ε(τ) = adev_err/adev` to mean anything (with 2–3 clusters σ can be
+//! off by a factor of several).
 //! - Local log-log slopes are least-squares slopes over ±2 neighbouring points.
-//! - **N** (white-noise density, unit/√Hz): the slope −½ line `σ = N/√τ` fitted (weighted mean of
-//!   `σ²τ`, weights = clusters) over the points whose local slope is within ±0.15 of −½, read
-//!   at τ = 1 s.
-//! - **K** (random walk, unit/s/√Hz): the slope +½ line `σ = K√(τ/3)` fitted the same way over
-//!   points with slope within ±0.15 of +½ (and ≥ 8 clusters), read at τ = 3 s.
+//! - **Regions.** A point is a candidate for the slope −½ (white noise) region when its local
+//!   slope is within ±0.15 of −½. Candidates form runs of consecutive points; a run is kept
+//!   only if it has ≥ 3 points **and** its own least-squares slope (over the run's points only)
+//!   is within ±0.15 of −½. The second test matters: a smoothed local slope passes through −½
+//!   wherever the curve goes from flat to steeper than −½ (e.g. the ADIS16405 accelerometers at
+//!   τ ≈ 0.8–1.6 s: a plateau then a drop of slope ≈ −1.2, a ≈ 1 Hz disturbance), which is not
+//!   white noise. The same for +½ (random walk).
+//! - **N** (white-noise density, unit/√Hz): the slope −½ line `σ = N/√τ` fitted (weighted mean
+//!   of `σ²τ`, weights = clusters) over the kept runs, read at τ = 1 s.
+//! - **K** (random walk, unit/s/√Hz): the slope +½ line `σ = K√(τ/3)` fitted the same way,
+//!   read at τ = 3 s.
 //! - Each line is fitted after subtracting the other fitted term (two passes), which removes most
 //!   of the bias from the crossover region where both terms matter.
-//! - Errors of N and K: the relative error of the best-determined point of the fitted region,
-//!   `1/√(2(K_max − 1))` (neighbouring τ share data, so the region is hardly better than that
-//!   point).
+//! - **Caps.** Then `N ≤ min_τ σ(τ)√τ·(1 + kε(τ))` and `K ≤ min_τ σ(τ)√(3/τ)·(1 + kε(τ))`
+//!   over the reliable points, `k = 3` ([`CAP_SIGMAS`]): the line never exceeds the measured
+//!   curve by more than 3 of its statistical errors anywhere. A weighted mean over a region
+//!   where other noise already adds (σ√τ rising slowly) sits above the lowest points; the cap
+//!   brings it to them. Why not `k = 2`: the long-τ points of a random-walk curve are few and
+//!   strongly correlated, so the whole tail of a correct curve often sits ≈ 2ε low together; on
+//!   `sim` data (10 h, 24 channels) `k = 2` pulled one K 13 % low, `k = 3` none.
+//! - **Bounds.** When no run of the right slope exists, the value is only the upper bound
+//!   `min_τ σ(τ)√τ` (resp. `min_τ σ(τ)√(3/τ)`, usually at the longest reliable τ): the line
+//!   touching the measured curve at its lowest point, flagged
+//!   ([`NoiseFit::white_density_is_bound`], [`NoiseFit::random_walk_is_bound`]), with the τ of
+//!   the minimum as its range and a NaN error.
+//! - Errors of fitted N and K: the relative error of the best-determined point of the fitted
+//!   region, `1/√(2(K_max − 1))` (neighbouring τ share data, so the region is hardly better than
+//!   that point).
 //! - **B** (bias instability): the minimum of σ(τ) over points with ≥ 8 clusters, divided by
 //!   `√(2 ln2/π) ≈ 0.664`. When the curve has no flat floor (e.g. white noise + random walk only)
 //!   this is an upper bound: for `σ² = N²/τ + K²τ/3` the minimum is `√(2NK/√3)` at
 //!   `τ* = √3·N/K`.
-//! - When no point has slope ≈ +½ (record too short for the random walk to show), K is reported
-//!   as the bound `σ(τ_max)·√(3/τ_max)` from the longest reliable τ and flagged.
 
 use preint::ImuSample;
 use preint::noise::ImuNoise;
@@ -64,8 +84,9 @@ pub enum AllanError {
     /// Timestamps are not strictly increasing or not uniform.
     #[error("timestamps: {0}")]
     Timestamps(String),
-    /// No point of the curve has slope ≈ −½: the white-noise density cannot be read.
-    #[error("channel {0}: no region with slope −1/2, white-noise density not fitted")]
+    /// The curve has no reliable point (≥ 8 clusters): nothing can be read from it. (A curve
+    /// without a slope −½ region gives an upper bound on N instead, see [`NoiseFit`].)
+    #[error("channel {0}: no point with at least 8 clusters, white-noise density not fitted")]
     NoWhiteNoiseRegion(usize),
     /// Channels have different lengths.
     #[error("channel lengths differ ({0} vs {1})")]
@@ -161,23 +182,27 @@ pub fn allan_deviation(data: &[f64], dt: f64, ms: &[usize]) -> Result<Vec<AllanP
 /// Fitted noise parameters of one channel (units: the signal's unit `u`, e.g. rad/s or m/s²).
 #[derive(Clone, Debug, PartialEq)]
 pub struct NoiseFit {
-    /// White-noise density N [u/√Hz] (σ of the slope −½ line at τ = 1 s).
+    /// White-noise density N [u/√Hz] (σ of the slope −½ line at τ = 1 s), capped so that the
+    /// line stays below the curve (module docs), or a bound (see `white_density_is_bound`).
     pub white_density: f64,
     /// Its 1-σ uncertainty: that of the best-determined point used, `N/√(2(K_max − 1))`
-    /// (K = clusters).
+    /// (K = clusters); NaN when it is a bound.
     pub white_density_err: f64,
-    /// τ range \[s\] of the points used for N.
+    /// τ range \[s\] of the points used for N (the τ of the minimum of `σ√τ` when a bound).
     pub white_tau_range: (f64, f64),
-    /// Random walk K [u/s/√Hz] (σ of the slope +½ line at τ = 3 s), or a bound (see
-    /// `random_walk_is_bound`).
+    /// `true` when no slope −½ region exists and N is only the upper bound `min_τ σ(τ)√τ`
+    /// over the reliable points (module docs).
+    pub white_density_is_bound: bool,
+    /// Random walk K [u/s/√Hz] (σ of the slope +½ line at τ = 3 s), capped as N, or a bound
+    /// (see `random_walk_is_bound`).
     pub random_walk: f64,
     /// 1-σ uncertainty of K, from the best-determined point used as for N (NaN when it is a
     /// bound).
     pub random_walk_err: f64,
     /// τ range \[s\] of the points used for K (the single longest τ when it is a bound).
     pub random_walk_tau_range: (f64, f64),
-    /// `true` when no slope +½ region exists and K is only the upper bound `σ(τ)√(3/τ)` at the
-    /// longest reliable τ.
+    /// `true` when no slope +½ region exists and K is only the upper bound `min_τ σ(τ)√(3/τ)`
+    /// over the reliable points (module docs; usually at the longest reliable τ).
     pub random_walk_is_bound: bool,
     /// Bias instability B \[u\] = min σ / 0.664 (an upper bound without a flat floor).
     pub bias_instability: f64,
@@ -187,6 +212,10 @@ pub struct NoiseFit {
 
 const MIN_CLUSTERS: f64 = 8.0;
 const SLOPE_TOL: f64 = 0.15;
+/// Minimum number of points of a slope region.
+const MIN_RUN: usize = 3;
+/// Allowance `k` of the caps and bounds, in units of a point's relative error ε (module docs).
+pub const CAP_SIGMAS: f64 = 3.0;
 
 fn local_slopes(pts: &[AllanPoint]) -> Vec<f64> {
     let lx: Vec<f64> = pts.iter().map(|p| p.tau.ln()).collect();
@@ -195,17 +224,64 @@ fn local_slopes(pts: &[AllanPoint]) -> Vec<f64> {
         .map(|i| {
             let a = i.saturating_sub(2);
             let b = (i + 2).min(pts.len() - 1);
-            let k = (b - a + 1) as f64;
-            let mx = lx[a..=b].iter().sum::<f64>() / k;
-            let my = ly[a..=b].iter().sum::<f64>() / k;
-            let (mut sxy, mut sxx) = (0.0, 0.0);
-            for j in a..=b {
-                sxy += (lx[j] - mx) * (ly[j] - my);
-                sxx += (lx[j] - mx) * (lx[j] - mx);
-            }
-            if sxx > 0.0 { sxy / sxx } else { f64::NAN }
+            ls_slope(&lx[a..=b], &ly[a..=b])
         })
         .collect()
+}
+
+/// Unweighted least-squares slope of `y` on `x` (NaN for fewer than 2 distinct x).
+fn ls_slope(x: &[f64], y: &[f64]) -> f64 {
+    let k = x.len() as f64;
+    let mx = x.iter().sum::<f64>() / k;
+    let my = y.iter().sum::<f64>() / k;
+    let (mut sxy, mut sxx) = (0.0, 0.0);
+    for (a, b) in x.iter().zip(y) {
+        sxy += (a - mx) * (b - my);
+        sxx += (a - mx) * (a - mx);
+    }
+    if sxx > 0.0 { sxy / sxx } else { f64::NAN }
+}
+
+/// Indices (into `pts`, all reliable) of the kept runs of slope `target` (module docs).
+fn slope_region(pts: &[AllanPoint], slopes: &[f64], target: f64) -> Vec<usize> {
+    let cand =
+        |i: usize| pts[i].clusters >= MIN_CLUSTERS && (slopes[i] - target).abs() <= SLOPE_TOL;
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < pts.len() {
+        if !cand(i) {
+            i += 1;
+            continue;
+        }
+        let start = i;
+        while i < pts.len() && cand(i) {
+            i += 1;
+        }
+        if i - start >= MIN_RUN {
+            let x: Vec<f64> = pts[start..i].iter().map(|p| p.tau.ln()).collect();
+            let y: Vec<f64> = pts[start..i].iter().map(|p| p.adev.ln()).collect();
+            if (ls_slope(&x, &y) - target).abs() <= SLOPE_TOL {
+                out.extend(start..i);
+            }
+        }
+    }
+    out
+}
+
+/// `min_τ σ(τ)·g(τ)·(1 + k·ε(τ))` over the reliable points and its τ: the largest `c` of a
+/// line `σ = c/g(τ)` that stays below the curve within `k` errors (module docs: `k =`
+/// [`CAP_SIGMAS`] for the caps, 0 for the bounds).
+fn line_cap(reliable: &[&AllanPoint], g: impl Fn(f64) -> f64, k: f64) -> (f64, f64) {
+    reliable
+        .iter()
+        .map(|p| {
+            let eps = p.adev_err / p.adev.max(1e-300);
+            (p.adev * g(p.tau) * (1.0 + k * eps), p.tau)
+        })
+        .fold(
+            (f64::INFINITY, f64::NAN),
+            |a, b| if b.0 < a.0 { b } else { a },
+        )
 }
 
 /// Weighted mean of `vals` (value, weight = 2(K−1), the inverse relative variance of σ) and
@@ -222,33 +298,31 @@ fn weighted(vals: &[(f64, f64)]) -> (f64, f64) {
 }
 
 /// Fits N, K and B to one channel's curve (see the module docs). `channel` only labels errors.
+/// Error: no point with ≥ 8 clusters ([`AllanError::NoWhiteNoiseRegion`]).
 pub fn fit_noise(pts: &[AllanPoint], channel: usize) -> Result<NoiseFit, AllanError> {
-    let slopes = local_slopes(pts);
-    let white: Vec<usize> = (0..pts.len())
-        .filter(|&i| (slopes[i] + 0.5).abs() <= SLOPE_TOL && pts[i].clusters >= MIN_CLUSTERS)
-        .collect();
-    let rw: Vec<usize> = (0..pts.len())
-        .filter(|&i| (slopes[i] - 0.5).abs() <= SLOPE_TOL && pts[i].clusters >= MIN_CLUSTERS)
-        .collect();
-    if white.is_empty() {
+    let reliable: Vec<&AllanPoint> = pts.iter().filter(|p| p.clusters >= MIN_CLUSTERS).collect();
+    if reliable.is_empty() {
         return Err(AllanError::NoWhiteNoiseRegion(channel));
     }
+    let slopes = local_slopes(pts);
+    let white = slope_region(pts, &slopes, -0.5);
+    let rw = slope_region(pts, &slopes, 0.5);
     // Weight of a point: 2(K−1) = inverse relative variance of σ (so of σ², up to 4).
     let wgt = |p: &AllanPoint| 2.0 * (p.clusters - 1.0);
     let (mut n2, mut k2) = (0.0, 0.0);
     let (mut n_rel, mut k_rel) = (f64::NAN, f64::NAN);
     for _pass in 0..2 {
-        let v: Vec<(f64, f64)> = white
-            .iter()
-            .map(|&i| {
-                let p = &pts[i];
-                let s2 = (p.adev * p.adev - k2 * p.tau / 3.0).max(0.0);
-                (s2 * p.tau, wgt(p))
-            })
-            .collect();
-        let (m, rel) = weighted(&v);
-        n2 = m;
-        n_rel = rel;
+        if !white.is_empty() {
+            let v: Vec<(f64, f64)> = white
+                .iter()
+                .map(|&i| {
+                    let p = &pts[i];
+                    let s2 = (p.adev * p.adev - k2 * p.tau / 3.0).max(0.0);
+                    (s2 * p.tau, wgt(p))
+                })
+                .collect();
+            (n2, n_rel) = weighted(&v);
+        }
         if !rw.is_empty() {
             let v: Vec<(f64, f64)> = rw
                 .iter()
@@ -258,39 +332,40 @@ pub fn fit_noise(pts: &[AllanPoint], channel: usize) -> Result<NoiseFit, AllanEr
                     (3.0 * s2 / p.tau, wgt(p))
                 })
                 .collect();
-            let (m, rel) = weighted(&v);
-            k2 = m;
-            k_rel = rel;
+            (k2, k_rel) = weighted(&v);
         }
     }
-    let reliable: Vec<&AllanPoint> = pts.iter().filter(|p| p.clusters >= MIN_CLUSTERS).collect();
     let minp = reliable
         .iter()
         .min_by(|a, b| a.adev.total_cmp(&b.adev))
         .copied()
         .unwrap_or(&pts[0]);
-    let last = reliable.last().copied().unwrap_or(&pts[pts.len() - 1]);
     let range = |idx: &[usize]| (pts[idx[0]].tau, pts[idx[idx.len() - 1]].tau);
-    let n = n2.sqrt();
-    let (k, k_err, k_range, bound) = if rw.is_empty() {
-        (
-            last.adev * (3.0 / last.tau).sqrt(),
-            f64::NAN,
-            (last.tau, last.tau),
-            true,
-        )
+    let g_white = |t: f64| t.sqrt();
+    let g_rw = |t: f64| (3.0 / t).sqrt();
+    let (n, n_err, n_range, n_bound) = if white.is_empty() {
+        let (b, t) = line_cap(&reliable, g_white, 0.0);
+        (b, f64::NAN, (t, t), true)
     } else {
-        let k = k2.sqrt();
+        let n = n2.sqrt().min(line_cap(&reliable, g_white, CAP_SIGMAS).0);
+        (n, n * n_rel, range(&white), false)
+    };
+    let (k, k_err, k_range, k_bound) = if rw.is_empty() {
+        let (b, t) = line_cap(&reliable, g_rw, 0.0);
+        (b, f64::NAN, (t, t), true)
+    } else {
+        let k = k2.sqrt().min(line_cap(&reliable, g_rw, CAP_SIGMAS).0);
         (k, k * k_rel, range(&rw), false)
     };
     Ok(NoiseFit {
         white_density: n,
-        white_density_err: n * n_rel,
-        white_tau_range: range(&white),
+        white_density_err: n_err,
+        white_tau_range: n_range,
+        white_density_is_bound: n_bound,
         random_walk: k,
         random_walk_err: k_err,
         random_walk_tau_range: k_range,
-        random_walk_is_bound: bound,
+        random_walk_is_bound: k_bound,
         bias_instability: minp.adev / BIAS_INSTABILITY_FACTOR,
         bias_instability_tau: minp.tau,
     })
@@ -373,8 +448,8 @@ impl ImuAllan {
     }
 
     /// Kalibr noise parameters, aggregated over the three axes of each sensor by the **maximum**
-    /// (conservative: a VIO back end fed a too-small noise becomes overconfident). Random walks
-    /// that are only bounds are used as they are (conservative too). `update_rate = 1/Δt`.
+    /// (conservative: a VIO back end fed a too-small noise becomes overconfident). Densities
+    /// and random walks that are only upper bounds are used as they are (conservative too). `update_rate = 1/Δt`.
     pub fn to_imu_noise(&self) -> ImuNoise {
         let max = |r: std::ops::Range<usize>, f: fn(&NoiseFit) -> f64| {
             self.fits[r].iter().map(f).fold(0.0, f64::max)

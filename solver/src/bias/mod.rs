@@ -6,7 +6,9 @@
 //! - [`multipose`]: several static attitudes linked by gyro preintegration (Tedaldi et al. 2014,
 //!   imu_tk) → gyro and accelerometer bias, attitude of each still interval, optional scale
 //!   factors and misalignments (accelerometer lower-triangular, gyro full), the model chosen
-//!   by BIC among the identifiable, converged candidates.
+//!   by BIC among the identifiable, converged candidates; the bias random walk is
+//!   marginalised (its covariance, which correlates intervals and links, whitens the stacked
+//!   residual), so the biases are those at a reference time and no parameter is added.
 //! - [`known_poses`]: segments with known, optionally noisy poses → biases, velocities and
 //!   gravity direction from preintegration factors (ORB-SLAM3 inertial-only initialisation,
 //!   VINS-Mono gyro bias), the pose noise propagated into every residual block with the
