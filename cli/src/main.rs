@@ -110,6 +110,19 @@ pub enum Command {
         /// Gravity magnitude G [m/s^2].
         #[arg(long, default_value_t = 9.81)]
         gravity: f64,
+        /// Use only samples (and poses) with timestamps >= this [ns].
+        #[arg(long, allow_hyphen_values = true)]
+        from: Option<i64>,
+        /// Use only samples (and poses) with timestamps <= this [ns].
+        #[arg(long, allow_hyphen_values = true)]
+        to: Option<i64>,
+        /// Known-pose problem: standard deviation of the given attitudes [rad] (0: exact).
+        /// E.g. 1.1e-3 for EuRoC V1_01 with vicon2gt (0.10° median error / 1.538).
+        #[arg(long, default_value_t = 0.0)]
+        pose_rot_std: f64,
+        /// Known-pose problem: standard deviation of the given positions [m] (0: exact).
+        #[arg(long, default_value_t = 0.0)]
+        pose_pos_std: f64,
     },
     /// Overlapping Allan deviation, fitted noise density, random walk and bias instability;
     /// writes imu.yaml (Kalibr) and a chart into --out when given.

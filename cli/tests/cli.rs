@@ -1,52 +1,10 @@
 //! End-to-end tests of the `preint` binary: happy paths on simulated and fixture files, and bad
 //! input (exit code, and a message naming the file, line and problem).
 
+mod common;
+
+use common::{json, repo, run, tmp, vec3};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_preint"))
-}
-
-fn run(args: &[&str]) -> Output {
-    bin().args(args).output().expect("binary runs")
-}
-
-fn json(args: &[&str]) -> Value {
-    let mut a = args.to_vec();
-    a.push("--json");
-    let o = run(&a);
-    assert!(
-        o.status.success(),
-        "{args:?} failed: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    serde_json::from_slice(&o.stdout).expect("one JSON object on stdout")
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("preint-cli-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn repo(p: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .join(p)
-        .display()
-        .to_string()
-}
-
-fn vec3(v: &Value) -> [f64; 3] {
-    let a = v.as_array().unwrap();
-    [
-        a[0].as_f64().unwrap(),
-        a[1].as_f64().unwrap(),
-        a[2].as_f64().unwrap(),
-    ]
-}
 
 #[test]
 fn integrate_euler_matches_the_gtsam_fixture() {

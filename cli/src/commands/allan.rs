@@ -83,6 +83,7 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         .map(|c| {
             let f = &a.fits[c];
             json!({"axis": AXES[c], "noise_density": f.white_density, "noise_density_err": f.white_density_err,
+                   "noise_density_is_upper_bound": f.white_density_is_bound,
                    "random_walk": f.random_walk, "random_walk_err": f.random_walk_err,
                    "random_walk_is_upper_bound": f.random_walk_is_bound,
                    "bias_instability": f.bias_instability, "bias_instability_tau": f.bias_instability_tau})
@@ -119,9 +120,10 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         let f = &a.fits[c];
         let _ = writeln!(
             h,
-            "{:<8} {:>16.4e} {:>15.4e}{} {:>16.4e}",
+            "{:<8} {:>15.4e}{} {:>15.4e}{} {:>16.4e}",
             AXES[c],
             f.white_density,
+            if f.white_density_is_bound { "≤" } else { " " },
             f.random_walk,
             if f.random_walk_is_bound { "≤" } else { " " },
             f.bias_instability
@@ -129,7 +131,7 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
     }
     let _ = writeln!(
         h,
-        "units: gyro rad/s/√Hz, rad/s²/√Hz, rad/s; acc m/s²/√Hz, m/s³/√Hz, m/s². ≤: upper bound (no +½ slope in the data)"
+        "units: gyro rad/s/√Hz, rad/s²/√Hz, rad/s; acc m/s²/√Hz, m/s³/√Hz, m/s². ≤: upper bound (no region of slope −½ resp. +½ in the data)"
     );
     let _ = writeln!(
         h,

@@ -52,12 +52,39 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         poses,
         noise,
         gravity,
+        from,
+        to,
+        pose_rot_std,
+        pose_pos_std,
     } = cmd
     else {
         unreachable!()
     };
+    for (name, v) in [
+        ("--pose-rot-std", pose_rot_std),
+        ("--pose-pos-std", pose_pos_std),
+    ] {
+        if !(v.is_finite() && *v >= 0.0) {
+            return Err(CliError::Usage(format!(
+                "{name} must be a non-negative number, got {v}"
+            )));
+        }
+    }
+    if !(gravity.is_finite() && *gravity > 0.0) {
+        return Err(CliError::Usage(format!(
+            "--gravity must be a positive number, got {gravity}"
+        )));
+    }
     let noise = noise_or_default(noise.as_ref())?;
-    let samples = read_euroc_imu(imu)?;
+    let mut samples = read_euroc_imu(imu)?;
+    let (lo, hi) = (from.unwrap_or(i64::MIN), to.unwrap_or(i64::MAX));
+    samples.retain(|s| s.t_ns >= lo && s.t_ns <= hi);
+    if samples.len() < 2 {
+        return Err(CliError::Failed(format!(
+            "{}: fewer than two samples with timestamps in [{lo}, {hi}] ns",
+            imu.display()
+        )));
+    }
     check_si_units(&samples, &imu.display().to_string())?;
     let g = Vector3::new(0.0, 0.0, -gravity);
     let n = samples.len();
@@ -85,13 +112,18 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         let params = PreintParams::from_noise(&noise)
             .with_scheme(Scheme::Midpoint)
             .with_gravity(g);
-        let c =
-            calibrate_known_poses(&samples, &kp, &KnownPoseOptions::new(params)).map_err(fail)?;
+        let opts = KnownPoseOptions {
+            pose_rot_std: *pose_rot_std,
+            pose_pos_std: *pose_pos_std,
+            ..KnownPoseOptions::new(params)
+        };
+        let c = calibrate_known_poses(&samples, &kp, &opts).map_err(fail)?;
         let json = json!({
             "model": "known-poses", "poses": kp.len(),
             "gyro_bias": list(&c.bias.gyro), "gyro_bias_std": list(&c.gyro_bias_std),
             "acc_bias": list(&c.bias.acc), "acc_bias_std": list(&c.acc_bias_std),
             "gravity": list(&c.gravity), "gravity_std": list(&c.gravity_std), "gravity_tilt_deg": c.gravity_tilt.to_degrees(),
+            "pose_rot_std": pose_rot_std, "pose_pos_std": pose_pos_std,
             "iterations": c.iterations, "cost": 0.5 * c.chi2, "chi2": c.chi2, "dof": c.dof,
             "units": {"gyro_bias": "rad/s", "acc_bias": "m/s^2", "gravity": "m/s^2"},
         });

@@ -206,7 +206,7 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         &series,
     )
     .map_err(fail)?;
-    page.svg(&gpath, "Attitude error against time; the scene passes exactly through pitch ±90° at t = 2, 6, 10 s. At the first pass the Euler-angle integration jumps (roll and yaw flip by ≈ π and the error settles orders of magnitude above the others; a run that starts at the lock does not converge with rate at all), while quaternion and SO(3) integration stay at their discretisation error.").map_err(fail)?;
+    page.svg(&gpath, "Attitude error against time; the scene passes exactly through pitch ±90° at t = 2, 6, 10 s. At the first pass the Euler-angle integration's error jumps by orders of magnitude and stays there: the body-rate→Euler-rate matrix has 1/cos(pitch) terms, so steps near ±90° move roll and yaw by large, grid-dependent amounts, and the error no longer shrinks with the rate as the scheme's order says (a run that starts at the lock is off by O(1) rad at every rate). Quaternion and SO(3) integration stay at their discretisation error.").map_err(fail)?;
     files.push(gpath.display().to_string());
 
     tick("gimbal lock");
