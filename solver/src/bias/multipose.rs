@@ -1140,18 +1140,24 @@ mod tests {
     use lie::Manifold;
     use sim::{MultiPoseStaticScene, SimConfig, scale_misalignment, simulate};
 
-    fn data() -> (Vec<ImuSample>, ImuNoise) {
+    /// The 5-pose protocol used by these tests: identity, ±90° about each axis, and two
+    /// generic attitudes.
+    fn five_poses() -> Vec<SO3> {
         let rx = |a: f64| SO3::exp(&Vector3::new(a, 0.0, 0.0));
         let ry = |a: f64| SO3::exp(&Vector3::new(0.0, a, 0.0));
         let rz = |a: f64| SO3::exp(&Vector3::new(0.0, 0.0, a));
         let h = std::f64::consts::FRAC_PI_2;
-        let poses = vec![
+        vec![
             SO3::identity(),
             rx(h),
             rx(h).compose(&rz(h)),
             ry(-h).compose(&rz(0.7)),
             rz(-h).compose(&rx(1.1)),
-        ];
+        ]
+    }
+
+    fn data() -> (Vec<ImuSample>, ImuNoise) {
+        let poses = five_poses();
         let scene = MultiPoseStaticScene::new(poses, 2.0, 1.5, Vector3::zeros()).unwrap();
         let noise = ImuNoise::euroc();
         let cfg = SimConfig {
@@ -1387,17 +1393,7 @@ mod tests {
     fn random_walk_covariance_matches_monte_carlo() {
         use rand::{RngExt, SeedableRng};
         use rand_distr::StandardNormal;
-        let rx = |a: f64| SO3::exp(&Vector3::new(a, 0.0, 0.0));
-        let ry = |a: f64| SO3::exp(&Vector3::new(0.0, a, 0.0));
-        let rz = |a: f64| SO3::exp(&Vector3::new(0.0, 0.0, a));
-        let h = std::f64::consts::FRAC_PI_2;
-        let poses = vec![
-            SO3::identity(),
-            rx(h),
-            rx(h).compose(&rz(h)),
-            ry(-h).compose(&rz(0.7)),
-            rz(-h).compose(&rx(1.1)),
-        ];
+        let poses = five_poses();
         let scene = MultiPoseStaticScene::new(poses.clone(), 3.0, 2.0, Vector3::zeros()).unwrap();
         let clean = simulate(&scene, 200.0, scene.duration_s(), &SimConfig::default(), 1)
             .unwrap()
