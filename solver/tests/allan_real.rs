@@ -64,6 +64,17 @@ fn adis16405_allan_deviation_is_plausible() {
     }
 }
 
+/// The six channels' Allan deviations and fits (10 clusters minimum), as every test here uses.
+fn fitted() -> ImuAllan {
+    let cols = load();
+    ImuAllan::from_channels(
+        [&cols[0], &cols[1], &cols[2], &cols[3], &cols[4], &cols[5]],
+        0.1,
+        10,
+    )
+    .unwrap()
+}
+
 /// The full fit. Measured (first hour): gyro N = 0.0402 / 0.0424 / 0.0382 deg/s/√Hz
 /// (7.0e-4 / 7.4e-4 / 6.7e-4 rad/s/√Hz; slope −½ regions 0.1–16 / 0.1–8 / 0.1–8 s, the
 /// weighted means capped by the τ = 0.1 s points), K only a bound (no slope +½ region below
@@ -86,13 +97,7 @@ fn adis16405_allan_deviation_is_plausible() {
 /// - the Kalibr noise is the maximum over axes.
 #[test]
 fn adis16405_full_fit_is_plausible() {
-    let cols = load();
-    let a = ImuAllan::from_channels(
-        [&cols[0], &cols[1], &cols[2], &cols[3], &cols[4], &cols[5]],
-        0.1,
-        10,
-    )
-    .unwrap();
+    let a = fitted();
     let readme_1s = [0.041, 0.043, 0.039, 0.00072, 0.00051, 0.00062];
     let readme_floor = [0.0072, 0.0084, 0.0082, 0.00029, 0.00022, 0.00023];
     for (c, f) in a.fits.iter().enumerate() {
@@ -157,13 +162,7 @@ fn adis16405_full_fit_is_plausible() {
 /// (accelerometer bounds σ(0.1 s)√0.1 of this excerpt).
 #[test]
 fn adis16405_lines_stay_below_the_curve() {
-    let cols = load();
-    let a = ImuAllan::from_channels(
-        [&cols[0], &cols[1], &cols[2], &cols[3], &cols[4], &cols[5]],
-        0.1,
-        10,
-    )
-    .unwrap();
+    let a = fitted();
     let readme_01: [f64; 6] = [0.125, 0.132, 0.119, 0.0014, 0.0012, 0.0015];
     let readme_1: [f64; 6] = [0.041, 0.043, 0.039, 0.00072, 0.00051, 0.00062];
     let k = 3.0;
