@@ -64,7 +64,7 @@ fn adis16405_allan_deviation_is_plausible() {
     }
 }
 
-/// The six channels' Allan deviations and fits (10 clusters minimum), as every test here uses.
+/// The six channels' Allan deviations and noise fits (at least 10 clusters per point).
 fn fitted() -> ImuAllan {
     let cols = load();
     ImuAllan::from_channels(
