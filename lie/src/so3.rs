@@ -121,12 +121,21 @@ const SHORT_SERIES_BELOW: f64 = 0.1;
 /// `(sin θ/θ, (1 − cos θ)/θ²)` at θ² [rad²]: the two coefficients Exp needs.
 #[inline]
 pub fn exp_coeffs(theta2: f64) -> (f64, f64) {
+    // The short series (every per-sample IMU angle) inline, the rest out of line.
     if theta2 < SHORT_SERIES_BELOW * SHORT_SERIES_BELOW {
         (
             horner(theta2, &A_SERIES[..5]),
             horner(theta2, &B_SERIES[..5]),
         )
-    } else if theta2 < SERIES_BELOW * SERIES_BELOW {
+    } else {
+        exp_coeffs_large(theta2)
+    }
+}
+
+/// [`exp_coeffs`] above the short series.
+#[inline(never)]
+fn exp_coeffs_large(theta2: f64) -> (f64, f64) {
+    if theta2 < SERIES_BELOW * SERIES_BELOW {
         (horner(theta2, &A_SERIES), horner(theta2, &B_SERIES))
     } else {
         // θ ≥ 1: cos θ ≤ 0.55, so 1 − cos θ ≥ 0.45 cancels at most one bit. One `sin_cos`
@@ -179,13 +188,22 @@ impl RodriguesCoeffs {
     #[inline]
     pub fn new(phi: &Vector3<f64>) -> Self {
         let theta2 = phi.norm_squared();
+        // The short series (every per-sample IMU angle) inline, the rest out of line.
         if theta2 < SHORT_SERIES_BELOW * SHORT_SERIES_BELOW {
             Self {
                 a: horner(theta2, &A_SERIES[..5]),
                 b: horner(theta2, &B_SERIES[..5]),
                 c: horner(theta2, &C_SERIES[..5]),
             }
-        } else if theta2 < SERIES_BELOW * SERIES_BELOW {
+        } else {
+            Self::large(theta2)
+        }
+    }
+
+    /// [`RodriguesCoeffs::new`] above the short series.
+    #[inline(never)]
+    fn large(theta2: f64) -> Self {
+        if theta2 < SERIES_BELOW * SERIES_BELOW {
             Self {
                 a: horner(theta2, &A_SERIES),
                 b: horner(theta2, &B_SERIES),

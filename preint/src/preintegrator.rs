@@ -13,7 +13,8 @@ use crate::measurement::{BiasJacobians, Cov9, Cov15, EdgeNoise, EdgeSource, Prei
 use crate::noise::{CellRule, walk_scale, white_scale};
 use crate::params::{CovShape, Level, PreintParams, Scheme};
 use crate::propagation::{
-    BiasWalk, Blk96, ErrorState, GenQ, Input, IsoQ, M3, NO_ID, NoiseQ, SLOTS, Sym9, Transition, V3,
+    BiasWalk, Blk96, ErrorState, GenQ, IsoQ, M3, NO_ID, NoiseQ, Origin, SLOTS, Sym9, Transition,
+    rot_cols,
 };
 use crate::sample::{ImuBias, ImuSample};
 use crate::scheme::{Deltas, Node, euler, midpoint, rk4, span_s};
@@ -75,12 +76,8 @@ pub(crate) struct WindowSpec {
 struct Cap {
     /// Extended index (context before = 0 when present).
     ext: usize,
-    /// Gain on the error at time `t_ns` (rotated coordinates).
+    /// Its total gain, pulled back to the origin (internal `propagation` module).
     g: Blk96,
-    /// Deltas at `t_ns`.
-    v: V3,
-    p: V3,
-    t_ns: i64,
     /// Timestamp of the sample itself.
     node_t: i64,
     /// Intervals to its window neighbours [s] (0 if none).
@@ -96,6 +93,12 @@ struct Core {
     /// 1 if a context sample precedes the window (it is `ring[0]`, extended index 0).
     cb: usize,
     ctx_after: Option<Node>,
+    /// Origin of the pulled-back error.
+    origin: Origin,
+    /// Midpoint: length of the last interval integrated [s].
+    h_prev: f64,
+    /// rk4: Lagrange weights of the last stencil.
+    weights: rk4::Weights,
     /// Window intervals integrated.
     done: usize,
     d: Deltas,
@@ -159,22 +162,24 @@ impl Core {
         if ext < self.cb || ext >= self.cb + self.n {
             return true;
         }
-        let j = ext - self.cb;
+        self.is_window_edge(cfg, ext - self.cb, fin)
+    }
+
+    /// [`Core::is_edge`] for window sample `j`.
+    #[inline(always)]
+    fn is_window_edge(&self, cfg: &Cfg, j: usize, fin: bool) -> bool {
         j < cfg.e0 || (fin && j + cfg.e1 >= self.n)
     }
 
-    /// Stores the gain `g` (on the error at `t_now`, deltas `self.d`) of edge sample `ext`.
+    /// Stores the total pulled-back gain `g` of edge sample `ext`.
     #[inline(never)]
-    fn capture(&mut self, ext: usize, g: Blk96, t_now: i64, left: f64, right: f64) -> bool {
+    fn capture(&mut self, ext: usize, g: &Blk96, left: f64, right: f64) -> bool {
         if self.ncap == CAPS {
             return false;
         }
         self.caps[self.ncap] = Cap {
             ext,
-            g,
-            v: self.d.v,
-            p: self.d.p,
-            t_ns: t_now,
+            g: *g,
             node_t: self.ext(ext).t_ns,
             left,
             right,
@@ -183,17 +188,9 @@ impl Core {
         true
     }
 
-    /// rk4: retires the pending samples with extended index below `below` (their gains are on
-    /// the error at window sample `at`).
+    /// rk4: retires the pending samples with extended index below `below`.
     #[inline(always)]
-    fn retire_below<N: NoiseQ>(
-        &mut self,
-        cfg: &Cfg,
-        noise: &N,
-        below: usize,
-        at: usize,
-        fin: bool,
-    ) {
+    fn retire_below<N: NoiseQ>(&mut self, cfg: &Cfg, noise: &N, below: usize, fin: bool) {
         let total = if fin { self.n } else { usize::MAX };
         for slot in 0..SLOTS {
             let id = self.e.pend[slot].id;
@@ -206,8 +203,7 @@ impl Core {
             } else {
                 (0.0, 0.0)
             };
-            let t_now = self.node(at).t_ns;
-            if !(self.is_edge(cfg, id, fin) && self.capture(id, pd.g, t_now, left, right)) {
+            if !(self.is_edge(cfg, id, fin) && self.capture(id, &pd.g, left, right)) {
                 let s = white_scale(cfg.rule.cell_s(left, right));
                 self.e.add_noise(&pd.g, s, noise);
             }
@@ -229,9 +225,8 @@ impl Core {
         let n0 = *self.node(k);
         let t1 = self.node(k + 1).t_ns;
         let h = span_s(n0.t_ns, t1);
-        let r0 = self.d.r;
-        if let Some((tr, gain)) = euler::step::<LIN>(&mut self.d, &n0, h) {
-            let edge = self.is_edge(cfg, k + cb, fin);
+        if let Some((tr, g)) = euler::step::<LIN>(&mut self.d, &n0, h, t1, &mut self.origin) {
+            let edge = self.is_window_edge(cfg, k, fin);
             // The held interval `h` decides the cell (`CellRule::Held`); the left
             // interval is only recorded for edge samples.
             let s = if edge {
@@ -239,17 +234,21 @@ impl Core {
             } else {
                 white_scale(cfg.rule.cell_s(0.0, h))
             };
-            self.e.step_euler(&tr, &gain, &r0, s, noise, &cfg.walk);
-            let (left, right) = if edge {
-                self.intervals(k, total)
-            } else {
-                (0.0, h)
-            };
-            if edge && !self.capture(k + cb, gain, t1, left, right) {
-                let s = white_scale(cfg.rule.cell_s(left, right));
-                self.e.add_noise(&gain, s, noise);
+            let c = (g.cv, g.cp, g.cp0);
+            self.e
+                .step_euler(&tr, &g.pb, &g.g, &g.r0, c, s, noise, &cfg.walk);
+            if edge {
+                let (left, right) = self.intervals(k, total);
+                let blk = Blk96 {
+                    g: g.g,
+                    a: rot_cols(&g.r0, g.cv, g.cp),
+                };
+                if !self.capture(k + cb, &blk, left, right) {
+                    let s = white_scale(cfg.rule.cell_s(left, right));
+                    self.e.add_noise(&blk, s, noise);
+                }
             }
-            self.int_cov(cfg, &tr);
+            self.int_cov(cfg, tr.h);
         }
     }
 
@@ -260,26 +259,33 @@ impl Core {
         cfg: &Cfg,
         noise: &N,
         k: usize,
-        total: usize,
         fin: bool,
     ) {
         let cb = self.cb;
         let (n0, n1) = (*self.node(k), *self.node(k + 1));
         let h = span_s(n0.t_ns, n1.t_ns);
-        if let Some((tr, g)) = midpoint::step::<LIN>(&mut self.d, &n0, &n1, h) {
-            let (left, right) = self.intervals(k, total);
-            let edge = self.is_edge(cfg, k + cb, fin);
+        if let Some((tr, g)) = midpoint::step::<LIN>(&mut self.d, &n0, &n1, h, &mut self.origin) {
+            // Sample k's intervals to its neighbours: the previous interval and this one.
+            let (left, right) = (if k > 0 { self.h_prev } else { 0.0 }, h);
+            self.h_prev = h;
+            let edge = self.is_window_edge(cfg, k, fin);
             let s0 = if edge {
                 0.0
             } else {
                 white_scale(cfg.rule.cell_s(left, right))
             };
-            let ng = self.e.step_mid(&tr, &g, s0, noise, &cfg.walk);
-            if edge && !self.capture(k + cb, ng.blk(), n1.t_ns, left, right) {
-                let s = white_scale(cfg.rule.cell_s(left, right));
-                self.e.add_noise(&ng.blk(), s, noise);
+            let done = self.e.step_mid(&tr, &g, &self.d.r, s0, noise, &cfg.walk);
+            if edge {
+                let blk = Blk96 {
+                    g: done.g,
+                    a: rot_cols(&g.r0, done.cv, done.cp),
+                };
+                if !self.capture(k + cb, &blk, left, right) {
+                    let s = white_scale(cfg.rule.cell_s(left, right));
+                    self.e.add_noise(&blk, s, noise);
+                }
             }
-            self.int_cov(cfg, &tr);
+            self.int_cov(cfg, tr.h);
         }
     }
 
@@ -302,16 +308,23 @@ impl Core {
             ke.saturating_sub(1)
         };
         if LIN {
-            self.retire_below(cfg, noise, s0, k, fin);
+            self.retire_below(cfg, noise, s0, fin);
         }
-        let mut st = [Node::default(); 4];
+        let mut st = [&self.ring[0]; 4];
         for (j, x) in st.iter_mut().enumerate().take(m) {
-            *x = self.ext(s0 + j);
+            *x = match &self.ctx_after {
+                Some(c) if s0 + j == cb + n => c,
+                _ => &self.ring[(s0 + j) % RING],
+            };
         }
-        let mut out = [Input::default(); 4];
-        if let Some(tr) = rk4::step::<LIN>(&mut self.d, &st[..m], ke - s0, s0, &mut out) {
-            self.e.step_multi(&tr, &out[..m], &cfg.walk);
-            self.int_cov(cfg, &tr);
+        let (o, w) = (&mut self.origin, &mut self.weights);
+        let pend = &mut self.e.pend;
+        let mut gsum = Blk96::default();
+        let sum = cfg.walk.combined.then_some(&mut gsum);
+        if let Some((tr, pb)) = rk4::step::<LIN>(&mut self.d, &st, m, ke - s0, s0, o, w, pend, sum)
+        {
+            self.e.step_multi(&tr, &pb, &gsum, &cfg.walk);
+            self.int_cov(cfg, tr.h);
         }
     }
 
@@ -337,12 +350,9 @@ impl Core {
             // In streaming mode `n` is a lower bound of the window size that is large enough
             // for every cell and stencil used here; with `fin` it is exact.
             let total = if fin { n } else { usize::MAX };
-            if k == 0 {
-                self.d.u_last = self.node(0).a;
-            }
             match cfg.scheme {
                 Scheme::Euler => self.euler_interval::<N, LIN>(cfg, noise, k, total, fin),
-                Scheme::Midpoint => self.midpoint_interval::<N, LIN>(cfg, noise, k, total, fin),
+                Scheme::Midpoint => self.midpoint_interval::<N, LIN>(cfg, noise, k, fin),
                 Scheme::Rk4 => self.rk4_interval::<N, LIN>(cfg, noise, k, fin),
             }
             self.done += 1;
@@ -355,36 +365,36 @@ impl Core {
             match cfg.scheme {
                 Scheme::Euler => {}
                 Scheme::Midpoint => {
-                    // The last sample: its gain is pending on the final error.
-                    let g = self.e.take_mid().blk();
+                    // The last sample: its gain is pending.
+                    let r = self.d.r;
+                    let m = self.e.take_mid(&r);
+                    let g = Blk96 {
+                        g: m.g,
+                        a: rot_cols(&r, m.cv, m.cp),
+                    };
                     let (left, right) = self.intervals(n - 1, n);
-                    let t = self.node(n - 1).t_ns;
-                    if !self.capture(cb + n - 1, g, t, left, right) {
+                    if !self.capture(cb + n - 1, &g, left, right) {
                         let s = white_scale(cfg.rule.cell_s(left, right));
                         self.e.add_noise(&g, s, noise);
                     }
                 }
-                Scheme::Rk4 => self.retire_below(cfg, noise, usize::MAX, n - 1, true),
+                Scheme::Rk4 => self.retire_below(cfg, noise, usize::MAX, true),
             }
         }
     }
 
+    /// Integration noise of an interval of length `h` [s]. GTSAM adds it to δp in the
+    /// body-(k+1) chart, i.e. `ΔR_k+1 Σ_int ΔR_k+1ᵀ h` in frame i; its pulled-back gain is the
+    /// same (it has no ψ row).
     #[inline(always)]
-    fn int_cov(&mut self, cfg: &Cfg, tr: &Transition) {
+    fn int_cov(&mut self, cfg: &Cfg, h: f64) {
         if let Some(ic) = &cfg.int_cov {
-            // GTSAM: integration noise added to δp in the body-(k+1) chart, i.e.
-            // ΔR_k+1 Σ_int ΔR_k+1ᵀ h in frame i.
-            let ws = walk_scale(tr.h);
+            let ws = walk_scale(h);
             match ic {
-                CovShape::Isotropic(s) => {
-                    let add = s * ws;
-                    for i in 0..3 {
-                        self.e.p.pp[(i, i)] += add;
-                    }
-                }
+                CovShape::Isotropic(s) => self.e.p.add_pp_diag(s * ws),
                 CovShape::General(m) => {
                     let r = &self.d.r;
-                    self.e.p.pp += r * m * r.transpose() * ws;
+                    self.e.p.add_pp(&(r * m * r.transpose() * ws));
                 }
             }
         }
@@ -431,6 +441,8 @@ pub struct Preintegrator {
     lin: bool,
     spec: WindowSpec,
     check_gaps: bool,
+    /// Largest accepted gap [ns] (`u64::MAX` without the gap check).
+    gap_limit: u64,
     samples: Vec<ImuSample>,
     first_t_ns: i64,
     last_t_ns: i64,
@@ -495,6 +507,13 @@ impl Preintegrator {
                 combined: params.level == Level::Combined,
                 g: params.gyro_bias_rw_cov,
                 a: params.acc_bias_rw_cov,
+                iso: match (
+                    CovShape::of(&params.gyro_bias_rw_cov),
+                    CovShape::of(&params.acc_bias_rw_cov),
+                ) {
+                    (CovShape::Isotropic(g), CovShape::Isotropic(a)) => Some((g, a)),
+                    _ => None,
+                },
             },
             int_cov: params
                 .integration_cov
@@ -510,17 +529,19 @@ impl Preintegrator {
             Vec::new()
         };
         let rk4 = params.scheme == Scheme::Rk4;
-        let corrected = |s: &ImuSample| Node {
-            t_ns: s.t_ns,
-            w: s.gyro - bias_hat.gyro,
-            a: s.acc - bias_hat.acc,
-        };
+        let corrected =
+            |s: &ImuSample| Node::new(s.t_ns, s.gyro - bias_hat.gyro, s.acc - bias_hat.acc);
         let ctx_before = spec.start.ctx.filter(|_| rk4).map(|s| corrected(&s));
         let ctx_after = spec.end.ctx.filter(|_| rk4).map(|s| corrected(&s));
         let mut ring = [Node::default(); RING];
         if let Some(c) = ctx_before {
             ring[0] = c;
         }
+        let gap_limit = if check_gaps {
+            params.max_gap_ns as u64
+        } else {
+            u64::MAX
+        };
         Ok(Self {
             lin: params.level != Level::Deltas,
             params,
@@ -529,6 +550,7 @@ impl Preintegrator {
             cfg,
             spec,
             check_gaps,
+            gap_limit,
             samples,
             first_t_ns: 0,
             last_t_ns: 0,
@@ -537,6 +559,9 @@ impl Preintegrator {
                 n: 0,
                 cb: usize::from(ctx_before.is_some()),
                 ctx_after,
+                origin: Origin::default(),
+                h_prev: 0.0,
+                weights: rk4::Weights::default(),
                 done: 0,
                 d: Deltas::default(),
                 e: ErrorState::default(),
@@ -576,6 +601,24 @@ impl Preintegrator {
     /// timestamp; a rejected sample leaves the preintegrator unchanged.
     #[inline]
     pub fn integrate(&mut self, s: &ImuSample) -> Result<(), PreintError> {
+        // One test for the common case: `x·0 = 0` for finite x and NaN otherwise (a sum that
+        // overflows only sends the sample to the exact checks); a later timestamp, and the gap
+        // as the exact u64 difference of two i64 that are in order.
+        let (g, a) = (&s.gyro, &s.acc);
+        let finite = ((g.x + a.x) + (g.y + a.y) + (g.z + a.z)) * 0.0 == 0.0;
+        let gap = (s.t_ns as u64).wrapping_sub(self.last_t_ns as u64);
+        if finite && s.t_ns > self.last_t_ns && gap <= self.gap_limit && self.core.n > 0 {
+            self.push(s);
+            Ok(())
+        } else {
+            self.integrate_checked(s)
+        }
+    }
+
+    /// [`Preintegrator::integrate`] for the first sample and for samples that may be invalid.
+    #[cold]
+    #[inline(never)]
+    fn integrate_checked(&mut self, s: &ImuSample) -> Result<(), PreintError> {
         let index = self.core.n;
         for (v, field) in [(&s.gyro, "gyro"), (&s.acc, "acc")] {
             if !v.iter().all(|x| x.is_finite()) {
@@ -614,20 +657,28 @@ impl Preintegrator {
             }
         } else {
             self.first_t_ns = s.t_ns;
+            // `ΔR_0 a_0 = a_0`, cached by the schemes that use the acceleration at both ends.
+            self.core.d.u_last = s.acc - self.bias_hat.acc;
         }
+        self.push(s);
+        Ok(())
+    }
+
+    /// Stores a valid sample and integrates the intervals that became ready.
+    #[inline(always)]
+    fn push(&mut self, s: &ImuSample) {
         self.last_t_ns = s.t_ns;
         if self.params.keep_samples {
             self.samples.push(*s);
         }
         let core = &mut self.core;
-        core.ring[(index + core.cb) % RING] = Node {
-            t_ns: s.t_ns,
-            w: s.gyro - self.bias_hat.gyro,
-            a: s.acc - self.bias_hat.acc,
-        };
+        core.ring[(core.n + core.cb) % RING] = Node::new(
+            s.t_ns,
+            s.gyro - self.bias_hat.gyro,
+            s.acc - self.bias_hat.acc,
+        );
         core.n += 1;
         Self::run(core, &self.cfg, &self.noise, self.lin, false);
-        Ok(())
     }
 
     /// Adds the samples in order; stops at the first invalid one (see [`Self::integrate`]).
@@ -659,22 +710,20 @@ impl Preintegrator {
         Ok(self.output(&core))
     }
 
-    /// Noise of the edge samples ([`crate::propagation`]): carries each collected gain to the
-    /// end of the window, splits interpolated boundary samples into the stream samples
-    /// they are made of, and adds each stream sample's noise once, with its own cell. Returns
-    /// the sources with their gains in the chart.
-    fn resolve_edges(&self, core: &Core, p: &mut Sym9) -> EdgeNoise {
+    /// Noise of the edge samples ([`crate::propagation`]): splits interpolated boundary
+    /// samples into the stream samples they are made of and adds each stream sample's noise
+    /// once, with its own cell, to the pulled-back covariance `p`. Returns the sources with
+    /// their gains pushed forward to the end of the window (`tr`) and in the chart.
+    fn resolve_edges(&self, core: &Core, p: &mut Sym9, tr: &Transition) -> EdgeNoise {
         let n = core.n;
         let cb = core.cb;
-        let t_end = core.node(n - 1).t_ns;
-        let (v_end, p_end) = (core.d.v, core.d.p);
         // (key, gain, left, right, start, end)
         let mut acc = [(0i64, Blk96::default(), 0.0, 0.0, false, false); ACC];
         let mut na = 0;
         let mut extra = Sym9::default();
         let mut add = |key: i64, g: Blk96, left: f64, right: f64, start: bool, end: bool| {
             if let Some(a) = acc[..na].iter_mut().find(|a| a.0 == key) {
-                a.1 = a.1.add(&g);
+                a.1.add_assign(&g);
                 a.4 |= start;
                 a.5 |= end;
             } else if na < ACC {
@@ -693,8 +742,7 @@ impl Preintegrator {
                 None => (left, right),
             };
         for cap in &core.caps[..core.ncap] {
-            let tr = Transition::between(span_s(cap.t_ns, t_end), &cap.v, &cap.p, &v_end, &p_end);
-            let g = tr.apply(&cap.g);
+            let g = cap.g;
             let start = cap.ext < cb + self.cfg.e0;
             let end = cap.ext + self.cfg.e1 >= cb + n;
             let side = if cap.ext == cb && spec.start.nw > 0 {
@@ -724,23 +772,14 @@ impl Preintegrator {
             self.add_full(p, &g, s);
             out.push(EdgeSource {
                 t_ns,
-                gain: g.chart(&rt),
+                gain: tr.apply(&g).chart(&rt),
                 left_s,
                 right_s,
                 start,
                 end,
             });
         }
-        for (a, b) in [
-            (&mut p.rr, &extra.rr),
-            (&mut p.rv, &extra.rv),
-            (&mut p.rp, &extra.rp),
-            (&mut p.vv, &extra.vv),
-            (&mut p.vp, &extra.vp),
-            (&mut p.pp, &extra.pp),
-        ] {
-            *a += b;
-        }
+        p.add_assign(&extra);
         out
     }
 
@@ -760,10 +799,15 @@ impl Preintegrator {
         let mut jac = BiasJacobians::default();
         let mut edge_noise = EdgeNoise::default();
         if self.lin {
+            // Pulled back to the origin → pushed forward to the end (rotated coordinates) →
+            // the documented chart.
+            let tr = core
+                .origin
+                .push_to(core.node(core.n - 1).t_ns, &core.d.v, &core.d.p);
             let mut p = e.p;
-            edge_noise = self.resolve_edges(core, &mut p);
-            // Rotated error coordinates → the documented chart.
+            edge_noise = self.resolve_edges(core, &mut p, &tr);
             let to_chart = |p: &Sym9| {
+                let p = tr.push_forward(p);
                 let mut m = Cov9::zeros();
                 let blocks = [
                     (0, 0, rt * p.rr * r),
@@ -783,30 +827,36 @@ impl Preintegrator {
             };
             cov = to_chart(&p);
             let cov_walk = to_chart(&e.p_walk);
+            let j = tr.apply(&e.j);
             jac = BiasJacobians {
-                d_r_d_bg: rt * e.j.rg,
-                d_v_d_bg: e.j.vg,
-                d_v_d_ba: e.j.va,
-                d_p_d_bg: e.j.pg,
-                d_p_d_ba: e.j.pa,
+                d_r_d_bg: rt * j.gyro_block(0),
+                d_v_d_bg: j.gyro_block(1),
+                d_v_d_ba: j.acc_block(1),
+                d_p_d_bg: j.gyro_block(2),
+                d_p_d_ba: j.acc_block(2),
             };
             cov15
                 .fixed_view_mut::<9, 9>(0, 0)
                 .copy_from(&(cov + cov_walk));
             let c = &e.c;
             let cross = [
-                (0, 9, rt * c.rg),
-                (3, 9, c.vg),
-                (3, 12, c.va),
-                (6, 9, c.pg),
-                (6, 12, c.pa),
+                (0, 9, rt * c.gyro_block(0)),
+                (3, 9, c.gyro_block(1)),
+                (3, 12, c.acc_block(1)),
+                (6, 9, c.gyro_block(2)),
+                (6, 12, c.acc_block(2)),
             ];
             for (i, j, b) in cross {
                 cov15.fixed_view_mut::<3, 3>(i, j).copy_from(&b);
                 cov15.fixed_view_mut::<3, 3>(j, i).copy_from(&b.transpose());
             }
-            cov15.fixed_view_mut::<3, 3>(9, 9).copy_from(&e.pbb_g);
-            cov15.fixed_view_mut::<3, 3>(12, 12).copy_from(&e.pbb_a);
+            let walk = &self.cfg.walk;
+            cov15
+                .fixed_view_mut::<3, 3>(9, 9)
+                .copy_from(&(walk.g * e.walk_t));
+            cov15
+                .fixed_view_mut::<3, 3>(12, 12)
+                .copy_from(&(walk.a * e.walk_t));
         }
         PreintegratedImu {
             t_i_ns: self.first_t_ns,

@@ -1,11 +1,12 @@
-//! Error-state propagation in rotated coordinates, shared by every scheme.
+//! Error-state propagation, shared by every scheme: every gain is pulled back to one origin
+//! near the window start, where gains simply add.
 //!
 //! Chart (documented in [`crate::measurement`]): `ΔR = ΔR°·Exp(δφ)`, `Δv = Δv° + δv`,
-//! `Δp = Δp° + δp`. Internally the rotation error is kept as `ψ = ΔR_k δφ` (the same error as a
-//! left perturbation, in frame i). With that choice the rotation block of every transition is
-//! the identity and `ΔR_k[a]×δφ = [u]×ψ` with `u = ΔR_k a` (PERFORMANCE.md, trick 2). Every
-//! scheme's interval is linear in this error state and in the perturbations `n_j = [δω_j, δa_j]`
-//! of the samples of its stencil:
+//! `Δp = Δp° + δp`. The rotation error is handled as `ψ = ΔR_k δφ` (the same error as a left
+//! perturbation, in frame i), the *rotated* error `e_k = [ψ, δv, δp]`. With that choice the
+//! rotation block of every transition is the identity and `ΔR_k[a]×δφ = [u]×ψ` with
+//! `u = ΔR_k a` (PERFORMANCE.md, trick 2). Every scheme's interval is linear in this error
+//! state and in the perturbations `n_j = [δω_j, δa_j]` of the samples of its stencil:
 //!
 //! ```text
 //! e_k+1 = A_k e_k + Σ_j Γ_kj n_j,   A_k = [[I, 0, 0], [−[U1]×, I, 0], [−[U2]×, h I, I]]
@@ -15,105 +16,357 @@
 //! scheme discretises them; for every scheme here they are exactly the increments
 //! `U1 = Δv_k+1 − Δv_k`, `U2 = Δp_k+1 − Δp_k − Δv_k h`.
 //!
-//! # Pending gains: each sample's noise enters once
-//!
-//! A sample is used by every interval whose stencil holds it (Euler 1, midpoint 2, rk4 up to 4),
-//! so its noise must not be added once per interval. Write the error after interval k as
-//! `e = f + Σ_{j pending} G_j n_j`, the pending samples being those a later interval still
-//! uses, `G_j` their accumulated gains and `f` independent of them. Then per interval
-//!
-//! ```text
-//! P_f ← A P_f Aᵀ,   G_j ← A G_j + Γ_kj   (a sample first used here starts at G_j = Γ_kj),
-//! ```
-//!
-//! and a sample no later interval uses is *retired*: `P_f += G_j Q_j G_jᵀ`, with
-//! `Q_j = diag(Σ_g, Σ_a)·white_scale(c_j)` ([`crate::noise`]). At the end every pending sample
-//! is retired. No cross-covariance is kept; the result is the exact first-order covariance
-//! `Σ_j G_j Q_j G_jᵀ`. Euler has no pending sample; midpoint has one (sample k+1, whose
-//! *merged gain* `A Γ_k,1 + Γ_k+1,0` is added when interval k+1 is done, see
-//! [`ErrorState::step_mid`]); rk4 has up to four ([`ErrorState::step_multi`]).
-//!
 //! # Transition between any two nodes
 //!
 //! Products of such transitions keep the form: from node k to node m,
 //! `Φ = [[I, 0, 0], [−[V]×, I, 0], [−[W]×, T I, I]]` with `T = t_m − t_k`, `V = Δv_m − Δv_k`,
-//! `W = Δp_m − Δp_k − Δv_k T` (compose two steps and use the increments above). So a gain
-//! known at node k is carried to the end of the window from the deltas alone
-//! ([`Transition::between`]), which is how the gains of the samples near the window edges are
-//! collected without per-interval work.
+//! `W = Δp_m − Δp_k − Δv_k T` (compose two steps and use the increments above);
+//! [`Transition`] holds `(T, V, W)`.
+//!
+//! # Pulled-back error: no per-interval transition
+//!
+//! Take node o = 1, the end of the window's first interval, as the origin and let
+//! `Φ_k = Φ(o → k)`: `T = τ_k = t_k − t_o`, `V = Δv_k − Δv_o`, `W = Δp_k − Δp_o − Δv_o τ_k`, so
+//!
+//! ```text
+//! Φ_k⁻¹ = [[I, 0, 0], [[V]×, I, 0], [[W − τ_k V]×, −τ_k I, I]],   W − τ_k V = Δp_k − Δp_o − τ_k Δv_k.
+//! ```
+//!
+//! The error is propagated *pulled back* to the origin, `e'_k = Φ_k⁻¹ e_k`. Since
+//! `Φ_k+1 = A_k Φ_k`, `e'_k+1 = e'_k + Σ_j Γ'_kj n_j` with `Γ'_kj = Φ_k+1⁻¹ Γ_kj`: the
+//! transition disappears (the first interval's gains enter at the origin itself, `Φ_1 = I`). A
+//! gain column `(r, v, p)` (ψ, v and p rows) entering at node k is pulled back ([`PullBack`]) as
+//!
+//! ```text
+//! r' = r,   v' = v + V × r,   p' = p − τ_k v + (W − τ_k V) × r
+//! ```
+//!
+//! so a rotation-row gain `g` whose v and p rows are `[x]× g` and `[y]× g` stays of that form
+//! (`x' = x + V`, `y' = y − τ_k x + W − τ_k V`), and an accelerometer gain `R·(c_v, c_p)` (v and
+//! p rows) becomes `R·(c_v, c_p − τ_k c_v)`. Covariance, bias Jacobians and the combined terms
+//! are then plain sums; they are pushed forward once, `e = Φ_N e'` ([`Transition::push_forward`],
+//! [`Transition::apply`]), when the measurement is read. With the origin at node 1 a
+//! one-interval window needs no push-forward at all and keeps the exact zeros of its rotated
+//! gains (Euler's gyro gain has no v and p rows), which merging such windows relies on.
+//!
+//! # Each sample's noise enters once
+//!
+//! A sample is used by every interval whose stencil holds it (Euler 1, midpoint 2, rk4 up to 4),
+//! so its noise must not be added once per interval. Its total pulled-back gain is the sum
+//! `G'_j = Σ_k Γ'_kj` over the intervals that use it; while a later interval still uses it the
+//! sample is *pending* and that sum is being collected, and once no later interval uses it the
+//! sample is *retired*: `P' += G'_j Q_j G'_jᵀ`, with `Q_j = diag(Σ_g, Σ_a)·white_scale(c_j)`
+//! ([`crate::noise`]). At the end every pending sample is retired. No cross-covariance is kept;
+//! the result is the exact first-order covariance `Φ_N (Σ_j G'_j Q_j G'_jᵀ) Φ_Nᵀ`. Euler has
+//! no pending sample; midpoint has one (sample k+1, whose total gain is complete when interval
+//! k+1 is done, see [`ErrorState::step_mid`]); rk4 has up to four ([`ErrorState::pending`]).
 //!
 //! # Bias Jacobians and the combined covariance
 //!
-//! Every sample sees `−δb`, so `J ← A J − Σ_j Γ_kj`. Combined covariance (bias deviation `δb`
-//! constant over an interval, then a random-walk step): `C = Cov(e, δb)`,
-//! `V = A C + ½ Γ_Σ P_bb`, `P += V Γ_Σᵀ + Γ_Σ Vᵀ`, `C ← V + ½ Γ_Σ P_bb`,
-//! `P_bb += Σ_rw·walk_scale(h)`, with `Γ_Σ = Σ_j Γ_kj`.
+//! Every sample sees `−δb` with its total gain, so `J' = −Σ_j G'_j`: Euler subtracts each
+//! interval's gain `Γ'_Σ = Σ_j Γ'_kj` (its one sample), midpoint and rk4 each sample's total
+//! gain when it is retired. Combined covariance (bias deviation `δb` constant over an
+//! interval, then a random-walk step): `C = Cov(e, δb)`,
+//! `V = A C + ½ Γ_Σ P_bb`, `P_walk ← A P_walk Aᵀ + V Γ_Σᵀ + Γ_Σ Vᵀ`, `C ← V + ½ Γ_Σ P_bb`,
+//! `P_bb += Σ_rw·walk_scale(h)`. `P_walk` is pulled back like `P`
+//! (`P'_walk += V' Γ'_Σᵀ + Γ'_Σ V'ᵀ`, `V' = Φ_k+1⁻¹ V`); the 9×6 `C` is kept in rotated
+//! coordinates, where the blocks that vanish (Euler's gyro rows over the first intervals) are
+//! exact zeros rather than round-off of a push-forward.
+//!
+//! # Storage
+//!
+//! Symmetric 9×9 matrices are packed ([`Sym9`]); 9×6 gains are stored by columns ([`Blk96`]),
+//! the ψ rows of the accelerometer columns being identically zero (acceleration never moves
+//! ΔR). Updates are rank-3 outer products of columns, the form that vectorises.
 
-use crate::noise::walk_scale;
+use crate::scheme::span_s;
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
 pub(crate) type M3 = Matrix3<f64>;
 pub(crate) type V3 = Vector3<f64>;
 
-/// A 9×6 matrix in 3×3 blocks, rows [ψ, v, p], columns [ω (or b_g), a (or b_a)]. The ψ–a block
-/// is identically zero for every quantity propagated here (acceleration never moves ΔR).
+/// Three gyro-type columns (gyro noise or gyro bias), rows `[ψ, v, p]`.
+pub(crate) type Cols9 = [[f64; 9]; 3];
+/// Three accelerometer-type columns, rows `[v, p]` (the ψ rows are zero).
+pub(crate) type Cols6 = [[f64; 6]; 3];
+
+#[inline(always)]
+fn cross(a: &V3, b: [f64; 3]) -> [f64; 3] {
+    [
+        a.y * b[2] - a.z * b[1],
+        a.z * b[0] - a.x * b[2],
+        a.x * b[1] - a.y * b[0],
+    ]
+}
+
+/// The columns `(g_c, x × g_c, y × g_c)` of the gain whose ψ rows are `g` and whose v and p
+/// rows are `[x]× g` and `[y]× g`.
+#[inline(always)]
+pub(crate) fn skew_cols(g: &M3, x: &V3, y: &V3) -> Cols9 {
+    let mut out = [[0.0; 9]; 3];
+    for (c, col) in out.iter_mut().enumerate() {
+        let r = [g[(0, c)], g[(1, c)], g[(2, c)]];
+        let v = cross(x, r);
+        let p = cross(y, r);
+        *col = [r[0], r[1], r[2], v[0], v[1], v[2], p[0], p[1], p[2]];
+    }
+    out
+}
+
+/// The columns `(c_v R_c, c_p R_c)` of the accelerometer gain `R·(c_v, c_p)`.
+#[inline(always)]
+pub(crate) fn rot_cols(r: &M3, cv: f64, cp: f64) -> Cols6 {
+    let mut out = [[0.0; 6]; 3];
+    for (c, col) in out.iter_mut().enumerate() {
+        let x = [r[(0, c)], r[(1, c)], r[(2, c)]];
+        *col = [
+            cv * x[0],
+            cv * x[1],
+            cv * x[2],
+            cp * x[0],
+            cp * x[1],
+            cp * x[2],
+        ];
+    }
+    out
+}
+
+#[inline(always)]
+fn add_cols<const N: usize>(a: &mut [[f64; N]; 3], b: &[[f64; N]; 3]) {
+    for (x, y) in a.iter_mut().zip(b) {
+        for (u, w) in x.iter_mut().zip(y) {
+            *u += w;
+        }
+    }
+}
+
+#[inline(always)]
+fn sub_cols<const N: usize>(a: &mut [[f64; N]; 3], b: &[[f64; N]; 3]) {
+    for (x, y) in a.iter_mut().zip(b) {
+        for (u, w) in x.iter_mut().zip(y) {
+            *u -= w;
+        }
+    }
+}
+
+#[inline(always)]
+fn scale_cols<const N: usize>(a: &[[f64; N]; 3], s: f64) -> [[f64; N]; 3] {
+    let mut out = *a;
+    for x in out.iter_mut() {
+        for u in x.iter_mut() {
+            *u *= s;
+        }
+    }
+    out
+}
+
+/// `A·Q` for columns `A` and a 3×3 `Q`: column c is `Σ_d A_d Q[d][c]`.
+#[inline(always)]
+fn mul_cols<const N: usize>(a: &[[f64; N]; 3], q: &M3) -> [[f64; N]; 3] {
+    let mut out = [[0.0; N]; 3];
+    for (c, col) in out.iter_mut().enumerate() {
+        for i in 0..N {
+            col[i] = a[0][i] * q[(0, c)] + a[1][i] * q[(1, c)] + a[2][i] * q[(2, c)];
+        }
+    }
+    out
+}
+
+/// A 9×6 matrix by columns: gyro (or b_g) columns with rows [ψ, v, p], accelerometer (or b_a)
+/// columns with rows [v, p]; its ψ–a block is identically zero for every quantity propagated
+/// here.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct Blk96 {
-    pub rg: M3,
-    pub vg: M3,
-    pub pg: M3,
-    pub va: M3,
-    pub pa: M3,
+    pub g: Cols9,
+    pub a: Cols6,
 }
 
 impl Blk96 {
     #[inline(always)]
     pub(crate) fn add(&self, o: &Self) -> Self {
-        Self {
-            rg: self.rg + o.rg,
-            vg: self.vg + o.vg,
-            pg: self.pg + o.pg,
-            va: self.va + o.va,
-            pa: self.pa + o.pa,
-        }
+        let mut out = *self;
+        out.add_assign(o);
+        out
+    }
+    #[inline(always)]
+    pub(crate) fn add_assign(&mut self, o: &Self) {
+        add_cols(&mut self.g, &o.g);
+        add_cols(&mut self.a, &o.a);
     }
     #[inline(always)]
     pub(crate) fn scale(&self, s: f64) -> Self {
         Self {
-            rg: self.rg * s,
-            vg: self.vg * s,
-            pg: self.pg * s,
-            va: self.va * s,
-            pa: self.pa * s,
+            g: scale_cols(&self.g, s),
+            a: scale_cols(&self.a, s),
         }
     }
     /// `self · diag(Qg, Qa)`.
     #[inline(always)]
     fn mul_diag(&self, qg: &M3, qa: &M3) -> Self {
         Self {
-            rg: self.rg * qg,
-            vg: self.vg * qg,
-            pg: self.pg * qg,
-            va: self.va * qa,
-            pa: self.pa * qa,
+            g: mul_cols(&self.g, qg),
+            a: mul_cols(&self.a, qa),
         }
+    }
+    /// The 3×3 block of the gyro columns at row block `row` (0 ψ, 1 v, 2 p).
+    pub(crate) fn gyro_block(&self, row: usize) -> M3 {
+        M3::from_fn(|i, c| self.g[c][3 * row + i])
+    }
+    /// The 3×3 block of the accelerometer columns at row block `row` (1 v, 2 p).
+    pub(crate) fn acc_block(&self, row: usize) -> M3 {
+        M3::from_fn(|i, c| self.a[c][3 * (row - 1) + i])
     }
     /// The dense 9×6 matrix with the ψ rows premultiplied by `rt` (rotated coordinates → the
     /// chart `δφ = ΔRᵀ ψ` when `rt = ΔRᵀ`).
     pub(crate) fn chart(&self, rt: &M3) -> SMatrix<f64, 9, 6> {
         let mut m = SMatrix::<f64, 9, 6>::zeros();
-        m.fixed_view_mut::<3, 3>(0, 0).copy_from(&(rt * self.rg));
-        m.fixed_view_mut::<3, 3>(3, 0).copy_from(&self.vg);
-        m.fixed_view_mut::<3, 3>(6, 0).copy_from(&self.pg);
-        m.fixed_view_mut::<3, 3>(3, 3).copy_from(&self.va);
-        m.fixed_view_mut::<3, 3>(6, 3).copy_from(&self.pa);
+        m.fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&(rt * self.gyro_block(0)));
+        m.fixed_view_mut::<3, 3>(3, 0)
+            .copy_from(&self.gyro_block(1));
+        m.fixed_view_mut::<3, 3>(6, 0)
+            .copy_from(&self.gyro_block(2));
+        m.fixed_view_mut::<3, 3>(3, 3).copy_from(&self.acc_block(1));
+        m.fixed_view_mut::<3, 3>(6, 3).copy_from(&self.acc_block(2));
         m
     }
 }
 
-/// Symmetric 9×9 in its six distinct 3×3 blocks, order [ψ, v, p].
+/// Start of column j of a packed symmetric 9×9: the upper triangle by columns, each column
+/// padded to an even length (entries `i ≤ j` used), so that updates run on aligned pairs.
+const COL: [usize; 10] = [0, 2, 4, 8, 12, 18, 24, 32, 40, 50];
+
+/// Index of entry `(i, j)`, `i ≤ j`, of a packed symmetric 9×9.
+#[inline(always)]
+const fn packed(i: usize, j: usize) -> usize {
+    COL[j] + i
+}
+
+/// `x[i] += Σ_c w_c[i] b_c` for `i < N`: one column of a rank-3 update (rows of length `R`).
+#[inline(always)]
+fn axpy<const R: usize, const N: usize>(x: &mut [f64], w: &[[f64; R]; 3], b: [f64; 3]) {
+    let x: &mut [f64; N] = (&mut x[..N]).try_into().expect("constant column range");
+    for i in 0..N {
+        x[i] += w[0][i] * b[0] + w[1][i] * b[1] + w[2][i] * b[2];
+    }
+}
+
+/// Symmetric 9×9, order [ψ, v, p], packed (see `COL`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Sym9(pub [f64; 50]);
+
+impl Default for Sym9 {
+    fn default() -> Self {
+        Self([0.0; 50])
+    }
+}
+
+impl Sym9 {
+    /// Entry `(i, j)` (either triangle).
+    #[inline(always)]
+    pub(crate) fn at(&self, i: usize, j: usize) -> f64 {
+        self.0[packed(i.min(j), i.max(j))]
+    }
+
+    /// The 3×3 block at row block `r`, column block `c` (0 ψ, 1 v, 2 p).
+    pub(crate) fn block(&self, r: usize, c: usize) -> M3 {
+        M3::from_fn(|i, j| self.at(3 * r + i, 3 * c + j))
+    }
+
+    /// `P += s Σ_c w_c g_cᵀ` (upper triangle; symmetric when `W = G·Q` with `Q` symmetric).
+    /// Column j is written for `i ≤ j` rounded up to even (the padding entry is never read), so
+    /// that every column is a run of aligned pairs. Out of line: on its own the compiler keeps
+    /// the columns in memory and pairs the rows (inlined into a large step it does not).
+    #[inline(never)]
+    pub(crate) fn add_outer(&mut self, w: &Cols9, g: &Cols9, s: f64) {
+        let b = |j: usize| [g[0][j] * s, g[1][j] * s, g[2][j] * s];
+        let p = &mut self.0;
+        axpy::<9, 2>(&mut p[COL[0]..], w, b(0));
+        axpy::<9, 2>(&mut p[COL[1]..], w, b(1));
+        axpy::<9, 4>(&mut p[COL[2]..], w, b(2));
+        axpy::<9, 4>(&mut p[COL[3]..], w, b(3));
+        axpy::<9, 6>(&mut p[COL[4]..], w, b(4));
+        axpy::<9, 6>(&mut p[COL[5]..], w, b(5));
+        axpy::<9, 8>(&mut p[COL[6]..], w, b(6));
+        axpy::<9, 8>(&mut p[COL[7]..], w, b(7));
+        axpy::<9, 9>(&mut p[COL[8]..], w, b(8));
+    }
+
+    /// [`Sym9::add_outer`] for columns with zero ψ rows (rows and columns [v, p] only).
+    #[inline(never)]
+    pub(crate) fn add_outer_vp(&mut self, w: &Cols6, g: &Cols6, s: f64) {
+        let b = |j: usize| [g[0][j] * s, g[1][j] * s, g[2][j] * s];
+        let p = &mut self.0;
+        axpy::<6, 1>(&mut p[COL[3] + 3..], w, b(0));
+        axpy::<6, 2>(&mut p[COL[4] + 3..], w, b(1));
+        axpy::<6, 3>(&mut p[COL[5] + 3..], w, b(2));
+        axpy::<6, 4>(&mut p[COL[6] + 3..], w, b(3));
+        axpy::<6, 5>(&mut p[COL[7] + 3..], w, b(4));
+        axpy::<6, 6>(&mut p[COL[8] + 3..], w, b(5));
+    }
+
+    /// Adds `(dv, dvp, dp)` to the diagonals of the v–v, v–p and p–p blocks.
+    #[inline(always)]
+    pub(crate) fn add_diag_vp(&mut self, dv: f64, dvp: f64, dp: f64) {
+        for i in 0..3 {
+            self.0[packed(3 + i, 3 + i)] += dv;
+            self.0[packed(3 + i, 6 + i)] += dvp;
+            self.0[packed(6 + i, 6 + i)] += dp;
+        }
+    }
+
+    /// Adds `m·(cv², cv·cp, cp²)` (`m` symmetric) to the v–v, v–p and p–p blocks.
+    #[inline(always)]
+    fn add_acc(&mut self, m: &M3, cv: f64, cp: f64) {
+        let (vv, vp, pp) = (cv * cv, cv * cp, cp * cp);
+        for j in 0..3 {
+            for i in 0..3 {
+                if i <= j {
+                    self.0[packed(3 + i, 3 + j)] += m[(i, j)] * vv;
+                    self.0[packed(6 + i, 6 + j)] += m[(i, j)] * pp;
+                }
+                self.0[packed(3 + i, 6 + j)] += m[(i, j)] * vp;
+            }
+        }
+    }
+
+    /// Adds the symmetric `m` to the p–p block.
+    #[inline(always)]
+    pub(crate) fn add_pp(&mut self, m: &M3) {
+        for j in 0..3 {
+            for i in 0..=j {
+                self.0[packed(6 + i, 6 + j)] += m[(i, j)];
+            }
+        }
+    }
+
+    /// Adds `x` to the diagonal of the p–p block.
+    #[inline(always)]
+    pub(crate) fn add_pp_diag(&mut self, x: f64) {
+        for i in 0..3 {
+            self.0[packed(6 + i, 6 + i)] += x;
+        }
+    }
+
+    /// `P += W Γᵀ + Γ Wᵀ` (both 9×6 with zero ψ–a block).
+    #[inline(always)]
+    fn add_sym(&mut self, w: &Blk96, g: &Blk96) {
+        self.add_outer(&w.g, &g.g, 1.0);
+        self.add_outer(&g.g, &w.g, 1.0);
+        self.add_outer_vp(&w.a, &g.a, 1.0);
+        self.add_outer_vp(&g.a, &w.a, 1.0);
+    }
+
+    pub(crate) fn add_assign(&mut self, o: &Self) {
+        for (a, b) in self.0.iter_mut().zip(&o.0) {
+            *a += b;
+        }
+    }
+}
+
+/// Rotated covariance in its six distinct 3×3 blocks, order [ψ, v, p].
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub(crate) struct Sym9 {
+pub(crate) struct Blocks9 {
     pub rr: M3,
     pub rv: M3,
     pub rp: M3,
@@ -137,8 +390,8 @@ fn mul_skew(m: &M3, u: &V3) -> M3 {
     -skew_mul(u, &m.transpose()).transpose()
 }
 
-/// The transition of one interval, or of several (see module doc): duration `h` [s], `U1`
-/// [m/s], `U2` [m].
+/// The transition `Φ` between two nodes (see module doc): duration `h` [s], `U1` [m/s],
+/// `U2` [m].
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Transition {
     pub h: f64,
@@ -147,46 +400,50 @@ pub(crate) struct Transition {
 }
 
 impl Transition {
-    /// `Φ` from a node with deltas `(v0, p0)` to a later node `h` [s] after it with deltas
-    /// `(v1, p1)` (module doc, "Transition between any two nodes").
-    #[inline]
-    pub(crate) fn between(h: f64, v0: &V3, p0: &V3, v1: &V3, p1: &V3) -> Self {
-        Self {
-            h,
-            u1: v1 - v0,
-            u2: p1 - p0 - v0 * h,
-        }
-    }
-
-    /// `A X` for a 9×6 block matrix.
+    /// `Φ X` for a 9×6 block matrix.
     #[inline(always)]
     pub(crate) fn apply(&self, x: &Blk96) -> Blk96 {
-        Blk96 {
-            rg: x.rg,
-            vg: x.vg - skew_mul(&self.u1, &x.rg),
-            pg: x.pg + x.vg * self.h - skew_mul(&self.u2, &x.rg),
-            va: x.va,
-            pa: x.pa + x.va * self.h,
+        let mut out = *x;
+        for (o, col) in out.g.iter_mut().zip(&x.g) {
+            let r = [col[0], col[1], col[2]];
+            let (a, b) = (cross(&self.u1, r), cross(&self.u2, r));
+            for i in 0..3 {
+                o[3 + i] = col[3 + i] - a[i];
+                o[6 + i] = col[6 + i] + col[3 + i] * self.h - b[i];
+            }
         }
+        for (o, col) in out.a.iter_mut().zip(&x.a) {
+            for i in 0..3 {
+                o[3 + i] = col[3 + i] + col[i] * self.h;
+            }
+        }
+        out
     }
 
-    /// `A P Aᵀ` by blocks.
-    #[inline(always)]
-    fn conjugate(&self, p: &Sym9) -> Sym9 {
+    /// `Φ P Φᵀ` by blocks.
+    pub(crate) fn push_forward(&self, s: &Sym9) -> Blocks9 {
+        let p = Blocks9 {
+            rr: s.block(0, 0),
+            rv: s.block(0, 1),
+            rp: s.block(0, 2),
+            vv: s.block(1, 1),
+            vp: s.block(1, 2),
+            pp: s.block(2, 2),
+        };
         let h = self.h;
         let (u1, u2) = (&self.u1, &self.u2);
         let p_vr = p.rv.transpose();
         let p_pr = p.rp.transpose();
         let p_pv = p.vp.transpose();
-        // Rows of A P.
+        // Rows of Φ P.
         let ap_vr = p_vr - skew_mul(u1, &p.rr);
         let ap_vv = p.vv - skew_mul(u1, &p.rv);
         let ap_vp = p.vp - skew_mul(u1, &p.rp);
         let ap_pr = p_pr + p_vr * h - skew_mul(u2, &p.rr);
         let ap_pv = p_pv + p.vv * h - skew_mul(u2, &p.rv);
         let ap_pp = p.pp + p.vp * h - skew_mul(u2, &p.rp);
-        // (A P) Aᵀ; (−[U]×)ᵀ = [U]×.
-        Sym9 {
+        // (Φ P) Φᵀ; (−[U]×)ᵀ = [U]×.
+        Blocks9 {
             rr: p.rr,
             rv: p.rv + mul_skew(&p.rr, u1),
             rp: p.rp + p.rv * h + mul_skew(&p.rr, u2),
@@ -197,65 +454,100 @@ impl Transition {
     }
 }
 
-/// `P += W Γᵀ + Γ Wᵀ` (both 9×6 with zero ψ–a block).
-#[inline(always)]
-fn add_sym(p: &mut Sym9, w: &Blk96, g: &Blk96) {
-    let t = w.rg * g.rg.transpose();
-    p.rr += t + t.transpose();
-    p.rv += w.rg * g.vg.transpose() + g.rg * w.vg.transpose();
-    p.rp += w.rg * g.pg.transpose() + g.rg * w.pg.transpose();
-    let t = w.vg * g.vg.transpose() + w.va * g.va.transpose();
-    p.vv += t + t.transpose();
-    p.vp += w.vg * g.pg.transpose()
-        + w.va * g.pa.transpose()
-        + g.vg * w.pg.transpose()
-        + g.va * w.pa.transpose();
-    let t = w.pg * g.pg.transpose() + w.pa * g.pa.transpose();
-    p.pp += t + t.transpose();
+/// The origin of the pulled-back error (module doc): node 1, the end of the window's first
+/// interval.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Origin {
+    pub t_ns: i64,
+    pub v: V3,
+    pub p: V3,
+    pub set: bool,
+}
+
+impl Origin {
+    /// `Φ_k⁻¹` for node k at `t_ns` [ns] with deltas `(v, p)`; the first call (node 1) fixes
+    /// the origin there.
+    #[inline(always)]
+    pub(crate) fn pull_back(&mut self, t_ns: i64, v: &V3, p: &V3) -> PullBack {
+        if !self.set {
+            *self = Self {
+                t_ns,
+                v: *v,
+                p: *p,
+                set: true,
+            };
+        }
+        let tau = span_s(self.t_ns, t_ns);
+        PullBack {
+            dv: v - self.v,
+            w: p - self.p - v * tau,
+            tau,
+        }
+    }
+
+    /// `Φ_k` for node k at `t_ns` [ns] with deltas `(v, p)`: what pushes a pulled-back
+    /// quantity forward to that node.
+    pub(crate) fn push_to(&self, t_ns: i64, v: &V3, p: &V3) -> Transition {
+        let tau = span_s(self.t_ns, t_ns);
+        Transition {
+            h: tau,
+            u1: v - self.v,
+            u2: p - self.p - self.v * tau,
+        }
+    }
+}
+
+/// `Φ_k⁻¹` at node k (module doc): a gain entering there is pulled back to the origin.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PullBack {
+    /// `V = Δv_k − Δv_o` [m/s].
+    pub dv: V3,
+    /// `W − τ V = Δp_k − Δp_o − τ Δv_k` [m].
+    pub w: V3,
+    /// `τ = t_k − t_o` [s].
+    pub tau: f64,
+}
+
+impl PullBack {
+    /// `Φ_k`, the inverse.
+    #[inline(always)]
+    pub(crate) fn forward(&self) -> Transition {
+        Transition {
+            h: self.tau,
+            u1: self.dv,
+            u2: self.w + self.dv * self.tau,
+        }
+    }
+
+    /// `Φ_k⁻¹ X` for a 9×6 block matrix in rotated coordinates at node k.
+    #[inline(always)]
+    pub(crate) fn apply(&self, x: &Blk96) -> Blk96 {
+        let mut out = *x;
+        for (o, col) in out.g.iter_mut().zip(&x.g) {
+            let r = [col[0], col[1], col[2]];
+            let (a, b) = (cross(&self.dv, r), cross(&self.w, r));
+            for i in 0..3 {
+                o[3 + i] = col[3 + i] + a[i];
+                o[6 + i] = col[6 + i] - col[3 + i] * self.tau + b[i];
+            }
+        }
+        for (o, col) in out.a.iter_mut().zip(&x.a) {
+            for i in 0..3 {
+                o[3 + i] = col[3 + i] - col[i] * self.tau;
+            }
+        }
+        out
+    }
 }
 
 /// Per-sample white-noise covariance `Q_j = s_j · diag(Σ_g, Σ_a)` with
 /// `s_j = white_scale(c_j)` [1/s] ([`crate::noise`]). Monomorphised once per noise shape.
 pub(crate) trait NoiseQ: Copy {
-    /// `P += Γ Q Γᵀ` for one sample's gain in [`NGain`] form; with `GV = false` the gyro
-    /// rows of v and p are taken as zero.
-    fn add_gqg<const GV: bool>(&self, p: &mut Sym9, g: &NGain, s: f64);
+    /// `P += Γ Q Γᵀ` for a gain with gyro columns `g` and accelerometer columns `R·(cv, cp)`
+    /// (v and p rows), `R` a rotation: every sample's gain in Euler and midpoint.
+    fn add_rot(&self, p: &mut Sym9, g: &Cols9, r: &M3, cv: f64, cp: f64, s: f64);
     /// `P += G Q Gᵀ` for a general gain.
     fn add_full(&self, p: &mut Sym9, g: &Blk96, s: f64);
-}
-
-/// One sample's noise gain whose accelerometer blocks are `R·cv` (v row) and `R·cp` (p row),
-/// `R` a rotation, so that `Γ_a Q_a Γ_aᵀ = (cv, cp)² · R Σ_a Rᵀ s`.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct NGain {
-    pub rg: M3,
-    pub vg: M3,
-    pub pg: M3,
-    pub r: M3,
-    pub cv: f64,
-    pub cp: f64,
-}
-
-impl NGain {
-    /// The same gain as a general 9×6 block matrix.
-    #[inline]
-    pub(crate) fn blk(&self) -> Blk96 {
-        Blk96 {
-            rg: self.rg,
-            vg: self.vg,
-            pg: self.pg,
-            va: self.r * self.cv,
-            pa: self.r * self.cp,
-        }
-    }
-}
-
-/// Adds `m·(cv², cv·cp, cp²)` to the v–v, v–p and p–p blocks.
-#[inline(always)]
-fn add_acc(p: &mut Sym9, m: &M3, cv: f64, cp: f64) {
-    p.vv += m * (cv * cv);
-    p.vp += m * (cv * cp);
-    p.pp += m * (cp * cp);
 }
 
 /// Isotropic `Σ_g = g I`, `Σ_a = a I`: scalar products only.
@@ -267,46 +559,18 @@ pub(crate) struct IsoQ {
 
 impl NoiseQ for IsoQ {
     #[inline(always)]
-    fn add_gqg<const GV: bool>(&self, p: &mut Sym9, g: &NGain, s: f64) {
-        // ΔR Σ_a ΔRᵀ = a I: the accelerometer noise adds to diagonals only.
-        let gs = self.g * s;
-        p.rr += (g.rg * g.rg.transpose()) * gs;
-        if GV {
-            p.rv += (g.rg * g.vg.transpose()) * gs;
-            p.rp += (g.rg * g.pg.transpose()) * gs;
-            p.vv += (g.vg * g.vg.transpose()) * gs;
-            p.vp += (g.vg * g.pg.transpose()) * gs;
-            p.pp += (g.pg * g.pg.transpose()) * gs;
-        }
-        let as_ = self.a * s;
-        let (dv, dvp, dp) = (
-            as_ * (g.cv * g.cv),
-            as_ * (g.cv * g.cp),
-            as_ * (g.cp * g.cp),
-        );
-        for i in 0..3 {
-            p.vv[(i, i)] += dv;
-            p.vp[(i, i)] += dvp;
-            p.pp[(i, i)] += dp;
-        }
+    fn add_rot(&self, p: &mut Sym9, g: &Cols9, _r: &M3, cv: f64, cp: f64, s: f64) {
+        p.add_outer(g, g, self.g * s);
+        // R Σ_a Rᵀ = a I: the accelerometer noise adds to diagonals only.
+        let a = self.a * s;
+        p.add_diag_vp(a * (cv * cv), a * (cv * cp), a * (cp * cp));
     }
 
     #[inline(always)]
     fn add_full(&self, p: &mut Sym9, g: &Blk96, s: f64) {
-        let (gs, as_) = (self.g * s, self.a * s);
-        p.rr += (g.rg * g.rg.transpose()) * gs;
-        p.rv += (g.rg * g.vg.transpose()) * gs;
-        p.rp += (g.rg * g.pg.transpose()) * gs;
-        p.vv += (g.vg * g.vg.transpose()) * gs + (g.va * g.va.transpose()) * as_;
-        p.vp += (g.vg * g.pg.transpose()) * gs + (g.va * g.pa.transpose()) * as_;
-        p.pp += (g.pg * g.pg.transpose()) * gs + (g.pa * g.pa.transpose()) * as_;
+        p.add_outer(&g.g, &g.g, self.g * s);
+        p.add_outer_vp(&g.a, &g.a, self.a * s);
     }
-}
-
-/// `½(m + mᵀ)`.
-#[inline(always)]
-fn sym(m: M3) -> M3 {
-    (m + m.transpose()) * 0.5
 }
 
 /// General (anisotropic) `Σ_g`, `Σ_a`.
@@ -318,37 +582,20 @@ pub(crate) struct GenQ {
 
 impl NoiseQ for GenQ {
     #[inline(always)]
-    fn add_gqg<const GV: bool>(&self, p: &mut Sym9, g: &NGain, s: f64) {
-        let qs = self.g * s;
-        let wr = g.rg * qs;
-        p.rr += sym(wr * g.rg.transpose());
-        if GV {
-            let wv = g.vg * qs;
-            p.rv += wr * g.vg.transpose();
-            p.rp += wr * g.pg.transpose();
-            p.vv += sym(wv * g.vg.transpose());
-            p.vp += wv * g.pg.transpose();
-            p.pp += sym((g.pg * qs) * g.pg.transpose());
-        }
-        let ra = sym(g.r * (self.a * s) * g.r.transpose());
-        add_acc(p, &ra, g.cv, g.cp);
+    fn add_rot(&self, p: &mut Sym9, g: &Cols9, r: &M3, cv: f64, cp: f64, s: f64) {
+        p.add_outer(&mul_cols(g, &self.g), g, s);
+        let ra = r * (self.a * s) * r.transpose();
+        p.add_acc(&((ra + ra.transpose()) * 0.5), cv, cp);
     }
 
     #[inline(always)]
     fn add_full(&self, p: &mut Sym9, g: &Blk96, s: f64) {
-        let (qg, qa) = (self.g * s, self.a * s);
-        let (wr, wv, wp) = (g.rg * qg, g.vg * qg, g.pg * qg);
-        let (xv, xp) = (g.va * qa, g.pa * qa);
-        p.rr += sym(wr * g.rg.transpose());
-        p.rv += wr * g.vg.transpose();
-        p.rp += wr * g.pg.transpose();
-        p.vv += sym(wv * g.vg.transpose() + xv * g.va.transpose());
-        p.vp += wv * g.pg.transpose() + xv * g.pa.transpose();
-        p.pp += sym(wp * g.pg.transpose() + xp * g.pa.transpose());
+        p.add_outer(&mul_cols(&g.g, &self.g), &g.g, s);
+        p.add_outer_vp(&mul_cols(&g.a, &self.a), &g.a, s);
     }
 }
 
-/// A pending sample (module doc): its index and accumulated gain.
+/// A pending sample (module doc): its index and the sum of its pulled-back gains so far.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Pending {
     pub id: usize,
@@ -360,33 +607,37 @@ pub(crate) const NO_ID: usize = usize::MAX;
 /// Number of pending-sample slots (≥ the largest stencil); sample `id` lives in `id % SLOTS`.
 pub(crate) const SLOTS: usize = 4;
 
-/// One sample's contribution to an interval: its index and its gain `Γ_kj`.
+/// Midpoint: the pulled-back gain of the last interval's end sample, which the next interval
+/// completes. Its accelerometer columns are `ΔR_k+1·(cv, cp)`.
 #[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Input {
-    pub id: usize,
-    pub gain: Blk96,
+pub(crate) struct MidPending {
+    pub g: Cols9,
+    pub cv: f64,
+    pub cp: f64,
 }
 
-/// The error state: covariance, bias Jacobians and the combined-covariance terms, all in
-/// rotated coordinates.
+/// The error state: covariance, bias Jacobians and the combined-covariance terms, pulled back
+/// to the origin except `C` (module doc).
 #[derive(Clone, Debug)]
 pub(crate) struct ErrorState {
     /// Covariance of the deltas from the white measurement noise of the retired samples
-    /// (`P_f` of the module doc; what `PreintegratedImu::cov` holds once every sample is
-    /// retired, as GTSAM's `ImuFactor`).
+    /// (`Φ_N P' Φ_Nᵀ` is what `PreintegratedImu::cov` holds once every sample is retired, as
+    /// GTSAM's `ImuFactor`).
     pub p: Sym9,
     /// The part of the deltas' covariance driven by the bias random walk during the window
     /// (combined level only); `p + p_walk` is the 9×9 block of the 15×15 covariance. Kept apart
     /// because propagation is linear, so the two parts evolve independently.
     pub p_walk: Sym9,
+    /// Bias Jacobian `J'`.
     pub j: Blk96,
+    /// `C = Cov(e, δb)` in rotated coordinates (combined level only).
     pub c: Blk96,
-    pub pbb_g: M3,
-    pub pbb_a: M3,
+    /// `Σ walk_scale(h)` over the intervals: `P_bb = diag(Σ_bg, Σ_ba)·walk_t`.
+    pub walk_t: f64,
     /// rk4: pending samples.
     pub pend: [Pending; SLOTS],
-    /// Midpoint: gain of the last interval's end sample (its noise is not yet in `p`).
-    mid: NGain,
+    /// Midpoint: the end sample of the last interval.
+    mid: MidPending,
 }
 
 impl Default for ErrorState {
@@ -396,13 +647,12 @@ impl Default for ErrorState {
             p_walk: Sym9::default(),
             j: Blk96::default(),
             c: Blk96::default(),
-            pbb_g: M3::zeros(),
-            pbb_a: M3::zeros(),
+            walk_t: 0.0,
             pend: [Pending {
                 id: NO_ID,
                 g: Blk96::default(),
             }; SLOTS],
-            mid: NGain::default(),
+            mid: MidPending::default(),
         }
     }
 }
@@ -413,170 +663,216 @@ pub(crate) struct BiasWalk {
     pub combined: bool,
     pub g: M3,
     pub a: M3,
+    /// `(σ_g², σ_a²)` when both densities are isotropic (`Σ = σ² I`): `Γ P_bb` is then a
+    /// scaling.
+    pub iso: Option<(f64, f64)>,
 }
 
-/// A midpoint interval's gains: both samples share the gyro gains `(rg, vg, pg)`; the
-/// accelerometer gains are `r0·(cv, cp)` (sample k) and `r1·(cv, cp)` (sample k+1).
+/// A midpoint interval's pulled-back gains: both samples share the gyro gain
+/// `(G, x × G, y × G)` (ψ, v, p rows; [`skew_cols`]); the accelerometer gains are `ΔR_k·(cv, cp)`
+/// (sample k) and `ΔR_k+1·(cv, cp)` (sample k+1).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct MidGain {
-    pub rg: M3,
-    pub vg: M3,
-    pub pg: M3,
+    /// The pull-back used, `Φ_k+1⁻¹`.
+    pub pb: PullBack,
+    pub g: M3,
+    pub x: V3,
+    pub y: V3,
+    /// `ΔR_k`.
     pub r0: M3,
-    pub r1: M3,
     pub cv: f64,
     pub cp: f64,
 }
 
 impl ErrorState {
-    /// `A C` before the conjugation (C is untouched by it), and `p_walk ← A p_walk Aᵀ`.
+    /// Combined terms and bias-walk step for interval `tr` ending at node k+1
+    /// (`pb = Φ_k+1⁻¹`); `gsum` gives the interval's total pulled-back gain, `rotated` the
+    /// same gain in rotated coordinates (both used at the combined level only).
     #[inline(always)]
-    fn walk_pre(&mut self, tr: &Transition, walk: &BiasWalk) -> Option<Blk96> {
+    fn walk_step(
+        &mut self,
+        tr: &Transition,
+        pb: &PullBack,
+        gsum: impl FnOnce(&Self) -> Blk96,
+        rotated: impl FnOnce(&Blk96) -> Blk96,
+        walk: &BiasWalk,
+    ) {
         if walk.combined {
-            self.p_walk = tr.conjugate(&self.p_walk);
-            Some(tr.apply(&self.c))
-        } else {
-            None
-        }
-    }
-
-    /// Combined terms, bias-walk step and bias Jacobians for an interval of total gain `gsum`.
-    #[inline(always)]
-    fn tail(&mut self, tr: &Transition, ac: Option<Blk96>, gsum: &Blk96, walk: &BiasWalk) {
-        if let Some(v) = ac {
-            let half = gsum.mul_diag(&self.pbb_g, &self.pbb_a).scale(0.5);
-            let v = v.add(&half);
-            add_sym(&mut self.p_walk, &v, gsum);
+            // `C` is kept in rotated coordinates, where its zero blocks (e.g. Euler's first
+            // intervals) are exact: `V = A C + ½ Γ_Σ P_bb`, `C ← V + ½ Γ_Σ P_bb`; `P_walk` is
+            // pulled back, `P'_walk += V' Γ'_Σᵀ + Γ'_Σ V'ᵀ` with `V' = Φ_k+1⁻¹ V`.
+            let gsum = gsum(self);
+            let rot = rotated(&gsum);
+            let t = 0.5 * self.walk_t;
+            let half = match walk.iso {
+                Some((g, a)) => Blk96 {
+                    g: scale_cols(&rot.g, g * t),
+                    a: scale_cols(&rot.a, a * t),
+                },
+                None => rot.mul_diag(&(walk.g * t), &(walk.a * t)),
+            };
+            let v = tr.apply(&self.c).add(&half);
+            self.p_walk.add_sym(&pb.apply(&v), &gsum);
             self.c = v.add(&half);
         }
-        let ws = walk_scale(tr.h);
-        self.pbb_g += walk.g * ws;
-        self.pbb_a += walk.a * ws;
-        let aj = tr.apply(&self.j);
-        self.j = aj.add(&gsum.scale(-1.0));
+        self.walk_t += crate::noise::walk_scale(tr.h);
     }
 
-    /// Euler interval: sample k (gain `gain`: `rg`, `va = r0 h`, `pa = r0 ½h²`, zero gyro
-    /// gains in the v and p rows) is used once, so it is retired at once with noise scale
-    /// `scale` [1/s] (0 when the caller collects its gain instead).
+    /// `J'_a −= r·(cv, cp)` (v and p rows).
     #[inline(always)]
+    fn sub_acc_jac(&mut self, r: &M3, cv: f64, cp: f64) {
+        for (c, col) in self.j.a.iter_mut().enumerate() {
+            for i in 0..3 {
+                col[i] -= cv * r[(i, c)];
+                col[3 + i] -= cp * r[(i, c)];
+            }
+        }
+    }
+
+    /// Euler interval `tr`: sample k (pulled-back gyro columns `g`, accelerometer columns
+    /// `r0·(cv, cp)`) is used once, so it is retired at once with noise scale `scale` [1/s]
+    /// (0 when the caller collects its gain instead). `cp0` is `c_p` in rotated coordinates
+    /// (`½h²`).
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn step_euler<N: NoiseQ>(
         &mut self,
         tr: &Transition,
-        gain: &Blk96,
+        pb: &PullBack,
+        g: &Cols9,
         r0: &M3,
+        (cv, cp, cp0): (f64, f64, f64),
         scale: f64,
         noise: &N,
         walk: &BiasWalk,
     ) {
-        let ng = NGain {
-            rg: gain.rg,
-            vg: M3::zeros(),
-            pg: M3::zeros(),
-            r: *r0,
-            cv: tr.h,
-            cp: 0.5 * tr.h * tr.h,
+        if scale != 0.0 {
+            noise.add_rot(&mut self.p, g, r0, cv, cp, scale);
+        }
+        sub_cols(&mut self.j.g, g);
+        self.sub_acc_jac(r0, cv, cp);
+        let gsum = |_: &Self| Blk96 {
+            g: *g,
+            a: rot_cols(r0, cv, cp),
         };
-        let ac = self.walk_pre(tr, walk);
-        self.p = tr.conjugate(&self.p);
-        noise.add_gqg::<false>(&mut self.p, &ng, scale);
-        self.tail(tr, ac, gain, walk);
+        // Rotated: the gyro gain has ψ rows only.
+        let rotated = |_: &Blk96| {
+            let mut rg = [[0.0; 9]; 3];
+            for (o, col) in rg.iter_mut().zip(g) {
+                o[..3].copy_from_slice(&col[..3]);
+            }
+            Blk96 {
+                g: rg,
+                a: rot_cols(r0, cv, cp0),
+            }
+        };
+        self.walk_step(tr, pb, gsum, rotated, walk);
     }
 
-    /// Midpoint interval. With `f_k = e_k − Γ_k−1,1 n_k` (independent of `n_k`),
-    /// `f_k+1 = A f_k + (A Γ_k−1,1 + Γ_k,0) n_k`: sample k is retired here through its merged
-    /// gain, with noise scale `s0` [1/s] (0 when the caller collects the gain instead).
-    /// Returns that merged gain (on the error after this interval).
+    /// Midpoint interval `tr` from `ΔR_k` (`g.r0`) to `r1 = ΔR_k+1` ending at node k+1
+    /// (`g.pb = Φ_k+1⁻¹`). Sample k's gain is now complete (the pending part from interval k−1 plus
+    /// this interval's): it is retired with noise scale `s0` [1/s] (0 when the caller collects
+    /// the gain instead), enters the bias Jacobian (`J' −= G'_k`: every sample sees `−δb`), and
+    /// is returned (gyro columns, `(cv, cp)` of its accelerometer gain `r0·(cv, cp)`). Sample
+    /// k+1 becomes pending.
     #[inline(always)]
+    #[allow(clippy::too_many_arguments, clippy::needless_range_loop)] // parallel arrays
     pub(crate) fn step_mid<N: NoiseQ>(
         &mut self,
         tr: &Transition,
         g: &MidGain,
+        r1: &M3,
         s0: f64,
         noise: &N,
         walk: &BiasWalk,
-    ) -> NGain {
-        let m = &self.mid;
-        let h = tr.h;
-        let ng = NGain {
-            rg: m.rg + g.rg,
-            vg: m.vg - skew_mul(&tr.u1, &m.rg) + g.vg,
-            pg: m.pg + m.vg * h - skew_mul(&tr.u2, &m.rg) + g.pg,
-            r: g.r0,
-            cv: m.cv + g.cv,
-            cp: m.cp + h * m.cv + g.cp,
+    ) -> MidPending {
+        // done = pending + this interval's gain; this interval's gain becomes pending.
+        let mut done = MidPending {
+            g: [[0.0; 9]; 3],
+            cv: self.mid.cv + g.cv,
+            cp: self.mid.cp + g.cp,
         };
-        let gsum = Blk96 {
-            rg: g.rg + g.rg,
-            vg: g.vg + g.vg,
-            pg: g.pg + g.pg,
-            va: g.r0 * g.cv + g.r1 * g.cv,
-            pa: g.r0 * g.cp + g.r1 * g.cp,
+        for c in 0..3 {
+            let r = [g.g[(0, c)], g.g[(1, c)], g.g[(2, c)]];
+            let (v, p) = (cross(&g.x, r), cross(&g.y, r));
+            let col = [r[0], r[1], r[2], v[0], v[1], v[2], p[0], p[1], p[2]];
+            for i in 0..9 {
+                let x = self.mid.g[c][i] + col[i];
+                done.g[c][i] = x;
+                self.j.g[c][i] -= x;
+                self.mid.g[c][i] = col[i];
+            }
+        }
+        (self.mid.cv, self.mid.cp) = (g.cv, g.cp);
+        if s0 != 0.0 {
+            noise.add_rot(&mut self.p, &done.g, &g.r0, done.cv, done.cp, s0);
+        }
+        self.sub_acc_jac(&g.r0, done.cv, done.cp);
+        // The interval's total gain: the gyro columns count twice (one per sample).
+        let gsum = |e: &Self| Blk96 {
+            g: scale_cols(&e.mid.g, 2.0),
+            a: rot_cols(&(g.r0 + r1), g.cv, g.cp),
         };
-        self.mid = NGain {
-            rg: g.rg,
-            vg: g.vg,
-            pg: g.pg,
-            r: g.r1,
-            cv: g.cv,
-            cp: g.cp,
-        };
-        let ac = self.walk_pre(tr, walk);
-        self.p = tr.conjugate(&self.p);
-        noise.add_gqg::<true>(&mut self.p, &ng, s0);
-        self.tail(tr, ac, &gsum, walk);
-        ng
+        self.walk_step(tr, &g.pb, gsum, |x| g.pb.forward().apply(x), walk);
+        done
     }
 
-    /// Midpoint, end of the window: removes and returns the last sample's pending gain.
+    /// Midpoint, end of the window: removes and returns the last sample's pending gain (its
+    /// accelerometer columns are `r·(cv, cp)`), which enters the bias Jacobian.
     #[inline]
-    pub(crate) fn take_mid(&mut self) -> NGain {
-        std::mem::take(&mut self.mid)
+    pub(crate) fn take_mid(&mut self, r: &M3) -> MidPending {
+        let m = std::mem::take(&mut self.mid);
+        sub_cols(&mut self.j.g, &m.g);
+        self.sub_acc_jac(r, m.cv, m.cp);
+        m
     }
 
-    /// Interval with several samples that may be pending (rk4): `P ← A P Aᵀ`, every pending
-    /// gain `G ← A G`, then `G_j += Γ_kj` for the inputs (new samples start at `Γ_kj`).
-    /// Samples no longer used must have been retired ([`ErrorState::take_pending`]) first.
+    /// rk4: the pending gain of sample `id`, which interval gains are added to (a sample
+    /// first used starts at zero). Samples no longer used must have been retired
+    /// ([`ErrorState::take_pending`]) first.
     #[inline(always)]
-    pub(crate) fn step_multi(&mut self, tr: &Transition, inputs: &[Input], walk: &BiasWalk) {
-        let ac = self.walk_pre(tr, walk);
-        self.p = tr.conjugate(&self.p);
-        for slot in self.pend.iter_mut() {
-            if slot.id != NO_ID {
-                slot.g = tr.apply(&slot.g);
-            }
+    pub(crate) fn pending(pend: &mut [Pending; SLOTS], id: usize) -> &mut Blk96 {
+        let slot = &mut pend[id % SLOTS];
+        if slot.id != id {
+            debug_assert_eq!(slot.id, NO_ID, "pending sample not retired");
+            *slot = Pending {
+                id,
+                g: Blk96::default(),
+            };
         }
-        let mut gsum = Blk96::default();
-        for inp in inputs {
-            gsum = gsum.add(&inp.gain);
-            let slot = &mut self.pend[inp.id % SLOTS];
-            if slot.id == inp.id {
-                slot.g = slot.g.add(&inp.gain);
-            } else {
-                debug_assert_eq!(slot.id, NO_ID, "pending sample not retired");
-                *slot = Pending {
-                    id: inp.id,
-                    g: inp.gain,
-                };
-            }
-        }
-        self.tail(tr, ac, &gsum, walk);
+        &mut slot.g
     }
 
-    /// Removes the pending sample of slot `slot` and returns it (its gain is on the current
-    /// error).
+    /// rk4 interval `tr` ending at node k+1 (`pb = Φ_k+1⁻¹`), whose gains were added to the
+    /// pending samples ([`ErrorState::pending`]); `gsum` is their sum (combined level only).
+    #[inline(always)]
+    pub(crate) fn step_multi(
+        &mut self,
+        tr: &Transition,
+        pb: &PullBack,
+        gsum: &Blk96,
+        walk: &BiasWalk,
+    ) {
+        self.walk_step(tr, pb, |_| *gsum, |x| pb.forward().apply(x), walk);
+    }
+
+    /// Removes the pending sample of slot `slot` and returns it; its total gain enters the
+    /// bias Jacobian (`J' −= G'_j`: every sample sees `−δb`).
     #[inline(always)]
     pub(crate) fn take_pending(&mut self, slot: usize) -> Pending {
-        std::mem::replace(
+        let pd = std::mem::replace(
             &mut self.pend[slot],
             Pending {
                 id: NO_ID,
                 g: Blk96::default(),
             },
-        )
+        );
+        sub_cols(&mut self.j.g, &pd.g.g);
+        sub_cols(&mut self.j.a, &pd.g.a);
+        pd
     }
 
-    /// Retires a sample: `P += G Q Gᵀ` with `Q = diag(Σ_g, Σ_a)·s`.
+    /// Retires a sample: `P' += G' Q G'ᵀ` with `Q = diag(Σ_g, Σ_a)·s`.
     #[inline(always)]
     pub(crate) fn add_noise<N: NoiseQ>(&mut self, g: &Blk96, s: f64, noise: &N) {
         noise.add_full(&mut self.p, g, s);
