@@ -168,6 +168,7 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
             "acc_scale": opt3(c.acc_scale), "acc_scale_std": opt3(c.acc_scale_std),
             "gyro_scale": opt3(c.gyro_scale), "gyro_scale_std": opt3(c.gyro_scale_std),
             "model_selection": fits, "reason": c.reason,
+            "bias_reference_time_ns": c.reference_time_ns, "random_walk_marginalised": c.random_walk_marginalised,
             "iterations": Value::Null, "cost": chosen.map(|f| 0.5 * f.chi2),
             "units": {"gyro_bias": "rad/s", "acc_bias": "m/s^2", "scale": "dimensionless (1 = ideal)"},
         });

@@ -125,7 +125,7 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
     );
     let _ = writeln!(
         h,
-        "Δp = [{:.9}, {:.9}, {:.9}] m",
+        "Δp = [{:.9}, {:.9}, {:.9}] m (body frame i, gravity excluded)",
         m.delta_p.x, m.delta_p.y, m.delta_p.z
     );
     let sd: Vec<f64> = (0..9).map(|i| m.cov[(i, i)].sqrt()).collect();
