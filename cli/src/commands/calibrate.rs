@@ -169,7 +169,7 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
             "gyro_scale": opt3(c.gyro_scale), "gyro_scale_std": opt3(c.gyro_scale_std),
             "model_selection": fits, "reason": c.reason,
             "bias_reference_time_ns": c.reference_time_ns, "random_walk_marginalised": c.random_walk_marginalised,
-            "iterations": Value::Null, "cost": chosen.map(|f| 0.5 * f.chi2),
+            "iterations": c.iterations, "cost": chosen.map(|f| 0.5 * f.chi2),
             "units": {"gyro_bias": "rad/s", "acc_bias": "m/s^2", "scale": "dimensionless (1 = ideal)"},
         });
         let human = format!(
