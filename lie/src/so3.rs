@@ -10,7 +10,7 @@
 //! θ = 1 (truncation error below 1e-17 relative) and in closed form above, written so that no
 //! subtraction cancels more than a few bits (above θ = 1, `cos θ ≤ 0.55`, so `1 − cos θ` loses
 //! at most one bit; `θ − sin θ` at most three). The closed forms take one `sin_cos` (our own fdlibm-kernel
-//! version in `trig.rs`, ~3× cheaper than glibc's `sincos`), one `sqrt` and reciprocals formed
+//! version in `trig.rs`: 88 instructions against glibc's 131), one `sqrt` and reciprocals formed
 //! while the `sin_cos` runs. Measured relative errors
 //! against 60-digit mpmath values at 423 angles in [1e-8, π] (`tests/so3.rs`,
 //! `coefficients_within_a_few_eps_on_dense_angles`; ε = 2⁻⁵²): series branches ≤ 0.7 ε; closed

@@ -1,6 +1,6 @@
 //! Private `sin_cos` and first/second-quadrant `atan2` for the closed-form branches of
-//! [`crate::so3`] and [`crate::se3`]: glibc's `sincos` and `atan2` cost ~15–20 ns each on the
-//! portable x86-64 target, several times the rest of a large-angle `Exp` or `Log`.
+//! [`crate::so3`] and [`crate::se3`]: glibc's `sincos` and `atan2` cost ~18–25 ns each on the
+//! portable x86-64 target, more than the rest of a large-angle `Exp` or `Log`.
 //!
 //! - [`sin_cos`]: Cody–Waite reduction by π/2 with fdlibm's three-stage split constant (each
 //!   stage 33 bits of π/2, the later stages taken only when the first one cancels more than 16
