@@ -14,7 +14,7 @@ use crate::noise::{CellRule, white_scale};
 use crate::params::Level;
 use crate::sample::ImuBias;
 use lie::SO3;
-use nalgebra::{Matrix3, SMatrix, Vector3};
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 /// 9×9 covariance of the preintegration error, order [δφ, δv, δp].
 pub type Cov9 = SMatrix<f64, 9, 9>;
@@ -223,6 +223,17 @@ pub struct PreintegratedImu {
 }
 
 impl PreintegratedImu {
+    /// This measurement's deltas minus `reference`'s, in the covariance's tangent order
+    /// [δφ, δv, δp]: `[Log(ΔR_refᵀ ΔR), Δv − Δv_ref [m/s], Δp − Δp_ref [m]]` (right
+    /// perturbation of ΔR, as `cov`). With `reference` the noise-free preintegration of the same
+    /// window, this is the error whose covariance `cov` predicts.
+    pub fn delta_error(&self, reference: &PreintegratedImu) -> SVector<f64, 9> {
+        let r = self.delta_r.minus(&reference.delta_r);
+        let v = self.delta_v - reference.delta_v;
+        let p = self.delta_p - reference.delta_p;
+        SVector::<f64, 9>::from_column_slice(&[r.x, r.y, r.z, v.x, v.y, v.z, p.x, p.y, p.z])
+    }
+
     /// Deltas corrected to first order for a new bias estimate `bias` (Forster eq. 44):
     /// `ΔR·Exp(∂ΔR/∂b_g δb_g)`, `Δv + ∂Δv/∂b_g δb_g + ∂Δv/∂b_a δb_a`, `Δp + …`, with
     /// `δb = bias − bias_hat`. Returns `(ΔR(b), Δv(b) [m/s], Δp(b) [m])`.

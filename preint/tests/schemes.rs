@@ -190,10 +190,7 @@ fn assert_consistent(what: &str, errs: &[DVector<f64>], cov: &DMatrix<f64>) {
 }
 
 fn err9(m: &PreintegratedImu, m0: &PreintegratedImu) -> DVector<f64> {
-    let r = m.delta_r.minus(&m0.delta_r);
-    let v = m.delta_v - m0.delta_v;
-    let p = m.delta_p - m0.delta_p;
-    DVector::from_iterator(9, r.iter().chain(v.iter()).chain(p.iter()).copied())
+    DVector::from_column_slice(m.delta_error(m0).as_slice())
 }
 
 #[test]
@@ -318,4 +315,30 @@ fn window_and_merged_covariances_match_monte_carlo() {
         );
         assert_consistent(&format!("{scheme:?} merged windows"), &em, &cov(&m0));
     }
+}
+
+/// `delta_error` is the right-perturbation chart of the covariance: perturbing a measurement by
+/// ΔR·Exp(δφ), Δv + δv, Δp + δp gives back [δφ, δv, δp], in that order.
+#[test]
+fn delta_error_reads_back_a_known_perturbation() {
+    let scene = Scene::smooth();
+    let m0 = run(
+        &params(Scheme::Midpoint, Level::Deltas),
+        &ImuBias::zero(),
+        &scene.samples(5_000_000, 1_000_000_000),
+    );
+    let (dphi, dv, dp) = (
+        nalgebra::Vector3::new(2e-3, -1e-3, 3e-3),
+        nalgebra::Vector3::new(0.1, 0.2, -0.3),
+        nalgebra::Vector3::new(-0.05, 0.04, 0.01),
+    );
+    let mut m = m0.clone();
+    m.delta_r = m0.delta_r.compose(&SO3::exp(&dphi));
+    m.delta_v += dv;
+    m.delta_p += dp;
+    let e = m.delta_error(&m0);
+    for (k, want) in dphi.iter().chain(dv.iter()).chain(dp.iter()).enumerate() {
+        assert!((e[k] - want).abs() < 1e-14, "entry {k}: {} vs {want}", e[k]);
+    }
+    assert_eq!(m0.delta_error(&m0), nalgebra::SVector::<f64, 9>::zeros());
 }

@@ -68,17 +68,6 @@ fn run(params: &PreintParams, samples: &[ImuSample]) -> PreintegratedImu {
     pi.finish().unwrap()
 }
 
-fn err9(m: &PreintegratedImu, m0: &PreintegratedImu) -> SVector<f64, 9> {
-    let mut e = SVector::<f64, 9>::zeros();
-    e.fixed_rows_mut::<3>(0)
-        .copy_from(&m.delta_r.minus(&m0.delta_r));
-    e.fixed_rows_mut::<3>(3)
-        .copy_from(&(m.delta_v - m0.delta_v));
-    e.fixed_rows_mut::<3>(6)
-        .copy_from(&(m.delta_p - m0.delta_p));
-    e
-}
-
 fn nees<const N: usize>(e: &SVector<f64, N>, cov: &SMatrix<f64, N, N>) -> f64 {
     e.dot(
         &cov.cholesky()
@@ -129,7 +118,7 @@ fn mean_nees_is_chi2_consistent() {
                     })
                     .collect();
                 let m = run(&p9, &noisy);
-                let e = err9(&m, &m0);
+                let e = m.delta_error(&m0);
                 ephi.push(e.fixed_rows::<3>(0).norm());
                 n9.push(nees(&e, &m.cov));
                 // White noise plus bias random walk.
@@ -153,7 +142,7 @@ fn mean_nees_is_chi2_consistent() {
                     .collect();
                 let m = run(&p15, &noisy);
                 let mut e15 = SVector::<f64, 15>::zeros();
-                e15.fixed_rows_mut::<9>(0).copy_from(&err9(&m, &m0_15));
+                e15.fixed_rows_mut::<9>(0).copy_from(&m.delta_error(&m0_15));
                 e15.fixed_rows_mut::<3>(9).copy_from(&bg);
                 e15.fixed_rows_mut::<3>(12).copy_from(&ba);
                 n15.push(nees(&e15, &m.cov15));

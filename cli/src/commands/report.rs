@@ -41,13 +41,7 @@ pub fn mean_nees(scene: &str, scheme: Scheme, runs: u64) -> Result<f64, CliError
     for seed in 0..runs {
         let noisy = sim::simulate(sc.as_ref(), 200.0, 3.0, &cfg, 1000 + seed).map_err(fail)?;
         let m = preintegrate(&params, &ImuBias::zero(), &noisy.samples, t_i, t_j).map_err(fail)?;
-        let mut e = nalgebra::SVector::<f64, 9>::zeros();
-        e.fixed_rows_mut::<3>(0)
-            .copy_from(&m.delta_r.minus(&m0.delta_r));
-        e.fixed_rows_mut::<3>(3)
-            .copy_from(&(m.delta_v - m0.delta_v));
-        e.fixed_rows_mut::<3>(6)
-            .copy_from(&(m.delta_p - m0.delta_p));
+        let e = m.delta_error(&m0);
         let chol = m
             .cov
             .cholesky()
