@@ -188,6 +188,22 @@ impl Core {
         true
     }
 
+    /// Edge sample `ext`: its gain is stored for an exact merge, or, if the store is full,
+    /// its white noise is added to the covariance now (as for an interior sample).
+    fn capture_or_add<N: NoiseQ>(
+        &mut self,
+        cfg: &Cfg,
+        noise: &N,
+        ext: usize,
+        g: &Blk96,
+        (left, right): (f64, f64),
+    ) {
+        if !self.capture(ext, g, left, right) {
+            let s = white_scale(cfg.rule.cell_s(left, right));
+            self.e.add_noise(g, s, noise);
+        }
+    }
+
     /// rk4: retires the pending samples with extended index below `below`.
     #[inline(always)]
     fn retire_below<N: NoiseQ>(&mut self, cfg: &Cfg, noise: &N, below: usize, fin: bool) {
@@ -243,10 +259,7 @@ impl Core {
                     g: g.g,
                     a: rot_cols(&g.r0, g.cv, g.cp),
                 };
-                if !self.capture(k + cb, &blk, left, right) {
-                    let s = white_scale(cfg.rule.cell_s(left, right));
-                    self.e.add_noise(&blk, s, noise);
-                }
+                self.capture_or_add(cfg, noise, k + cb, &blk, (left, right));
             }
             self.int_cov(cfg, tr.h);
         }
@@ -280,10 +293,7 @@ impl Core {
                     g: done.g,
                     a: rot_cols(&g.r0, done.cv, done.cp),
                 };
-                if !self.capture(k + cb, &blk, left, right) {
-                    let s = white_scale(cfg.rule.cell_s(left, right));
-                    self.e.add_noise(&blk, s, noise);
-                }
+                self.capture_or_add(cfg, noise, k + cb, &blk, (left, right));
             }
             self.int_cov(cfg, tr.h);
         }
@@ -372,11 +382,8 @@ impl Core {
                         g: m.g,
                         a: rot_cols(&r, m.cv, m.cp),
                     };
-                    let (left, right) = self.intervals(n - 1, n);
-                    if !self.capture(cb + n - 1, &g, left, right) {
-                        let s = white_scale(cfg.rule.cell_s(left, right));
-                        self.e.add_noise(&g, s, noise);
-                    }
+                    let lr = self.intervals(n - 1, n);
+                    self.capture_or_add(cfg, noise, cb + n - 1, &g, lr);
                 }
                 Scheme::Rk4 => self.retire_below(cfg, noise, usize::MAX, true),
             }
