@@ -145,6 +145,20 @@ fn simulate_then_integrate_allan_and_advise() {
         "2000000000",
     ]);
     assert!((i["delta_t"].as_f64().unwrap() - 1.0).abs() < 1e-15);
+    // The output names the noise it used, and the rotation variance is the discrete sum: at
+    // rest ΔR ≈ I; the midpoint rule gives each interior sample the gain h (h/2 in each of its
+    // two intervals) and the two end samples h/2, each sample's variance is σ_g²/h, so
+    // var φ = σ_g²·(Δt − h/2) with h = 0.01 s (Euler would give σ_g²·Δt).
+    assert!(i["noise"]["source"].as_str().unwrap().ends_with("imu.yaml"));
+    let sg = i["noise"]["gyroscope_noise_density"].as_f64().unwrap();
+    assert_eq!(sg, 1.6968e-4);
+    for k in 0..3 {
+        let var = i["covariance"][k][k].as_f64().unwrap();
+        assert!(
+            (var / (sg * sg * 0.995) - 1.0).abs() < 1e-4,
+            "var φ_{k} = {var}"
+        );
+    }
     // Allan recovers the simulated EuRoC densities (white noise) within 10 %.
     let a = json(&[
         "allan",

@@ -58,6 +58,10 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
             "--gravity must be a non-negative number, got {gravity}"
         )));
     }
+    let noise_source = match noise {
+        Some(p) => p.display().to_string(),
+        None => "EuRoC / ADIS16448 defaults (no --noise)".to_string(),
+    };
     let noise = noise_or_default(noise.as_ref())?;
     let samples = read_euroc_imu(imu)?;
     if !no_unit_check {
@@ -93,6 +97,14 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         "covariance15": rows(&m.cov15),
         "bias_hat": {"gyro": list(&bias.gyro), "acc": list(&bias.acc)},
         "gravity": list(&m.gravity),
+        "noise": {
+            "source": noise_source,
+            "gyroscope_noise_density": noise.gyro_noise_density,
+            "gyroscope_random_walk": noise.gyro_random_walk,
+            "accelerometer_noise_density": noise.acc_noise_density,
+            "accelerometer_random_walk": noise.acc_random_walk,
+            "units": "continuous-time densities: rad/s/sqrt(Hz), rad/s^2/sqrt(Hz), m/s^2/sqrt(Hz), m/s^3/sqrt(Hz)",
+        },
         "units": {"delta_t": "s", "delta_v": "m/s (body frame i)", "delta_p": "m (body frame i)",
                   "covariance": "rad^2, (m/s)^2, m^2 blocks", "jacobians": "d(delta)/d(bias), bias order [b_g, b_a]"},
         "jacobians": {
@@ -129,6 +141,14 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         m.delta_p.x, m.delta_p.y, m.delta_p.z
     );
     let sd: Vec<f64> = (0..9).map(|i| m.cov[(i, i)].sqrt()).collect();
+    let _ = writeln!(
+        h,
+        "noise: {noise_source}: σ_g = {:.4e} rad/s/√Hz, σ_a = {:.4e} m/s²/√Hz, σ_bg = {:.4e} rad/s²/√Hz, σ_ba = {:.4e} m/s³/√Hz",
+        noise.gyro_noise_density,
+        noise.acc_noise_density,
+        noise.gyro_random_walk,
+        noise.acc_random_walk
+    );
     let _ = writeln!(
         h,
         "1σ (noise): φ [{:.3e} {:.3e} {:.3e}] rad, v [{:.3e} {:.3e} {:.3e}] m/s, p [{:.3e} {:.3e} {:.3e}] m",
