@@ -139,7 +139,7 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
     let half = 3.0 * (18.0f64 / runs as f64).sqrt();
     page.p(&format!("{runs} noise realisations per row (EuRoC densities, 200 Hz, 1 s window); mean of eᵀΣ⁻¹e with \
         e = [Log(ΔR₀ᵀΔR), Δv − Δv₀, Δp − Δp₀] against the noise-free run. A consistent 9×9 covariance gives 9; \
-        with {runs} runs the 3σ band is [{:.2}, {:.2}]. (The test suite runs 1000 per row.)", 9.0 - half, 9.0 + half));
+        with {runs} runs the 3σ band is [{:.2}, {:.2}]. (The test suite, `cargo test -p evidence --test nees`, runs 2 000 per row; `PREINT_FULL=1` runs 20 000.)", 9.0 - half, 9.0 + half));
     page.table(&["scene", "scheme", "mean NEES"], &nees_rows);
     summary.insert("nees".into(), serde_json::Value::Object(nees_json));
 
