@@ -344,22 +344,23 @@ impl Core {
     fn advance<N: NoiseQ, const LIN: bool>(&mut self, cfg: &Cfg, noise: &N, fin: bool) {
         let n = self.n;
         let cb = self.cb;
-        loop {
+        // Intervals `done..end` are ready: with `fin` all `n − 1`; streaming, those whose
+        // samples have all arrived (one sample beyond the interval for Euler and midpoint, the
+        // cubic stencil `max(k + cb, 1) + 3 ≤ cb + n` for rk4).
+        let end = if fin {
+            n.saturating_sub(1)
+        } else {
+            match cfg.scheme {
+                Scheme::Euler | Scheme::Midpoint => n.saturating_sub(2),
+                Scheme::Rk4 if cb == 0 && n < 4 => 0,
+                Scheme::Rk4 => n.saturating_sub(2),
+            }
+        };
+        // In streaming mode `n` is a lower bound of the window size that is large enough for
+        // every cell and stencil used here; with `fin` it is exact.
+        let total = if fin { n } else { usize::MAX };
+        while self.done < end {
             let k = self.done;
-            if k + 1 >= n {
-                break;
-            }
-            let ready = fin
-                || match cfg.scheme {
-                    Scheme::Euler | Scheme::Midpoint => k + 2 < n,
-                    Scheme::Rk4 => (k + cb).max(1) + 3 <= cb + n,
-                };
-            if !ready {
-                break;
-            }
-            // In streaming mode `n` is a lower bound of the window size that is large enough
-            // for every cell and stencil used here; with `fin` it is exact.
-            let total = if fin { n } else { usize::MAX };
             match cfg.scheme {
                 Scheme::Euler => self.euler_interval::<N, LIN>(cfg, noise, k, total, fin),
                 Scheme::Midpoint => self.midpoint_interval::<N, LIN>(cfg, noise, k, fin),
