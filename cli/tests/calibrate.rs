@@ -203,4 +203,17 @@ fn calibrate_bad_input_is_a_usage_error() {
         !o.status.success() && err.contains("few.csv") && err.contains("fewer than three poses"),
         "{err}"
     );
+    // A solver error names the IMU file it came from.
+    let short = d.join("two.csv");
+    std::fs::write(
+        &short,
+        "#timestamp [ns],wx,wy,wz,ax,ay,az\n1000,0,0,0,0,0,9.81\n5001000,0,0,0,0,0,9.81\n",
+    )
+    .unwrap();
+    let o = run(&["calibrate", "--imu", short.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.code() == Some(2) && err.contains("two.csv: too few samples"),
+        "{err}"
+    );
 }

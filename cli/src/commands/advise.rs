@@ -88,9 +88,12 @@ pub fn evaluate(
     let margin = 64 * (span / (n as i64 - 1).max(1));
     let usable = span - w_ns - 2 * margin;
     if usable < 0 {
-        return Err(CliError::Usage(
-            "recording too short for this window".into(),
-        ));
+        return Err(CliError::Usage(format!(
+            "recording of {:.3} s ({n} samples) too short for a {window_s} s window: advise needs \
+             the window plus 64 samples on each side ({:.3} s in all); give a shorter --window",
+            span as f64 * 1e-9,
+            (w_ns + 2 * margin) as f64 * 1e-9
+        )));
     }
     let nw = (usable / w_ns + 1).clamp(1, 24);
     let starts: Vec<i64> = (0..nw)

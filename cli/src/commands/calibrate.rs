@@ -22,8 +22,9 @@ use solver::bias::{
     calibrate_known_poses, calibrate_multi_pose, calibrate_static, detect_still_intervals,
 };
 
-fn fail(e: impl std::fmt::Display) -> CliError {
-    CliError::Failed(e.to_string())
+/// A solver error, prefixed with the IMU file it came from.
+fn fail_in(imu: &std::path::Path) -> impl Fn(solver::bias::BiasError) -> CliError + '_ {
+    move |e| CliError::Failed(format!("{}: {e}", imu.display()))
 }
 
 fn opt3(v: Option<Vector3<f64>>) -> Value {
@@ -60,6 +61,7 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
     else {
         unreachable!()
     };
+    let fail = fail_in(imu);
     for (name, v) in [
         ("--pose-rot-std", pose_rot_std),
         ("--pose-pos-std", pose_pos_std),
@@ -117,7 +119,7 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
             pose_pos_std: *pose_pos_std,
             ..KnownPoseOptions::new(params)
         };
-        let c = calibrate_known_poses(&samples, &kp, &opts).map_err(fail)?;
+        let c = calibrate_known_poses(&samples, &kp, &opts).map_err(&fail)?;
         let json = json!({
             "model": "known-poses", "poses": kp.len(),
             "gyro_bias": list(&c.bias.gyro), "gyro_bias_std": list(&c.gyro_bias_std),
@@ -151,13 +153,13 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
     }
 
     let still =
-        detect_still_intervals(&samples, &StillOptions::from_noise(&noise, rate)).map_err(fail)?;
+        detect_still_intervals(&samples, &StillOptions::from_noise(&noise, rate)).map_err(&fail)?;
     if distinct_attitudes(&samples, &still) >= 3 {
         let opts = MultiPoseOptions {
             gravity: g,
             ..Default::default()
         };
-        let c = calibrate_multi_pose(&samples, &noise, &opts).map_err(fail)?;
+        let c = calibrate_multi_pose(&samples, &noise, &opts).map_err(&fail)?;
         let fits: Vec<Value> = c.fits.iter().map(|f| json!({"model": format!("{:?}", f.model), "chi2": f.chi2,
             "params": f.params, "bic": f.bic, "identifiable": f.identifiable, "converged": f.converged})).collect();
         let chosen = c.fits.iter().find(|f| f.model == c.model);
@@ -201,7 +203,7 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
             ..Default::default()
         },
     )
-    .map_err(fail)?;
+    .map_err(&fail)?;
     let json = json!({
         "model": "static-single-attitude",
         "gyro_bias": list(&c.gyro_bias), "gyro_bias_std": list(&c.gyro_bias_std),
