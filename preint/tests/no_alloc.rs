@@ -54,6 +54,15 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static A: Counting = Counting;
 
+/// Runs `f` with the counter on; returns its result and the allocations it made.
+fn counted<R>(f: impl FnOnce() -> R) -> (R, usize) {
+    ALLOCS.store(0);
+    ON.with(|c| c.set(true));
+    let r = f();
+    ON.with(|c| c.set(false));
+    (r, ALLOCS.load())
+}
+
 fn sample(k: i64) -> ImuSample {
     let t = k as f64 * 5e-3;
     ImuSample::new(
@@ -76,23 +85,22 @@ fn integrate_does_not_allocate() {
                 prm.keep_samples = keep;
                 let mut pi =
                     Preintegrator::with_capacity(prm, ImuBias::zero(), n as usize).unwrap();
-                ALLOCS.store(0);
-                ON.with(|c| c.set(true));
-                for s in &samples {
-                    pi.integrate(s).unwrap();
-                }
-                ON.with(|c| c.set(false));
-                let count = ALLOCS.load();
+                let ((), count) = counted(|| {
+                    for s in &samples {
+                        pi.integrate(s).unwrap();
+                    }
+                });
                 assert_eq!(
                     count, 0,
                     "{scheme:?} {level:?} keep={keep}: {count} allocations"
                 );
                 // The counter works: finish() allocates nothing either, a Vec does.
-                ON.with(|c| c.set(true));
-                let m = pi.finish().unwrap();
-                let v: Vec<u8> = Vec::with_capacity(std::hint::black_box(8));
-                ON.with(|c| c.set(false));
-                assert_eq!(ALLOCS.load(), 1);
+                let ((m, v), count) = counted(|| {
+                    let m = pi.finish().unwrap();
+                    let v: Vec<u8> = Vec::with_capacity(std::hint::black_box(8));
+                    (m, v)
+                });
+                assert_eq!(count, 1);
                 drop(v);
                 assert!(m.delta_v.norm().is_finite());
             }
@@ -111,13 +119,11 @@ fn new_allocates_only_for_stored_samples_and_only_amortised() {
                 .with_level(Level::Combined);
             prm.keep_samples = keep;
             let mut pi = Preintegrator::new(prm, ImuBias::zero()).unwrap();
-            ALLOCS.store(0);
-            ON.with(|c| c.set(true));
-            for s in &samples {
-                pi.integrate(s).unwrap();
-            }
-            ON.with(|c| c.set(false));
-            let count = ALLOCS.load();
+            let ((), count) = counted(|| {
+                for s in &samples {
+                    pi.integrate(s).unwrap();
+                }
+            });
             eprintln!("{scheme:?} new, keep_samples={keep}: {count} allocations for {n} samples");
             if keep {
                 let bound = (n as f64).log2().ceil() as usize + 1;
