@@ -147,7 +147,7 @@ fn exp_coeffs_large(theta2: f64) -> (f64, f64) {
         // (one call of `trig::sin_cos`) instead of sin θ and sin(θ/2).
         // Divisions, not multiplications by reciprocals formed while sin_cos runs: the extra
         // rounding of a reciprocal raised Exp's orthonormality error (2·10⁶ random φ: 174
-        // instead of 51 above 1e-15).
+        // instead of 56 above 1e-15).
         let theta = trig::sqrt(theta2);
         let (s, c) = trig::sin_cos(theta);
         (s / theta, (1.0 - c) / theta2)

@@ -8,34 +8,13 @@
 //! Throughput is reported per sample (elements/s ⇒ ns/sample = 1e9 / rate).
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use nalgebra::Vector3;
-use preint::{ImuBias, ImuNoise, ImuSample, Level, PreintParams, Preintegrator, Scheme};
+use preint::sample::synthetic_stream;
+use preint::{ImuBias, ImuNoise, Level, PreintParams, Preintegrator, Scheme};
 use std::hint::black_box;
-
-fn stream(n: usize) -> Vec<ImuSample> {
-    (0..n)
-        .map(|k| {
-            let t = k as f64 * 5e-3;
-            ImuSample::new(
-                k as i64 * 5_000_000,
-                Vector3::new(
-                    0.3 * (1.1 * t).sin(),
-                    0.2 * (0.7 * t).cos(),
-                    0.5 * (0.3 * t).sin() + 0.1,
-                ),
-                Vector3::new(
-                    0.5 * (0.9 * t).sin(),
-                    0.3 * (1.3 * t).cos(),
-                    9.81 + 0.2 * (0.5 * t).sin(),
-                ),
-            )
-        })
-        .collect()
-}
 
 fn bench(c: &mut Criterion) {
     let n = 100_000;
-    let s = stream(n);
+    let s = synthetic_stream(n);
     let mut g = c.benchmark_group("preint");
     g.throughput(Throughput::Elements(n as u64));
     g.sample_size(10);

@@ -3,39 +3,17 @@
 //! Method: a synthetic smooth stream of N samples at 200 Hz (sinusoidal rates and specific
 //! force), integrated once per scheme and level with `Preintegrator::integrate_slice`
 //! (`keep_samples` off, so nothing is stored); the median of 11 runs is reported as ns/sample
-//! (criterion reports a mean over its samples; on a quiet machine the two agree within a few %).
+//! (criterion reports a mean over its samples; the README compares the two).
 //! The criterion benchmark `cargo bench -p preint` measures the same loop.
 
 use super::{CliError, Output};
 use crate::Command;
 use crate::commands::integrate::scheme_name;
-use nalgebra::Vector3;
+pub use preint::sample::synthetic_stream;
 use preint::{ImuBias, ImuNoise, ImuSample, Level, PreintParams, Preintegrator, Scheme};
 use serde_json::json;
 use std::fmt::Write as _;
 use std::time::Instant;
-
-/// A smooth synthetic stream: `n` samples at 200 Hz.
-pub fn synthetic_stream(n: usize) -> Vec<ImuSample> {
-    (0..n)
-        .map(|k| {
-            let t = k as f64 * 0.005;
-            ImuSample::new(
-                k as i64 * 5_000_000,
-                Vector3::new(
-                    0.3 * (1.1 * t).sin(),
-                    0.2 * (0.7 * t).cos(),
-                    0.5 * (0.3 * t).sin() + 0.1,
-                ),
-                Vector3::new(
-                    0.5 * (0.9 * t).sin(),
-                    0.3 * (1.3 * t).cos(),
-                    9.81 + 0.2 * (0.5 * t).sin(),
-                ),
-            )
-        })
-        .collect()
-}
 
 /// Median over `runs` of the ns/sample of one scheme and level over `samples`.
 pub fn ns_per_sample(
