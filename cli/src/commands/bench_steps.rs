@@ -7,7 +7,7 @@
 //! × rate = ns per second of IMU data.
 
 use super::integrate::scheme_name;
-use super::speed::{ns_per_sample, synthetic_stream};
+use super::speed::{best_ns_per_sample, synthetic_stream};
 use super::{CliError, Output};
 use crate::Command;
 use crate::charts::{Chart, Series, draw, pareto_front};
@@ -60,14 +60,10 @@ pub fn measure(scene_name: &str, rates: &[f64], window_s: f64) -> Result<Vec<Row
     let t_i: i64 = 1_000_000_000;
     let t_j = t_i + (window_s * 1e9).round() as i64;
     let (r_true, v_true, p_true) = sim::exact_deltas(scene.as_ref(), t_i, t_j, g);
-    let bench = synthetic_stream(50_000);
-    let mut cost = std::collections::HashMap::new();
-    for s in [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4] {
-        cost.insert(
-            scheme_name(s),
-            ns_per_sample(s, Level::Covariance, &bench, 3)?,
-        );
-    }
+    let schemes = [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4];
+    let ns = best_ns_per_sample(&schemes, Level::Covariance, &synthetic_stream(50_000), 3)?;
+    let cost: std::collections::HashMap<_, _> =
+        schemes.iter().map(|&s| scheme_name(s)).zip(ns).collect();
     let mut rows = Vec::new();
     for &rate in rates {
         let step = (1e9 / rate).round() as i64;
