@@ -6,18 +6,25 @@
 //! - Right Jacobian `Jr(φ)`: `Exp(φ + δ) ≈ Exp(φ)·Exp(Jr(φ) δ)` (Solà eq. 143);
 //!   left Jacobian `Jl(φ) = Jr(−φ) = Jr(φ)ᵀ`: `Exp(φ + δ) ≈ Exp(Jl(φ) δ)·Exp(φ)` (eq. 145).
 //!
-//! Numerics: every trigonometric coefficient is evaluated as a Taylor polynomial in θ² below
-//! θ = 1 (truncation error below 1e-17 relative) and in closed form above, written so that no
-//! subtraction cancels more than a few bits (above θ = 1, `cos θ ≤ 0.55`, so `1 − cos θ` loses
-//! at most one bit; `θ − sin θ` at most three). The closed forms take one `sin_cos` (our own fdlibm-kernel
-//! version in `trig.rs`: ~90 instructions against glibc's 131), one `sqrt` and no more divisions
-//! than coefficients. Measured relative errors
-//! against 60-digit mpmath values at 423 angles in [1e-8, π] (`tests/so3.rs`,
-//! `coefficients_within_a_few_eps_on_dense_angles`; ε = 2⁻⁵²): series branches ≤ 0.7 ε; closed
-//! forms `sin θ/θ` ≤ 0.8 ε, `(1 − cos θ)/θ²` ≤ 1.1 ε, `(θ − sin θ)/θ³` ≤ 1.8 ε; `D` ≤ 9.2 ε
-//! (closed form from θ = ½). `Log` goes through
-//! Shepperd's quaternion extraction and `atan2`, so it is exact near θ = 0 and at θ = π, where a
-//! formula that divides by `sin θ` fails.
+//! Numerics. `a = sin θ/θ`, `b = (1 − cos θ)/θ²` and `c = (θ − sin θ)/θ³` are even in θ, so
+//! they are computed from θ² = φᵀφ without a square root, on three branches:
+//! - θ < 0.1 (every per-sample IMU angle): five-term Taylor series in θ² (truncation < 3e-18).
+//! - 0.1 ≤ θ ≤ π: degree-9 polynomials in θ² (Chebyshev interpolants, `lie/tools/fit_poly.py`),
+//!   with the zero of `a` at θ = π factored out, `a = (π² − θ²)·qa(θ²)`, so that `a` keeps its
+//!   relative precision up to π. No sqrt, no `sin_cos`, no division: 1.9-rad Exp went from
+//!   ~30 ns (sqrt → sin_cos → division) to ~12 ns.
+//! - θ > π: closed form with one `sqrt` and one `sin_cos` (our own fdlibm-kernel version in
+//!   `trig.rs`); there `cos θ < 0`, so `1 − cos θ` and `θ − sin θ` do not cancel.
+//!
+//! Measured relative errors against 60-digit mpmath values at √(exact f64 θ²) for 473 angles in
+//! [1e-8, 5.5] (`tests/so3.rs`, `coefficients_within_a_few_eps_on_dense_angles`; ε = 2⁻⁵²):
+//! series ≤ 0.7 ε; polynomials a ≤ 1.8 ε, b ≤ 1.2 ε, c ≤ 0.9 ε (20 000 points in
+//! `fit_poly.py`); closed form ≤ 1.6 ε. `D` (the coefficient of Jr⁻¹) keeps its Bernoulli
+//! series below θ = ½ and its closed form above (≤ 9.2 ε). Above π, `a` computed from θ² is
+//! only as precise as θ = √θ²: its relative error grows as |θ cot θ − 1|·ε/2 near 2π (and
+//! within ~1e-5 rad above π); `a·θ = sin θ` stays within a few ε absolute.
+//! `Log` goes through Shepperd's quaternion extraction and `atan2`, so it is exact near θ = 0
+//! and at θ = π, where a formula that divides by `sin θ` fails.
 
 use crate::trig;
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
@@ -39,9 +46,6 @@ pub fn vee(m: &Matrix3<f64>) -> Vector3<f64> {
     )
 }
 
-/// Below this angle (rad) the coefficients use Taylor polynomials in θ².
-const SERIES_BELOW: f64 = 1.0;
-
 /// Horner evaluation of Σ c_k x^k. Plain multiply-add, not `f64::mul_add`: on the portable
 /// x86-64 target (no FMA) `mul_add` is a call into libm's software `fma`.
 /// Starts from the last coefficient: the compiler cannot drop a leading `0·x + c` (it is not
@@ -56,42 +60,24 @@ pub(crate) fn horner(x: f64, c: &[f64]) -> f64 {
     acc
 }
 
-// Taylor coefficients in θ² (nine terms; for θ < 1 the first omitted term is < 1e-17 relative).
+// Taylor coefficients in θ², for θ < 0.1 (the first omitted term, θ¹⁰/11!, is < 3e-18 relative).
 // A = sin θ/θ = Σ (−1)^k θ^{2k}/(2k+1)!
-const A_SERIES: [f64; 9] = [
-    1.0,
-    -1.0 / 6.0,
-    1.0 / 120.0,
-    -1.0 / 5040.0,
-    1.0 / 362880.0,
-    -1.0 / 39916800.0,
-    1.0 / 6227020800.0,
-    -1.0 / 1307674368000.0,
-    1.0 / 355687428096000.0,
-];
+const A_SERIES: [f64; 5] = [1.0, -1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362880.0];
 // B = (1 − cos θ)/θ² = Σ (−1)^k θ^{2k}/(2k+2)!
-const B_SERIES: [f64; 9] = [
+const B_SERIES: [f64; 5] = [
     1.0 / 2.0,
     -1.0 / 24.0,
     1.0 / 720.0,
     -1.0 / 40320.0,
     1.0 / 3628800.0,
-    -1.0 / 479001600.0,
-    1.0 / 87178291200.0,
-    -1.0 / 20922789888000.0,
-    1.0 / 6402373705728000.0,
 ];
 // C = (θ − sin θ)/θ³ = Σ (−1)^k θ^{2k}/(2k+3)!
-const C_SERIES: [f64; 9] = [
+const C_SERIES: [f64; 5] = [
     1.0 / 6.0,
     -1.0 / 120.0,
     1.0 / 5040.0,
     -1.0 / 362880.0,
     1.0 / 39916800.0,
-    -1.0 / 6227020800.0,
-    1.0 / 1307674368000.0,
-    -1.0 / 355687428096000.0,
-    1.0 / 121645100408832000.0,
 ];
 // D = 1/θ² − (1 + cos θ)/(2 θ sin θ) = (1 − (θ/2) cot(θ/2))/θ², from x cot x = Σ (−1)^k B_2k (2x)^{2k}/(2k)!
 // (Bernoulli numbers): D = 1/12 + θ²/720 + θ⁴/30240 + θ⁶/1209600 + θ⁸/47900160 + …
@@ -106,6 +92,117 @@ const D_SERIES: [f64; 9] = [
     3617.0 / 10670622842880000.0,
     43867.0 / 5109094217170944000.0,
 ];
+
+// Polynomials in x = θ² − POLY_MID for 0.1 ≤ θ ≤ π (θ² from 0.01 to fl(π²)), printed by
+// `lie/tools/fit_poly.py`: degree-9 Chebyshev interpolants of b(θ²), c(θ²) and
+// qa = a/(π² − θ²) (the zero of a = sin θ/θ at π factored out, so that a keeps its relative
+// precision up to π). No sqrt, sin_cos or division: the coefficients are even functions of θ.
+const PI2_HI: f64 = 9.869604401089358;
+const PI2_LO: f64 = 6.265295508739711e-16;
+const POLY_MID: f64 = 4.939802200544679;
+// max relative error (f64, evaluated as `poly` does, 20 000 points): 1.77 eps
+const QA_POLY: [f64; 10] = [
+    0.07255861482888722,
+    -0.005080515305618535,
+    0.00013938014007554343,
+    -2.093986086069455e-06,
+    2.001125994500491e-08,
+    -1.327903457655872e-10,
+    6.485727767456568e-13,
+    -2.4311397689370836e-15,
+    7.220343740581226e-18,
+    -1.74040675166308e-20,
+];
+// max relative error (f64, evaluated as `poly` does, 20 000 points): 1.20 eps
+const B_POLY: [f64; 10] = [
+    0.325234627025735,
+    -0.02963374069585886,
+    0.001059273811545564,
+    -1.9839223600678132e-05,
+    2.280129636119179e-07,
+    -1.7711639676555208e-09,
+    9.9207323606325e-12,
+    -4.197082468679499e-14,
+    1.3891290049771992e-16,
+    -3.6927146049886227e-19,
+];
+// max relative error (f64, evaluated as `poly` does, 20 000 points): 0.84 eps
+const C_POLY: [f64; 10] = [
+    0.1300255263008822,
+    -0.006563213388358138,
+    0.00016105534780223158,
+    -2.2981224856374353e-06,
+    2.135406276949112e-08,
+    -1.3931178978058103e-10,
+    6.729233137764263e-13,
+    -2.5032376492055595e-15,
+    7.393823231039694e-18,
+    -1.7749876727227043e-20,
+];
+
+/// Two tables interleaved, `[[p_k, q_k]]`, for [`horner2`].
+const fn zip(p: &[f64; 10], q: &[f64; 10]) -> [[f64; 2]; 10] {
+    let mut out = [[0.0; 2]; 10];
+    let mut k = 0;
+    while k < 10 {
+        out[k] = [p[k], q[k]];
+        k += 1;
+    }
+    out
+}
+/// `(qa, b)`, Exp's pair.
+const QA_B_POLY: [[f64; 2]; 10] = zip(&QA_POLY, &B_POLY);
+/// `(b, c)`, the Jacobians' pair.
+const B_C_POLY: [[f64; 2]; 10] = zip(&B_POLY, &C_POLY);
+
+/// Two degree-9 polynomials at the same `x`: the tail `c₂ + c₃x + … + c₉x⁷` by Estrin's scheme
+/// (three levels of independent multiply-adds), then two Horner steps for `c₁` and `c₀`, which
+/// carry the rounding that matters (the printed errors of `fit_poly.py` are those of full
+/// Horner) on a dependency chain of 5 multiply-adds instead of 9. Both polynomials share one
+/// SSE2 register on x86-64 (`mulpd`/`addpd`), and each lane is rounded exactly as the scalar
+/// fallback rounds it.
+#[inline(always)]
+fn poly2(x: f64, c: &[[f64; 2]; 10]) -> [f64; 2] {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_add_pd, _mm_loadu_pd, _mm_mul_pd, _mm_set1_pd, _mm_storeu_pd};
+        // SAFETY: SSE2 is part of the x86-64 baseline; every load and the store touch the two
+        // f64 of a `[f64; 2]`.
+        unsafe {
+            let k = |i: usize| _mm_loadu_pd(c[i].as_ptr());
+            let madd = |a, b, x| _mm_add_pd(_mm_mul_pd(b, x), a);
+            let x1 = _mm_set1_pd(x);
+            let x2 = _mm_mul_pd(x1, x1);
+            let x4 = _mm_mul_pd(x2, x2);
+            let (p0, p1) = (madd(k(2), k(3), x1), madd(k(4), k(5), x1));
+            let (p2, p3) = (madd(k(6), k(7), x1), madd(k(8), k(9), x1));
+            let tail = madd(madd(p0, p1, x2), madd(p2, p3, x2), x4);
+            let acc = madd(k(0), madd(k(1), tail, x1), x1);
+            let mut out = [0.0; 2];
+            _mm_storeu_pd(out.as_mut_ptr(), acc);
+            out
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let lane = |j: usize| poly(x, &std::array::from_fn(|i| c[i][j]));
+        [lane(0), lane(1)]
+    }
+}
+
+/// One polynomial by the scheme of [`poly2`].
+#[inline(always)]
+fn poly(x: f64, c: &[f64; 10]) -> f64 {
+    let (x2, p) = (x * x, |i: usize| c[i] + c[i + 1] * x);
+    let tail = (p(2) + p(4) * x2) + (p(6) + p(8) * x2) * (x2 * x2);
+    (tail * x + c[1]) * x + c[0]
+}
+
+/// `a = sin θ/θ` on the polynomial branch from `qa(θ²)`: `(π² − θ²)·qa` with π² in two parts.
+#[inline(always)]
+fn a_from_qa(theta2: f64, qa: f64) -> f64 {
+    ((PI2_HI - theta2) + PI2_LO) * qa
+}
 
 /// The scalar coefficients of Rodrigues' formula and of the SO(3) Jacobians at angle θ:
 /// `a = sin θ/θ`, `b = (1 − cos θ)/θ²`, `c = (θ − sin θ)/θ³`.
@@ -126,57 +223,47 @@ const SHORT_SERIES_BELOW: f64 = 0.1;
 /// `(sin θ/θ, (1 − cos θ)/θ²)` at θ² [rad²]: the two coefficients Exp needs.
 #[inline]
 pub fn exp_coeffs(theta2: f64) -> (f64, f64) {
-    // The short series (every per-sample IMU angle) inline, the rest out of line.
+    // Series and polynomial inline (no sqrt, sin_cos or division); θ > π out of line.
     if theta2 < SHORT_SERIES_BELOW * SHORT_SERIES_BELOW {
-        (
-            horner(theta2, &A_SERIES[..5]),
-            horner(theta2, &B_SERIES[..5]),
-        )
+        (horner(theta2, &A_SERIES), horner(theta2, &B_SERIES))
+    } else if theta2 <= PI2_HI {
+        let [qa, b] = poly2(theta2 - POLY_MID, &QA_B_POLY);
+        (a_from_qa(theta2, qa), b)
     } else {
-        exp_coeffs_large(theta2)
+        exp_coeffs_beyond_pi(theta2)
     }
 }
 
-/// [`exp_coeffs`] above the short series.
+/// [`exp_coeffs`] for θ > π, in closed form (θ > π: cos θ < 0, so 1 − cos θ > 1 does not
+/// cancel). Divisions, not multiplications by reciprocals formed while `sin_cos` runs: the
+/// extra rounding of a reciprocal raised Exp's orthonormality error (measured when this
+/// closed form served θ ≥ 1: 174 instead of 56 of 2·10⁶ random φ above 1e-15).
 #[inline(never)]
-fn exp_coeffs_large(theta2: f64) -> (f64, f64) {
-    if theta2 < SERIES_BELOW * SERIES_BELOW {
-        (horner(theta2, &A_SERIES), horner(theta2, &B_SERIES))
-    } else {
-        // θ ≥ 1: cos θ ≤ 0.55, so 1 − cos θ ≥ 0.45 cancels at most one bit. One `sin_cos`
-        // (one call of `trig::sin_cos`) instead of sin θ and sin(θ/2).
-        // Divisions, not multiplications by reciprocals formed while sin_cos runs: the extra
-        // rounding of a reciprocal raised Exp's orthonormality error (2·10⁶ random φ: 174
-        // instead of 56 above 1e-15).
-        let theta = trig::sqrt(theta2);
-        let (s, c) = trig::sin_cos(theta);
-        (s / theta, (1.0 - c) / theta2)
-    }
+fn exp_coeffs_beyond_pi(theta2: f64) -> (f64, f64) {
+    let theta = trig::sqrt(theta2);
+    let (s, c) = trig::sin_cos(theta);
+    (s / theta, (1.0 - c) / theta2)
 }
 
 /// `((1 − cos θ)/θ², (θ − sin θ)/θ³)` at θ² [rad²]: the two coefficients of Jr and Jl.
 #[inline]
 pub fn jac_coeffs(theta2: f64) -> (f64, f64) {
     if theta2 < SHORT_SERIES_BELOW * SHORT_SERIES_BELOW {
-        (
-            horner(theta2, &B_SERIES[..5]),
-            horner(theta2, &C_SERIES[..5]),
-        )
+        (horner(theta2, &B_SERIES), horner(theta2, &C_SERIES))
+    } else if theta2 <= PI2_HI {
+        let [b, c] = poly2(theta2 - POLY_MID, &B_C_POLY);
+        (b, c)
     } else {
-        jac_coeffs_large(theta2)
+        jac_coeffs_beyond_pi(theta2)
     }
 }
 
-/// [`jac_coeffs`] above the short series.
+/// [`jac_coeffs`] for θ > π, in closed form (`θ − sin θ > π` does not cancel).
 #[inline(never)]
-fn jac_coeffs_large(theta2: f64) -> (f64, f64) {
-    if theta2 < SERIES_BELOW * SERIES_BELOW {
-        (horner(theta2, &B_SERIES), horner(theta2, &C_SERIES))
-    } else {
-        let theta = trig::sqrt(theta2);
-        let (s, c) = trig::sin_cos(theta);
-        ((1.0 - c) / theta2, (theta - s) / (theta2 * theta))
-    }
+fn jac_coeffs_beyond_pi(theta2: f64) -> (f64, f64) {
+    let theta = trig::sqrt(theta2);
+    let (s, c) = trig::sin_cos(theta);
+    ((1.0 - c) / theta2, (theta - s) / (theta2 * theta))
 }
 
 /// `I + α[φ]× + β[φ]×²`, built entry-wise from `[φ]×² = φφᵀ − θ²I` (no 3×3 products).
@@ -204,35 +291,34 @@ impl RodriguesCoeffs {
     #[inline]
     pub fn new(phi: &Vector3<f64>) -> Self {
         let theta2 = phi.norm_squared();
-        // The short series (every per-sample IMU angle) inline, the rest out of line.
         if theta2 < SHORT_SERIES_BELOW * SHORT_SERIES_BELOW {
-            Self {
-                a: horner(theta2, &A_SERIES[..5]),
-                b: horner(theta2, &B_SERIES[..5]),
-                c: horner(theta2, &C_SERIES[..5]),
-            }
-        } else {
-            Self::large(theta2)
-        }
-    }
-
-    /// [`RodriguesCoeffs::new`] above the short series.
-    #[inline(never)]
-    fn large(theta2: f64) -> Self {
-        if theta2 < SERIES_BELOW * SERIES_BELOW {
             Self {
                 a: horner(theta2, &A_SERIES),
                 b: horner(theta2, &B_SERIES),
                 c: horner(theta2, &C_SERIES),
             }
-        } else {
-            let theta = trig::sqrt(theta2);
-            let (s, c) = trig::sin_cos(theta);
+        } else if theta2 <= PI2_HI {
+            let x = theta2 - POLY_MID;
+            let [qa, b] = poly2(x, &QA_B_POLY);
             Self {
-                a: s / theta,
-                b: (1.0 - c) / theta2,
-                c: (theta - s) / (theta2 * theta),
+                a: a_from_qa(theta2, qa),
+                b,
+                c: poly(x, &C_POLY),
             }
+        } else {
+            Self::beyond_pi(theta2)
+        }
+    }
+
+    /// [`RodriguesCoeffs::new`] for θ > π, in closed form.
+    #[inline(never)]
+    fn beyond_pi(theta2: f64) -> Self {
+        let theta = trig::sqrt(theta2);
+        let (s, c) = trig::sin_cos(theta);
+        Self {
+            a: s / theta,
+            b: (1.0 - c) / theta2,
+            c: (theta - s) / (theta2 * theta),
         }
     }
 }
@@ -390,6 +476,8 @@ impl SO3 {
     }
 
     /// Exponential map `Exp(φ)` of a rotation vector φ (rad), Rodrigues' formula (Solà eq. 77).
+    /// Like any rounded rotation matrix, an entry may exceed 1 in magnitude by an ulp or two
+    /// (`Exp((0, π/2, 0))[(2, 0)]` is −1 − 2⁻⁵²): clamp before `asin`/`acos`.
     #[inline]
     pub fn exp(phi: &Vector3<f64>) -> Self {
         let (a, b) = exp_coeffs(phi.norm_squared());

@@ -50,7 +50,11 @@ fn truth_at_ref(out: &SimOutput, c: &MultiPoseCalibration) -> ImuBias {
 /// Roll and pitch of `R_wb = Rz(y)Ry(p)Rx(r)` from its third row.
 fn roll_pitch(r: &SO3) -> (f64, f64) {
     let m = r.matrix();
-    (m[(2, 1)].atan2(m[(2, 2)]), (-m[(2, 0)]).asin())
+    // Entries of a rotation matrix may exceed 1 in magnitude by an ulp or two (Ry(π/2)).
+    (
+        m[(2, 1)].atan2(m[(2, 2)]),
+        (-m[(2, 0)]).clamp(-1.0, 1.0).asin(),
+    )
 }
 
 /// An angle difference wrapped to (−π, π] (roll of Rx(π) is ±π).

@@ -1,0 +1,94 @@
+#!/usr/bin/env python3
+"""Prints the polynomial tables of lie/src/so3.rs (`QA_POLY`, `B_POLY`, `C_POLY`).
+
+On the branch 0.01 <= t <= fl(pi^2), t = theta^2, the SO(3) coefficients are polynomials in
+x = t - POLY_MID:
+  b(t) = (1 - cos sqrt t)/t,  c(t) = (sqrt t - sin sqrt t)/t^1.5,
+  a(t) = sin(sqrt t)/sqrt t = (pi^2 - t) * qa(t)   (the zero at t = pi^2 factored out, so that
+                                                   a keeps its relative precision near pi).
+Each table is the degree-9 Chebyshev interpolant (10 nodes, 50-digit mpmath) converted to
+monomials in x and rounded to f64. Chebyshev interpolation is within a few percent of minimax
+here; the printed maxima (in eps = 2^-52, f64 evaluation in the order of so3.rs's `poly`, at
+20 000 random t plus the ends) are what tests/so3.rs bounds.
+Run: python3 lie/tools/fit_poly.py  (needs mpmath).
+"""
+import random
+import mpmath as mp
+
+mp.mp.dps = 50
+PI2 = mp.pi ** 2
+PI2_HI = float(PI2)
+PI2_LO = float(PI2 - mp.mpf(PI2_HI))
+LO, HI, DEG = 0.01, PI2_HI, 9
+
+
+def a(t):
+    s = mp.sqrt(t)
+    return mp.sin(s) / s
+
+
+def b(t):
+    return (1 - mp.cos(mp.sqrt(t))) / t
+
+
+def c(t):
+    s = mp.sqrt(t)
+    return (s - mp.sin(s)) / (t * s)
+
+
+def qa(t):
+    return a(t) / (PI2 - t)
+
+
+def cheb_mono(f, lo, hi, n):
+    lo, hi = mp.mpf(lo), mp.mpf(hi)
+    mid, h = (lo + hi) / 2, (hi - lo) / 2
+    N = n + 1
+    nodes = [mp.cos(mp.pi * (k + mp.mpf(1) / 2) / N) for k in range(N)]
+    vals = [f(mid + h * z) for z in nodes]
+    cc = [2 * mp.fsum(vals[k] * mp.cos(mp.pi * j * (k + mp.mpf(1) / 2) / N) for k in range(N)) / N
+          for j in range(N)]
+    cc[0] /= 2
+    T = [[mp.mpf(1)], [mp.mpf(0), mp.mpf(1)]]
+    for j in range(2, N):
+        up = [mp.mpf(0)] + [2 * x for x in T[j - 1]]
+        down = T[j - 2] + [mp.mpf(0)] * (len(up) - len(T[j - 2]))
+        T.append([up[i] - down[i] for i in range(len(up))])
+    mono = [mp.mpf(0)] * N
+    for j in range(N):
+        for i, x in enumerate(T[j]):
+            mono[i] += cc[j] * x
+    return float(mid), [float(mono[i] / h ** i) for i in range(N)]
+
+
+def horner(x, cs):
+    acc = cs[-1]
+    for ck in reversed(cs[:-1]):
+        acc = acc * x + ck
+    return acc
+
+
+def poly(x, c):
+    """so3.rs's `poly`/`poly2`: Estrin for c2..c9, then two Horner steps."""
+    x2 = x * x
+    p = lambda i: c[i] + c[i + 1] * x
+    tail = (p(2) + p(4) * x2) + (p(6) + p(8) * x2) * (x2 * x2)
+    return (tail * x + c[1]) * x + c[0]
+
+
+mid = cheb_mono(b, LO, HI, DEG)[0]
+print(f"const PI2_HI: f64 = {PI2_HI!r};\nconst PI2_LO: f64 = {PI2_LO!r};\nconst POLY_MID: f64 = {mid!r};")
+rng = random.Random(7)
+pts = [rng.uniform(LO, HI) for _ in range(20000)] + [LO, HI, HI - 1e-9, HI - 1e-5]
+for name, f, ref in [("QA_POLY", qa, a), ("B_POLY", b, b), ("C_POLY", c, c)]:
+    m, cs = cheb_mono(f, LO, HI, DEG)
+    assert m == mid
+    worst = 0.0
+    for t in pts:
+        got = poly(t - mid, cs)
+        if name == "QA_POLY":
+            got = ((PI2_HI - t) + PI2_LO) * got
+        r = ref(mp.mpf(t))
+        worst = max(worst, float(abs((got - r) / r) / mp.mpf(2) ** -52))
+    print(f"// max relative error {worst:.2f} eps")
+    print(f"const {name}: [f64; {DEG + 1}] = [\n" + "".join(f"    {x!r},\n" for x in cs) + "];")
