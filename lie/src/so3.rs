@@ -6,25 +6,30 @@
 //! - Right Jacobian `Jr(φ)`: `Exp(φ + δ) ≈ Exp(φ)·Exp(Jr(φ) δ)` (Solà eq. 143);
 //!   left Jacobian `Jl(φ) = Jr(−φ) = Jr(φ)ᵀ`: `Exp(φ + δ) ≈ Exp(Jl(φ) δ)·Exp(φ)` (eq. 145).
 //!
-//! Numerics. `a = sin θ/θ`, `b = (1 − cos θ)/θ²` and `c = (θ − sin θ)/θ³` are even in θ, so
-//! they are computed from θ² = φᵀφ without a square root, on three branches:
+//! Numerics. `a = sin θ/θ`, `b = (1 − cos θ)/θ²`, `c = (θ − sin θ)/θ³` and Jr⁻¹'s
+//! `D = 1/θ² − (1 + cos θ)/(2θ sin θ)` are even in θ, so they are computed from θ² = φᵀφ
+//! without a square root, on three branches:
 //! - θ < 0.1 (every per-sample IMU angle): five-term Taylor series in θ² (truncation < 3e-18).
-//! - 0.1 ≤ θ ≤ π: degree-9 polynomials in θ² (Chebyshev interpolants, `lie/tools/fit_poly.py`),
-//!   with the zero of `a` at θ = π factored out, `a = (π² − θ²)·qa(θ²)`, so that `a` keeps its
-//!   relative precision up to π. No sqrt, no `sin_cos`, no division: 1.9-rad Exp went from
-//!   ~30 ns (sqrt → sin_cos → division) to ~12 ns.
+//! - 0.1 ≤ θ ≤ π: polynomials in θ² (Chebyshev interpolants from `lie/tools/fit_poly.py`;
+//!   degree 9, D degree 14), with the zero of `a` at θ = π factored out,
+//!   `a = (π² − θ²)·qa(θ²)`, so that `a` keeps its relative precision up to π. No sqrt, no
+//!   `sin_cos`, no division: a 1.9-rad Exp or Jr went from ~30 ns (sqrt → sin_cos → division)
+//!   to ~12 ns, Jr⁻¹ from ~30 ns to ~13 ns.
 //! - θ > π: closed form with one `sqrt` and one `sin_cos` (our own fdlibm-kernel version in
-//!   `trig.rs`); there `cos θ < 0`, so `1 − cos θ` and `θ − sin θ` do not cancel.
+//!   `trig.rs`); there `cos θ < 0`, so `1 − cos θ`, `θ − sin θ` and `1 − (θ/2)cot(θ/2)` do not
+//!   cancel.
 //!
 //! Measured relative errors against 60-digit mpmath values at √(exact f64 θ²) for 473 angles in
 //! [1e-8, 5.5] (`tests/so3.rs`, `coefficients_within_a_few_eps_on_dense_angles`; ε = 2⁻⁵²):
-//! series ≤ 0.7 ε; polynomials a ≤ 1.8 ε, b ≤ 1.2 ε, c ≤ 0.9 ε (20 000 points in
-//! `fit_poly.py`); closed form ≤ 1.6 ε. `D` (the coefficient of Jr⁻¹) keeps its Bernoulli
-//! series below θ = ½ and its closed form above (≤ 9.2 ε). Above π, `a` computed from θ² is
-//! only as precise as θ = √θ²: its relative error grows as |θ cot θ − 1|·ε/2 near 2π (and
-//! within ~1e-5 rad above π); `a·θ = sin θ` stays within a few ε absolute.
-//! `Log` goes through Shepperd's quaternion extraction and `atan2`, so it is exact near θ = 0
-//! and at θ = π, where a formula that divides by `sin θ` fails.
+//! series ≤ 0.7 ε; polynomials a ≤ 1.8 ε, b ≤ 1.2 ε, c ≤ 0.9 ε, D ≤ 0.8 ε (20 000 points in
+//! `fit_poly.py`); closed form ≤ 1.9 ε. (D's closed form, used up to π before, cancels up to
+//! ~6 bits near θ = ½: 29 ε measured there.) Above π, `a` computed from θ² is only as precise
+//! as θ = √θ²: its relative error grows as |θ cot θ − 1|·ε/2 near 2π (and within ~1e-5 rad
+//! above π); `a·θ = sin θ` stays within a few ε absolute.
+//! `Log` goes through `atan2` (sqrt, one division in `atan2`, one after; it uses both the
+//! antisymmetric part and the trace, so a slightly drifted R costs it nothing extra) and, near
+//! π, Shepperd's quaternion extraction, so it is exact near θ = 0 and at θ = π, where a
+//! formula that divides by `sin θ` fails.
 
 use crate::trig;
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
@@ -81,16 +86,12 @@ const C_SERIES: [f64; 5] = [
 ];
 // D = 1/θ² − (1 + cos θ)/(2 θ sin θ) = (1 − (θ/2) cot(θ/2))/θ², from x cot x = Σ (−1)^k B_2k (2x)^{2k}/(2k)!
 // (Bernoulli numbers): D = 1/12 + θ²/720 + θ⁴/30240 + θ⁶/1209600 + θ⁸/47900160 + …
-const D_SERIES: [f64; 9] = [
+const D_SERIES: [f64; 5] = [
     1.0 / 12.0,
     1.0 / 720.0,
     1.0 / 30240.0,
     1.0 / 1209600.0,
     1.0 / 47900160.0,
-    691.0 / 1307674368000.0,
-    1.0 / 74724249600.0,
-    3617.0 / 10670622842880000.0,
-    43867.0 / 5109094217170944000.0,
 ];
 
 // Polynomials in x = θ² − POLY_MID for 0.1 ≤ θ ≤ π (θ² from 0.01 to fl(π²)), printed by
@@ -138,6 +139,25 @@ const C_POLY: [f64; 10] = [
     -2.5032376492055595e-15,
     7.393823231039694e-18,
     -1.7749876727227043e-20,
+];
+
+// D(√t), max relative error (f64, Horner, 20 000 points): 0.77 eps
+const D_POLY: [f64; 15] = [
+    0.09111496204096993,
+    0.0017880308159743674,
+    4.915841641790693e-05,
+    1.4092343199307815e-06,
+    4.071593448353104e-08,
+    1.1783068314499603e-09,
+    3.4112108292146564e-11,
+    9.876280216252141e-13,
+    2.859474354775627e-14,
+    8.279379908303351e-16,
+    2.397136539570888e-17,
+    6.922953512529858e-19,
+    2.0044096549007404e-20,
+    6.283426883727e-22,
+    1.81924689401072e-23,
 ];
 
 /// Two tables interleaved, `[[p_k, q_k]]`, for [`horner2`].
@@ -188,6 +208,18 @@ fn poly2(x: f64, c: &[[f64; 2]; 10]) -> [f64; 2] {
         let lane = |j: usize| poly(x, &std::array::from_fn(|i| c[i][j]));
         [lane(0), lane(1)]
     }
+}
+
+/// The degree-14 `D_POLY` by the scheme of [`poly2`]: Estrin for `c₂…c₁₄` (four levels),
+/// then two Horner steps (as accurate as full Horner: 0.77 ε either way in `fit_poly.py`'s
+/// points, on a chain of 6 multiply-adds instead of 14).
+#[inline(always)]
+fn poly15(x: f64, c: &[f64; 15]) -> f64 {
+    let (x2, p) = (x * x, |i: usize| c[i] + c[i + 1] * x);
+    let x4 = x2 * x2;
+    let (q0, q1, q2) = (p(2) + p(4) * x2, p(6) + p(8) * x2, p(10) + p(12) * x2);
+    let tail = (q0 + q1 * x4) + (q2 + c[14] * x4) * (x4 * x4);
+    (tail * x + c[1]) * x + c[0]
 }
 
 /// One polynomial by the scheme of [`poly2`].
@@ -327,28 +359,27 @@ impl RodriguesCoeffs {
 /// Finite for θ < 2π; at θ = π it equals 1/π². Takes θ² [rad²].
 #[inline]
 pub fn d_coeff(theta2: f64) -> f64 {
-    // The Bernoulli series converges for θ < 2π with ratio ~(θ/2π)²; below θ = ½ nine terms
-    // leave < 1e-21 relative. Above, the closed form loses at most ~6 bits of D, and D enters
-    // the Jacobians only multiplied by θ².
+    // Below θ = 0.1 five terms of the Bernoulli series (ratio ~(θ/2π)² per term); up to π a
+    // degree-14 polynomial in θ² (`D_POLY`: D's poles at θ = ±2π are close, so it needs
+    // more terms than Exp's). The closed form, which cancels 1 − (θ/2)cot(θ/2) by up to
+    // ~6 bits near θ = ½ (measured 29 ε there), only serves θ > π, where it adds.
     if theta2 < SHORT_SERIES_BELOW * SHORT_SERIES_BELOW {
-        horner(theta2, &D_SERIES[..5])
+        horner(theta2, &D_SERIES)
+    } else if theta2 <= PI2_HI {
+        poly15(theta2 - POLY_MID, &D_POLY)
     } else {
-        d_coeff_large(theta2)
+        d_coeff_beyond_pi(theta2)
     }
 }
 
-/// [`d_coeff`] above the short series.
+/// [`d_coeff`] for θ > π: `cot(θ/2) < 0`, so `1 − (θ/2)cot(θ/2) > 1` does not cancel.
 #[inline(never)]
-fn d_coeff_large(theta2: f64) -> f64 {
-    if theta2 < 0.25 {
-        horner(theta2, &D_SERIES)
-    } else {
-        let theta = trig::sqrt(theta2);
-        let half = 0.5 * theta;
-        // (1 + cos θ)/sin θ = cot(θ/2), from one `sin_cos` of θ/2.
-        let (s, c) = trig::sin_cos(half);
-        (1.0 - half * c / s) / theta2
-    }
+fn d_coeff_beyond_pi(theta2: f64) -> f64 {
+    let theta = trig::sqrt(theta2);
+    let half = 0.5 * theta;
+    // (1 + cos θ)/sin θ = cot(θ/2), from one `sin_cos` of θ/2.
+    let (s, c) = trig::sin_cos(half);
+    (1.0 - half * c / s) / theta2
 }
 
 /// Right Jacobian of SO(3): `Jr(φ) = I − b[φ]× + c[φ]×²` (Solà eq. 143).
@@ -501,12 +532,6 @@ impl SO3 {
     /// Logarithmic map `Log(R)`: the rotation vector φ with ‖φ‖ ∈ [0, π] and `Exp(φ) = R`.
     /// At exactly θ = π either of the two opposite vectors may be returned.
     pub fn log(&self) -> Vector3<f64> {
-        self.log_parts().0
-    }
-
-    /// `Log(R)` and, on the `atan2` branch, `(θ, sin θ, cos θ)` as `Log` computed them.
-    #[inline(always)]
-    fn log_parts(&self) -> (Vector3<f64>, Option<(f64, f64, f64)>) {
         let m = &self.m;
         // s = sin θ·n (antisymmetric part), c = cos θ.
         let s = vee(m);
@@ -515,33 +540,16 @@ impl SO3 {
         if c > 0.0 && s2 < 0.01 {
             // θ < 0.1: θ/sin θ = asin(σ)/σ = Σ (2k)!/(4^k (k!)² (2k+1)) σ^{2k}, σ = sin θ;
             // six terms leave < 2e-24.
-            (s * horner(s2, &ASIN_SERIES), None)
+            s * horner(s2, &ASIN_SERIES)
         } else if c > -0.9 {
             // θ < 2.69: sin θ ≥ 0.43, so s carries full relative precision.
             let sn = trig::sqrt(s2);
             let theta = trig::atan2_upper(sn, c);
-            (s * (theta / sn), Some((theta, sn, c)))
+            s * (theta / sn)
         } else {
             // Near π the antisymmetric part vanishes: extract the axis from the diagonal.
             let q = shepperd(m);
-            (log_quaternion(q.w, &q.imag()), None)
-        }
-    }
-
-    /// `Log(R)` and `D(‖Log R‖)` ([`d_coeff`]), for SE(3)'s `Log`. For 1.5 ≤ θ < 2.69, D is
-    /// formed from the sin θ and cos θ that `Log` already has,
-    /// `D = (1 − θ(1 + cos θ)/(2 sin θ))/θ²`, with one division instead of a second `sin_cos`:
-    /// there `1 − θ/2·cot(θ/2) ≥ 0.19`, so the few-ε errors of sin θ and cos θ reach D amplified
-    /// at most ~4× (measured against 50-digit mpmath at the returned θ: ≤ 7.8 ε, mean 3.8 ε;
-    /// `d_coeff` there: ≤ 4.9 ε). Saves ~50 ns of SE(3) `Log` at 1.9 rad.
-    #[inline]
-    pub(crate) fn log_and_d(&self) -> (Vector3<f64>, f64) {
-        match self.log_parts() {
-            (phi, Some((theta, sn, c))) if theta >= 1.5 => {
-                let d = (1.0 - 0.5 * theta * (1.0 + c) / sn) / (theta * theta);
-                (phi, d)
-            }
-            (phi, _) => (phi, d_coeff(phi.norm_squared())),
+            log_quaternion(q.w, &q.imag())
         }
     }
 
@@ -705,41 +713,5 @@ fn log_quaternion(w: f64, v: &Vector3<f64>) -> Vector3<f64> {
     } else {
         let n = trig::sqrt(n2);
         v * (2.0 * trig::atan2_upper(n, w) / n)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// `log_and_d`'s D from Log's own sin θ, cos θ against `d_coeff` (checked against mpmath in
-    /// `tests/so3.rs`) on a dense grid of angles about several axes, through all three `Log`
-    /// branches; and its φ is `log`'s. The bound is the sum of the two measured worst errors
-    /// against mpmath (7.8 ε and 4.9 ε, see `log_and_d`).
-    #[test]
-    fn log_and_d_agrees_with_d_coeff() {
-        let axes = [
-            Vector3::new(1.0, 0.0, 0.0),
-            Vector3::new(0.3, -0.5, 0.81),
-            Vector3::new(-0.7, 0.2, -0.4),
-        ];
-        let mut worst = 0.0_f64;
-        for axis in axes {
-            let n = axis.normalize();
-            for i in 1..=4000 {
-                let theta = std::f64::consts::PI * i as f64 / 4000.0 * 0.9999;
-                let r = SO3::exp(&(n * theta));
-                let (phi, d) = r.log_and_d();
-                assert_eq!(phi, r.log());
-                let d0 = d_coeff(phi.norm_squared());
-                let rel = (d - d0).abs() / d0;
-                worst = worst.max(rel);
-                assert!(
-                    rel < 12.7 * f64::EPSILON,
-                    "θ = {theta}: D {d:e} vs {d0:e} ({rel:e})"
-                );
-            }
-        }
-        println!("log_and_d vs d_coeff: worst relative difference {worst:.2e}");
     }
 }

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Prints the polynomial tables of lie/src/so3.rs (`QA_POLY`, `B_POLY`, `C_POLY`).
+"""Prints the polynomial tables of lie/src/so3.rs (`QA_POLY`, `B_POLY`, `C_POLY`, `D_POLY`).
 
 On the branch 0.01 <= t <= fl(pi^2), t = theta^2, the SO(3) coefficients are polynomials in
 x = t - POLY_MID:
@@ -10,6 +10,9 @@ Each table is the degree-9 Chebyshev interpolant (10 nodes, 50-digit mpmath) con
 monomials in x and rounded to f64. Chebyshev interpolation is within a few percent of minimax
 here; the printed maxima (in eps = 2^-52, f64 evaluation in the order of so3.rs's `poly`, at
 20 000 random t plus the ends) are what tests/so3.rs bounds.
+`D_POLY`: D = 1/theta^2 - (1 + cos theta)/(2 theta sin theta), the coefficient of Jr^-1 (and of
+SE(3)'s Log), as a degree-14 polynomial in x the same way (its poles at t = 4 pi^2 are closer,
+so it needs more terms); its printed error is that of Horner, which so3.rs's `poly15` matches.
 Run: python3 lie/tools/fit_poly.py  (needs mpmath).
 """
 import random
@@ -92,3 +95,19 @@ for name, f, ref in [("QA_POLY", qa, a), ("B_POLY", b, b), ("C_POLY", c, c)]:
         worst = max(worst, float(abs((got - r) / r) / mp.mpf(2) ** -52))
     print(f"// max relative error {worst:.2f} eps")
     print(f"const {name}: [f64; {DEG + 1}] = [\n" + "".join(f"    {x!r},\n" for x in cs) + "];")
+
+def d_of_t(t):
+    th = mp.sqrt(t)
+    return 1 / t - (1 + mp.cos(th)) / (2 * th * mp.sin(th))
+
+
+D_DEG = 14
+m3, cs = cheb_mono(d_of_t, LO, HI, D_DEG)
+assert m3 == mid
+worst = 0.0
+for t in pts:
+    got = horner(t - mid, cs)
+    r = d_of_t(mp.mpf(t))
+    worst = max(worst, float(abs((got - r) / r) / mp.mpf(2) ** -52))
+print(f"// max relative error {worst:.2f} eps")
+print(f"const D_POLY: [f64; {D_DEG + 1}] = [\n" + "".join(f"    {x!r},\n" for x in cs) + "];")
