@@ -338,6 +338,76 @@ impl Core {
         }
     }
 
+    /// Counts one more interval integrated; every [`RENORM_EVERY`] intervals ΔR is
+    /// re-orthonormalised.
+    #[inline(always)]
+    fn interval_done(&mut self) {
+        Self::count_interval(&mut self.done, &mut self.d);
+    }
+
+    /// [`Core::interval_done`] on loose state.
+    #[inline(always)]
+    fn count_interval(done: &mut usize, d: &mut Deltas) {
+        *done += 1;
+        if done.is_multiple_of(RENORM_EVERY) {
+            let r = d.r;
+            d.r = r * (M3::identity() * 3.0 - r.transpose() * r) * 0.5;
+        }
+    }
+
+    /// [`Level::Deltas`] with Euler (`MID = false`) or midpoint (`MID = true`), in the steady
+    /// state (`n ≥ 2`, every interval but the last integrated): integrates the leading samples
+    /// of `samples` that pass [`Preintegrator::integrate`]'s common-case test, straight from
+    /// the slice, and returns how many. The same scheme steps and re-orthonormalisation as
+    /// [`Core::advance`], in the same order, so the deltas are bit-identical to pushing the
+    /// samples one by one (`preint/tests/deltas_fast_path.rs`); what it saves is the ring
+    /// traffic and the per-sample dispatch: the deltas and the two newest samples stay in
+    /// registers. The ring is written back at the end.
+    #[inline(never)]
+    fn run_deltas<const MID: bool>(
+        &mut self,
+        samples: &[ImuSample],
+        bias: &ImuBias,
+        last_t_ns: i64,
+        gap_limit: u64,
+    ) -> usize {
+        let (mut d, mut done) = (self.d, self.done);
+        let (mut n0, mut n1) = (*self.node(self.n - 2), *self.node(self.n - 1));
+        let mut last = last_t_ns;
+        let mut used = 0;
+        for s in samples {
+            if !Preintegrator::common_case(s, last, gap_limit) {
+                break;
+            }
+            last = s.t_ns;
+            let h = span_s(n0.t_ns, n1.t_ns);
+            if MID {
+                midpoint::step::<false>(&mut d, &n0, &n1, h, &mut self.origin);
+            } else {
+                euler::step::<false>(&mut d, &n0, h, n1.t_ns, &mut self.origin);
+            }
+            Self::count_interval(&mut done, &mut d);
+            n0 = n1;
+            n1 = Node::new(s.t_ns, s.gyro - bias.gyro, s.acc - bias.acc);
+            used += 1;
+        }
+        (self.d, self.done) = (d, done);
+        self.n += used;
+        // The ring as pushing one by one would have left it: the last RING − 2 new samples
+        // before the two newest, then n0, n1.
+        let keep = used.min(RING);
+        for (i, s) in samples[used - keep..used].iter().enumerate() {
+            let j = self.n - keep + i;
+            self.ring[(j + self.cb) % RING] =
+                Node::new(s.t_ns, s.gyro - bias.gyro, s.acc - bias.acc);
+        }
+        if used > 0 {
+            self.ring[(self.n - 2 + self.cb) % RING] = n0;
+            self.ring[(self.n - 1 + self.cb) % RING] = n1;
+        }
+        used
+    }
+
     /// Integrates every interval that is ready; with `fin`, all remaining intervals and the
     /// remaining noise (the window then has exactly `self.n` samples).
     #[inline(always)]
@@ -366,11 +436,7 @@ impl Core {
                 Scheme::Midpoint => self.midpoint_interval::<N, LIN>(cfg, noise, k, fin),
                 Scheme::Rk4 => self.rk4_interval::<N, LIN>(cfg, noise, k, fin),
             }
-            self.done += 1;
-            if self.done.is_multiple_of(RENORM_EVERY) {
-                let r = self.d.r;
-                self.d.r = r * (M3::identity() * 3.0 - r.transpose() * r) * 0.5;
-            }
+            self.interval_done();
         }
         if fin && LIN && n >= 2 {
             match cfg.scheme {
@@ -609,18 +675,24 @@ impl Preintegrator {
     /// timestamp; a rejected sample leaves the preintegrator unchanged.
     #[inline]
     pub fn integrate(&mut self, s: &ImuSample) -> Result<(), PreintError> {
-        // One test for the common case: `x·0 = 0` for finite x and NaN otherwise (a sum that
-        // overflows only sends the sample to the exact checks); a later timestamp, and the gap
-        // as the exact u64 difference of two i64 that are in order.
-        let (g, a) = (&s.gyro, &s.acc);
-        let finite = ((g.x + a.x) + (g.y + a.y) + (g.z + a.z)) * 0.0 == 0.0;
-        let gap = (s.t_ns as u64).wrapping_sub(self.last_t_ns as u64);
-        if finite && s.t_ns > self.last_t_ns && gap <= self.gap_limit && self.core.n > 0 {
+        if self.core.n > 0 && Self::common_case(s, self.last_t_ns, self.gap_limit) {
             self.push(s);
             Ok(())
         } else {
             self.integrate_checked(s)
         }
+    }
+
+    /// The common case of [`Preintegrator::integrate`], in one test: `x·0 = 0` for finite x
+    /// and NaN otherwise (a sum that overflows only sends the sample to the exact checks); a
+    /// later timestamp than `last_t_ns`, and the gap as the exact u64 difference of two i64
+    /// that are in order.
+    #[inline(always)]
+    fn common_case(s: &ImuSample, last_t_ns: i64, gap_limit: u64) -> bool {
+        let (g, a) = (&s.gyro, &s.acc);
+        let finite = ((g.x + a.x) + (g.y + a.y) + (g.z + a.z)) * 0.0 == 0.0;
+        let gap = (s.t_ns as u64).wrapping_sub(last_t_ns as u64);
+        finite && s.t_ns > last_t_ns && gap <= gap_limit
     }
 
     /// [`Preintegrator::integrate`] for the first sample and for samples that may be invalid.
@@ -689,9 +761,34 @@ impl Preintegrator {
         Self::run(core, &self.cfg, &self.noise, self.lin, false);
     }
 
-    /// Adds the samples in order; stops at the first invalid one (see [`Self::integrate`]).
+    /// Adds the samples in order; stops at the first invalid one (see [`Self::integrate`]),
+    /// leaving the samples before it integrated. With [`Level::Deltas`] and Euler or midpoint,
+    /// runs of valid samples go straight from the slice through the scheme's step (same
+    /// result, bit for bit, as pushing them one by one).
     pub fn integrate_slice(&mut self, samples: &[ImuSample]) -> Result<(), PreintError> {
-        samples.iter().try_for_each(|s| self.integrate(s))
+        let fast = !self.lin && matches!(self.cfg.scheme, Scheme::Euler | Scheme::Midpoint);
+        let mut i = 0;
+        while i < samples.len() {
+            if fast && self.core.n >= 2 && self.core.done + 2 == self.core.n {
+                let rest = &samples[i..];
+                let (bias, last, gap) = (&self.bias_hat, self.last_t_ns, self.gap_limit);
+                let used = match self.cfg.scheme {
+                    Scheme::Midpoint => self.core.run_deltas::<true>(rest, bias, last, gap),
+                    _ => self.core.run_deltas::<false>(rest, bias, last, gap),
+                };
+                if used > 0 {
+                    self.last_t_ns = rest[used - 1].t_ns;
+                    if self.params.keep_samples {
+                        self.samples.extend_from_slice(&rest[..used]);
+                    }
+                    i += used;
+                    continue;
+                }
+            }
+            self.integrate(&samples[i])?;
+            i += 1;
+        }
+        Ok(())
     }
 
     #[inline(always)]

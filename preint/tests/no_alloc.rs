@@ -1,7 +1,7 @@
 //! No heap allocation per sample: a counting global allocator watches `integrate`.
 //!
 //! - `with_capacity(n)` (samples kept) and `keep_samples = false` (with `new`): no allocation
-//!   at all while integrating, and none in `finish`.
+//!   at all while integrating, one sample at a time or as slices, and none in `finish`.
 //! - `new` with `keep_samples = true` (the default): the stored-sample `Vec` grows
 //!   geometrically, so the count is a handful of reallocations (≤ log₂ n + 1), not one per
 //!   sample.
@@ -78,21 +78,29 @@ fn integrate_does_not_allocate() {
     let samples: Vec<_> = (0..n).map(sample).collect();
     for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4] {
         for level in [Level::Deltas, Level::Covariance, Level::Combined] {
-            for keep in [false, true] {
+            for (keep, slice) in [(false, false), (true, false), (false, true), (true, true)] {
                 let mut prm = PreintParams::default()
                     .with_scheme(scheme)
                     .with_level(level);
                 prm.keep_samples = keep;
                 let mut pi =
                     Preintegrator::with_capacity(prm, ImuBias::zero(), n as usize).unwrap();
+                // One by one, or as slices (Level::Deltas with Euler and midpoint takes the
+                // slice path, `Core::run_deltas`).
                 let ((), count) = counted(|| {
-                    for s in &samples {
-                        pi.integrate(s).unwrap();
+                    if slice {
+                        for chunk in samples.chunks(1000) {
+                            pi.integrate_slice(chunk).unwrap();
+                        }
+                    } else {
+                        for s in &samples {
+                            pi.integrate(s).unwrap();
+                        }
                     }
                 });
                 assert_eq!(
                     count, 0,
-                    "{scheme:?} {level:?} keep={keep}: {count} allocations"
+                    "{scheme:?} {level:?} keep={keep} slice={slice}: {count} allocations"
                 );
                 // The counter works: finish() allocates nothing either, a Vec does.
                 let ((m, v), count) = counted(|| {

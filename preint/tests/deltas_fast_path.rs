@@ -1,0 +1,158 @@
+//! `integrate_slice` with `Level::Deltas` runs Euler and midpoint straight from the slice
+//! (`Core::run_deltas`). It must be indistinguishable from pushing the samples one by one:
+//! the same deltas bit for bit (across ΔR's re-orthonormalisation every 1024 intervals), the
+//! same stored samples, the same error at the same index for a bad sample, and the same
+//! state after it.
+
+use nalgebra::Vector3;
+use preint::{ImuBias, ImuSample, Level, PreintError, PreintParams, Preintegrator, Scheme};
+
+fn stream(n: usize) -> Vec<ImuSample> {
+    (0..n as i64)
+        .map(|k| {
+            let t = k as f64 * 5e-3;
+            // Slightly uneven stamps, so that every interval has its own h.
+            let jitter = (k * 7919 % 13) * 10_000;
+            ImuSample::new(
+                k * 5_000_000 + jitter,
+                Vector3::new(
+                    0.4 * (1.3 * t).sin(),
+                    0.3 * (0.7 * t).cos(),
+                    0.2 + 0.5 * t.sin(),
+                ),
+                Vector3::new(
+                    0.6 * (0.9 * t).sin(),
+                    0.2 * t.cos(),
+                    9.81 + 0.3 * (2.1 * t).sin(),
+                ),
+            )
+        })
+        .collect()
+}
+
+fn make(scheme: Scheme, keep: bool) -> Preintegrator {
+    let mut prm = PreintParams::default()
+        .with_scheme(scheme)
+        .with_level(Level::Deltas);
+    prm.keep_samples = keep;
+    let bias = ImuBias::new(
+        Vector3::new(0.01, -0.02, 0.005),
+        Vector3::new(0.1, 0.05, -0.2),
+    );
+    Preintegrator::new(prm, bias).unwrap()
+}
+
+/// One by one, stopping at the first error like `integrate_slice` does.
+fn one_by_one(pi: &mut Preintegrator, s: &[ImuSample]) -> Result<(), PreintError> {
+    for x in s {
+        pi.integrate(x)?;
+    }
+    Ok(())
+}
+
+/// Makes sample `s` invalid, given the sample before it.
+type Spoil = fn(&mut ImuSample, &ImuSample);
+
+const SCHEMES: [Scheme; 3] = [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4];
+
+#[test]
+fn slice_equals_one_by_one_bit_for_bit() {
+    let s = stream(5000); // > 4 re-orthonormalisations
+    for scheme in SCHEMES {
+        for keep in [false, true] {
+            let mut a = make(scheme, keep);
+            one_by_one(&mut a, &s).unwrap();
+            let ma = a.finish().unwrap();
+            // All at once.
+            let mut b = make(scheme, keep);
+            b.integrate_slice(&s).unwrap();
+            assert_eq!(b.finish().unwrap(), ma, "{scheme:?} keep={keep}: one slice");
+            assert_eq!(b.samples(), a.samples());
+            assert_eq!(b.len(), a.len());
+            // Uneven chunks, single samples in between, and finish() on the way (it does not
+            // consume the preintegrator).
+            let mut c = make(scheme, keep);
+            let (mut i, mut k) = (0, 0usize);
+            while i < s.len() {
+                let len = (k * 37 % 61).min(s.len() - i);
+                c.integrate_slice(&s[i..i + len]).unwrap();
+                i += len;
+                if i < s.len() {
+                    c.integrate(&s[i]).unwrap();
+                    i += 1;
+                }
+                if k % 17 == 3 && c.len() >= 2 {
+                    let mid = c.finish().unwrap();
+                    let mut r = make(scheme, keep);
+                    one_by_one(&mut r, &s[..i]).unwrap();
+                    assert_eq!(mid, r.finish().unwrap(), "{scheme:?}: after {i} samples");
+                }
+                k += 1;
+            }
+            assert_eq!(c.finish().unwrap(), ma, "{scheme:?} keep={keep}: chunks");
+            assert_eq!(c.samples(), a.samples());
+        }
+    }
+}
+
+#[test]
+fn a_bad_sample_stops_the_slice_where_one_by_one_stops() {
+    let good = stream(3000);
+    let bad_at = 1234;
+    let variants: [(&str, Spoil); 4] = [
+        ("NaN gyro", |s, _| s.gyro.y = f64::NAN),
+        ("infinite acc", |s, _| s.acc.z = f64::INFINITY),
+        ("duplicate stamp", |s, prev| s.t_ns = prev.t_ns),
+        ("decreasing stamp", |s, prev| s.t_ns = prev.t_ns - 1),
+    ];
+    for scheme in SCHEMES {
+        for (what, spoil) in variants {
+            let mut s = good.clone();
+            let prev = s[bad_at - 1];
+            spoil(&mut s[bad_at], &prev);
+            let mut a = make(scheme, true);
+            let ea = one_by_one(&mut a, &s).unwrap_err();
+            let mut b = make(scheme, true);
+            let eb = b.integrate_slice(&s).unwrap_err();
+            assert_eq!(eb, ea, "{scheme:?} {what}");
+            assert_eq!(
+                b.len(),
+                bad_at,
+                "{scheme:?} {what}: samples before the bad one"
+            );
+            assert_eq!(
+                b.finish().unwrap(),
+                a.finish().unwrap(),
+                "{scheme:?} {what}"
+            );
+            // Both go on with the rest.
+            one_by_one(&mut a, &good[bad_at + 1..]).unwrap();
+            b.integrate_slice(&good[bad_at + 1..]).unwrap();
+            assert_eq!(
+                b.finish().unwrap(),
+                a.finish().unwrap(),
+                "{scheme:?} {what}: rest"
+            );
+            assert_eq!(b.samples(), a.samples());
+        }
+    }
+}
+
+#[test]
+fn valid_samples_outside_the_quick_test_take_the_exact_checks() {
+    // Finite readings whose sum overflows fail the one-test common case; they are valid and
+    // must be integrated, not rejected, on both paths.
+    let mut s = stream(600);
+    s[300].gyro = Vector3::new(1e308, 1e308, 0.0);
+    s[300].acc = Vector3::new(1e308, 0.0, 0.0);
+    for scheme in [Scheme::Euler, Scheme::Midpoint] {
+        let mut a = make(scheme, false);
+        one_by_one(&mut a, &s).unwrap();
+        let mut b = make(scheme, false);
+        b.integrate_slice(&s).unwrap();
+        assert_eq!(b.len(), 600);
+        let (ma, mb) = (a.finish().unwrap(), b.finish().unwrap());
+        // Overflowed deltas are NaN/inf on both; compare bit patterns.
+        assert_eq!(format!("{ma:?}"), format!("{mb:?}"), "{scheme:?}");
+    }
+}
