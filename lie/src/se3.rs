@@ -136,8 +136,8 @@ impl SE3 {
 
     /// `Log(T) = [Jl⁻¹(θ) t, θ]` with θ = Log(R) (Solà eq. 173).
     pub fn log(&self) -> Vector6<f64> {
-        let theta = self.r.log();
-        let d = so3::d_coeff(theta.norm_squared());
+        let (theta, theta2) = self.r.log_theta2();
+        let d = so3::d_coeff(theta2);
         // Jl⁻¹(θ)t = t − ½ θ×t + D θ×(θ×t).
         let tt = theta.cross(&self.t);
         join(&(self.t - tt * 0.5 + theta.cross(&tt) * d), &theta)

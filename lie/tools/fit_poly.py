@@ -12,7 +12,8 @@ here; the printed maxima (in eps = 2^-52, f64 evaluation in the order of so3.rs'
 20 000 random t plus the ends) are what tests/so3.rs bounds.
 `D_POLY`: D = 1/theta^2 - (1 + cos theta)/(2 theta sin theta), the coefficient of Jr^-1 (and of
 SE(3)'s Log), as a degree-14 polynomial in x the same way (its poles at t = 4 pi^2 are closer,
-so it needs more terms); its printed error is that of Horner, which so3.rs's `poly15` matches.
+so it needs more terms); its printed error is that of Horner (so3.rs's `poly15`, Estrin for
+c1..c14 and one Horner step, measured 0.82 eps at the same points).
 Run: python3 lie/tools/fit_poly.py  (needs mpmath).
 """
 import random
