@@ -263,19 +263,9 @@ pub fn exp_coeffs(theta2: f64) -> (f64, f64) {
         let [qa, b] = poly2(theta2 - POLY_MID, &QA_B_POLY);
         (a_from_qa(theta2, qa), b)
     } else {
-        exp_coeffs_beyond_pi(theta2)
+        let k = RodriguesCoeffs::beyond_pi(theta2);
+        (k.a, k.b)
     }
-}
-
-/// [`exp_coeffs`] for θ > π, in closed form (θ > π: cos θ < 0, so 1 − cos θ > 1 does not
-/// cancel). Divisions, not multiplications by reciprocals formed while `sin_cos` runs: the
-/// extra rounding of a reciprocal raised Exp's orthonormality error (measured when this
-/// closed form served θ ≥ 1: 174 instead of 56 of 2·10⁶ random φ above 1e-15).
-#[inline(never)]
-fn exp_coeffs_beyond_pi(theta2: f64) -> (f64, f64) {
-    let theta = trig::sqrt(theta2);
-    let (s, c) = trig::sin_cos(theta);
-    (s / theta, (1.0 - c) / theta2)
 }
 
 /// `((1 − cos θ)/θ², (θ − sin θ)/θ³)` at θ² [rad²]: the two coefficients of Jr and Jl.
@@ -287,16 +277,9 @@ pub fn jac_coeffs(theta2: f64) -> (f64, f64) {
         let [b, c] = poly2(theta2 - POLY_MID, &B_C_POLY);
         (b, c)
     } else {
-        jac_coeffs_beyond_pi(theta2)
+        let k = RodriguesCoeffs::beyond_pi(theta2);
+        (k.b, k.c)
     }
-}
-
-/// [`jac_coeffs`] for θ > π, in closed form (`θ − sin θ > π` does not cancel).
-#[inline(never)]
-fn jac_coeffs_beyond_pi(theta2: f64) -> (f64, f64) {
-    let theta = trig::sqrt(theta2);
-    let (s, c) = trig::sin_cos(theta);
-    ((1.0 - c) / theta2, (theta - s) / (theta2 * theta))
 }
 
 /// `I + α[φ]× + β[φ]×²`, built entry-wise from `[φ]×² = φφᵀ − θ²I` (no 3×3 products).
@@ -343,7 +326,12 @@ impl RodriguesCoeffs {
         }
     }
 
-    /// [`RodriguesCoeffs::new`] for θ > π, in closed form.
+    /// The three coefficients for θ > π, in closed form (for [`RodriguesCoeffs::new`],
+    /// [`exp_coeffs`] and [`jac_coeffs`]): there `cos θ < 0`, so `1 − cos θ` and `θ − sin θ`
+    /// do not cancel. One `sqrt` and one `sin_cos`. Divisions, not multiplications by
+    /// reciprocals formed while `sin_cos` runs: the extra rounding of a reciprocal raised
+    /// Exp's orthonormality error (measured when this closed form served θ ≥ 1: 174 instead of
+    /// 56 of 2·10⁶ random φ above 1e-15).
     #[inline(never)]
     fn beyond_pi(theta2: f64) -> Self {
         let theta = trig::sqrt(theta2);

@@ -393,17 +393,13 @@ impl Core {
         }
         (self.d, self.done) = (d, done);
         self.n += used;
-        // The ring as pushing one by one would have left it: the last RING − 2 new samples
-        // before the two newest, then n0, n1.
+        // The ring as pushing one by one would have left it: the nodes of the last
+        // min(used, RING) samples (the older ones are already there).
         let keep = used.min(RING);
         for (i, s) in samples[used - keep..used].iter().enumerate() {
             let j = self.n - keep + i;
             self.ring[(j + self.cb) % RING] =
                 Node::new(s.t_ns, s.gyro - bias.gyro, s.acc - bias.acc);
-        }
-        if used > 0 {
-            self.ring[(self.n - 2 + self.cb) % RING] = n0;
-            self.ring[(self.n - 1 + self.cb) % RING] = n1;
         }
         used
     }
