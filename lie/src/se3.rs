@@ -124,7 +124,7 @@ impl SE3 {
     /// `Exp(ξ)`, ξ = [ρ, θ]: `(Exp(θ), Jl(θ) ρ)` (Solà eq. 172).
     pub fn exp(xi: &Vector6<f64>) -> Self {
         let (rho, theta) = split(xi);
-        // One set of coefficients (one sqrt and one sin_cos above θ = 1) for both parts:
+        // One set of coefficients (polynomials in θ² up to π, see `so3`) for both parts:
         // R = I + a θ̂ + b θ̂² (Rodrigues), Jl(θ)ρ = ρ + b θ×ρ + c θ×(θ×ρ).
         let k = so3::RodriguesCoeffs::new(&theta);
         let tr = theta.cross(&rho);
