@@ -529,20 +529,26 @@ impl SO3 {
     #[inline(always)]
     pub(crate) fn log_theta2(&self) -> (Vector3<f64>, f64) {
         let m = &self.m;
-        // s = sin θ·n (antisymmetric part), c = cos θ.
-        let s = vee(m);
-        let c = 0.5 * (m[(0, 0)] + m[(1, 1)] + m[(2, 2)] - 1.0);
-        let s2 = s.norm_squared();
-        if c > 0.0 && s2 < 0.01 {
+        // s2 = 2 sin θ·n (antisymmetric part), c2 = 2 cos θ: the factors ½ are left out (a
+        // power of two, so every result below is bit for bit what it would be with them).
+        let s2v = Vector3::new(
+            m[(2, 1)] - m[(1, 2)],
+            m[(0, 2)] - m[(2, 0)],
+            m[(1, 0)] - m[(0, 1)],
+        );
+        let c2 = m[(0, 0)] + m[(1, 1)] + m[(2, 2)] - 1.0;
+        let n2 = s2v.norm_squared(); // 4 sin²θ
+        if c2 > 0.0 && n2 < 0.04 {
             // θ < 0.1: θ/sin θ = asin(σ)/σ = Σ (2k)!/(4^k (k!)² (2k+1)) σ^{2k}, σ = sin θ;
             // six terms leave < 2e-24.
-            let phi = s * horner(s2, &ASIN_SERIES);
+            let phi = (s2v * 0.5) * horner(0.25 * n2, &ASIN_SERIES);
             (phi, phi.norm_squared())
-        } else if c > -0.9 {
-            // θ < 2.69: sin θ ≥ 0.43, so s carries full relative precision.
-            let sn = trig::sqrt(s2);
-            let theta = trig::atan2_upper(sn, c);
-            (s * (theta / sn), theta * theta)
+        } else if c2 > -1.8 {
+            // θ < 2.69: sin θ ≥ 0.43, so s carries full relative precision. atan2 is
+            // invariant under the common factor 2, and θ/(2 sin θ)·(2 sin θ·n) = θ n.
+            let sn2 = trig::sqrt(n2);
+            let theta = trig::atan2_upper(sn2, c2);
+            (s2v * (theta / sn2), theta * theta)
         } else {
             // Near π the antisymmetric part vanishes: extract the axis from the diagonal.
             let q = shepperd(m);
