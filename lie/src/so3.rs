@@ -14,7 +14,7 @@
 //!   degree 9, D degree 14), with the zero of `a` at θ = π factored out,
 //!   `a = (π² − θ²)·qa(θ²)`, so that `a` keeps its relative precision up to π. No sqrt, no
 //!   `sin_cos`, no division: a 1.9-rad Exp or Jr went from ~30 ns (sqrt → sin_cos → division)
-//!   to ~12 ns, Jr⁻¹ from ~30 ns to ~13 ns.
+//!   to ~12–15 ns, Jr⁻¹ likewise (criterion, README).
 //! - θ > π: closed form with one `sqrt` and one `sin_cos` (our own fdlibm-kernel version in
 //!   `trig.rs`); there `cos θ < 0`, so `1 − cos θ`, `θ − sin θ` and `1 − (θ/2)cot(θ/2)` do not
 //!   cancel.
@@ -160,7 +160,7 @@ const D_POLY: [f64; 15] = [
     1.81924689401072e-23,
 ];
 
-/// Two tables interleaved, `[[p_k, q_k]]`, for [`horner2`].
+/// Two tables interleaved, `[[p_k, q_k]]`, for [`poly2`].
 const fn zip(p: &[f64; 10], q: &[f64; 10]) -> [[f64; 2]; 10] {
     let mut out = [[0.0; 2]; 10];
     let mut k = 0;
@@ -177,8 +177,8 @@ const B_C_POLY: [[f64; 2]; 10] = zip(&B_POLY, &C_POLY);
 
 /// Two degree-9 polynomials at the same `x`: the tail `c₂ + c₃x + … + c₉x⁷` by Estrin's scheme
 /// (three levels of independent multiply-adds), then two Horner steps for `c₁` and `c₀`, which
-/// carry the rounding that matters (the printed errors of `fit_poly.py` are those of full
-/// Horner) on a dependency chain of 5 multiply-adds instead of 9. Both polynomials share one
+/// carry the rounding that matters (as accurate as full Horner; `fit_poly.py` prints the errors
+/// of this order of evaluation) on a dependency chain of 5 multiply-adds instead of 9. Both polynomials share one
 /// SSE2 register on x86-64 (`mulpd`/`addpd`), and each lane is rounded exactly as the scalar
 /// fallback rounds it.
 #[inline(always)]
@@ -529,26 +529,26 @@ impl SO3 {
     #[inline(always)]
     pub(crate) fn log_theta2(&self) -> (Vector3<f64>, f64) {
         let m = &self.m;
-        // s2 = 2 sin θ·n (antisymmetric part), c2 = 2 cos θ: the factors ½ are left out (a
-        // power of two, so every result below is bit for bit what it would be with them).
-        let s2v = Vector3::new(
+        // two_s = 2 sin θ·n (antisymmetric part), two_c = 2 cos θ: the factors ½ are left out
+        // (a power of two, so every result below is bit for bit what it would be with them).
+        let two_s = Vector3::new(
             m[(2, 1)] - m[(1, 2)],
             m[(0, 2)] - m[(2, 0)],
             m[(1, 0)] - m[(0, 1)],
         );
-        let c2 = m[(0, 0)] + m[(1, 1)] + m[(2, 2)] - 1.0;
-        let n2 = s2v.norm_squared(); // 4 sin²θ
-        if c2 > 0.0 && n2 < 0.04 {
+        let two_c = m[(0, 0)] + m[(1, 1)] + m[(2, 2)] - 1.0;
+        let four_s2 = two_s.norm_squared(); // 4 sin²θ
+        if two_c > 0.0 && four_s2 < 0.04 {
             // θ < 0.1: θ/sin θ = asin(σ)/σ = Σ (2k)!/(4^k (k!)² (2k+1)) σ^{2k}, σ = sin θ;
             // six terms leave < 2e-24.
-            let phi = (s2v * 0.5) * horner(0.25 * n2, &ASIN_SERIES);
+            let phi = (two_s * 0.5) * horner(0.25 * four_s2, &ASIN_SERIES);
             (phi, phi.norm_squared())
-        } else if c2 > -1.8 {
-            // θ < 2.69: sin θ ≥ 0.43, so s carries full relative precision. atan2 is
+        } else if two_c > -1.8 {
+            // θ < 2.69: sin θ ≥ 0.43, so two_s carries full relative precision. atan2 is
             // invariant under the common factor 2, and θ/(2 sin θ)·(2 sin θ·n) = θ n.
-            let sn2 = trig::sqrt(n2);
-            let theta = trig::atan2_upper(sn2, c2);
-            (s2v * (theta / sn2), theta * theta)
+            let two_sn = trig::sqrt(four_s2);
+            let theta = trig::atan2_upper(two_sn, two_c);
+            (two_s * (theta / two_sn), theta * theta)
         } else {
             // Near π the antisymmetric part vanishes: extract the axis from the diagonal.
             let q = shepperd(m);

@@ -161,12 +161,12 @@ fn coefficients_match_high_precision_on_both_sides_of_every_branch() {
         {
             let e = (got - want).abs() / want.abs();
             worst[i] = worst[i].max(e);
-            assert!(e <= 6e-16, "{name}({t}) = {got} vs {want}: rel {e:e}");
+            assert!(e <= 4e-16, "{name}({t}) = {got} vs {want}: rel {e:e}");
         }
         // D: series, polynomial up to π, closed form (no cancellation) above.
         let e = (d - r[3]).abs() / r[3];
         worst[3] = worst[3].max(e);
-        assert!(e <= 6e-16, "D({t}) = {d} vs {}: rel {e:e}", r[3]);
+        assert!(e <= 4e-16, "D({t}) = {d} vs {}: rel {e:e}", r[3]);
     }
     println!(
         "max relative error vs mpmath: a {:.1e}, b {:.1e}, c {:.1e}, D {:.1e}",
