@@ -268,6 +268,46 @@ pub fn exp_coeffs(theta2: f64) -> (f64, f64) {
     }
 }
 
+// Exp as a unit quaternion (cos(θ/2), (sin(θ/2)/θ)·φ), for θ < 0.1; the first omitted terms,
+// θ¹⁰/(4⁵·10!) and θ¹⁰/(2¹¹·11!), are < 3e-20 relative.
+// cos(θ/2) = Σ (−1)^k θ^{2k}/(4^k (2k)!)
+const QC_SERIES: [f64; 5] = [
+    1.0,
+    -1.0 / 8.0,
+    1.0 / 384.0,
+    -1.0 / 46080.0,
+    1.0 / 10321920.0,
+];
+// sin(θ/2)/θ = Σ (−1)^k θ^{2k}/(2^{2k+1} (2k+1)!)
+const QS_SERIES: [f64; 5] = [
+    1.0 / 2.0,
+    -1.0 / 48.0,
+    1.0 / 3840.0,
+    -1.0 / 645120.0,
+    1.0 / 185794560.0,
+];
+
+/// `(cos(θ/2), sin(θ/2)/θ)` at θ² [rad²]: `Exp(φ)` as the unit quaternion
+/// `(w, x, y, z) = (cos(θ/2), (sin(θ/2)/θ)·φ)` (Solà 2018, eq. 101). Five-term series below
+/// θ = 0.1 (no sqrt or `sin_cos`; every per-sample IMU angle), `sqrt` and `sin_cos(θ/2)` above.
+/// Neither coefficient cancels anywhere, so both are within ~1.5 ulp on either branch.
+#[inline]
+pub fn exp_quat_coeffs(theta2: f64) -> (f64, f64) {
+    if theta2 < SHORT_SERIES_BELOW * SHORT_SERIES_BELOW {
+        (horner(theta2, &QC_SERIES), horner(theta2, &QS_SERIES))
+    } else {
+        exp_quat_coeffs_closed(theta2)
+    }
+}
+
+#[inline(never)]
+#[cold]
+fn exp_quat_coeffs_closed(theta2: f64) -> (f64, f64) {
+    let theta = trig::sqrt(theta2);
+    let (s, c) = trig::sin_cos(0.5 * theta);
+    (c, s / theta)
+}
+
 /// `((1 − cos θ)/θ², (θ − sin θ)/θ³)` at θ² [rad²]: the two coefficients of Jr and Jl.
 #[inline]
 pub fn jac_coeffs(theta2: f64) -> (f64, f64) {

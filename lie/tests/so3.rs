@@ -5,7 +5,7 @@
 
 mod common;
 use common::*;
-use lie::so3::{RodriguesCoeffs, d_coeff, exp_coeffs, jac_coeffs};
+use lie::so3::{RodriguesCoeffs, d_coeff, exp_coeffs, exp_quat_coeffs, jac_coeffs};
 use lie::{SO3, hat, jl, jl_inv, jr, jr_inv, vee};
 use nalgebra::{Matrix3, Quaternion, Rotation3, Unit, UnitQuaternion, Vector3};
 use proptest::prelude::*;
@@ -241,6 +241,68 @@ fn coefficients_within_a_few_eps_on_dense_angles() {
                 "branch {b}, coefficient {i}: {} ε > {}",
                 w[i],
                 tol[i]
+            );
+        }
+    }
+}
+
+#[test]
+fn quaternion_exp_coefficients_within_an_ulp() {
+    // tests/data/quat_ref.txt (generator gen_quat_ref.py beside it): 60-digit references of
+    // cos(θ/2) and sin(θ/2)/θ at √(exact f64 θ²), 200 angles on the series branch (θ < 0.1),
+    // 100 on the closed form up to 6 rad, and the edge.
+    let mut worst = [[0.0f64; 2]; 2];
+    let mut worst_r = [0.0f64; 2];
+    let mut n = [0; 2];
+    for line in include_str!("data/quat_ref.txt").lines() {
+        let v: Vec<f64> = line.split(' ').map(|x| x.parse().unwrap()).collect();
+        let t = v[0];
+        let (c, s) = exp_quat_coeffs(t * t);
+        let branch = usize::from(t >= 0.1);
+        n[branch] += 1;
+        // cos(θ/2) in units of ε absolute (it is a unit quaternion's component and crosses
+        // zero at π); sin(θ/2)/θ relative.
+        let ec = ((c - v[1]) - v[2]).abs() / f64::EPSILON;
+        // Above π, sin(θ/2)/θ is only as precise as θ = √θ², whose half-ulp rounding it
+        // amplifies by |x cot x − 1|, x = θ/2 (as for a = sin θ/θ, module docs); that part is
+        // taken out of the error before it is compared.
+        let x = 0.5 * t;
+        let amp = if t > PI {
+            (x / x.tan() - 1.0).abs() * 0.5
+        } else {
+            0.0
+        };
+        let es = (rel_eps(s, v[3], v[4]) - amp).max(0.0);
+        worst[branch][0] = worst[branch][0].max(ec);
+        worst[branch][1] = worst[branch][1].max(es);
+        // The quaternion is the matrix Exp's rotation: entries within a few ε.
+        let phi = Vector3::new(0.36, -0.48, 0.8) * t;
+        let q = UnitQuaternion::new_unchecked(Quaternion::new(c, s * phi.x, s * phi.y, s * phi.z));
+        let e = (q.to_rotation_matrix().matrix() - SO3::exp(&phi).matrix()).amax();
+        worst_r[branch] = worst_r[branch].max(e);
+        assert!(
+            e <= [4e-16, 1.2e-15][branch],
+            "θ = {t}: R(q) − Exp(φ) = {e:e}"
+        );
+    }
+    assert!(
+        n[0] >= 200 && n[1] >= 100,
+        "reference file truncated: {n:?}"
+    );
+    println!(
+        "quaternion Exp coefficients / ε: series cos {:.2} sin/θ {:.2}; closed form cos {:.2} sin/θ {:.2}; max |R(q) − Exp(φ)| {:.1e} / {:.1e}",
+        worst[0][0], worst[0][1], worst[1][0], worst[1][1], worst_r[0], worst_r[1]
+    );
+    // ≈ 1.5× the measured maxima (printed above). Series: a five-term Horner sum led by 1 or
+    // ½. Closed form: sqrt's rounding of θ, sin_cos (< 1 ulp) and a division.
+    let tols = [[0.4, 0.4], [0.6, 0.9]];
+    for b in 0..2 {
+        for i in 0..2 {
+            assert!(
+                worst[b][i] <= tols[b][i],
+                "branch {b}, coefficient {i}: {} ε > {}",
+                worst[b][i],
+                tols[b][i]
             );
         }
     }

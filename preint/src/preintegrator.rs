@@ -13,7 +13,7 @@ use crate::measurement::{BiasJacobians, Cov9, Cov15, EdgeNoise, EdgeSource, Prei
 use crate::noise::{CellRule, walk_scale, white_scale};
 use crate::params::{CovShape, Level, PreintParams, Scheme};
 use crate::propagation::{
-    BiasWalk, Blk96, ErrorState, GenQ, IsoQ, M3, NO_ID, NoiseQ, Origin, SLOTS, Sym9, Transition,
+    BiasWalk, Blk96, ErrorState, GenQ, IsoQ, NO_ID, NoiseQ, Origin, SLOTS, Sym9, Transition,
     rot_cols,
 };
 use crate::sample::{ImuBias, ImuSample};
@@ -350,8 +350,7 @@ impl Core {
     fn count_interval(done: &mut usize, d: &mut Deltas) {
         *done += 1;
         if done.is_multiple_of(RENORM_EVERY) {
-            let r = d.r;
-            d.r = r * (M3::identity() * 3.0 - r.transpose() * r) * 0.5;
+            d.renormalize();
         }
     }
 
@@ -892,7 +891,7 @@ impl Preintegrator {
     }
 
     fn output(&self, core: &Core) -> PreintegratedImu {
-        let r = core.d.r;
+        let r = core.d.delta_r();
         let rt = r.transpose();
         let e = &core.e;
         let mut cov = Cov9::zeros();

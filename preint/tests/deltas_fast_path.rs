@@ -156,3 +156,60 @@ fn valid_samples_outside_the_quick_test_take_the_exact_checks() {
         assert_eq!(format!("{ma:?}"), format!("{mb:?}"), "{scheme:?}");
     }
 }
+
+/// `Level::Deltas` accumulates ΔR of Euler and midpoint as a unit quaternion, the other levels
+/// as a matrix: the two must agree to round-off over a long window, on both branches of the
+/// quaternion Exp (per-step angles below and above 0.1 rad) and across the renormalisations.
+#[test]
+fn quaternion_deltas_agree_with_the_matrix_deltas() {
+    let n = 40_000i64; // 200 s at 200 Hz: ~40 renormalisations
+    let s: Vec<ImuSample> = (0..n)
+        .map(|k| {
+            let t = k as f64 * 5e-3;
+            // Tumbling at up to ~4 rad/s, with a 2-s burst at 30 rad/s (0.15 rad per step).
+            let burst = if (100.0..102.0).contains(&t) {
+                30.0
+            } else {
+                0.0
+            };
+            ImuSample::new(
+                k * 5_000_000,
+                Vector3::new(
+                    2.0 * (0.31 * t).sin() + burst,
+                    1.5 * (0.17 * t).cos(),
+                    0.8 + 2.0 * (0.05 * t).sin(),
+                ),
+                Vector3::new(
+                    1.5 * (0.9 * t).sin(),
+                    0.7 * t.cos(),
+                    9.81 + 0.5 * (2.1 * t).sin(),
+                ),
+            )
+        })
+        .collect();
+    for scheme in [Scheme::Euler, Scheme::Midpoint] {
+        let run = |level| {
+            let mut prm = PreintParams::default()
+                .with_scheme(scheme)
+                .with_level(level);
+            prm.keep_samples = false;
+            let mut pi = Preintegrator::new(prm, ImuBias::zero()).unwrap();
+            pi.integrate_slice(&s).unwrap();
+            pi.finish().unwrap()
+        };
+        let (q, m) = (run(Level::Deltas), run(Level::Covariance));
+        let er = (q.delta_r.matrix() - m.delta_r.matrix()).amax();
+        let ev = (q.delta_v - m.delta_v).norm() / m.delta_v.norm();
+        let ep = (q.delta_p - m.delta_p).norm() / m.delta_p.norm();
+        let orth = q.delta_r.orthonormality_error();
+        println!(
+            "{scheme:?}: |ΔR_q − ΔR_m| {er:.1e}, Δv rel {ev:.1e}, Δp rel {ep:.1e}, \
+             |ΔRᵀΔR − I| {orth:.1e}"
+        );
+        assert!(
+            er < 1e-13 && ev < 1e-13 && ep < 1e-13,
+            "{scheme:?}: {er:e} {ev:e} {ep:e}"
+        );
+        assert!(orth < 1e-15, "{scheme:?}: ΔR orthonormality {orth:e}");
+    }
+}

@@ -36,6 +36,15 @@ pub(crate) fn step<const LIN: bool>(
     o: &mut Origin,
 ) -> Option<(Transition, EulerGain)> {
     let th = n0.w * h;
+    if !LIN {
+        // Level::Deltas: ΔR as a unit quaternion (`Deltas`).
+        let u = d.q.rotate(&n0.a);
+        let h2 = 0.5 * h * h;
+        d.p += d.v * h + u * h2;
+        d.v += u * h;
+        d.q = d.q.mul_exp(&th);
+        return None;
+    }
     let k = coeffs::<LIN>(&th);
     let e = i_plus_hat_hat2(&th, k.a, k.b);
     let r0 = d.r;

@@ -32,6 +32,18 @@ pub(crate) fn step<const LIN: bool>(
     o: &mut Origin,
 ) -> Option<(Transition, MidGain)> {
     let th = (n0.w + n1.w) * (0.5 * h);
+    if !LIN {
+        // Level::Deltas: ΔR as a unit quaternion (`Deltas`).
+        let q1 = d.q.mul_exp(&th);
+        let u1 = q1.rotate(&n1.a);
+        let abar = (d.u_last + u1) * 0.5;
+        let hh = 0.5 * h * h;
+        d.p += d.v * h + abar * hh;
+        d.v += abar * h;
+        d.q = q1;
+        d.u_last = u1;
+        return None;
+    }
     let k = coeffs::<LIN>(&th);
     let e = i_plus_hat_hat2(&th, k.a, k.b);
     let r0 = d.r;
