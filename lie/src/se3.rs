@@ -122,6 +122,7 @@ impl SE3 {
     }
 
     /// `Exp(ξ)`, ξ = [ρ, θ]: `(Exp(θ), Jl(θ) ρ)` (Solà eq. 172).
+    #[inline]
     pub fn exp(xi: &Vector6<f64>) -> Self {
         let (rho, theta) = split(xi);
         // One set of coefficients (polynomials in θ² up to π, see `so3`) for both parts:
@@ -135,6 +136,7 @@ impl SE3 {
     }
 
     /// `Log(T) = [Jl⁻¹(θ) t, θ]` with θ = Log(R) (Solà eq. 173).
+    #[inline]
     pub fn log(&self) -> Vector6<f64> {
         let (theta, theta2) = self.r.log_theta2();
         let d = so3::d_coeff(theta2);

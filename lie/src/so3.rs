@@ -560,6 +560,7 @@ impl SO3 {
 
     /// Logarithmic map `Log(R)`: the rotation vector φ with ‖φ‖ ∈ [0, π] and `Exp(φ) = R`.
     /// At exactly θ = π either of the two opposite vectors may be returned.
+    #[inline]
     pub fn log(&self) -> Vector3<f64> {
         self.log_theta2().0
     }
