@@ -35,16 +35,16 @@ pub(crate) fn step<const LIN: bool>(
     t1_ns: i64,
     o: &mut Origin,
 ) -> Option<(Transition, EulerGain)> {
-    let th = n0.w * h;
     if !LIN {
         // Level::Deltas: ΔR as a unit quaternion (`Deltas`).
         let u = d.q.rotate(&n0.a);
         let h2 = 0.5 * h * h;
         d.p += d.v * h + u * h2;
         d.v += u * h;
-        d.q = d.q.mul_exp(&th);
+        d.q = d.q.mul_exp_scaled(&n0.w, h);
         return None;
     }
+    let th = n0.w * h;
     let k = coeffs::<LIN>(&th);
     let e = i_plus_hat_hat2(&th, k.a, k.b);
     let r0 = d.r;

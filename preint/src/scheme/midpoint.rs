@@ -31,10 +31,9 @@ pub(crate) fn step<const LIN: bool>(
     h: f64,
     o: &mut Origin,
 ) -> Option<(Transition, MidGain)> {
-    let th = (n0.w + n1.w) * (0.5 * h);
     if !LIN {
         // Level::Deltas: ΔR as a unit quaternion (`Deltas`).
-        let q1 = d.q.mul_exp(&th);
+        let q1 = d.q.mul_exp_scaled(&(n0.w + n1.w), 0.5 * h);
         let u1 = q1.rotate(&n1.a);
         let abar = (d.u_last + u1) * 0.5;
         let hh = 0.5 * h * h;
@@ -44,6 +43,7 @@ pub(crate) fn step<const LIN: bool>(
         d.u_last = u1;
         return None;
     }
+    let th = (n0.w + n1.w) * (0.5 * h);
     let k = coeffs::<LIN>(&th);
     let e = i_plus_hat_hat2(&th, k.a, k.b);
     let r0 = d.r;

@@ -100,10 +100,12 @@ impl Quat {
         v: V3::new(0.0, 0.0, 0.0),
     };
 
-    /// `q ⊗ Exp(φ)`, `Exp(φ) = (cos(θ/2), (sin(θ/2)/θ) φ)` ([`exp_quat_coeffs`]).
+    /// `q ⊗ Exp(φ)`, `Exp(φ) = (cos(θ/2), (sin(θ/2)/θ) φ)` ([`exp_quat_coeffs`]), given
+    /// `theta2 = θ²` (which the caller can form without waiting for φ, see
+    /// [`Quat::mul_exp_scaled`]).
     #[inline(always)]
-    pub(crate) fn mul_exp(&self, phi: &V3) -> Self {
-        let (c, s) = exp_quat_coeffs(phi.norm_squared());
+    pub(crate) fn mul_exp(&self, phi: &V3, theta2: f64) -> Self {
+        let (c, s) = exp_quat_coeffs(theta2);
         let (w, x, y, z) = (self.w, self.v.x, self.v.y, self.v.z);
         let (ex, ey, ez) = (s * phi.x, s * phi.y, s * phi.z);
         Self {
@@ -114,6 +116,14 @@ impl Quat {
                 w * ez + x * ey - y * ex + z * c,
             ),
         }
+    }
+
+    /// `q ⊗ Exp(k w)` for a rate `w` [rad/s] and a time `k` [s], with θ² formed as `|w|²·k²`:
+    /// `|w|²` does not wait for `k`, which shortens each step's chain of dependent operations
+    /// (the steps of a loop overlap only as far as the out-of-order window reaches).
+    #[inline(always)]
+    pub(crate) fn mul_exp_scaled(&self, w: &V3, k: f64) -> Self {
+        self.mul_exp(&(w * k), w.norm_squared() * (k * k))
     }
 
     /// `R(q) x = x + w t + v × t`, `t = 2 v × x` (unit q).
