@@ -9,7 +9,8 @@
 //! Numerics. `a = sin θ/θ`, `b = (1 − cos θ)/θ²`, `c = (θ − sin θ)/θ³` and Jr⁻¹'s
 //! `D = 1/θ² − (1 + cos θ)/(2θ sin θ)` are even in θ, so they are computed from θ² = φᵀφ
 //! without a square root, on three branches:
-//! - θ < 0.1 (every per-sample IMU angle): five-term Taylor series in θ² (truncation < 3e-18).
+//! - θ < 0.1 (every per-sample IMU angle): five-term Taylor series in θ² (truncation < 3e-18),
+//!   by Estrin's scheme with c₀ added last (three dependent multiply-add levels, not four).
 //! - 0.1 ≤ θ ≤ π: polynomials in θ² (Chebyshev interpolants from `lie/tools/fit_poly.py`;
 //!   degree 9, D degree 14), with the zero of `a` at θ = π factored out,
 //!   `a = (π² − θ²)·qa(θ²)`, so that `a` keeps its relative precision up to π. No sqrt, no
@@ -258,7 +259,7 @@ const SHORT_SERIES_BELOW: f64 = 0.1;
 pub fn exp_coeffs(theta2: f64) -> (f64, f64) {
     // Series and polynomial inline (no sqrt, sin_cos or division); θ > π out of line.
     if theta2 < SHORT_SERIES_BELOW * SHORT_SERIES_BELOW {
-        (horner(theta2, &A_SERIES), horner(theta2, &B_SERIES))
+        (estrin5(theta2, &A_SERIES), estrin5(theta2, &B_SERIES))
     } else if theta2 <= PI2_HI {
         let [qa, b] = poly2(theta2 - POLY_MID, &QA_B_POLY);
         (a_from_qa(theta2, qa), b)
@@ -322,7 +323,7 @@ fn exp_quat_coeffs_closed(theta2: f64) -> (f64, f64) {
 #[inline]
 pub fn jac_coeffs(theta2: f64) -> (f64, f64) {
     if theta2 < SHORT_SERIES_BELOW * SHORT_SERIES_BELOW {
-        (horner(theta2, &B_SERIES), horner(theta2, &C_SERIES))
+        (estrin5(theta2, &B_SERIES), estrin5(theta2, &C_SERIES))
     } else if theta2 <= PI2_HI {
         let [b, c] = poly2(theta2 - POLY_MID, &B_C_POLY);
         (b, c)
@@ -359,9 +360,9 @@ impl RodriguesCoeffs {
         let theta2 = phi.norm_squared();
         if theta2 < SHORT_SERIES_BELOW * SHORT_SERIES_BELOW {
             Self {
-                a: horner(theta2, &A_SERIES),
-                b: horner(theta2, &B_SERIES),
-                c: horner(theta2, &C_SERIES),
+                a: estrin5(theta2, &A_SERIES),
+                b: estrin5(theta2, &B_SERIES),
+                c: estrin5(theta2, &C_SERIES),
             }
         } else if theta2 <= PI2_HI {
             let x = theta2 - POLY_MID;
@@ -403,7 +404,7 @@ pub fn d_coeff(theta2: f64) -> f64 {
     // more terms than Exp's). The closed form, which cancels 1 − (θ/2)cot(θ/2) by up to
     // ~6 bits near θ = ½ (measured 29 ε there), only serves θ > π, where it adds.
     if theta2 < SHORT_SERIES_BELOW * SHORT_SERIES_BELOW {
-        horner(theta2, &D_SERIES)
+        estrin5(theta2, &D_SERIES)
     } else if theta2 <= PI2_HI {
         poly15(theta2 - POLY_MID, &D_POLY)
     } else {
