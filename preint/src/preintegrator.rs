@@ -391,16 +391,56 @@ impl Core {
             used += 1;
         }
         (self.d, self.done) = (d, done);
+        self.write_back(samples, used, bias);
+        used
+    }
+
+    /// [`Core::run_deltas`] for rk4: in the steady state (`n ≥ 3`, every interval but the last
+    /// two integrated) each new sample completes the cubic stencil `{k−1, k, k+1, k+2}` of
+    /// interval k = n − 2, which [`Core::rk4_interval`] would integrate with the same nodes,
+    /// weights and step. The stencil's three older nodes stay in registers.
+    #[inline(never)]
+    fn run_deltas_rk4(
+        &mut self,
+        samples: &[ImuSample],
+        bias: &ImuBias,
+        last_t_ns: i64,
+        gap_limit: u64,
+    ) -> usize {
+        let (mut d, mut done) = (self.d, self.done);
+        let n = self.n;
+        let (mut a, mut b, mut c) = (*self.node(n - 3), *self.node(n - 2), *self.node(n - 1));
+        let mut last = last_t_ns;
+        let mut used = 0;
+        for s in samples {
+            if !Preintegrator::common_case(s, last, gap_limit) {
+                break;
+            }
+            last = s.t_ns;
+            let nn = Node::new(s.t_ns, s.gyro - bias.gyro, s.acc - bias.acc);
+            let st = [&a, &b, &c, &nn];
+            let (o, w, pend) = (&mut self.origin, &mut self.weights, &mut self.e.pend);
+            rk4::step::<false>(&mut d, &st, 4, 1, done + self.cb - 1, o, w, pend, None);
+            Self::count_interval(&mut done, &mut d);
+            (a, b, c) = (b, c, nn);
+            used += 1;
+        }
+        (self.d, self.done) = (d, done);
+        self.write_back(samples, used, bias);
+        used
+    }
+
+    /// After a slice path consumed `used` samples: the ring as pushing them one by one would
+    /// have left it, the nodes of the last min(used, RING) samples (older ones are already
+    /// there).
+    fn write_back(&mut self, samples: &[ImuSample], used: usize, bias: &ImuBias) {
         self.n += used;
-        // The ring as pushing one by one would have left it: the nodes of the last
-        // min(used, RING) samples (the older ones are already there).
         let keep = used.min(RING);
         for (i, s) in samples[used - keep..used].iter().enumerate() {
             let j = self.n - keep + i;
             self.ring[(j + self.cb) % RING] =
                 Node::new(s.t_ns, s.gyro - bias.gyro, s.acc - bias.acc);
         }
-        used
     }
 
     /// Integrates every interval that is ready; with `fin`, all remaining intervals and the
@@ -757,19 +797,22 @@ impl Preintegrator {
     }
 
     /// Adds the samples in order; stops at the first invalid one (see [`Self::integrate`]),
-    /// leaving the samples before it integrated. With [`Level::Deltas`] and Euler or midpoint,
-    /// runs of valid samples go straight from the slice through the scheme's step (same
-    /// result, bit for bit, as pushing them one by one).
+    /// leaving the samples before it integrated. With [`Level::Deltas`], runs of valid
+    /// samples go straight from the slice through the scheme's step (same result, bit for
+    /// bit, as pushing them one by one).
     pub fn integrate_slice(&mut self, samples: &[ImuSample]) -> Result<(), PreintError> {
-        let fast = !self.lin && matches!(self.cfg.scheme, Scheme::Euler | Scheme::Midpoint);
+        let fast = !self.lin;
+        // Euler and midpoint need two nodes, rk4's cubic stencil three (see `run_deltas_rk4`).
+        let min_n = if self.cfg.scheme == Scheme::Rk4 { 3 } else { 2 };
         let mut i = 0;
         while i < samples.len() {
-            if fast && self.core.n >= 2 && self.core.done + 2 == self.core.n {
+            if fast && self.core.n >= min_n && self.core.done + 2 == self.core.n {
                 let rest = &samples[i..];
                 let (bias, last, gap) = (&self.bias_hat, self.last_t_ns, self.gap_limit);
                 let used = match self.cfg.scheme {
                     Scheme::Midpoint => self.core.run_deltas::<true>(rest, bias, last, gap),
-                    _ => self.core.run_deltas::<false>(rest, bias, last, gap),
+                    Scheme::Euler => self.core.run_deltas::<false>(rest, bias, last, gap),
+                    Scheme::Rk4 => self.core.run_deltas_rk4(rest, bias, last, gap),
                 };
                 if used > 0 {
                     self.last_t_ns = rest[used - 1].t_ns;

@@ -1,5 +1,6 @@
-//! `integrate_slice` with `Level::Deltas` runs Euler and midpoint straight from the slice
-//! (`Core::run_deltas`). It must be indistinguishable from pushing the samples one by one:
+//! `integrate_slice` with `Level::Deltas` runs every scheme straight from the slice
+//! (`Core::run_deltas`, `Core::run_deltas_rk4`). It must be indistinguishable from pushing the
+//! samples one by one:
 //! the same deltas bit for bit (across ΔR's re-orthonormalisation every 1024 intervals), the
 //! same stored samples, the same error at the same index for a bad sample, and the same
 //! state after it.
@@ -157,8 +158,7 @@ fn valid_samples_outside_the_quick_test_take_the_exact_checks() {
     }
 }
 
-/// `Level::Deltas` accumulates ΔR of Euler and midpoint as a unit quaternion, the other levels
-/// as a matrix: the two must agree to round-off over a long window, on both branches of the
+/// `Level::Deltas` accumulates ΔR as a unit quaternion, the other levels as a matrix: the two must agree to round-off over a long window, on both branches of the
 /// quaternion Exp (per-step angles below and above 0.1 rad) and across the renormalisations.
 #[test]
 fn quaternion_deltas_agree_with_the_matrix_deltas() {
@@ -187,7 +187,7 @@ fn quaternion_deltas_agree_with_the_matrix_deltas() {
             )
         })
         .collect();
-    for scheme in [Scheme::Euler, Scheme::Midpoint] {
+    for scheme in SCHEMES {
         let run = |level| {
             let mut prm = PreintParams::default()
                 .with_scheme(scheme)

@@ -9,8 +9,9 @@
 //! (GTSAM). The gain is returned pulled back (internal `propagation` module, `Φ_k+1⁻¹` with
 //! `(V, W, τ)`): gyro columns `(g, V × g, (W − τV) × g)`, accelerometer `ΔR_k·(h, ½h² − τ h)`.
 
-use super::{Deltas, Node, coeffs, s_plus_hat_hat2};
+use super::{Deltas, Node, s_plus_hat_hat2};
 use crate::propagation::{Cols9, M3, Origin, PullBack, Transition, skew_cols};
+use lie::so3::RodriguesCoeffs;
 use lie::so3::i_plus_hat_hat2;
 
 /// Sample k's pulled-back gain: gyro columns `g`, accelerometer columns `r0·(cv, cp)`
@@ -45,7 +46,7 @@ pub(crate) fn step<const LIN: bool>(
         return None;
     }
     let th = n0.w * h;
-    let k = coeffs::<LIN>(&th);
+    let k = RodriguesCoeffs::new(&th);
     let e = i_plus_hat_hat2(&th, k.a, k.b);
     let r0 = d.r;
     let u = r0 * n0.a;

@@ -16,8 +16,9 @@
 //! adds the sample's noise once, with the sum of both intervals' gains, when interval k+1 is
 //! done (no cross-covariance is kept).
 
-use super::{Deltas, Node, coeffs, s_plus_hat_hat2};
+use super::{Deltas, Node, s_plus_hat_hat2};
 use crate::propagation::{MidGain, Origin, Transition};
+use lie::so3::RodriguesCoeffs;
 use lie::so3::i_plus_hat_hat2;
 
 /// One midpoint interval between nodes `n0` and `n1` of length `h` [s]; gains are pulled back
@@ -44,7 +45,7 @@ pub(crate) fn step<const LIN: bool>(
         return None;
     }
     let th = (n0.w + n1.w) * (0.5 * h);
-    let k = coeffs::<LIN>(&th);
+    let k = RodriguesCoeffs::new(&th);
     let e = i_plus_hat_hat2(&th, k.a, k.b);
     let r0 = d.r;
     let r1 = r0 * e;

@@ -9,7 +9,7 @@ pub mod midpoint;
 pub mod rk4;
 
 use crate::propagation::{M3, V3};
-use lie::so3::{RodriguesCoeffs, exp_coeffs, exp_quat_coeffs};
+use lie::so3::exp_quat_coeffs;
 use nalgebra::Matrix3;
 
 /// A bias-corrected sample: time [ns], `ω` [rad/s], `a` [m/s²].
@@ -203,16 +203,4 @@ pub(crate) fn s_plus_hat_hat2(phi: &V3, s: f64, alpha: f64, beta: f64) -> M3 {
         byz + ax,
         s - beta * (xx + yy),
     )
-}
-
-/// Rodrigues' coefficients of `phi` ([`RodriguesCoeffs`]); without `LIN` only `a` and `b`
-/// (what Exp needs) are computed and `c` is 0.
-#[inline(always)]
-pub(crate) fn coeffs<const LIN: bool>(phi: &V3) -> RodriguesCoeffs {
-    if LIN {
-        RodriguesCoeffs::new(phi)
-    } else {
-        let (a, b) = exp_coeffs(phi.norm_squared());
-        RodriguesCoeffs { a, b, c: 0.0 }
-    }
 }

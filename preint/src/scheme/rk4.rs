@@ -29,12 +29,13 @@
 //! grid every interior stencil has the same offsets, so its Lagrange weights are computed once
 //! (`Weights`).
 
-use super::{Deltas, Node, coeffs, s_plus_hat_hat2, span_s};
+use super::{Deltas, Node, s_plus_hat_hat2, span_s};
 use crate::propagation::{
     Blk96, Cols6, Cols9, ErrorState, M3, Origin, Pending, PullBack, SLOTS, Transition, V3,
     rot_cols, skew_mul,
 };
 use lie::hat;
+use lie::so3::RodriguesCoeffs;
 use lie::so3::i_plus_hat_hat2;
 
 const SQRT3_6: f64 = 0.288_675_134_594_812_9; // √3/6
@@ -162,23 +163,32 @@ pub(crate) fn step<const LIN: bool>(
     let om = (w1 + w2) * (0.5 * h) + w1.cross(&w2) * (KAPPA * h * h);
     let hm = 0.5 * h;
     let omm = (wm1 + wm2) * (0.5 * hm) + wm1.cross(&wm2) * (KAPPA * hm * hm);
-    let k = coeffs::<LIN>(&om);
-    let km = coeffs::<LIN>(&omm);
+    let h6 = h / 6.0;
+    let hh6 = h * h / 6.0;
+    if !LIN {
+        // Level::Deltas: ΔR as a unit quaternion (`Deltas`).
+        let q1 = d.q.mul_exp(&om, om.norm_squared());
+        let um = d.q.mul_exp(&omm, omm.norm_squared()).rotate(&am);
+        let u1 = q1.rotate(&st[kk + 1].a);
+        let u0 = d.u_last;
+        d.p += d.v * h + (u0 + um * 2.0) * hh6;
+        d.v += (u0 + um * 4.0 + u1) * h6;
+        d.q = q1;
+        d.u_last = u1;
+        return None;
+    }
+    let k = RodriguesCoeffs::new(&om);
+    let km = RodriguesCoeffs::new(&omm);
     let r0 = d.r;
     let re = r0 * i_plus_hat_hat2(&om, k.a, k.b);
     let rm = r0 * i_plus_hat_hat2(&omm, km.a, km.b);
     let u0 = d.u_last;
     let um = rm * am;
     let u1 = re * st[kk + 1].a;
-    let h6 = h / 6.0;
-    let hh6 = h * h / 6.0;
     d.p += d.v * h + (u0 + um * 2.0) * hh6;
     d.v += (u0 + um * 4.0 + u1) * h6;
     d.r = re;
     d.u_last = u1;
-    if !LIN {
-        return None;
-    }
     // ΔR_k+1 Jr(Ω) = ΔR_k Jl(Ω) and R_m Jr(Ω_m) = ΔR_k Jl(Ω_m) (Exp(φ) Jr(φ) = Jl(φ)).
     let f = r0 * s_plus_hat_hat2(&om, 1.0, k.b, k.c);
     let fm = r0 * s_plus_hat_hat2(&omm, 1.0, km.b, km.c);
