@@ -30,11 +30,12 @@
 //! `Log` reads sin θ·n from the antisymmetric part and cos θ from the trace, on four branches:
 //! an eight-term arcsine series for sin θ < 0.1; up to θ = π/3 the half angle,
 //! `u = tan²(θ/2) = sin²θ/(1 + cos θ)²` and a degree-14 polynomial for `atan(√u)/√u` (one
-//! division, no sqrt or `atan2`); up to cos θ = −0.9 `atan2` (sqrt, one division in `atan2`,
-//! one after); and near π Shepperd's quaternion extraction. So it is exact near θ = 0 and at
-//! θ = π, where a formula that divides by `sin θ` fails, and a slightly drifted R costs it
-//! nothing extra. Measured Log(Exp φ) relative errors (`tests/so3.rs`, 200 000 angles): series
-//! 1.4 ε, half angle 2.6 ε, atan2 2.1 ε, Shepperd 1.7 ε.
+//! division, no sqrt or `atan2`); up to 2π/3 `π/2 − atan(cot θ)` with the same polynomial; up
+//! to cos θ = −0.9 `atan2` (sqrt, one division in `atan2`, one after); and near π Shepperd's
+//! quaternion extraction. So it is exact near θ = 0 and at θ = π, where a formula that divides
+//! by `sin θ` fails, and a slightly drifted R costs it nothing extra. Measured Log(Exp φ)
+//! relative errors (`tests/so3.rs`, 200 000 angles): series 1.4 ε, half angle 2.6 ε, cotangent
+//! 2.2 ε, atan2 2.1 ε, Shepperd 1.7 ε.
 
 use crate::trig;
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
@@ -165,6 +166,9 @@ const D_POLY: [f64; 15] = [
     1.81924689401072e-23,
 ];
 
+// π/2 as hi + lo (hi = fl(π/2)).
+const PIO2_HI: f64 = std::f64::consts::FRAC_PI_2;
+const PIO2_LO: f64 = 6.123233995736766e-17;
 // Log's half-angle kernel A(u) = atan(√u)/√u for u = tan²(θ/2) ≤ 0.34 (θ ≤ π/3 is u ≤ 1/3),
 // printed by `lie/tools/fit_poly.py` (degree-14 Chebyshev interpolant in x = u − ATAN_MID,
 // evaluated by `poly15`).
@@ -635,6 +639,16 @@ impl SO3 {
             let u = four_s2 * (iv * iv);
             let at = poly15(u - ATAN_MID, &ATAN_POLY);
             (two_s * (2.0 * at * iv), 4.0 * u * (at * at))
+        } else if two_c > -1.0 {
+            // π/3 < θ < 2π/3: θ = π/2 − atan(cot θ) with |cot θ| < 1/√3, so the same
+            // polynomial, A(r²) for r = cos θ/sin θ, gives the angle: atan2's own reduction
+            // for this range (conditioning as atan2's), without its case selection and table.
+            // (1/(2 sin θ) formed once and multiplied, for one division less, cost 0.3 ε and a
+            // quarter more round-trip error on drifted matrices.)
+            let two_sn = trig::sqrt(four_s2);
+            let r = two_c / two_sn;
+            let theta = PIO2_HI - (r * poly15(r * r - ATAN_MID, &ATAN_POLY) - PIO2_LO);
+            (two_s * (theta / two_sn), theta * theta)
         } else if two_c > -1.8 {
             // θ < 2.69: sin θ ≥ 0.43, so two_s carries full relative precision. atan2 is
             // invariant under the common factor 2, and θ/(2 sin θ)·(2 sin θ·n) = θ n.
