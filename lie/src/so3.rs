@@ -27,7 +27,7 @@
 //! ~6 bits near θ = ½: 29 ε measured there.) Above π, `a` computed from θ² is only as precise
 //! as θ = √θ²: its relative error grows as |θ cot θ − 1|·ε/2 near 2π (and within ~1e-5 rad
 //! above π); `a·θ = sin θ` stays within a few ε absolute.
-//! `Log` reads sin θ·n from the antisymmetric part and cos θ from the trace, on four branches:
+//! `Log` reads sin θ·n from the antisymmetric part and cos θ from the trace, on five branches:
 //! an eight-term arcsine series for sin θ < 0.1; up to θ = π/3 the half angle,
 //! `u = tan²(θ/2) = sin²θ/(1 + cos θ)²` and a degree-14 polynomial for `atan(√u)/√u` (one
 //! division, no sqrt or `atan2`); up to 2π/3 `π/2 − atan(cot θ)` with the same polynomial; up
@@ -320,9 +320,11 @@ const QS_SERIES: [f64; 5] = [
 ];
 
 /// `(cos(θ/2), sin(θ/2)/θ)` at θ² [rad²]: `Exp(φ)` as the unit quaternion
-/// `(w, x, y, z) = (cos(θ/2), (sin(θ/2)/θ)·φ)` (Solà 2018, eq. 101). Five-term series below
+/// `(w, x, y, z) = (cos(θ/2), (sin(θ/2)/θ)·φ)` (Hamilton; Solà 2017, "Quaternion kinematics
+/// for the error-state Kalman filter", the quaternion exponential map). Five-term series below
 /// θ = 0.1 (no sqrt or `sin_cos`; every per-sample IMU angle), `sqrt` and `sin_cos(θ/2)` above.
-/// Neither coefficient cancels anywhere, so both are within ~1.5 ulp on either branch.
+/// Neither coefficient cancels anywhere: measured ≤ 0.6 ε against 60-digit references
+/// (`tests/so3.rs`).
 #[inline]
 pub fn exp_quat_coeffs(theta2: f64) -> (f64, f64) {
     if theta2 < SHORT_SERIES_BELOW * SHORT_SERIES_BELOW {
@@ -631,8 +633,8 @@ impl SO3 {
             // u = tan²(θ/2) = 4 sin²θ/(2 + 2cos θ)² ≤ 1/3 and θ = 2 tan(θ/2) A(u) with
             // A(u) = atan(√u)/√u (a polynomial): θ/(2 sin θ) = 2A(u)/(2 + 2cos θ). One
             // division, where atan2 needs sqrt → division → polynomial → division. Both parts
-            // of R enter, as in atan2, and with the same conditioning here (dθ is
-            // tan(θ/2)·dcos θ + dsin θ, atan2's sin θ·dcos θ + cos θ·dsin θ). Above π/3 the
+            // of R enter, as in atan2, and with about the same conditioning here
+            // (|∂θ/∂cos θ| = tan(θ/2), |∂θ/∂sin θ| = 1; atan2's sin θ and |cos θ|). Above π/3 the
             // polynomial would need many more terms; a quarter-angle variant (one sqrt) that
             // reached 2.3 rad doubled the round-trip error of drifted matrices there.
             let iv = 1.0 / (2.0 + two_c);

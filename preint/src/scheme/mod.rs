@@ -42,7 +42,7 @@ impl Node {
 /// the schemes that evaluate the acceleration at both ends of an interval.
 ///
 /// ΔR is accumulated in one of two forms, and the other stays exactly the identity: as the
-/// unit quaternion `q` by Euler and midpoint at [`crate::Level::Deltas`] (a product is 28 flops
+/// unit quaternion `q` by every scheme at [`crate::Level::Deltas`] (a product is 28 flops
 /// instead of 45, a rotation of a vector 30 instead of 15 + the Exp matrix's 20, and 4 numbers
 /// in registers instead of 9), as the matrix `r` everywhere else (the gains need ΔR_k and
 /// ΔR_k+1 as matrices). The two agree to round-off (`preint/tests/deltas_fast_path.rs`).
@@ -87,7 +87,8 @@ impl Deltas {
 }
 
 /// A unit quaternion `(w, v)`, Hamilton convention: `R(q) x = q ⊗ x ⊗ q*` (Solà 2017,
-/// "Quaternion kinematics for the error-state Kalman filter", eqs. 12 and 115).
+/// "Quaternion kinematics for the error-state Kalman filter": the product, §1.2.2, and the
+/// vector rotation formula).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Quat {
     pub w: f64,

@@ -35,8 +35,7 @@ use crate::propagation::{
     rot_cols, skew_mul,
 };
 use lie::hat;
-use lie::so3::RodriguesCoeffs;
-use lie::so3::i_plus_hat_hat2;
+use lie::so3::{RodriguesCoeffs, i_plus_hat_hat2};
 
 const SQRT3_6: f64 = 0.288_675_134_594_812_9; // √3/6
 const KAPPA: f64 = 0.144_337_567_297_406_43; // √3/12
