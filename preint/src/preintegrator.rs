@@ -372,27 +372,19 @@ impl Core {
     ) -> usize {
         let (mut d, mut done) = (self.d, self.done);
         let (mut n0, mut n1) = (*self.node(self.n - 2), *self.node(self.n - 1));
-        let mut last = last_t_ns;
-        let mut used = 0;
-        for s in samples {
-            if !Preintegrator::common_case(s, last, gap_limit) {
-                break;
+        let o = &mut self.origin;
+        let used = Self::slice_loop(samples, last_t_ns, gap_limit, &mut d, &mut done, {
+            |d, s, _| {
+                let h = span_s(n0.t_ns, n1.t_ns);
+                if MID {
+                    midpoint::step::<false>(d, &n0, &n1, h, o);
+                } else {
+                    euler::step::<false>(d, &n0, h, n1.t_ns, o);
+                }
+                (n0, n1) = (n1, Node::corrected(s, bias));
             }
-            last = s.t_ns;
-            let h = span_s(n0.t_ns, n1.t_ns);
-            if MID {
-                midpoint::step::<false>(&mut d, &n0, &n1, h, &mut self.origin);
-            } else {
-                euler::step::<false>(&mut d, &n0, h, n1.t_ns, &mut self.origin);
-            }
-            Self::count_interval(&mut done, &mut d);
-            n0 = n1;
-            n1 = Node::new(s.t_ns, s.gyro - bias.gyro, s.acc - bias.acc);
-            used += 1;
-        }
-        (self.d, self.done) = (d, done);
-        self.write_back(samples, used, bias);
-        used
+        });
+        self.finish_slice(d, done, samples, used, bias)
     }
 
     /// [`Core::run_deltas`] for rk4: in the steady state (`n ≥ 3`, every interval but the last
@@ -410,37 +402,66 @@ impl Core {
         let (mut d, mut done) = (self.d, self.done);
         let n = self.n;
         let (mut a, mut b, mut c) = (*self.node(n - 3), *self.node(n - 2), *self.node(n - 1));
-        let mut last = last_t_ns;
+        let cb = self.cb;
+        let (o, w, pend) = (&mut self.origin, &mut self.weights, &mut self.e.pend);
+        let used = Self::slice_loop(samples, last_t_ns, gap_limit, &mut d, &mut done, {
+            |d, s, k| {
+                let nn = Node::corrected(s, bias);
+                // Interval k's stencil starts at sample k − 1 (window index k + cb − 1).
+                rk4::step::<false>(d, &[&a, &b, &c, &nn], 4, 1, k + cb - 1, o, w, pend, None);
+                (a, b, c) = (b, c, nn);
+            }
+        });
+        self.finish_slice(d, done, samples, used, bias)
+    }
+
+    /// The loop of the slice paths: takes the leading samples of `samples` that pass
+    /// [`Preintegrator::integrate`]'s common-case test, hands each one and the index of the
+    /// interval it completes to `step`, counts the interval (with the re-orthonormalisation of
+    /// [`Core::advance`]) and returns how many samples it took. (`step` builds the sample's
+    /// node itself, where it needs it: built before the step, it stays live across it and
+    /// costs registers.)
+    #[inline(always)]
+    fn slice_loop(
+        samples: &[ImuSample],
+        mut last_t_ns: i64,
+        gap_limit: u64,
+        d: &mut Deltas,
+        done: &mut usize,
+        mut step: impl FnMut(&mut Deltas, &ImuSample, usize),
+    ) -> usize {
         let mut used = 0;
         for s in samples {
-            if !Preintegrator::common_case(s, last, gap_limit) {
+            if !Preintegrator::common_case(s, last_t_ns, gap_limit) {
                 break;
             }
-            last = s.t_ns;
-            let nn = Node::new(s.t_ns, s.gyro - bias.gyro, s.acc - bias.acc);
-            let st = [&a, &b, &c, &nn];
-            let (o, w, pend) = (&mut self.origin, &mut self.weights, &mut self.e.pend);
-            rk4::step::<false>(&mut d, &st, 4, 1, done + self.cb - 1, o, w, pend, None);
-            Self::count_interval(&mut done, &mut d);
-            (a, b, c) = (b, c, nn);
+            last_t_ns = s.t_ns;
+            step(d, s, *done);
+            Self::count_interval(done, d);
             used += 1;
         }
-        (self.d, self.done) = (d, done);
-        self.write_back(samples, used, bias);
         used
     }
 
-    /// After a slice path consumed `used` samples: the ring as pushing them one by one would
-    /// have left it, the nodes of the last min(used, RING) samples (older ones are already
-    /// there).
-    fn write_back(&mut self, samples: &[ImuSample], used: usize, bias: &ImuBias) {
+    /// After a slice path took `used` samples: its deltas and interval count, and the ring as
+    /// pushing them one by one would have left it (the nodes of the last min(used, RING)
+    /// samples; older ones are already there). Returns `used`.
+    fn finish_slice(
+        &mut self,
+        d: Deltas,
+        done: usize,
+        samples: &[ImuSample],
+        used: usize,
+        bias: &ImuBias,
+    ) -> usize {
+        (self.d, self.done) = (d, done);
         self.n += used;
         let keep = used.min(RING);
         for (i, s) in samples[used - keep..used].iter().enumerate() {
             let j = self.n - keep + i;
-            self.ring[(j + self.cb) % RING] =
-                Node::new(s.t_ns, s.gyro - bias.gyro, s.acc - bias.acc);
+            self.ring[(j + self.cb) % RING] = Node::corrected(s, bias);
         }
+        used
     }
 
     /// Integrates every interval that is ready; with `fin`, all remaining intervals and the
@@ -638,10 +659,16 @@ impl Preintegrator {
             Vec::new()
         };
         let rk4 = params.scheme == Scheme::Rk4;
-        let corrected =
-            |s: &ImuSample| Node::new(s.t_ns, s.gyro - bias_hat.gyro, s.acc - bias_hat.acc);
-        let ctx_before = spec.start.ctx.filter(|_| rk4).map(|s| corrected(&s));
-        let ctx_after = spec.end.ctx.filter(|_| rk4).map(|s| corrected(&s));
+        let ctx_before = spec
+            .start
+            .ctx
+            .filter(|_| rk4)
+            .map(|s| Node::corrected(&s, &bias_hat));
+        let ctx_after = spec
+            .end
+            .ctx
+            .filter(|_| rk4)
+            .map(|s| Node::corrected(&s, &bias_hat));
         let mut ring = [Node::default(); RING];
         if let Some(c) = ctx_before {
             ring[0] = c;
@@ -787,11 +814,7 @@ impl Preintegrator {
             self.samples.push(*s);
         }
         let core = &mut self.core;
-        core.ring[(core.n + core.cb) % RING] = Node::new(
-            s.t_ns,
-            s.gyro - self.bias_hat.gyro,
-            s.acc - self.bias_hat.acc,
-        );
+        core.ring[(core.n + core.cb) % RING] = Node::corrected(s, &self.bias_hat);
         core.n += 1;
         Self::run(core, &self.cfg, &self.noise, self.lin, false);
     }

@@ -9,6 +9,7 @@ pub mod midpoint;
 pub mod rk4;
 
 use crate::propagation::{M3, V3};
+use crate::sample::{ImuBias, ImuSample};
 use lie::so3::exp_quat_coeffs;
 use nalgebra::Matrix3;
 
@@ -35,6 +36,12 @@ impl Node {
             a,
             t_ns,
         }
+    }
+
+    /// The node of sample `s` for the bias estimate `bias`: `ω_m − b_g`, `a_m − b_a`.
+    #[inline(always)]
+    pub(crate) fn corrected(s: &ImuSample, bias: &ImuBias) -> Self {
+        Self::new(s.t_ns, s.gyro - bias.gyro, s.acc - bias.acc)
     }
 }
 
