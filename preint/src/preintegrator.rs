@@ -17,7 +17,7 @@ use crate::propagation::{
     rot_cols,
 };
 use crate::sample::{ImuBias, ImuSample};
-use crate::scheme::{Deltas, Node, euler, midpoint, rk4, span_s};
+use crate::scheme::{Deltas, Node, euler, hermite, midpoint, span_s};
 use lie::SO3;
 
 const RING: usize = 8;
@@ -97,8 +97,9 @@ struct Core {
     origin: Origin,
     /// Midpoint: length of the last interval integrated [s].
     h_prev: f64,
-    /// rk4: Lagrange weights of the last stencil.
-    weights: rk4::Weights,
+    /// rk4: the last stencil's weights, and the slice path's.
+    weights: hermite::Weights,
+    steady: hermite::SteadyWeights,
     /// Window intervals integrated.
     done: usize,
     d: Deltas,
@@ -331,7 +332,9 @@ impl Core {
         let pend = &mut self.e.pend;
         let mut gsum = Blk96::default();
         let sum = cfg.walk.combined.then_some(&mut gsum);
-        if let Some((tr, pb)) = rk4::step::<LIN>(&mut self.d, &st, m, ke - s0, s0, o, w, pend, sum)
+        let first = k == 0;
+        if let Some((tr, pb)) =
+            hermite::step::<LIN>(&mut self.d, &st, m, ke - s0, first, s0, o, w, pend, sum)
         {
             self.e.step_multi(&tr, &pb, &gsum, &cfg.walk);
             self.int_cov(cfg, tr.h);
@@ -388,9 +391,10 @@ impl Core {
     }
 
     /// [`Core::run_deltas`] for rk4: in the steady state (`n ≥ 3`, every interval but the last
-    /// two integrated) each new sample completes the cubic stencil `{k−1, k, k+1, k+2}` of
-    /// interval k = n − 2, which [`Core::rk4_interval`] would integrate with the same nodes,
-    /// weights and step. The stencil's three older nodes stay in registers.
+    /// two integrated) each new sample k+2 completes the derivative stencil `{k, k+1, k+2}`
+    /// of node k+1 and so interval k = n − 2, which [`Core::rk4_interval`] would integrate with
+    /// the same weights and arithmetic ([`hermite::steady`]). Nodes k and k+1 stay in
+    /// registers.
     #[inline(never)]
     fn run_deltas_rk4(
         &mut self,
@@ -401,16 +405,10 @@ impl Core {
     ) -> usize {
         let (mut d, mut done) = (self.d, self.done);
         let n = self.n;
-        let (mut a, mut b, mut c) = (*self.node(n - 3), *self.node(n - 2), *self.node(n - 1));
-        let cb = self.cb;
-        let (o, w, pend) = (&mut self.origin, &mut self.weights, &mut self.e.pend);
+        let mut carry = hermite::Carry::new(self.node(n - 2), self.node(n - 1));
+        let w = &mut self.steady;
         let used = Self::slice_loop(samples, last_t_ns, gap_limit, &mut d, &mut done, {
-            |d, s, k| {
-                let nn = Node::corrected(s, bias);
-                // Interval k's stencil starts at sample k − 1 (window index k + cb − 1).
-                rk4::step::<false>(d, &[&a, &b, &c, &nn], 4, 1, k + cb - 1, o, w, pend, None);
-                (a, b, c) = (b, c, nn);
-            }
+            |d, s, _| carry.step(d, s.t_ns, s.gyro - bias.gyro, s.acc - bias.acc, w)
         });
         self.finish_slice(d, done, samples, used, bias)
     }
@@ -697,7 +695,8 @@ impl Preintegrator {
                 ctx_after,
                 origin: Origin::default(),
                 h_prev: 0.0,
-                weights: rk4::Weights::default(),
+                weights: hermite::Weights::default(),
+                steady: hermite::SteadyWeights::default(),
                 done: 0,
                 d: Deltas::default(),
                 e: ErrorState::default(),

@@ -5,8 +5,8 @@
 //! `ΔR_k+1 = ΔR_k Exp(Ω_k)`, `Δv`, `Δp` in frame i (gravity excluded, Forster eq. 33).
 
 pub mod euler;
+pub mod hermite;
 pub mod midpoint;
-pub mod rk4;
 
 use crate::propagation::{M3, V3};
 use crate::sample::{ImuBias, ImuSample};
@@ -60,6 +60,9 @@ pub(crate) struct Deltas {
     pub v: V3,
     pub p: V3,
     pub u_last: V3,
+    /// `u̇_k = ΔR_k (ω_k × a_k + ȧ_k)` and `ω̇_k` at the last node (the Hermite scheme).
+    pub du_last: V3,
+    pub dw_last: V3,
 }
 
 impl Default for Deltas {
@@ -70,6 +73,8 @@ impl Default for Deltas {
             v: V3::zeros(),
             p: V3::zeros(),
             u_last: V3::zeros(),
+            du_last: V3::zeros(),
+            dw_last: V3::zeros(),
         }
     }
 }
@@ -147,6 +152,28 @@ impl Quat {
             x.x + w * t[0] + (u.y * t[2] - u.z * t[1]),
             x.y + w * t[1] + (u.z * t[0] - u.x * t[2]),
             x.z + w * t[2] + (u.x * t[1] - u.y * t[0]),
+        )
+    }
+
+    /// `R(q)` for a unit `q` (no normalisation: the caller keeps `|q| = 1` as for
+    /// [`Quat::rotate`]).
+    #[inline(always)]
+    pub(crate) fn unit_matrix(&self) -> M3 {
+        let (w, x, y, z) = (self.w, self.v.x, self.v.y, self.v.z);
+        let (x2, y2, z2) = (x + x, y + y, z + z);
+        let (xx, yy, zz) = (x * x2, y * y2, z * z2);
+        let (xy, xz, yz) = (x * y2, x * z2, y * z2);
+        let (wx, wy, wz) = (w * x2, w * y2, w * z2);
+        Matrix3::new(
+            1.0 - (yy + zz),
+            xy - wz,
+            xz + wy,
+            xy + wz,
+            1.0 - (xx + zz),
+            yz - wx,
+            xz - wy,
+            yz + wx,
+            1.0 - (xx + yy),
         )
     }
 
