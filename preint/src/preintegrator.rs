@@ -470,7 +470,7 @@ impl Core {
         let cb = self.cb;
         // Intervals `done..end` are ready: with `fin` all `n − 1`; streaming, those whose
         // samples have all arrived (one sample beyond the interval for Euler and midpoint, the
-        // cubic stencil `max(k + cb, 1) + 3 ≤ cb + n` for rk4).
+        // stencil `max(k + cb, 1) + 3 ≤ cb + n` for rk4: node k+1's derivative reads k+2).
         let end = if fin {
             n.saturating_sub(1)
         } else {
@@ -824,7 +824,7 @@ impl Preintegrator {
     /// bit, as pushing them one by one).
     pub fn integrate_slice(&mut self, samples: &[ImuSample]) -> Result<(), PreintError> {
         let fast = !self.lin;
-        // Euler and midpoint need two nodes, rk4's cubic stencil three (see `run_deltas_rk4`).
+        // Euler and midpoint need two nodes, rk4 three (see `run_deltas_rk4`).
         let min_n = if self.cfg.scheme == Scheme::Rk4 { 3 } else { 2 };
         let mut i = 0;
         while i < samples.len() {

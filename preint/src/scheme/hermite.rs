@@ -11,15 +11,15 @@
 //! there (by the first interval for node 0), and carried to the next interval.
 //!
 //! With `u(t) = ΔR(t) a(t)` (frame i), `u̇ = ΔR (ω × a + ȧ)`, and the corrected trapezoidal
-//! (two-point Hermite) rules `∫₀ʰ f = h/2 (f₀ + f₁) + h²/12 (ḟ₀ − ḟ₁)` and
-//! `∫₀ʰ (h − s) f(s) ds = h² (7/20 f₀ + 3/20 f₁) + h³ (1/20 ḟ₀ − 1/30 ḟ₁)`, both exact for cubics:
+//! (two-point Hermite) rule `∫₀ʰ f = h/2 (f₀ + f₁) + h²/12 (ḟ₀ − ḟ₁)`, exact for cubics, applied
+//! to ω, to `v̇ = u` and to `ṗ = v`:
 //!
 //! ```text
 //! Ω       = h/2 (ω_k + ω_k+1) + h²/12 (ω̇_k − ω̇_k+1) + h²/12 ω_k × ω_k+1
 //! ΔR_k+1  = ΔR_k Exp(Ω)
 //! u_k+1   = ΔR_k+1 a_k+1,   u̇_k+1 = ΔR_k+1 (ω_k+1 × a_k+1 + ȧ_k+1)
 //! Δv_k+1  = Δv_k + h/2 (u_k + u_k+1) + h²/12 (u̇_k − u̇_k+1)
-//! Δp_k+1  = Δp_k + Δv_k h + h² (7/20 u_k + 3/20 u_k+1) + h³ (1/20 u̇_k − 1/30 u̇_k+1)
+//! Δp_k+1  = Δp_k + h/2 (Δv_k + Δv_k+1) + h²/12 (u_k − u_k+1)
 //! ```
 //!
 //! `Ω` is 4th-order Magnus (Iserles–Nørsett) for `Ṙ = R[ω]×`: its first term integrates ω to
@@ -27,20 +27,22 @@
 //! `h/24 (−ω_k−1 + 13 ω_k + 13 ω_k+1 − ω_k+2)`; the commutator term `κh² ω(c₁h) × ω(c₂h)` of the
 //! two-node Gauss form (`κ = √3/12`) equals `h²/12 ω_k × ω_k+1` to O(h⁵). The local error of
 //! every delta is O(h⁵), the global error O(h⁴) (`tests/tests/convergence.rs` measures the
-//! slopes). The quadratic's derivative is off by O(h²), but the error enters the velocity
-//! rule as a difference of two neighbouring nodes' errors (O(h³)) times h², and the position
-//! rule times h³. Cost: one Exp, two rotations and three cross products per sample, where
-//! Gauss–Legendre Magnus with Simpson's rule needs two Exp, three rotations and ω at four
-//! interpolated points.
+//! slopes). The quadratic's derivative is off by `h² f‴/6` (uniform grid), but that error
+//! enters the velocity rule only as the difference of two neighbouring nodes' errors (O(h³))
+//! times h², so Δv is still exact for a cubic `a(t)` without rotation, and ΔR for a cubic rate
+//! about a fixed axis (`preint/tests/schemes.rs`). Cost: one Exp, two rotations and three
+//! cross products per sample, where Gauss–Legendre Magnus with Simpson's rule (this scheme's
+//! predecessor) needs two Exp, three rotations and ω at four interpolated points.
 //!
 //! Linearisation (rotated coordinates `ψ = ΔR δφ`, `F = ΔR_k Jl(Ω) = ΔR_k+1 Jr(Ω)`,
 //! `d^m_j`: the derivative weight of stencil sample j at node m): `ψ_k+1 = ψ_k + F δΩ`,
 //! `δΩ = Σ_j [c_j I + [j=k] (−h²/12)[ω_k+1]× + [j=k+1] (h²/12)[ω_k]×] δω_j` with
 //! `c_j = h/2 ([j=k] + [j=k+1]) + h²/12 (d^k_j − d^k+1_j)`; `δu_m = ΔR_m δa_m − [u_m]×ψ_m` and
-//! `δu̇_m = ΔR_m (−[a_m]× δω_m + [ω_m]× δa_m + Σ_j d^m_j δa_j) − [u̇_m]×ψ_m`. The ψ_k terms give
+//! `δu̇_m = ΔR_m (−[a_m]× δω_m + [ω_m]× δa_m + Σ_j d^m_j δa_j) − [u̇_m]×ψ_m`, and
+//! `δp_k+1 = δp_k + h/2 (δv_k + δv_k+1) + h²/12 (δu_k − δu_k+1)`. The ψ_k terms give
 //! the transition with `U1 = Δv_k+1 − Δv_k`, `U2 = Δp_k+1 − Δp_k − Δv_k h` (internal
 //! `propagation` module); the gains of the stencil samples follow from the rules above
-//! ([`GainBasis`]), are pulled back to the origin and added to their pending gains, so each
+//! (`GainBasis`), are pulled back to the origin and added to their pending gains, so each
 //! sample's noise enters once with the sum of its gains over every interval that reads it.
 
 use super::{Deltas, Node, Quat, s_plus_hat_hat2, span_s};
