@@ -393,8 +393,8 @@ impl Core {
     /// [`Core::run_deltas`] for rk4: in the steady state (`n ≥ 3`, every interval but the last
     /// two integrated) each new sample k+2 completes the derivative stencil `{k, k+1, k+2}`
     /// of node k+1 and so interval k = n − 2, which [`Core::rk4_interval`] would integrate with
-    /// the same weights and arithmetic ([`hermite::steady`]). Nodes k and k+1 stay in
-    /// registers.
+    /// the same weights and arithmetic ([`hermite::Carry::step`]). What the next interval needs
+    /// of nodes k and k+1 is carried in registers ([`hermite::Carry`]).
     #[inline(never)]
     fn run_deltas_rk4(
         &mut self,

@@ -159,29 +159,20 @@ impl Quat {
     /// [`Quat::rotate`]).
     #[inline(always)]
     pub(crate) fn unit_matrix(&self) -> M3 {
-        let (w, x, y, z) = (self.w, self.v.x, self.v.y, self.v.z);
-        let (x2, y2, z2) = (x + x, y + y, z + z);
-        let (xx, yy, zz) = (x * x2, y * y2, z * z2);
-        let (xy, xz, yz) = (x * y2, x * z2, y * z2);
-        let (wx, wy, wz) = (w * x2, w * y2, w * z2);
-        Matrix3::new(
-            1.0 - (yy + zz),
-            xy - wz,
-            xz + wy,
-            xy + wz,
-            1.0 - (xx + zz),
-            yz - wx,
-            xz - wy,
-            yz + wx,
-            1.0 - (xx + yy),
-        )
+        self.scaled_matrix(2.0)
     }
 
     /// `R(q/|q|)`: normalised first, so the drift since the last [`Quat::renormalize`] does
     /// not reach the matrix.
     pub(crate) fn matrix(&self) -> M3 {
+        let (w, v) = (self.w, &self.v);
+        self.scaled_matrix(2.0 / (w * w + v.x * v.x + v.y * v.y + v.z * v.z))
+    }
+
+    /// `I + s (w[v]× + [v]×²)` written entry-wise (`R(q)` for `s = 2/|q|²`).
+    #[inline(always)]
+    fn scaled_matrix(&self, s: f64) -> M3 {
         let (w, x, y, z) = (self.w, self.v.x, self.v.y, self.v.z);
-        let s = 2.0 / (w * w + x * x + y * y + z * z);
         let (xx, yy, zz) = (s * x * x, s * y * y, s * z * z);
         let (xy, xz, yz) = (s * x * y, s * x * z, s * y * z);
         let (wx, wy, wz) = (s * w * x, s * w * y, s * w * z);
