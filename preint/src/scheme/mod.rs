@@ -169,13 +169,15 @@ impl Quat {
         self.scaled_matrix(2.0 / (w * w + v.x * v.x + v.y * v.y + v.z * v.z))
     }
 
-    /// `I + s (w[v]× + [v]×²)` written entry-wise (`R(q)` for `s = 2/|q|²`).
+    /// `I + s (w[v]× + [v]×²)` written entry-wise (`R(q)` for `s = 2/|q|²`; for `s = 2` the
+    /// products are those of `2v`, exact doublings).
     #[inline(always)]
     fn scaled_matrix(&self, s: f64) -> M3 {
         let (w, x, y, z) = (self.w, self.v.x, self.v.y, self.v.z);
-        let (xx, yy, zz) = (s * x * x, s * y * y, s * z * z);
-        let (xy, xz, yz) = (s * x * y, s * x * z, s * y * z);
-        let (wx, wy, wz) = (s * w * x, s * w * y, s * w * z);
+        let (sx, sy, sz) = (s * x, s * y, s * z);
+        let (xx, yy, zz) = (x * sx, y * sy, z * sz);
+        let (xy, xz, yz) = (x * sy, x * sz, y * sz);
+        let (wx, wy, wz) = (w * sx, w * sy, w * sz);
         Matrix3::new(
             1.0 - (yy + zz),
             xy - wz,
