@@ -129,11 +129,8 @@ impl Rates {
     fn spread(&self) -> [f64; 4] {
         let mut out = [0.0; 4];
         out[self.lo] -= self.beta;
-        out[self.lo + 1] += self.beta;
-        if self.alpha != 0.0 {
-            out[self.lo + 1] -= self.alpha;
-            out[self.lo + 2] += self.alpha;
-        }
+        out[self.lo + 1] += self.beta - self.alpha;
+        out[self.lo + 2] += self.alpha;
         out
     }
 }
@@ -142,9 +139,16 @@ impl Rates {
 #[inline(always)]
 fn rates(x: [&Node; 3], alpha: f64, beta: f64) -> (V3, V3) {
     (
-        (x[2].w - x[1].w) * alpha + (x[1].w - x[0].w) * beta,
-        (x[2].a - x[1].a) * alpha + (x[1].a - x[0].a) * beta,
+        slope(&(x[2].w - x[1].w), &(x[1].w - x[0].w), alpha, beta),
+        slope(&(x[2].a - x[1].a), &(x[1].a - x[0].a), alpha, beta),
     )
+}
+
+/// `α d₁₂ + β d₀₁`: the derivative from the two differences, written once so that the slice
+/// path ([`Carry::step`], which carries `d₀₁`) and [`step`] round alike.
+#[inline(always)]
+fn slope(d12: &V3, d01: &V3, alpha: f64, beta: f64) -> V3 {
+    d12 * alpha + d01 * beta
 }
 
 /// The rule and the derivative weights of a stencil at the interval's two nodes, with the
@@ -289,8 +293,8 @@ impl Carry {
             rule, alpha, beta, ..
         } = *cache.of([self.t0, self.t1, t2_ns]);
         let (dw12, da12) = (w2 - self.w1, a2 - self.a1);
-        let dw1 = dw12 * alpha + self.dw01 * beta;
-        let da1 = da12 * alpha + self.da01 * beta;
+        let dw1 = slope(&dw12, &self.dw01, alpha, beta);
+        let da1 = slope(&da12, &self.da01, alpha, beta);
         deltas_q(d, &rule, &self.w0, &self.w1, &self.a1, &dw1, &da1);
         *self = Self {
             t0: self.t1,
