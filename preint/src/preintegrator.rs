@@ -23,6 +23,10 @@ use lie::SO3;
 const RING: usize = 8;
 /// ΔR is re-orthonormalised (`R ← ½R(3I − RᵀR)`) every this many intervals.
 const RENORM_EVERY: usize = 1024;
+
+/// Intervals per block of [`Core::run_deltas_rk4`]: 64 × 88 bytes of prepared intervals stay
+/// in the L1 cache.
+const RK4_BLOCK: usize = 64;
 /// Most edge samples whose gains are collected (rk4: context, 3 first, 3 last, context).
 const CAPS: usize = 8;
 /// Most distinct noise sources of the edge samples (each is a combination of ≤ 4).
@@ -393,8 +397,15 @@ impl Core {
     /// [`Core::run_deltas`] for rk4: in the steady state (`n ≥ 3`, every interval but the last
     /// two integrated) each new sample k+2 completes the derivative stencil `{k, k+1, k+2}`
     /// of node k+1 and so interval k = n − 2, which [`Core::rk4_interval`] would integrate with
-    /// the same weights and arithmetic ([`hermite::Carry::step`]). What the next interval needs
-    /// of nodes k and k+1 is carried in registers ([`hermite::Carry`]).
+    /// the same weights and arithmetic. What the next interval needs of nodes k and k+1 is
+    /// carried in registers ([`hermite::Carry`]).
+    ///
+    /// The samples are taken in blocks of [`RK4_BLOCK`]: first everything that does not depend
+    /// on ΔR ([`hermite::Carry::prepare`]: the node derivatives, `Exp(Ω)`, `ω × a + ȧ`) for
+    /// the whole block, then the chain through ΔR, Δv and Δp ([`hermite::Prepared::apply`]).
+    /// Fused, the two halves' state does not fit in the registers, and each interval waits on
+    /// the previous one's ΔR; split, the first half has no chain at all. A slice shorter than
+    /// a block is taken fused (the block buffer is not worth filling).
     #[inline(never)]
     fn run_deltas_rk4(
         &mut self,
@@ -405,11 +416,36 @@ impl Core {
     ) -> usize {
         let (mut d, mut done) = (self.d, self.done);
         let n = self.n;
-        let mut carry = hermite::Carry::new(self.node(n - 2), self.node(n - 1));
+        let mut carry = hermite::Carry::new(self.node(n - 2), self.node(n - 1), &d.dw_last);
         let w = &mut self.steady;
-        let used = Self::slice_loop(samples, last_t_ns, gap_limit, &mut d, &mut done, {
-            |d, s, _| carry.step(d, s.t_ns, s.gyro - bias.gyro, s.acc - bias.acc, w)
-        });
+        let used = if samples.len() < RK4_BLOCK {
+            Self::slice_loop(samples, last_t_ns, gap_limit, &mut d, &mut done, {
+                |d, s, _| carry.prepare(s, bias, w).apply(d)
+            })
+        } else {
+            let mut buf = [hermite::Prepared::default(); RK4_BLOCK];
+            let (mut used, mut last) = (0, last_t_ns);
+            loop {
+                let mut m = 0;
+                for s in samples[used..].iter().take(RK4_BLOCK) {
+                    if !Preintegrator::common_case(s, last, gap_limit) {
+                        break;
+                    }
+                    last = s.t_ns;
+                    buf[m] = carry.prepare(s, bias, w);
+                    m += 1;
+                }
+                for e in &buf[..m] {
+                    e.apply(&mut d);
+                    Self::count_interval(&mut done, &mut d);
+                }
+                used += m;
+                if m < RK4_BLOCK {
+                    break used;
+                }
+            }
+        };
+        d.dw_last = carry.dw_last();
         self.finish_slice(d, done, samples, used, bias)
     }
 
