@@ -319,6 +319,14 @@ const QS_SERIES: [f64; 5] = [
     1.0 / 185794560.0,
 ];
 
+/// The two series [`exp_quat_coeffs`] evaluates below θ² = [`EXP_QUAT_SERIES_BELOW`]
+/// (`cos(θ/2)` and `sin(θ/2)/θ` in powers of θ²), for callers that evaluate them on several
+/// angles at once. Evaluated as `c₀ + (c₁x + x²((c₂ + c₃x) + c₄x²))`, `x = θ²`, they round
+/// exactly as [`exp_quat_coeffs`].
+pub const EXP_QUAT_SERIES: [[f64; 5]; 2] = [QC_SERIES, QS_SERIES];
+/// Where [`exp_quat_coeffs`] switches from [`EXP_QUAT_SERIES`] to the closed form [rad²].
+pub const EXP_QUAT_SERIES_BELOW: f64 = SHORT_SERIES_BELOW * SHORT_SERIES_BELOW;
+
 /// `(cos(θ/2), sin(θ/2)/θ)` at θ² [rad²]: `Exp(φ)` as the unit quaternion
 /// `(w, x, y, z) = (cos(θ/2), (sin(θ/2)/θ)·φ)` (Hamilton; Solà 2017, "Quaternion kinematics
 /// for the error-state Kalman filter", the quaternion exponential map). Five-term series below
@@ -327,7 +335,7 @@ const QS_SERIES: [f64; 5] = [
 /// (`tests/so3.rs`).
 #[inline]
 pub fn exp_quat_coeffs(theta2: f64) -> (f64, f64) {
-    if theta2 < SHORT_SERIES_BELOW * SHORT_SERIES_BELOW {
+    if theta2 < EXP_QUAT_SERIES_BELOW {
         (estrin5(theta2, &QC_SERIES), estrin5(theta2, &QS_SERIES))
     } else {
         exp_quat_coeffs_closed(theta2)

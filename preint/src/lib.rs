@@ -21,6 +21,7 @@ pub mod params;
 pub mod preintegrator;
 pub(crate) mod propagation;
 pub mod scheme;
+pub(crate) mod simd;
 pub mod window;
 
 pub use error::PreintError;

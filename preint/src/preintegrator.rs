@@ -18,6 +18,7 @@ use crate::propagation::{
 };
 use crate::sample::{ImuBias, ImuSample};
 use crate::scheme::{Deltas, Node, euler, hermite, midpoint, span_s};
+use crate::scheme::hermite::deltas::{Carry, Record, State};
 use lie::SO3;
 
 const RING: usize = 8;
@@ -104,6 +105,8 @@ struct Core {
     /// rk4: the last stencil's weights, and the slice path's.
     weights: hermite::Weights,
     steady: hermite::SteadyWeights,
+    /// The same for two intervals at a time (the rk4 slice path).
+    pairs: hermite::PairWeights,
     /// Window intervals integrated.
     done: usize,
     d: Deltas,
@@ -416,36 +419,54 @@ impl Core {
     ) -> usize {
         let (mut d, mut done) = (self.d, self.done);
         let n = self.n;
-        let mut carry = hermite::Carry::new(self.node(n - 2), self.node(n - 1), &d.dw_last);
-        let w = &mut self.steady;
+        let mut carry = Carry::new(self.node(n - 2), self.node(n - 1), &d);
+        let (w, pw) = (&mut self.steady, &mut self.pairs);
         let used = if samples.len() < RK4_BLOCK {
             Self::slice_loop(samples, last_t_ns, gap_limit, &mut d, &mut done, {
-                |d, s, _| carry.prepare(s, bias, w).apply(d)
+                |d, s, _| {
+                    let r = carry.prepare_one(s, bias, w);
+                    let mut st = State::load(d);
+                    st.step(&r);
+                    st.store(d);
+                }
             })
         } else {
-            let mut buf = [hermite::Prepared::default(); RK4_BLOCK];
+            let mut buf = [Record::default(); RK4_BLOCK];
             let (mut used, mut last) = (0, last_t_ns);
             loop {
+                let rest = &samples[used..];
                 let mut m = 0;
-                for s in samples[used..].iter().take(RK4_BLOCK) {
+                for s in rest.iter().take(RK4_BLOCK) {
                     if !Preintegrator::common_case(s, last, gap_limit) {
                         break;
                     }
                     last = s.t_ns;
-                    buf[m] = carry.prepare(s, bias, w);
                     m += 1;
                 }
-                for e in &buf[..m] {
-                    e.apply(&mut d);
-                    Self::count_interval(&mut done, &mut d);
+                let even = m & !1;
+                carry.prepare_pairs(&rest[..even], bias, pw, &mut buf[..even]);
+                if m > even {
+                    buf[even] = carry.prepare_one(&rest[even], bias, w);
                 }
+                let mut st = State::load(&d);
+                for r in &buf[..m] {
+                    st.step(r);
+                    done += 1;
+                    if done.is_multiple_of(RENORM_EVERY) {
+                        // As `count_interval`.
+                        st.store(&mut d);
+                        d.renormalize();
+                        st = State::load(&d);
+                    }
+                }
+                st.store(&mut d);
                 used += m;
                 if m < RK4_BLOCK {
                     break used;
                 }
             }
         };
-        d.dw_last = carry.dw_last();
+        carry.finish(&mut d);
         self.finish_slice(d, done, samples, used, bias)
     }
 
@@ -733,6 +754,7 @@ impl Preintegrator {
                 h_prev: 0.0,
                 weights: hermite::Weights::default(),
                 steady: hermite::SteadyWeights::default(),
+                pairs: hermite::PairWeights::default(),
                 done: 0,
                 d: Deltas::default(),
                 e: ErrorState::default(),

@@ -45,12 +45,14 @@
 //! (`GainBasis`), are pulled back to the origin and added to their pending gains, so each
 //! sample's noise enters once with the sum of its gains over every interval that reads it.
 
-use super::{Deltas, Node, Quat, s_plus_hat_hat2, span_s};
+pub(crate) mod deltas;
+
+use super::{Deltas, Node, s_plus_hat_hat2, span_s};
+use crate::simd::F2;
 use crate::propagation::{
     Blk96, Cols6, Cols9, ErrorState, M3, Origin, Pending, PullBack, SLOTS, Transition, V3,
     rot_cols, skew_cols, skew_mul,
 };
-use crate::sample::{ImuBias, ImuSample};
 use lie::hat;
 use lie::so3::{RodriguesCoeffs, i_plus_hat_hat2};
 
@@ -216,6 +218,51 @@ impl SteadyWeights {
     }
 }
 
+/// [`SteadyWeights`] of two consecutive intervals, one per [`F2`] lane (what
+/// [`deltas::Carry::prepare_pairs`] needs per pair), keyed by the three intervals [ns]. Every
+/// lane holds exactly what [`SteadyWeights::of`] gives for its interval.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct PairWeights {
+    key: (i64, i64, i64),
+    h: F2,
+    h_2: F2,
+    h2_12: F2,
+    alpha: F2,
+    beta: F2,
+}
+
+impl PairWeights {
+    /// The weights of intervals `[t₀, t₁]` and `[t₁, t₂]` (nodes `t₁`, `t₂`) for the nodes at
+    /// `t` [ns].
+    #[inline(always)]
+    fn of(&mut self, t: [i64; 4]) -> &Self {
+        let key = (
+            t[1].wrapping_sub(t[0]),
+            t[2].wrapping_sub(t[1]),
+            t[3].wrapping_sub(t[2]),
+        );
+        if key != self.key {
+            self.refresh(t, key);
+        }
+        self
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn refresh(&mut self, t: [i64; 4], key: (i64, i64, i64)) {
+        let (r0, r1) = (Rule::new(t[0], t[1]), Rule::new(t[1], t[2]));
+        let ((a0, b0), (a1, b1)) = (slopes([t[0], t[1], t[2]], 1), slopes([t[1], t[2], t[3]], 1));
+        *self = Self {
+            key,
+            h: F2::new(r0.h, r1.h),
+            h_2: F2::new(r0.h_2, r1.h_2),
+            h2_12: F2::new(r0.h2_12, r1.h2_12),
+            alpha: F2::new(a0, a1),
+            beta: F2::new(b0, b1),
+        };
+    }
+}
+
 /// `Ω = h/2 (ω_k + ω_k+1) + h²/12 (ω̇_k − ω̇_k+1 + ω_k × ω_k+1)`.
 #[inline(always)]
 fn omega(c: &Rule, w0: &V3, w1: &V3, dw0: &V3, dw1: &V3) -> V3 {
@@ -230,119 +277,6 @@ fn advance(h_2: f64, h2_12: f64, v0: &V3, u0: &V3, du0: &V3, u1: &V3, du1: &V3) 
     let v1 = v0 + ((u0 + u1) * h_2 + (du0 - du1) * h2_12);
     let dp = (v0 + v1) * h_2 + (u0 - u1) * h2_12;
     (v1, dp)
-}
-
-/// What an interval at [`crate::Level::Deltas`] needs besides ΔR_k and the running deltas:
-/// `Exp(Ω)` as a quaternion, node k+1's acceleration `a_k+1` and `s_k+1 = ω_k+1 × a_k+1 + ȧ_k+1`
-/// (so that `u̇_k+1 = ΔR_k+1 s_k+1`), and the rule. None of it depends on ΔR, so the slice path
-/// computes it for a block of intervals before it accumulates them ([`Prepared::apply`]):
-/// each half then keeps its own state in registers, and the independent half runs as fast as
-/// the processor can issue it instead of waiting on the chain through ΔR.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Prepared {
-    e: Quat,
-    a1: V3,
-    s1: V3,
-    h_2: f64,
-    h2_12: f64,
-}
-
-impl Prepared {
-    /// From rates `w0`, `w1`, acceleration `a1`, node k's `ω̇_k` (`dw0`) and node k+1's
-    /// derivatives `(dw1, da1)`.
-    #[inline(always)]
-    fn new(c: &Rule, w0: &V3, w1: &V3, a1: &V3, dw0: &V3, dw1: &V3, da1: &V3) -> Self {
-        let om = omega(c, w0, w1, dw0, dw1);
-        Self {
-            e: Quat::exp(&om, om.norm_squared()),
-            a1: *a1,
-            s1: w1.cross(a1) + da1,
-            h_2: c.h_2,
-            h2_12: c.h2_12,
-        }
-    }
-
-    /// Advances `d` (ΔR as the quaternion `d.q`, `d.u_last`, `d.du_last`) over the interval;
-    /// `d.dw_last` is the caller's.
-    #[inline(always)]
-    pub(crate) fn apply(&self, d: &mut Deltas) {
-        let q1 = d.q.mul(&self.e);
-        let m1 = q1.unit_matrix();
-        let (u1, du1) = (m1 * self.a1, m1 * self.s1);
-        let (v1, dp) = advance(self.h_2, self.h2_12, &d.v, &d.u_last, &d.du_last, &u1, &du1);
-        d.p += dp;
-        d.v = v1;
-        d.q = q1;
-        d.u_last = u1;
-        d.du_last = du1;
-    }
-}
-
-/// What the slice path carries from one interval to the next (steady state): nodes k and
-/// k+1 as far as they are still needed, the differences `(ω, a)_k+1 − (ω, a)_k` and `ω̇_k`.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Carry {
-    t0: i64,
-    t1: i64,
-    w0: V3,
-    w1: V3,
-    a1: V3,
-    dw01: V3,
-    da01: V3,
-    dw0: V3,
-}
-
-impl Carry {
-    /// From nodes k and k+1 and node k's `ω̇_k` (`d.dw_last`).
-    pub(crate) fn new(n0: &Node, n1: &Node, dw0: &V3) -> Self {
-        Self {
-            t0: n0.t_ns,
-            t1: n1.t_ns,
-            w0: n0.w,
-            w1: n1.w,
-            a1: n1.a,
-            dw01: n1.w - n0.w,
-            da01: n1.a - n0.a,
-            dw0: *dw0,
-        }
-    }
-
-    /// `ω̇` at the newest complete node (what [`Deltas::dw_last`] holds after the intervals
-    /// prepared so far are applied).
-    pub(crate) fn dw_last(&self) -> V3 {
-        self.dw0
-    }
-
-    /// Interval k of the slice path ([`crate::Level::Deltas`], steady state), completed by the
-    /// new sample k+2 (`s`, corrected with `bias`): the same weights and arithmetic as [`step`]
-    /// with the stencil `{k−1, k, k+1, k+2}`, so the deltas are bit-identical.
-    #[inline(always)]
-    pub(crate) fn prepare(
-        &mut self,
-        s: &ImuSample,
-        bias: &ImuBias,
-        cache: &mut SteadyWeights,
-    ) -> Prepared {
-        let (t2_ns, w2, a2) = (s.t_ns, s.gyro - bias.gyro, s.acc - bias.acc);
-        let SteadyWeights {
-            rule, alpha, beta, ..
-        } = *cache.of([self.t0, self.t1, t2_ns]);
-        let (dw12, da12) = (w2 - self.w1, a2 - self.a1);
-        let dw1 = slope(&dw12, &self.dw01, alpha, beta);
-        let da1 = slope(&da12, &self.da01, alpha, beta);
-        let out = Prepared::new(&rule, &self.w0, &self.w1, &self.a1, &self.dw0, &dw1, &da1);
-        *self = Self {
-            t0: self.t1,
-            t1: t2_ns,
-            w0: self.w1,
-            w1: w2,
-            a1: a2,
-            dw01: dw12,
-            da01: da12,
-            dw0: dw1,
-        };
-        out
-    }
 }
 
 /// One interval `[st[kk].t, st[kk+1].t]` with stencil `st[..n]` (2–4 nodes, unused entries
@@ -373,14 +307,16 @@ pub(crate) fn step<const LIN: bool>(
     if first {
         // Node k's derivatives; `u_last = ΔR_k a_k` is already set.
         let (dw0, da0) = d0.of(st);
-        let s0 = n0.w.cross(&n0.a) + da0;
         d.dw_last = dw0;
-        d.du_last = if LIN { d.r * s0 } else { d.q.rotate(&s0) };
+        if LIN {
+            d.du_last = d.r * (n0.w.cross(&n0.a) + da0);
+        } else {
+            d.s_last = deltas::s_of(&n0.w, &n0.a, &da0);
+        }
     }
     let (dw1, da1) = d1.of(st);
     if !LIN {
-        Prepared::new(&c, &n0.w, &n1.w, &n1.a, &d.dw_last, &dw1, &da1).apply(d);
-        d.dw_last = dw1;
+        deltas::step(d, &c, n0, n1, &dw1, &da1);
         return None;
     }
     let om = omega(&c, &n0.w, &n1.w, &d.dw_last, &dw1);

@@ -60,8 +60,10 @@ pub(crate) struct Deltas {
     pub v: V3,
     pub p: V3,
     pub u_last: V3,
-    /// `u̇_k = ΔR_k (ω_k × a_k + ȧ_k)` and `ω̇_k` at the last node (the Hermite scheme).
+    /// `u̇_k = ΔR_k s_k`, `s_k = ω_k × a_k + ȧ_k`, and `ω̇_k` at the last node (the Hermite
+    /// scheme; `du_last` with ΔR as the matrix `r`, `s_last` (frame k) with the quaternion).
     pub du_last: V3,
+    pub s_last: V3,
     pub dw_last: V3,
 }
 
@@ -74,6 +76,7 @@ impl Default for Deltas {
             p: V3::zeros(),
             u_last: V3::zeros(),
             du_last: V3::zeros(),
+            s_last: V3::zeros(),
             dw_last: V3::zeros(),
         }
     }

@@ -1,0 +1,376 @@
+//! The Hermite scheme at [`crate::Level::Deltas`]: ΔR as a quaternion, no linearisation.
+//!
+//! With `E = Exp(Ω)` (so `ΔR_k+1 = ΔR_k E`) and `s_m = ω_m × a_m + ȧ_m` (so
+//! `u̇_m = ΔR_m s_m`), the velocity and position rules of the parent module become
+//!
+//! ```text
+//! Δv_k+1 = Δv_k + ΔR_k x,          x = (h/2 a_k + h²/12 s_k) + E (h/2 a_k+1 − h²/12 s_k+1)
+//! Δp_k+1 = Δp_k + h Δv_k + ΔR_k y,  y = h/2 x + h²/12 (a_k − E a_k+1)
+//! ```
+//!
+//! `E`, `x` and `y` do not depend on ΔR ([`prepare`]); what does is one quaternion product and
+//! two rotations by ΔR_k ([`State::step`]), and the rotations do not wait for ΔR_k+1. The
+//! slice path prepares a block of intervals two at a time, one per [`F2`] lane
+//! ([`Carry::prepare_pairs`]: every operation is then a packed one, where LLVM's own pairing of
+//! 3-vectors leaves a third of them scalar and adds shuffles), then accumulates the block. The
+//! one-by-one path ([`step`]) runs the same code in `f64`, so the two agree bit for bit.
+
+use super::{PairWeights, Rule, SteadyWeights};
+use crate::propagation::V3;
+use crate::sample::{ImuBias, ImuSample};
+use crate::scheme::{Deltas, Node, Quat};
+use crate::simd::{F2, Lane};
+
+/// A 3-vector in lanes: `[x, y, z]`.
+type L3<T> = [T; 3];
+
+#[inline(always)]
+fn add<T: Lane>(a: &L3<T>, b: &L3<T>) -> L3<T> {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+#[inline(always)]
+fn sub<T: Lane>(a: &L3<T>, b: &L3<T>) -> L3<T> {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+#[inline(always)]
+fn scale<T: Lane>(a: &L3<T>, s: T) -> L3<T> {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+
+#[inline(always)]
+fn cross<T: Lane>(a: &L3<T>, b: &L3<T>) -> L3<T> {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// `R(q)` for a unit quaternion `q = (w, x, y, z)`, by rows: `I + 2(w[q_v]× + [q_v]×²)`
+/// (in lanes its 21 operations and the 15 of a product [`mv`] are all packed).
+#[inline(always)]
+fn rot_matrix<T: Lane>(q: &[T; 4]) -> [L3<T>; 3] {
+    let [w, x, y, z] = *q;
+    let (x2, y2, z2) = (x + x, y + y, z + z);
+    let (xx, yy, zz) = (x * x2, y * y2, z * z2);
+    let (xy, xz, yz) = (x * y2, x * z2, y * z2);
+    let (wx, wy, wz) = (w * x2, w * y2, w * z2);
+    let one = T::splat(1.0);
+    [
+        [one - (yy + zz), xy - wz, xz + wy],
+        [xy + wz, one - (xx + zz), yz - wx],
+        [xz - wy, yz + wx, one - (xx + yy)],
+    ]
+}
+
+/// `M v`.
+#[inline(always)]
+fn mv<T: Lane>(m: &[L3<T>; 3], v: &L3<T>) -> L3<T> {
+    m.map(|r| (r[0] * v[0] + r[1] * v[1]) + r[2] * v[2])
+}
+
+/// `α d₁₂ + β d₀₁`: a node's derivative from its two differences (as the parent's `slope`).
+#[inline(always)]
+fn slope<T: Lane>(d12: &L3<T>, d01: &L3<T>, alpha: T, beta: T) -> L3<T> {
+    add(&scale(d12, alpha), &scale(d01, beta))
+}
+
+#[inline(always)]
+fn l3(v: &V3) -> L3<f64> {
+    [v.x, v.y, v.z]
+}
+
+#[inline(always)]
+fn v3(l: &L3<f64>) -> V3 {
+    V3::new(l[0], l[1], l[2])
+}
+
+/// `s = ω × a + ȧ` of a node (frame of the node), rounded as [`Carry`] rounds it.
+#[inline(always)]
+pub(crate) fn s_of(w: &V3, a: &V3, da: &V3) -> V3 {
+    v3(&add(&cross(&l3(w), &l3(a)), &l3(da)))
+}
+
+/// `(E, x, y)` of the interval (module docs) from its rule (`h/2`, `h²/12`), the rates and
+/// accelerations of both nodes, node k's `ω̇_k` and `s_k`, and node k+1's `ω̇_k+1` and `s_k+1`.
+/// `E` is the unit quaternion `(cos(θ/2), sin(θ/2)/θ Ω)` of
+/// `Ω = h/2 (ω_k + ω_k+1) + h²/12 (ω̇_k − ω̇_k+1 + ω_k × ω_k+1)`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn prepare<T: Lane>(
+    h_2: T,
+    h12: T,
+    w0: &L3<T>,
+    w1: &L3<T>,
+    a0: &L3<T>,
+    a1: &L3<T>,
+    dw0: &L3<T>,
+    s0: &L3<T>,
+    dw1: &L3<T>,
+    s1: &L3<T>,
+) -> ([T; 4], L3<T>, L3<T>) {
+    let om = add(
+        &scale(&add(w0, w1), h_2),
+        &scale(&add(&sub(dw0, dw1), &cross(w0, w1)), h12),
+    );
+    let (c, s) = T::exp_quat_coeffs((om[0] * om[0] + om[1] * om[1]) + om[2] * om[2]);
+    let e = [c, s * om[0], s * om[1], s * om[2]];
+    let m = rot_matrix(&e);
+    let (eb, ea) = (mv(&m, &sub(&scale(a1, h_2), &scale(s1, h12))), mv(&m, a1));
+    let x = add(&add(&scale(a0, h_2), &scale(s0, h12)), &eb);
+    let y = add(&scale(&x, h_2), &scale(&sub(a0, &ea), h12));
+    (e, x, y)
+}
+
+/// One prepared interval, laid out for [`State::step`]: `E = (c, e_x, e_y, e_z)` as the pairs
+/// `(c, e_x)`, `(e_y, e_z)`; `(x_i, y_i)` by component; `(h, h)` [s].
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C)]
+pub(crate) struct Record {
+    e1: F2,
+    e2: F2,
+    xy: [F2; 3],
+    h: F2,
+}
+
+impl Record {
+    #[inline(always)]
+    fn one(e: &[f64; 4], x: &L3<f64>, y: &L3<f64>, h: f64) -> Self {
+        Self {
+            e1: F2::new(e[0], e[1]),
+            e2: F2::new(e[2], e[3]),
+            xy: [0, 1, 2].map(|i| F2::new(x[i], y[i])),
+            h: F2::splat(h),
+        }
+    }
+
+    /// The records of the two intervals in lanes lo and hi.
+    #[inline(always)]
+    fn two(e: &[F2; 4], x: &L3<F2>, y: &L3<F2>, h: F2) -> [Self; 2] {
+        [
+            Self {
+                e1: F2::lows(e[0], e[1]),
+                e2: F2::lows(e[2], e[3]),
+                xy: [0, 1, 2].map(|i| F2::lows(x[i], y[i])),
+                h: h.splat_lo(),
+            },
+            Self {
+                e1: F2::highs(e[0], e[1]),
+                e2: F2::highs(e[2], e[3]),
+                xy: [0, 1, 2].map(|i| F2::highs(x[i], y[i])),
+                h: h.splat_hi(),
+            },
+        ]
+    }
+}
+
+/// The running deltas in lanes: ΔR's quaternion as `(w, x)`, `(y, z)` and `(Δv_i, Δp_i)` by
+/// component.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct State {
+    qa: F2,
+    qb: F2,
+    vp: [F2; 3],
+}
+
+impl State {
+    #[inline(always)]
+    pub(crate) fn load(d: &Deltas) -> Self {
+        let (q, v, p) = (&d.q, &d.v, &d.p);
+        Self {
+            qa: F2::new(q.w, q.v.x),
+            qb: F2::new(q.v.y, q.v.z),
+            vp: [0, 1, 2].map(|i| F2::new(v[i], p[i])),
+        }
+    }
+
+    #[inline(always)]
+    pub(crate) fn store(&self, d: &mut Deltas) {
+        d.q = Quat {
+            w: self.qa.lo(),
+            v: V3::new(self.qa.hi(), self.qb.lo(), self.qb.hi()),
+        };
+        d.v = V3::new(self.vp[0].lo(), self.vp[1].lo(), self.vp[2].lo());
+        d.p = V3::new(self.vp[0].hi(), self.vp[1].hi(), self.vp[2].hi());
+    }
+
+    /// One interval: `Δv += ΔR_k x`, `Δp = (Δp + h Δv) + ΔR_k y`, `q = q ⊗ E`.
+    #[inline(always)]
+    pub(crate) fn step(&mut self, r: &Record) {
+        let (w, x) = (self.qa.splat_lo(), self.qa.splat_hi());
+        let (y, z) = (self.qb.splat_lo(), self.qb.splat_hi());
+        // R(q) P = P + w t + q_v × t, t = 2 q_v × P (Quat::rotate, both vectors at once).
+        let (qv, p) = ([x, y, z], &r.xy);
+        let t = cross(&qv, p);
+        let t = add(&t, &t);
+        let rxy = add(&add(p, &scale(&t, w)), &cross(&qv, &t));
+        let zero = F2::splat(0.0);
+        for (vp, o) in self.vp.iter_mut().zip(&rxy) {
+            // (v + 0, p + v h) + (R x, R y)_i
+            *vp = (*vp + F2::lows(zero, *vp) * r.h) + *o;
+        }
+        // q ⊗ E, the lanes of (w', x') and (y', z') (Hamilton product, as Quat::mul).
+        let (e1, e2) = (r.e1, r.e2);
+        let (e1s, e2s) = (e1.swap(), e2.swap());
+        self.qa = (w * e1 + x * e1s.flip(true, false))
+            + (y * e2.flip(true, false) + z * e2s.flip(true, true));
+        self.qb =
+            (w * e2 + x * e2s.flip(true, false)) + (y * e1.flip(false, true) + z * e1s);
+    }
+}
+
+/// One interval of the one-by-one path (nodes `n0`, `n1`, node k+1's derivatives `dw1`,
+/// `da1`; node k's are `d.dw_last`, `d.s_last`), as [`Carry`] computes it.
+#[inline(always)]
+pub(crate) fn step(d: &mut Deltas, c: &Rule, n0: &Node, n1: &Node, dw1: &V3, da1: &V3) {
+    let s1 = add(&cross(&l3(&n1.w), &l3(&n1.a)), &l3(da1));
+    let (e, x, y) = prepare(
+        c.h_2,
+        c.h2_12,
+        &l3(&n0.w),
+        &l3(&n1.w),
+        &l3(&n0.a),
+        &l3(&n1.a),
+        &l3(&d.dw_last),
+        &l3(&d.s_last),
+        &l3(dw1),
+        &s1,
+    );
+    let mut st = State::load(d);
+    st.step(&Record::one(&e, &x, &y, c.h));
+    st.store(d);
+    d.dw_last = *dw1;
+    d.s_last = v3(&s1);
+}
+
+/// What the slice path carries from one interval to the next (steady state): nodes k and
+/// k+1 (time [ns], bias-corrected `ω`, `a`), and node k's `ω̇_k` and `s_k`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Carry {
+    t0: i64,
+    t1: i64,
+    w0: V3,
+    w1: V3,
+    a0: V3,
+    a1: V3,
+    dw0: V3,
+    s0: V3,
+}
+
+impl Carry {
+    /// From nodes k and k+1 and node k's `ω̇_k` and `s_k` (`d.dw_last`, `d.s_last`).
+    pub(crate) fn new(n0: &Node, n1: &Node, d: &Deltas) -> Self {
+        Self {
+            t0: n0.t_ns,
+            t1: n1.t_ns,
+            w0: n0.w,
+            w1: n1.w,
+            a0: n0.a,
+            a1: n1.a,
+            dw0: d.dw_last,
+            s0: d.s_last,
+        }
+    }
+
+    /// Stores `ω̇` and `s` of the newest complete node in `d`.
+    pub(crate) fn finish(&self, d: &mut Deltas) {
+        d.dw_last = self.dw0;
+        d.s_last = self.s0;
+    }
+
+    /// Interval k, completed by the new sample k+2 (`s`, corrected with `bias`): the weights
+    /// and arithmetic of the one-by-one path ([`super::step`] with the stencil
+    /// `{k−1, k, k+1, k+2}`).
+    #[inline(always)]
+    pub(crate) fn prepare_one(
+        &mut self,
+        s: &ImuSample,
+        bias: &ImuBias,
+        cache: &mut SteadyWeights,
+    ) -> Record {
+        let (w2, a2) = (s.gyro - bias.gyro, s.acc - bias.acc);
+        let c = *cache.of([self.t0, self.t1, s.t_ns]);
+        let (w0, w1, a0, a1) = (l3(&self.w0), l3(&self.w1), l3(&self.a0), l3(&self.a1));
+        let dw1 = slope(&sub(&l3(&w2), &w1), &sub(&w1, &w0), c.alpha, c.beta);
+        let da1 = slope(&sub(&l3(&a2), &a1), &sub(&a1, &a0), c.alpha, c.beta);
+        let s1 = add(&cross(&w1, &a1), &da1);
+        let (e, x, y) = prepare(
+            c.rule.h_2,
+            c.rule.h2_12,
+            &w0,
+            &w1,
+            &a0,
+            &a1,
+            &l3(&self.dw0),
+            &l3(&self.s0),
+            &dw1,
+            &s1,
+        );
+        *self = Self {
+            t0: self.t1,
+            t1: s.t_ns,
+            w0: self.w1,
+            w1: w2,
+            a0: self.a1,
+            a1: a2,
+            dw0: v3(&dw1),
+            s0: v3(&s1),
+        };
+        Record::one(&e, &x, &y, c.rule.h)
+    }
+
+    /// The intervals completed by `samples` (an even number of them, all of which pass the
+    /// common-case test), two at a time: lanes lo and hi hold intervals k and k+1, completed
+    /// by samples k+2 and k+3, with the same weights and operations as [`Carry::prepare_one`].
+    /// Writes `out[..samples.len()]`.
+    #[inline(always)]
+    pub(crate) fn prepare_pairs(
+        &mut self,
+        samples: &[ImuSample],
+        bias: &ImuBias,
+        cache: &mut PairWeights,
+        out: &mut [Record],
+    ) {
+        let lanes = |a: &V3, b: &V3| [0, 1, 2].map(|i| F2::new(a[i], b[i]));
+        let (bw, ba) = (
+            [0, 1, 2].map(|i| F2::splat(bias.gyro[i])),
+            [0, 1, 2].map(|i| F2::splat(bias.acc[i])),
+        );
+        // Nodes (k, k+1); (·, ω̇_k) and (·, s_k).
+        let (mut w01, mut a01) = (lanes(&self.w0, &self.w1), lanes(&self.a0, &self.a1));
+        let (mut dprev, mut sprev) = (lanes(&self.dw0, &self.dw0), lanes(&self.s0, &self.s0));
+        let (mut t0, mut t1) = (self.t0, self.t1);
+        for (pair, rec) in samples.chunks_exact(2).zip(out.chunks_exact_mut(2)) {
+            let (s2, s3) = (&pair[0], &pair[1]);
+            let w23 = [0, 1, 2].map(|i| F2::new(s2.gyro[i], s3.gyro[i]) - bw[i]);
+            let a23 = [0, 1, 2].map(|i| F2::new(s2.acc[i], s3.acc[i]) - ba[i]);
+            let w12 = [0, 1, 2].map(|i| F2::straddle(w01[i], w23[i]));
+            let a12 = [0, 1, 2].map(|i| F2::straddle(a01[i], a23[i]));
+            let c = *cache.of([t0, t1, s2.t_ns, s3.t_ns]);
+            let (alpha, beta) = (c.alpha, c.beta);
+            let dw1 = slope(&sub(&w23, &w12), &sub(&w12, &w01), alpha, beta);
+            let da1 = slope(&sub(&a23, &a12), &sub(&a12, &a01), alpha, beta);
+            let s1 = add(&cross(&w12, &a12), &da1);
+            let dw0 = [0, 1, 2].map(|i| F2::straddle(dprev[i], dw1[i]));
+            let s0 = [0, 1, 2].map(|i| F2::straddle(sprev[i], s1[i]));
+            let (e, x, y) = prepare(c.h_2, c.h2_12, &w01, &w12, &a01, &a12, &dw0, &s0, &dw1, &s1);
+            rec.copy_from_slice(&Record::two(&e, &x, &y, c.h));
+            (w01, a01, dprev, sprev) = (w23, a23, dw1, s1);
+            (t0, t1) = (s2.t_ns, s3.t_ns);
+        }
+        let lo = |l: &L3<F2>| V3::new(l[0].lo(), l[1].lo(), l[2].lo());
+        let hi = |l: &L3<F2>| V3::new(l[0].hi(), l[1].hi(), l[2].hi());
+        *self = Self {
+            t0,
+            t1,
+            w0: lo(&w01),
+            w1: hi(&w01),
+            a0: lo(&a01),
+            a1: hi(&a01),
+            dw0: hi(&dprev),
+            s0: hi(&sprev),
+        };
+    }
+}

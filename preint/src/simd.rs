@@ -1,0 +1,268 @@
+//! Two `f64` lanes in one SSE2 register (part of the x86-64 baseline, so no runtime
+//! detection and no special build), with a plain `[f64; 2]` on other targets.
+//!
+//! Every operation is the lane-wise IEEE operation, so a computation written once over
+//! [`Lane`] rounds identically whether it runs on `f64` or on `F2`: the rk4 slice path
+//! prepares two intervals at a time in `F2` lanes and the one-by-one path prepares one in
+//! `f64`, and their deltas are bit-identical (`preint/tests/deltas_fast_path.rs`). LLVM does not
+//! find this layout itself: it pairs the x and y components of one 3-vector and leaves z
+//! alone, and spends the difference on shuffles (a cross product) and register copies.
+
+use std::ops::{Add, Mul, Neg, Sub};
+
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::{
+    __m128d, _mm_add_pd, _mm_castsi128_pd, _mm_cvtsd_f64, _mm_mul_pd, _mm_set_epi64x, _mm_set_pd,
+    _mm_set1_pd, _mm_shuffle_pd, _mm_sub_pd, _mm_unpackhi_pd, _mm_unpacklo_pd, _mm_xor_pd,
+};
+
+/// Scalar arithmetic that runs lane-wise: `f64` (one lane) or [`F2`] (two).
+pub(crate) trait Lane:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Neg<Output = Self>
+{
+    /// `x` in every lane.
+    fn splat(x: f64) -> Self;
+    /// [`lie::so3::exp_quat_coeffs`] in every lane.
+    fn exp_quat_coeffs(theta2: Self) -> (Self, Self);
+}
+
+impl Lane for f64 {
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        x
+    }
+
+    #[inline(always)]
+    fn exp_quat_coeffs(theta2: Self) -> (Self, Self) {
+        lie::so3::exp_quat_coeffs(theta2)
+    }
+}
+
+/// Two `f64` lanes, `(lo, hi)`; 16-byte aligned.
+#[derive(Clone, Copy)]
+#[repr(transparent)]
+pub(crate) struct F2(
+    #[cfg(target_arch = "x86_64")] __m128d,
+    #[cfg(not(target_arch = "x86_64"))] [f64; 2],
+);
+
+// SAFETY (every `unsafe` block below): the intrinsics are SSE2 register operations, part of the
+// x86-64 baseline; none touches memory.
+#[cfg(target_arch = "x86_64")]
+impl F2 {
+    #[inline(always)]
+    pub(crate) fn new(lo: f64, hi: f64) -> Self {
+        Self(unsafe { _mm_set_pd(hi, lo) })
+    }
+
+    #[inline(always)]
+    pub(crate) fn lo(self) -> f64 {
+        unsafe { _mm_cvtsd_f64(self.0) }
+    }
+
+    #[inline(always)]
+    pub(crate) fn hi(self) -> f64 {
+        unsafe { _mm_cvtsd_f64(_mm_unpackhi_pd(self.0, self.0)) }
+    }
+
+    /// `(a.lo, b.lo)`.
+    #[inline(always)]
+    pub(crate) fn lows(a: Self, b: Self) -> Self {
+        Self(unsafe { _mm_unpacklo_pd(a.0, b.0) })
+    }
+
+    /// `(a.hi, b.hi)`.
+    #[inline(always)]
+    pub(crate) fn highs(a: Self, b: Self) -> Self {
+        Self(unsafe { _mm_unpackhi_pd(a.0, b.0) })
+    }
+
+    /// `(a.hi, b.lo)`: the pair one lane further along a sequence split as `a, b`.
+    #[inline(always)]
+    pub(crate) fn straddle(a: Self, b: Self) -> Self {
+        Self(unsafe { _mm_shuffle_pd::<0b01>(a.0, b.0) })
+    }
+
+    /// `(hi, lo)`.
+    #[inline(always)]
+    pub(crate) fn swap(self) -> Self {
+        Self(unsafe { _mm_shuffle_pd::<0b01>(self.0, self.0) })
+    }
+
+    /// The sign bit of lane lo (`lo`) and of lane hi (`hi`) flipped: an exact negation.
+    #[inline(always)]
+    pub(crate) fn flip(self, lo: bool, hi: bool) -> Self {
+        let m = |b: bool| if b { i64::MIN } else { 0 };
+        Self(unsafe { _mm_xor_pd(self.0, _mm_castsi128_pd(_mm_set_epi64x(m(hi), m(lo)))) })
+    }
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+impl F2 {
+    #[inline(always)]
+    pub(crate) fn new(lo: f64, hi: f64) -> Self {
+        Self([lo, hi])
+    }
+    #[inline(always)]
+    pub(crate) fn lo(self) -> f64 {
+        self.0[0]
+    }
+    #[inline(always)]
+    pub(crate) fn hi(self) -> f64 {
+        self.0[1]
+    }
+    #[inline(always)]
+    pub(crate) fn lows(a: Self, b: Self) -> Self {
+        Self([a.0[0], b.0[0]])
+    }
+    #[inline(always)]
+    pub(crate) fn highs(a: Self, b: Self) -> Self {
+        Self([a.0[1], b.0[1]])
+    }
+    #[inline(always)]
+    pub(crate) fn straddle(a: Self, b: Self) -> Self {
+        Self([a.0[1], b.0[0]])
+    }
+    #[inline(always)]
+    pub(crate) fn swap(self) -> Self {
+        Self([self.0[1], self.0[0]])
+    }
+    #[inline(always)]
+    pub(crate) fn flip(self, lo: bool, hi: bool) -> Self {
+        let f = |x: f64, b: bool| if b { -x } else { x };
+        Self([f(self.0[0], lo), f(self.0[1], hi)])
+    }
+}
+
+impl F2 {
+    /// `lo` in lane lo and lane hi.
+    #[inline(always)]
+    pub(crate) fn splat_lo(self) -> Self {
+        Self::lows(self, self)
+    }
+
+    /// `hi` in lane lo and lane hi.
+    #[inline(always)]
+    pub(crate) fn splat_hi(self) -> Self {
+        Self::highs(self, self)
+    }
+}
+
+impl Default for F2 {
+    fn default() -> Self {
+        Self::splat(0.0)
+    }
+}
+
+impl std::fmt::Debug for F2 {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "F2({:e}, {:e})", self.lo(), self.hi())
+    }
+}
+
+macro_rules! lane_op {
+    ($tr:ident, $m:ident, $sse:ident, $op:tt) => {
+        impl $tr for F2 {
+            type Output = Self;
+            #[inline(always)]
+            fn $m(self, o: Self) -> Self {
+                #[cfg(target_arch = "x86_64")]
+                {
+                    Self(unsafe { $sse(self.0, o.0) })
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                {
+                    Self([self.0[0] $op o.0[0], self.0[1] $op o.0[1]])
+                }
+            }
+        }
+    };
+}
+lane_op!(Add, add, _mm_add_pd, +);
+lane_op!(Sub, sub, _mm_sub_pd, -);
+lane_op!(Mul, mul, _mm_mul_pd, *);
+
+impl Neg for F2 {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        self.flip(true, true)
+    }
+}
+
+impl Lane for F2 {
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        #[cfg(target_arch = "x86_64")]
+        {
+            Self(unsafe { _mm_set1_pd(x) })
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            Self([x, x])
+        }
+    }
+
+    /// Both lanes' series at once when both angles are below the series' range end (every
+    /// per-sample angle), in the order [`lie::so3::EXP_QUAT_SERIES`] prescribes; otherwise
+    /// lane by lane.
+    #[inline(always)]
+    fn exp_quat_coeffs(theta2: Self) -> (Self, Self) {
+        use lie::so3::{EXP_QUAT_SERIES, EXP_QUAT_SERIES_BELOW};
+        let (lo, hi) = (theta2.lo(), theta2.hi());
+        if lo < EXP_QUAT_SERIES_BELOW && hi < EXP_QUAT_SERIES_BELOW {
+            let series = |c: &[f64; 5]| {
+                let (x, k) = (theta2, |i: usize| Self::splat(c[i]));
+                let x2 = x * x;
+                k(0) + (k(1) * x + x2 * ((k(2) + k(3) * x) + k(4) * x2))
+            };
+            (series(&EXP_QUAT_SERIES[0]), series(&EXP_QUAT_SERIES[1]))
+        } else {
+            let (c0, s0) = lie::so3::exp_quat_coeffs(lo);
+            let (c1, s1) = lie::so3::exp_quat_coeffs(hi);
+            (Self::new(c0, c1), Self::new(s0, s1))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lanes_round_like_scalars() {
+        let (a, b) = (F2::new(0.1, -3.0), F2::new(0.7, 1e-300));
+        let (x, y) = ((a + b) * a - b, -(a * b));
+        assert_eq!(x.lo(), (0.1 + 0.7) * 0.1 - 0.7);
+        assert_eq!(x.hi(), (-3.0 + 1e-300) * -3.0 - 1e-300);
+        assert_eq!(y.lo(), -(0.1 * 0.7));
+        assert_eq!(y.hi(), -(-3.0 * 1e-300));
+        let z = F2::new(0.0, 2.0).flip(true, false);
+        assert!(z.lo() == 0.0 && z.lo().is_sign_negative() && z.hi() == 2.0);
+        assert_eq!((a.swap().lo(), a.swap().hi()), (-3.0, 0.1));
+        let s = F2::straddle(a, b);
+        assert_eq!((s.lo(), s.hi()), (-3.0, 0.7));
+        let (l, h) = (F2::lows(a, b), F2::highs(a, b));
+        assert_eq!((l.lo(), l.hi(), h.lo(), h.hi()), (0.1, 0.7, -3.0, 1e-300));
+        assert_eq!((a.splat_lo().hi(), a.splat_hi().lo()), (0.1, -3.0));
+    }
+
+    #[test]
+    fn two_lane_exp_coefficients_are_the_scalar_ones() {
+        // Both lanes in the series, one or both beyond it (θ = 0.1 is the switch), and θ > π.
+        let thetas = [0.0, 1e-9, 0.003, 0.0999, 0.1, 0.10001, 1.3, 3.5];
+        for &t0 in &thetas {
+            for &t1 in &thetas {
+                let (c, s) = F2::exp_quat_coeffs(F2::new(t0 * t0, t1 * t1));
+                let (c0, s0) = lie::so3::exp_quat_coeffs(t0 * t0);
+                let (c1, s1) = lie::so3::exp_quat_coeffs(t1 * t1);
+                let bits = |x: f64| x.to_bits();
+                assert_eq!(
+                    [c.lo(), c.hi(), s.lo(), s.hi()].map(bits),
+                    [c0, c1, s0, s1].map(bits),
+                    "θ = {t0}, {t1}"
+                );
+            }
+        }
+    }
+}
