@@ -17,8 +17,8 @@ use crate::propagation::{
     rot_cols,
 };
 use crate::sample::{ImuBias, ImuSample};
-use crate::scheme::{Deltas, Node, euler, hermite, midpoint, span_s};
 use crate::scheme::hermite::deltas::{Carry, Record, State};
+use crate::scheme::{Deltas, Node, euler, hermite, midpoint, span_s};
 use lie::SO3;
 
 const RING: usize = 8;
@@ -107,6 +107,9 @@ struct Core {
     steady: hermite::SteadyWeights,
     /// The same for two intervals at a time (the rk4 slice path).
     pairs: hermite::PairWeights,
+    /// Four at a time (the rk4 slice path with AVX2).
+    #[cfg(target_arch = "x86_64")]
+    quads: hermite::QuadWeights,
     /// Window intervals integrated.
     done: usize,
     d: Deltas,
@@ -420,8 +423,8 @@ impl Core {
         let (mut d, mut done) = (self.d, self.done);
         let n = self.n;
         let mut carry = Carry::new(self.node(n - 2), self.node(n - 1), &d);
-        let (w, pw) = (&mut self.steady, &mut self.pairs);
         let used = if samples.len() < RK4_BLOCK {
+            let w = &mut self.steady;
             Self::slice_loop(samples, last_t_ns, gap_limit, &mut d, &mut done, {
                 |d, s, _| {
                     let r = carry.prepare_one(s, bias, w);
@@ -431,43 +434,87 @@ impl Core {
                 }
             })
         } else {
-            let mut buf = [Record::default(); RK4_BLOCK];
-            let (mut used, mut last) = (0, last_t_ns);
-            loop {
-                let rest = &samples[used..];
-                let mut m = 0;
-                for s in rest.iter().take(RK4_BLOCK) {
-                    if !Preintegrator::common_case(s, last, gap_limit) {
-                        break;
-                    }
-                    last = s.t_ns;
-                    m += 1;
-                }
-                let even = m & !1;
-                carry.prepare_pairs(&rest[..even], bias, pw, &mut buf[..even]);
-                if m > even {
-                    buf[even] = carry.prepare_one(&rest[even], bias, w);
-                }
-                let mut st = State::load(&d);
-                for r in &buf[..m] {
-                    st.step(r);
-                    done += 1;
-                    if done.is_multiple_of(RENORM_EVERY) {
-                        // As `count_interval`.
-                        st.store(&mut d);
-                        d.renormalize();
-                        st = State::load(&d);
-                    }
-                }
-                st.store(&mut d);
-                used += m;
-                if m < RK4_BLOCK {
-                    break used;
-                }
+            let args = (samples, bias, last_t_ns, gap_limit);
+            #[cfg(target_arch = "x86_64")]
+            if crate::simd::avx2() {
+                // SAFETY: this processor has AVX2.
+                unsafe { self.rk4_blocks_avx2(&mut carry, &mut d, &mut done, args) }
+            } else {
+                self.rk4_blocks::<false>(&mut carry, &mut d, &mut done, args)
             }
+            #[cfg(not(target_arch = "x86_64"))]
+            self.rk4_blocks::<false>(&mut carry, &mut d, &mut done, args)
         };
         carry.finish(&mut d);
         self.finish_slice(d, done, samples, used, bias)
+    }
+
+    /// The blocks of [`Core::run_deltas_rk4`]: per block of up to [`RK4_BLOCK`] samples that
+    /// pass the common-case test, the intervals they complete are prepared four at a time
+    /// (`QUADS`, AVX2 only), two at a time and one at a time, then accumulated.
+    #[inline(always)]
+    fn rk4_blocks<const QUADS: bool>(
+        &mut self,
+        carry: &mut Carry,
+        d: &mut Deltas,
+        done: &mut usize,
+        (samples, bias, last_t_ns, gap_limit): (&[ImuSample], &ImuBias, i64, u64),
+    ) -> usize {
+        let mut buf = [Record::default(); RK4_BLOCK];
+        let (mut used, mut last) = (0, last_t_ns);
+        loop {
+            let rest = &samples[used..];
+            let mut m = 0;
+            for s in rest.iter().take(RK4_BLOCK) {
+                if !Preintegrator::common_case(s, last, gap_limit) {
+                    break;
+                }
+                last = s.t_ns;
+                m += 1;
+            }
+            let mut i = 0;
+            #[cfg(target_arch = "x86_64")]
+            if QUADS {
+                i = m & !3;
+                // SAFETY: `QUADS` only from `rk4_blocks_avx2`, entered on processors with AVX2.
+                unsafe { carry.prepare_quads(&rest[..i], bias, &mut self.quads, &mut buf[..i]) };
+            }
+            let even = i + ((m - i) & !1);
+            carry.prepare_pairs(&rest[i..even], bias, &mut self.pairs, &mut buf[i..even]);
+            if m > even {
+                buf[even] = carry.prepare_one(&rest[even], bias, &mut self.steady);
+            }
+            let mut st = State::load(d);
+            for r in &buf[..m] {
+                st.step(r);
+                *done += 1;
+                if done.is_multiple_of(RENORM_EVERY) {
+                    // As `count_interval`.
+                    st.store(d);
+                    d.renormalize();
+                    st = State::load(d);
+                }
+            }
+            st.store(d);
+            used += m;
+            if m < RK4_BLOCK {
+                return used;
+            }
+        }
+    }
+
+    /// [`Core::rk4_blocks`] compiled for AVX2 (VEX encoding everywhere, four-lane
+    /// preparation). The same operations, so the same bits.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn rk4_blocks_avx2(
+        &mut self,
+        carry: &mut Carry,
+        d: &mut Deltas,
+        done: &mut usize,
+        args: (&[ImuSample], &ImuBias, i64, u64),
+    ) -> usize {
+        self.rk4_blocks::<true>(carry, d, done, args)
     }
 
     /// The loop of the slice paths: takes the leading samples of `samples` that pass
@@ -755,6 +802,8 @@ impl Preintegrator {
                 weights: hermite::Weights::default(),
                 steady: hermite::SteadyWeights::default(),
                 pairs: hermite::PairWeights::default(),
+                #[cfg(target_arch = "x86_64")]
+                quads: hermite::QuadWeights::default(),
                 done: 0,
                 d: Deltas::default(),
                 e: ErrorState::default(),

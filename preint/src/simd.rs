@@ -38,6 +38,14 @@ impl Lane for f64 {
     }
 }
 
+/// `c₀ + (c₁x + x²((c₂ + c₃x) + c₄x²))` in every lane: [`lie::so3::EXP_QUAT_SERIES`]'s order.
+#[inline(always)]
+fn estrin5<T: Lane>(x: T, c: &[f64; 5]) -> T {
+    let k = |i: usize| T::splat(c[i]);
+    let x2 = x * x;
+    k(0) + (k(1) * x + x2 * ((k(2) + k(3) * x) + k(4) * x2))
+}
+
 /// Two `f64` lanes, `(lo, hi)`; 16-byte aligned.
 #[derive(Clone, Copy)]
 #[repr(transparent)]
@@ -211,12 +219,10 @@ impl Lane for F2 {
         use lie::so3::{EXP_QUAT_SERIES, EXP_QUAT_SERIES_BELOW};
         let (lo, hi) = (theta2.lo(), theta2.hi());
         if lo < EXP_QUAT_SERIES_BELOW && hi < EXP_QUAT_SERIES_BELOW {
-            let series = |c: &[f64; 5]| {
-                let (x, k) = (theta2, |i: usize| Self::splat(c[i]));
-                let x2 = x * x;
-                k(0) + (k(1) * x + x2 * ((k(2) + k(3) * x) + k(4) * x2))
-            };
-            (series(&EXP_QUAT_SERIES[0]), series(&EXP_QUAT_SERIES[1]))
+            (
+                estrin5(theta2, &EXP_QUAT_SERIES[0]),
+                estrin5(theta2, &EXP_QUAT_SERIES[1]),
+            )
         } else {
             let (c0, s0) = lie::so3::exp_quat_coeffs(lo);
             let (c1, s1) = lie::so3::exp_quat_coeffs(hi);
@@ -264,5 +270,148 @@ mod tests {
                 );
             }
         }
+    }
+}
+
+/// Four `f64` lanes in one AVX register, for x86-64 processors that have AVX2 (checked at
+/// run time by the caller: see [`avx2`]). Every method may only run on such a processor:
+/// the rk4 slice path calls them only inside a `#[target_feature(enable = "avx2")]` function
+/// that it enters after [`avx2`] returned true.
+#[cfg(target_arch = "x86_64")]
+pub(crate) mod quad {
+    use super::{F2, Lane, estrin5};
+    use std::arch::x86_64::{
+        __m256d, _mm256_add_pd, _mm256_castpd256_pd128, _mm256_extractf128_pd, _mm256_mul_pd,
+        _mm256_permute2f128_pd, _mm256_set_pd, _mm256_set1_pd, _mm256_shuffle_pd, _mm256_storeu_pd,
+        _mm256_sub_pd, _mm256_unpackhi_pd, _mm256_unpacklo_pd, _mm256_xor_pd,
+    };
+    use std::ops::{Add, Mul, Neg, Sub};
+
+    /// Four lanes `(l0, l1, l2, l3)`.
+    #[derive(Clone, Copy)]
+    #[repr(transparent)]
+    pub(crate) struct F4(__m256d);
+
+    // SAFETY (every `unsafe` block in this module): AVX register operations (no memory but
+    // the local array of `lanes`); the module's contract is that they run only after the
+    // processor was found to have AVX2.
+    impl F4 {
+        #[inline(always)]
+        pub(crate) fn new(l: [f64; 4]) -> Self {
+            Self(unsafe { _mm256_set_pd(l[3], l[2], l[1], l[0]) })
+        }
+
+        #[inline(always)]
+        pub(crate) fn lanes(self) -> [f64; 4] {
+            let mut out = [0.0; 4];
+            unsafe { _mm256_storeu_pd(out.as_mut_ptr(), self.0) };
+            out
+        }
+
+        /// `(a3, b0, b1, b2)`: the lanes one back along a sequence split as `a, b`.
+        #[inline(always)]
+        pub(crate) fn after(a: Self, b: Self) -> Self {
+            unsafe {
+                let mid = _mm256_permute2f128_pd::<0x21>(a.0, b.0); // (a2, a3, b0, b1)
+                Self(_mm256_shuffle_pd::<0b0101>(mid, b.0))
+            }
+        }
+
+        /// `(a1, b0, a3, b2)`: for `a` = nodes j…j+3 and `b` = nodes j+2…j+5, nodes j+1…j+4.
+        #[inline(always)]
+        pub(crate) fn odd_even(a: Self, b: Self) -> Self {
+            Self(unsafe { _mm256_shuffle_pd::<0b0101>(a.0, b.0) })
+        }
+
+        /// `(a2, a3, b0, b1)`: two lanes further.
+        #[inline(always)]
+        pub(crate) fn straddle2(a: Self, b: Self) -> Self {
+            Self(unsafe { _mm256_permute2f128_pd::<0x21>(a.0, b.0) })
+        }
+
+        /// `(a0, b0, a2, b2)` and `(a1, b1, a3, b3)`.
+        #[inline(always)]
+        pub(crate) fn interleave(a: Self, b: Self) -> (Self, Self) {
+            unsafe {
+                (
+                    Self(_mm256_unpacklo_pd(a.0, b.0)),
+                    Self(_mm256_unpackhi_pd(a.0, b.0)),
+                )
+            }
+        }
+
+        /// The lower and upper halves, `(l0, l1)` and `(l2, l3)`.
+        #[inline(always)]
+        pub(crate) fn halves(self) -> (F2, F2) {
+            unsafe {
+                (
+                    F2(_mm256_castpd256_pd128(self.0)),
+                    F2(_mm256_extractf128_pd::<1>(self.0)),
+                )
+            }
+        }
+    }
+
+    macro_rules! quad_op {
+        ($tr:ident, $m:ident, $avx:ident) => {
+            impl $tr for F4 {
+                type Output = Self;
+                #[inline(always)]
+                fn $m(self, o: Self) -> Self {
+                    Self(unsafe { $avx(self.0, o.0) })
+                }
+            }
+        };
+    }
+    quad_op!(Add, add, _mm256_add_pd);
+    quad_op!(Sub, sub, _mm256_sub_pd);
+    quad_op!(Mul, mul, _mm256_mul_pd);
+
+    impl Neg for F4 {
+        type Output = Self;
+        #[inline(always)]
+        fn neg(self) -> Self {
+            Self(unsafe { _mm256_xor_pd(self.0, _mm256_set1_pd(-0.0)) })
+        }
+    }
+
+    impl Lane for F4 {
+        #[inline(always)]
+        fn splat(x: f64) -> Self {
+            Self(unsafe { _mm256_set1_pd(x) })
+        }
+
+        /// All four lanes' series at once when every angle is below the series' range end;
+        /// otherwise lane by lane (as [`super::F2`]).
+        #[inline(always)]
+        fn exp_quat_coeffs(theta2: Self) -> (Self, Self) {
+            use lie::so3::{EXP_QUAT_SERIES, EXP_QUAT_SERIES_BELOW};
+            let l = theta2.lanes();
+            if l.iter().all(|&t| t < EXP_QUAT_SERIES_BELOW) {
+                (
+                    estrin5(theta2, &EXP_QUAT_SERIES[0]),
+                    estrin5(theta2, &EXP_QUAT_SERIES[1]),
+                )
+            } else {
+                let [c0, c1, c2, c3] = l.map(lie::so3::exp_quat_coeffs);
+                (
+                    Self::new([c0.0, c1.0, c2.0, c3.0]),
+                    Self::new([c0.1, c1.1, c2.1, c3.1]),
+                )
+            }
+        }
+    }
+}
+
+/// Whether this processor has AVX2 (x86-64; detected once, then a cached load).
+#[inline]
+pub(crate) fn avx2() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
     }
 }

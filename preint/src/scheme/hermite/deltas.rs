@@ -20,9 +20,18 @@ use crate::propagation::V3;
 use crate::sample::{ImuBias, ImuSample};
 use crate::scheme::{Deltas, Node, Quat};
 use crate::simd::{F2, Lane};
+#[cfg(target_arch = "x86_64")]
+use {super::QuadWeights, crate::simd::quad::F4};
 
 /// A 3-vector in lanes: `[x, y, z]`.
 type L3<T> = [T; 3];
+
+/// `[f(0), f(1), f(2)]` (`array::map` is not always inlined, and a call in the lane code costs
+/// more than the work).
+#[inline(always)]
+fn by3<T>(f: impl Fn(usize) -> T) -> [T; 3] {
+    [f(0), f(1), f(2)]
+}
 
 #[inline(always)]
 fn add<T: Lane>(a: &L3<T>, b: &L3<T>) -> L3<T> {
@@ -68,7 +77,7 @@ fn rot_matrix<T: Lane>(q: &[T; 4]) -> [L3<T>; 3] {
 /// `M v`.
 #[inline(always)]
 fn mv<T: Lane>(m: &[L3<T>; 3], v: &L3<T>) -> L3<T> {
-    m.map(|r| (r[0] * v[0] + r[1] * v[1]) + r[2] * v[2])
+    by3(|i| (m[i][0] * v[0] + m[i][1] * v[1]) + m[i][2] * v[2])
 }
 
 /// `α d₁₂ + β d₀₁`: a node's derivative from its two differences (as the parent's `slope`).
@@ -141,9 +150,29 @@ impl Record {
         Self {
             e1: F2::new(e[0], e[1]),
             e2: F2::new(e[2], e[3]),
-            xy: [0, 1, 2].map(|i| F2::new(x[i], y[i])),
+            xy: by3(|i| F2::new(x[i], y[i])),
             h: F2::splat(h),
         }
+    }
+
+    /// The records of the four intervals in lanes 0…3.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn four(e: &[F4; 4], x: &L3<F4>, y: &L3<F4>, h: F4) -> [Self; 4] {
+        // (a0, b0, a2, b2), (a1, b1, a3, b3) split into the pairs of lanes 0, 2 and 1, 3.
+        let split = |a: F4, b: F4| {
+            let (l, h) = F4::interleave(a, b);
+            let ((p0, p2), (p1, p3)) = (l.halves(), h.halves());
+            [p0, p1, p2, p3]
+        };
+        let (e1, e2, hh) = (split(e[0], e[1]), split(e[2], e[3]), split(h, h));
+        let xy: [[F2; 4]; 3] = by3(|i| split(x[i], y[i]));
+        std::array::from_fn(|j| Self {
+            e1: e1[j],
+            e2: e2[j],
+            xy: [xy[0][j], xy[1][j], xy[2][j]],
+            h: hh[j],
+        })
     }
 
     /// The records of the two intervals in lanes lo and hi.
@@ -153,13 +182,13 @@ impl Record {
             Self {
                 e1: F2::lows(e[0], e[1]),
                 e2: F2::lows(e[2], e[3]),
-                xy: [0, 1, 2].map(|i| F2::lows(x[i], y[i])),
+                xy: by3(|i| F2::lows(x[i], y[i])),
                 h: h.splat_lo(),
             },
             Self {
                 e1: F2::highs(e[0], e[1]),
                 e2: F2::highs(e[2], e[3]),
-                xy: [0, 1, 2].map(|i| F2::highs(x[i], y[i])),
+                xy: by3(|i| F2::highs(x[i], y[i])),
                 h: h.splat_hi(),
             },
         ]
@@ -182,7 +211,7 @@ impl State {
         Self {
             qa: F2::new(q.w, q.v.x),
             qb: F2::new(q.v.y, q.v.z),
-            vp: [0, 1, 2].map(|i| F2::new(v[i], p[i])),
+            vp: by3(|i| F2::new(v[i], p[i])),
         }
     }
 
@@ -216,8 +245,7 @@ impl State {
         let (e1s, e2s) = (e1.swap(), e2.swap());
         self.qa = (w * e1 + x * e1s.flip(true, false))
             + (y * e2.flip(true, false) + z * e2s.flip(true, true));
-        self.qb =
-            (w * e2 + x * e2s.flip(true, false)) + (y * e1.flip(false, true) + z * e1s);
+        self.qb = (w * e2 + x * e2s.flip(true, false)) + (y * e1.flip(false, true) + z * e1s);
     }
 }
 
@@ -321,6 +349,65 @@ impl Carry {
         Record::one(&e, &x, &y, c.rule.h)
     }
 
+    /// [`Carry::prepare_pairs`] four intervals at a time, one per [`F4`] lane (intervals k…k+3,
+    /// completed by samples k+2…k+5); `samples.len()` is a multiple of 4.
+    ///
+    /// Only for processors with AVX2 ([`crate::simd::avx2`]): the caller checks.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    pub(crate) fn prepare_quads(
+        &mut self,
+        samples: &[ImuSample],
+        bias: &ImuBias,
+        cache: &mut QuadWeights,
+        out: &mut [Record],
+    ) {
+        let (bw, ba) = (
+            by3(|i| F4::splat(bias.gyro[i])),
+            by3(|i| F4::splat(bias.acc[i])),
+        );
+        // Nodes (·, ·, k, k+1); (·, ·, ·, ω̇_k) and (·, ·, ·, s_k).
+        let last2 = |a: &V3, b: &V3| by3(|i| F4::new([a[i], a[i], a[i], b[i]]));
+        let (mut wc, mut ac) = (last2(&self.w0, &self.w1), last2(&self.a0, &self.a1));
+        let (mut dprev, mut sprev) = (
+            by3(|i| F4::splat(self.dw0[i])),
+            by3(|i| F4::splat(self.s0[i])),
+        );
+        let (mut t0, mut t1) = (self.t0, self.t1);
+        for (q, rec) in samples.chunks_exact(4).zip(out.chunks_exact_mut(4)) {
+            let w2 =
+                by3(|i| F4::new([q[0].gyro[i], q[1].gyro[i], q[2].gyro[i], q[3].gyro[i]]) - bw[i]);
+            let a2 = by3(|i| F4::new([q[0].acc[i], q[1].acc[i], q[2].acc[i], q[3].acc[i]]) - ba[i]);
+            // Nodes (k…k+3) and (k+1…k+4).
+            let w0 = by3(|i| F4::straddle2(wc[i], w2[i]));
+            let a0 = by3(|i| F4::straddle2(ac[i], a2[i]));
+            let w1 = by3(|i| F4::odd_even(w0[i], w2[i]));
+            let a1 = by3(|i| F4::odd_even(a0[i], a2[i]));
+            let c = *cache.of([t0, t1, q[0].t_ns, q[1].t_ns, q[2].t_ns, q[3].t_ns]);
+            let dw1 = slope(&sub(&w2, &w1), &sub(&w1, &w0), c.alpha, c.beta);
+            let da1 = slope(&sub(&a2, &a1), &sub(&a1, &a0), c.alpha, c.beta);
+            let s1 = add(&cross(&w1, &a1), &da1);
+            let dw0 = by3(|i| F4::after(dprev[i], dw1[i]));
+            let s0 = by3(|i| F4::after(sprev[i], s1[i]));
+            let (e, x, y) = prepare(c.h_2, c.h2_12, &w0, &w1, &a0, &a1, &dw0, &s0, &dw1, &s1);
+            rec.copy_from_slice(&Record::four(&e, &x, &y, c.h));
+            (wc, ac, dprev, sprev) = (w2, a2, dw1, s1);
+            (t0, t1) = (q[2].t_ns, q[3].t_ns);
+        }
+        let lane =
+            |l: &L3<F4>, j: usize| V3::new(l[0].lanes()[j], l[1].lanes()[j], l[2].lanes()[j]);
+        *self = Self {
+            t0,
+            t1,
+            w0: lane(&wc, 2),
+            w1: lane(&wc, 3),
+            a0: lane(&ac, 2),
+            a1: lane(&ac, 3),
+            dw0: lane(&dprev, 3),
+            s0: lane(&sprev, 3),
+        };
+    }
+
     /// The intervals completed by `samples` (an even number of them, all of which pass the
     /// common-case test), two at a time: lanes lo and hi hold intervals k and k+1, completed
     /// by samples k+2 and k+3, with the same weights and operations as [`Carry::prepare_one`].
@@ -333,10 +420,10 @@ impl Carry {
         cache: &mut PairWeights,
         out: &mut [Record],
     ) {
-        let lanes = |a: &V3, b: &V3| [0, 1, 2].map(|i| F2::new(a[i], b[i]));
+        let lanes = |a: &V3, b: &V3| by3(|i| F2::new(a[i], b[i]));
         let (bw, ba) = (
-            [0, 1, 2].map(|i| F2::splat(bias.gyro[i])),
-            [0, 1, 2].map(|i| F2::splat(bias.acc[i])),
+            by3(|i| F2::splat(bias.gyro[i])),
+            by3(|i| F2::splat(bias.acc[i])),
         );
         // Nodes (k, k+1); (·, ω̇_k) and (·, s_k).
         let (mut w01, mut a01) = (lanes(&self.w0, &self.w1), lanes(&self.a0, &self.a1));
@@ -344,17 +431,17 @@ impl Carry {
         let (mut t0, mut t1) = (self.t0, self.t1);
         for (pair, rec) in samples.chunks_exact(2).zip(out.chunks_exact_mut(2)) {
             let (s2, s3) = (&pair[0], &pair[1]);
-            let w23 = [0, 1, 2].map(|i| F2::new(s2.gyro[i], s3.gyro[i]) - bw[i]);
-            let a23 = [0, 1, 2].map(|i| F2::new(s2.acc[i], s3.acc[i]) - ba[i]);
-            let w12 = [0, 1, 2].map(|i| F2::straddle(w01[i], w23[i]));
-            let a12 = [0, 1, 2].map(|i| F2::straddle(a01[i], a23[i]));
+            let w23 = by3(|i| F2::new(s2.gyro[i], s3.gyro[i]) - bw[i]);
+            let a23 = by3(|i| F2::new(s2.acc[i], s3.acc[i]) - ba[i]);
+            let w12 = by3(|i| F2::straddle(w01[i], w23[i]));
+            let a12 = by3(|i| F2::straddle(a01[i], a23[i]));
             let c = *cache.of([t0, t1, s2.t_ns, s3.t_ns]);
             let (alpha, beta) = (c.alpha, c.beta);
             let dw1 = slope(&sub(&w23, &w12), &sub(&w12, &w01), alpha, beta);
             let da1 = slope(&sub(&a23, &a12), &sub(&a12, &a01), alpha, beta);
             let s1 = add(&cross(&w12, &a12), &da1);
-            let dw0 = [0, 1, 2].map(|i| F2::straddle(dprev[i], dw1[i]));
-            let s0 = [0, 1, 2].map(|i| F2::straddle(sprev[i], s1[i]));
+            let dw0 = by3(|i| F2::straddle(dprev[i], dw1[i]));
+            let s0 = by3(|i| F2::straddle(sprev[i], s1[i]));
             let (e, x, y) = prepare(c.h_2, c.h2_12, &w01, &w12, &a01, &a12, &dw0, &s0, &dw1, &s1);
             rec.copy_from_slice(&Record::two(&e, &x, &y, c.h));
             (w01, a01, dprev, sprev) = (w23, a23, dw1, s1);
