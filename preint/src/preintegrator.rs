@@ -403,15 +403,15 @@ impl Core {
     /// [`Core::run_deltas`] for rk4: in the steady state (`n ≥ 3`, every interval but the last
     /// two integrated) each new sample k+2 completes the derivative stencil `{k, k+1, k+2}`
     /// of node k+1 and so interval k = n − 2, which [`Core::rk4_interval`] would integrate with
-    /// the same weights and arithmetic. What the next interval needs of nodes k and k+1 is
-    /// carried in registers ([`hermite::Carry`]).
+    /// the same weights and operations (`hermite::deltas`, whose lane code is written once for
+    /// one, two and four intervals at a time). What the next interval needs of nodes k and
+    /// k+1 is carried ([`Carry`]).
     ///
-    /// The samples are taken in blocks of [`RK4_BLOCK`]: first everything that does not depend
-    /// on ΔR ([`hermite::Carry::prepare`]: the node derivatives, `Exp(Ω)`, `ω × a + ȧ`) for
-    /// the whole block, then the chain through ΔR, Δv and Δp ([`hermite::Prepared::apply`]).
-    /// Fused, the two halves' state does not fit in the registers, and each interval waits on
-    /// the previous one's ΔR; split, the first half has no chain at all. A slice shorter than
-    /// a block is taken fused (the block buffer is not worth filling).
+    /// The samples are taken in blocks of [`RK4_BLOCK`] ([`Core::rk4_blocks`]): first
+    /// everything that does not depend on ΔR (the node derivatives, `Exp(Ω)` and the two
+    /// vectors that ΔR_k rotates, [`Carry::prepare_quads`] etc.) for the whole block, several
+    /// intervals per SIMD register, then the chain through ΔR, Δv and Δp ([`State::step`]).
+    /// A slice shorter than a block is taken one interval at a time.
     #[inline(never)]
     fn run_deltas_rk4(
         &mut self,

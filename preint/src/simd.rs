@@ -403,9 +403,19 @@ pub(crate) mod quad {
     }
 }
 
+#[cfg(test)]
+thread_local! {
+    /// Unit tests set this to run the portable paths on a processor with AVX2.
+    pub(crate) static NO_AVX2: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
 /// Whether this processor has AVX2 (x86-64; detected once, then a cached load).
 #[inline]
 pub(crate) fn avx2() -> bool {
+    #[cfg(test)]
+    if NO_AVX2.with(|c| c.get()) {
+        return false;
+    }
     #[cfg(target_arch = "x86_64")]
     {
         std::is_x86_feature_detected!("avx2")

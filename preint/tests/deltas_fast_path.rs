@@ -75,7 +75,14 @@ fn slice_equals_one_by_one_bit_for_bit() {
             let mut c = make(scheme, keep);
             let (mut i, mut k) = (0, 0usize);
             while i < s.len() {
-                let len = (k * 37 % 61).min(s.len() - i);
+                // Short slices (taken one interval at a time) and block lengths of every
+                // residue modulo 4 (taken four, two and one at a time).
+                let len = if k % 2 == 0 {
+                    k * 37 % 61
+                } else {
+                    64 + k * 37 % 71
+                };
+                let len = len.min(s.len() - i);
                 c.integrate_slice(&s[i..i + len]).unwrap();
                 i += len;
                 if i < s.len() {

@@ -44,6 +44,9 @@
 //! `propagation` module); the gains of the stencil samples follow from the rules above
 //! (`GainBasis`), are pulled back to the origin and added to their pending gains, so each
 //! sample's noise enters once with the sum of its gains over every interval that reads it.
+//!
+//! At [`crate::Level::Deltas`] the same rules are rearranged so that everything but one
+//! quaternion product and two rotations is independent of ΔR ([`deltas`]).
 
 pub(crate) mod deltas;
 
@@ -149,8 +152,8 @@ fn rates(x: [&Node; 3], alpha: f64, beta: f64) -> (V3, V3) {
     )
 }
 
-/// `α d₁₂ + β d₀₁`: the derivative from the two differences, written once so that the slice
-/// path ([`Carry::step`], which carries `d₀₁`) and [`step`] round alike.
+/// `α d₁₂ + β d₀₁`: the derivative from the two differences (rounded as `deltas` rounds it in
+/// lanes, so that the slice path and [`step`] agree).
 #[inline(always)]
 fn slope(d12: &V3, d01: &V3, alpha: f64, beta: f64) -> V3 {
     d12 * alpha + d01 * beta

@@ -179,13 +179,6 @@ impl Quat {
         )
     }
 
-    /// `R(q)` for a unit `q` (no normalisation: the caller keeps `|q| = 1` as for
-    /// [`Quat::rotate`]).
-    #[inline(always)]
-    pub(crate) fn unit_matrix(&self) -> M3 {
-        self.scaled_matrix(2.0)
-    }
-
     /// `R(q/|q|)`: normalised first, so the drift since the last [`Quat::renormalize`] does
     /// not reach the matrix.
     pub(crate) fn matrix(&self) -> M3 {
@@ -193,8 +186,7 @@ impl Quat {
         self.scaled_matrix(2.0 / (w * w + v.x * v.x + v.y * v.y + v.z * v.z))
     }
 
-    /// `I + s (w[v]× + [v]×²)` written entry-wise (`R(q)` for `s = 2/|q|²`; for `s = 2` the
-    /// products are those of `2v`, exact doublings).
+    /// `I + s (w[v]× + [v]×²)` written entry-wise (`R(q)` for `s = 2/|q|²`).
     #[inline(always)]
     fn scaled_matrix(&self, s: f64) -> M3 {
         let (w, x, y, z) = (self.w, self.v.x, self.v.y, self.v.z);

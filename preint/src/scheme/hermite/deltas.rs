@@ -461,3 +461,75 @@ impl Carry {
         };
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::simd::NO_AVX2;
+    use crate::{ImuBias, ImuSample, Level, PreintParams, Preintegrator, Scheme};
+    use nalgebra::Vector3;
+
+    /// Jittered stamps; a stretch spinning at up to 36 rad/s (0.18 rad per interval, beyond
+    /// the Exp series, so the lane code takes its lane-by-lane branch there).
+    fn stream(n: usize) -> Vec<ImuSample> {
+        (0..n as i64)
+            .map(|k| {
+                let t = k as f64 * 5e-3;
+                let spin = if (700..900).contains(&k) { 36.0 } else { 0.5 };
+                ImuSample::new(
+                    k * 5_000_000 + (k * 7919 % 13) * 10_000,
+                    Vector3::new(0.4 * (1.3 * t).sin(), 0.3 * t.cos(), spin * (0.7 * t).cos()),
+                    Vector3::new(0.6 * (0.9 * t).sin(), 0.2 * t.cos(), 9.81 + 0.3 * t.sin()),
+                )
+            })
+            .collect()
+    }
+
+    fn run(s: &[ImuSample], chunks: &[usize], portable: bool) -> crate::PreintegratedImu {
+        let mut prm = PreintParams::default()
+            .with_scheme(Scheme::Rk4)
+            .with_level(Level::Deltas);
+        prm.keep_samples = false;
+        let bias = ImuBias::new(
+            Vector3::new(0.01, -0.02, 0.005),
+            Vector3::new(0.1, 0.05, -0.2),
+        );
+        let mut pi = Preintegrator::new(prm, bias).unwrap();
+        NO_AVX2.with(|c| c.set(portable));
+        let mut i = 0;
+        for &len in chunks.iter().cycle() {
+            if i == s.len() {
+                break;
+            }
+            let len = len.min(s.len() - i);
+            if len == 1 {
+                pi.integrate(&s[i]).unwrap();
+            } else {
+                pi.integrate_slice(&s[i..i + len]).unwrap();
+            }
+            i += len;
+        }
+        NO_AVX2.with(|c| c.set(false));
+        pi.finish().unwrap()
+    }
+
+    /// The four-lane (AVX2), two-lane and one-lane preparations, in blocks of every length
+    /// modulo 4 and across the re-orthonormalisation, give the one-by-one deltas bit for bit.
+    #[test]
+    fn every_lane_width_gives_the_one_by_one_bits() {
+        let s = stream(2500);
+        let one = run(&s, &[1], false);
+        let chunks = [64, 65, 66, 67, 131, 200, 2, 3, 1];
+        for portable in [false, true] {
+            assert_eq!(
+                run(&s, &[s.len()], portable),
+                one,
+                "one slice, portable {portable}"
+            );
+            assert_eq!(
+                run(&s, &chunks, portable),
+                one,
+                "chunks, portable {portable}"
+            );
+        }
+    }
+}
