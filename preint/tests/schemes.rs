@@ -233,7 +233,7 @@ fn combined_covariance_matches_monte_carlo_with_bias_walk() {
     let scene = Scene::smooth();
     let clean = scene.samples(5_000_000, 1_000_000_000);
     let bias = ImuBias::zero();
-    for scheme in [Scheme::Euler, Scheme::Midpoint] {
+    for scheme in SCHEMES {
         let mut prm = params(scheme, Level::Combined);
         prm.gyro_cov *= 100.0;
         prm.acc_cov *= 100.0;

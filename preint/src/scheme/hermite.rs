@@ -445,17 +445,25 @@ pub(crate) fn step<const LIN: bool>(
         ]
     };
     for j in 0..n {
-        basis.add_to(
-            ErrorState::pending(pend, id0 + j),
-            coef(j),
-            j == kk,
-            j == kk + 1,
-        );
+        let (g, c) = (ErrorState::pending(pend, id0 + j), coef(j));
+        if j == kk {
+            basis.add_to::<FIRST>(g, &c);
+        } else if j == kk + 1 {
+            basis.add_to::<SECOND>(g, &c);
+        } else {
+            basis.add_to::<OUTER>(g, &c);
+        }
     }
     if let Some(s) = sum {
+        // Σ_j of the gains above: the basis is linear in the scalars, and samples k and k+1
+        // add their own terms once each.
+        let mut cs = [0.0; 5];
         for j in 0..n {
-            basis.add_to(s, coef(j), j == kk, j == kk + 1);
+            for (a, b) in cs.iter_mut().zip(coef(j)) {
+                *a += b;
+            }
         }
+        basis.add_to::<BOTH>(s, &cs);
     }
     let u2 = dp - v0 * c.h;
     Some((
@@ -498,30 +506,50 @@ struct GainBasis {
     wk1: Cols6,
 }
 
+/// [`GainBasis::add_to`]'s roles: a stencil sample that is neither node of the interval, its
+/// first node (k), its second (k+1), and the sum over the whole stencil.
+const OUTER: u8 = 0;
+const FIRST: u8 = 1;
+const SECOND: u8 = 2;
+const BOTH: u8 = FIRST | SECOND;
+
 impl GainBasis {
     /// Adds the gain of a stencil sample with scalars `c = [c_j, α_v, α_p, β_v, β_p]` to `g`;
-    /// `first`/`second`: it is the interval's first/second node.
+    /// `ROLE` says which node terms it has (`FIRST`: k's, `SECOND`: k+1's), so that the terms
+    /// a sample does not have cost nothing.
     #[inline(always)]
-    fn add_to(&self, g: &mut Blk96, c: [f64; 5], first: bool, second: bool) {
-        let (w0, w1) = (f64::from(u8::from(first)), f64::from(u8::from(second)));
+    fn add_to<const ROLE: u8>(&self, g: &mut Blk96, c: &[f64; 5]) {
+        let (k0, k1) = (ROLE & FIRST != 0, ROLE & SECOND != 0);
         for col in 0..3 {
             for i in 0..9 {
-                g.g[col][i] += self.f[col][i] * c[0] + self.fk[col][i] * w0 + self.fk1[col][i] * w1;
+                let mut x = self.f[col][i] * c[0];
+                if k0 {
+                    x += self.fk[col][i];
+                }
+                if k1 {
+                    x += self.fk1[col][i];
+                }
+                g.g[col][i] += x;
             }
         }
         for col in 0..3 {
             for i in 0..3 {
                 // v rows: r·α_v; p rows: r·(α_p − τα_v) = (r·1)·α_p + (r·(−τ))·α_v.
-                g.a[col][i] += self.r0[col][i] * c[1]
-                    + self.r1[col][i] * c[3]
-                    + self.wk[col][i] * w0
-                    + self.wk1[col][i] * w1;
-                g.a[col][3 + i] += self.r0[col][i] * c[2]
+                let mut v = self.r0[col][i] * c[1] + self.r1[col][i] * c[3];
+                let mut p = self.r0[col][i] * c[2]
                     + self.r0[col][3 + i] * c[1]
                     + self.r1[col][i] * c[4]
-                    + self.r1[col][3 + i] * c[3]
-                    + self.wk[col][3 + i] * w0
-                    + self.wk1[col][3 + i] * w1;
+                    + self.r1[col][3 + i] * c[3];
+                if k0 {
+                    v += self.wk[col][i];
+                    p += self.wk[col][3 + i];
+                }
+                if k1 {
+                    v += self.wk1[col][i];
+                    p += self.wk1[col][3 + i];
+                }
+                g.a[col][i] += v;
+                g.a[col][3 + i] += p;
             }
         }
     }
