@@ -472,13 +472,17 @@ impl Core {
                 last = s.t_ns;
                 m += 1;
             }
-            let mut i = 0;
             #[cfg(target_arch = "x86_64")]
-            if QUADS {
-                i = m & !3;
+            let i = if QUADS {
+                let i = m & !3;
                 // SAFETY: `QUADS` only from `rk4_blocks_avx2`, entered on processors with AVX2.
                 unsafe { carry.prepare_quads(&rest[..i], bias, &mut self.quads, &mut buf[..i]) };
-            }
+                i
+            } else {
+                0
+            };
+            #[cfg(not(target_arch = "x86_64"))]
+            let i = 0;
             let even = i + ((m - i) & !1);
             carry.prepare_pairs(&rest[i..even], bias, &mut self.pairs, &mut buf[i..even]);
             if m > even {

@@ -274,9 +274,9 @@ mod tests {
 }
 
 /// Four `f64` lanes in one AVX register, for x86-64 processors that have AVX2 (checked at
-/// run time by the caller: see [`avx2`]). Every method may only run on such a processor:
+/// run time by the caller: see [`super::avx2`]). Every method may only run on such a processor:
 /// the rk4 slice path calls them only inside a `#[target_feature(enable = "avx2")]` function
-/// that it enters after [`avx2`] returned true.
+/// that it enters after [`super::avx2`] returned true.
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod quad {
     use super::{F2, Lane, estrin5};
@@ -409,19 +409,13 @@ thread_local! {
     pub(crate) static NO_AVX2: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
 }
 
-/// Whether this processor has AVX2 (x86-64; detected once, then a cached load).
+/// Whether this processor has AVX2 (detected once, then a cached load).
+#[cfg(target_arch = "x86_64")]
 #[inline]
 pub(crate) fn avx2() -> bool {
     #[cfg(test)]
     if NO_AVX2.with(|c| c.get()) {
         return false;
     }
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::is_x86_feature_detected!("avx2")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
+    std::is_x86_feature_detected!("avx2")
 }
