@@ -71,7 +71,7 @@ fn variance(x: &[f64]) -> f64 {
     x.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / x.len() as f64
 }
 
-/// The denoised stream and the cutoffs [Hz] chosen for (gyro, accelerometer); `None` when no
+/// The denoised stream and the cutoffs \[Hz\] chosen for (gyro, accelerometer); `None` when no
 /// cutoff below 0.45·f_s explains the residual as noise (the stream is then left unfiltered).
 pub fn denoise(
     samples: &[ImuSample],

@@ -43,16 +43,16 @@ pub struct Cli {
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Simulate an IMU on a built-in scene; writes imu.csv (EuRoC imu0), groundtruth.csv (EuRoC
-    /// state_groundtruth_estimate0: p [m], q wxyz body->world, v [m/s], b_g [rad/s], b_a [m/s^2])
+    /// state_groundtruth_estimate0: p (m), q wxyz body->world, v (m/s), b_g (rad/s), b_a (m/s^2))
     /// and imu.yaml (Kalibr densities) into --out.
     Simulate {
         /// Scene: seed-ellipse, static, multi-pose-static, gimbal-lock, spin, aggressive.
         #[arg(long, default_value = "seed-ellipse")]
         scene: String,
-        /// Sample rate [Hz].
+        /// Sample rate (Hz).
         #[arg(long, default_value_t = 200.0)]
         rate: f64,
-        /// Duration [s].
+        /// Duration (s).
         #[arg(long, default_value_t = 10.0)]
         duration: f64,
         /// Noise: a Kalibr imu.yaml, or `none` for noise-free data. Default: EuRoC figures.
@@ -65,8 +65,8 @@ pub enum Command {
         #[arg(long)]
         out: PathBuf,
     },
-    /// Preintegrate the samples with timestamps in [from, to] and print ΔR, Δv [m/s], Δp [m],
-    /// Δt [s], the 9x9 covariance of [dphi, dv, dp] and the five bias Jacobians.
+    /// Preintegrate the samples with timestamps in [from, to] and print ΔR, Δv (m/s), Δp (m),
+    /// Δt (s), the 9x9 covariance of [dphi, dv, dp] and the five bias Jacobians.
     Integrate {
         /// IMU CSV file (EuRoC imu0 format).
         #[arg(long)]
@@ -77,19 +77,19 @@ pub enum Command {
         /// Kalibr imu.yaml with the noise densities (default: EuRoC figures).
         #[arg(long)]
         noise: Option<PathBuf>,
-        /// Gravity magnitude G [m/s^2]; gravity is (0, 0, -G).
+        /// Gravity magnitude G (m/s^2); gravity is (0, 0, -G).
         #[arg(long, default_value_t = 9.81)]
         gravity: f64,
-        /// Gyro bias estimate b_g [rad/s] as x,y,z (negative values allowed: --bias-gyro=-0.01,0,0).
+        /// Gyro bias estimate b_g (rad/s) as x,y,z (negative values allowed: --bias-gyro=-0.01,0,0).
         #[arg(long, allow_hyphen_values = true, value_parser = args::vec3)]
         bias_gyro: Option<nalgebra::Vector3<f64>>,
-        /// Accelerometer bias estimate b_a [m/s^2] as x,y,z.
+        /// Accelerometer bias estimate b_a (m/s^2) as x,y,z.
         #[arg(long, allow_hyphen_values = true, value_parser = args::vec3)]
         bias_acc: Option<nalgebra::Vector3<f64>>,
-        /// First keyframe time [ns] (default: first sample).
+        /// First keyframe time in ns (default: first sample).
         #[arg(long, allow_hyphen_values = true)]
         from: Option<i64>,
-        /// Last keyframe time [ns] (default: last sample).
+        /// Last keyframe time in ns (default: last sample).
         #[arg(long, allow_hyphen_values = true)]
         to: Option<i64>,
         /// Skip the check that the data looks like SI units (m/s^2, rad/s).
@@ -107,20 +107,20 @@ pub enum Command {
         /// Kalibr imu.yaml with the noise densities (default: EuRoC figures).
         #[arg(long)]
         noise: Option<PathBuf>,
-        /// Gravity magnitude G [m/s^2].
+        /// Gravity magnitude G (m/s^2).
         #[arg(long, default_value_t = 9.81)]
         gravity: f64,
-        /// Use only samples (and poses) with timestamps >= this [ns].
+        /// Use only samples (and poses) with timestamps >= this, in ns.
         #[arg(long, allow_hyphen_values = true)]
         from: Option<i64>,
-        /// Use only samples (and poses) with timestamps <= this [ns].
+        /// Use only samples (and poses) with timestamps <= this, in ns.
         #[arg(long, allow_hyphen_values = true)]
         to: Option<i64>,
-        /// Known-pose problem: standard deviation of the given attitudes [rad] (0: exact).
+        /// Known-pose problem: standard deviation of the given attitudes in rad (0: exact).
         /// E.g. 1.75e-3 (0.1°) and --pose-pos-std 0.005 for motion capture such as EuRoC's.
         #[arg(long, default_value_t = 0.0)]
         pose_rot_std: f64,
-        /// Known-pose problem: standard deviation of the given positions [m] (0: exact).
+        /// Known-pose problem: standard deviation of the given positions in m (0: exact).
         #[arg(long, default_value_t = 0.0)]
         pose_pos_std: f64,
     },
@@ -139,10 +139,10 @@ pub enum Command {
         /// Scene name.
         #[arg(long, default_value = "aggressive")]
         scene: String,
-        /// Rates [Hz], comma-separated.
+        /// Rates (Hz), comma-separated.
         #[arg(long, value_delimiter = ',', value_parser = args::positive, default_value = "25,50,100,200,400,800,1600,3200")]
         rates: Vec<f64>,
-        /// Window length [s].
+        /// Window length (s).
         #[arg(long, default_value_t = 1.0)]
         window: f64,
         /// Output directory for the charts.
@@ -158,14 +158,14 @@ pub enum Command {
         /// Kalibr imu.yaml with the noise densities.
         #[arg(long)]
         noise: PathBuf,
-        /// Preintegration window [s].
+        /// Preintegration window (s).
         #[arg(long, default_value_t = 1.0)]
         window: f64,
         /// Allowed discretisation error as a fraction of the noise σ.
         #[arg(long, default_value_t = 0.1)]
         fraction: f64,
     },
-    /// Throughput of each scheme on this machine [ns/sample], with and without covariance.
+    /// Throughput of each scheme on this machine (ns per sample), with and without covariance.
     Speed {
         /// Number of samples to integrate per measurement (default: the criterion bench's 10⁵).
         #[arg(long, default_value_t = 100_000)]

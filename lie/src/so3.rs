@@ -285,7 +285,7 @@ pub struct RodriguesCoeffs {
 /// (θ¹⁰/11!); per-sample IMU angles live here.
 const SHORT_SERIES_BELOW: f64 = 0.1;
 
-/// `(sin θ/θ, (1 − cos θ)/θ²)` at θ² [rad²]: the two coefficients Exp needs.
+/// `(sin θ/θ, (1 − cos θ)/θ²)` at θ² \[rad²\]: the two coefficients Exp needs.
 #[inline]
 pub fn exp_coeffs(theta2: f64) -> (f64, f64) {
     // Series and polynomial inline (no sqrt, sin_cos or division); θ > π out of line.
@@ -324,10 +324,10 @@ const QS_SERIES: [f64; 5] = [
 /// angles at once. Evaluated as `c₀ + (c₁x + x²((c₂ + c₃x) + c₄x²))`, `x = θ²`, they round
 /// exactly as [`exp_quat_coeffs`].
 pub const EXP_QUAT_SERIES: [[f64; 5]; 2] = [QC_SERIES, QS_SERIES];
-/// Where [`exp_quat_coeffs`] switches from [`EXP_QUAT_SERIES`] to the closed form [rad²].
+/// Where [`exp_quat_coeffs`] switches from [`EXP_QUAT_SERIES`] to the closed form \[rad²\].
 pub const EXP_QUAT_SERIES_BELOW: f64 = SHORT_SERIES_BELOW * SHORT_SERIES_BELOW;
 
-/// `(cos(θ/2), sin(θ/2)/θ)` at θ² [rad²]: `Exp(φ)` as the unit quaternion
+/// `(cos(θ/2), sin(θ/2)/θ)` at θ² \[rad²\]: `Exp(φ)` as the unit quaternion
 /// `(w, x, y, z) = (cos(θ/2), (sin(θ/2)/θ)·φ)` (Hamilton; Solà 2017, "Quaternion kinematics
 /// for the error-state Kalman filter", the quaternion exponential map). Five-term series below
 /// θ = 0.1 (no sqrt or `sin_cos`; every per-sample IMU angle), `sqrt` and `sin_cos(θ/2)` above.
@@ -360,7 +360,7 @@ fn exp_quat_coeffs_closed(theta2: f64) -> (f64, f64) {
     (c, s / theta)
 }
 
-/// `((1 − cos θ)/θ², (θ − sin θ)/θ³)` at θ² [rad²]: the two coefficients of Jr and Jl.
+/// `((1 − cos θ)/θ², (θ − sin θ)/θ³)` at θ² \[rad²\]: the two coefficients of Jr and Jl.
 #[inline]
 pub fn jac_coeffs(theta2: f64) -> (f64, f64) {
     if theta2 < SHORT_SERIES_BELOW * SHORT_SERIES_BELOW {
@@ -437,7 +437,7 @@ impl RodriguesCoeffs {
 }
 
 /// `D(θ) = 1/θ² − (1 + cos θ)/(2 θ sin θ)`, the coefficient of `[φ]×²` in `Jr⁻¹` and `Jl⁻¹`.
-/// Finite for θ < 2π; at θ = π it equals 1/π². Takes θ² [rad²].
+/// Finite for θ < 2π; at θ = π it equals 1/π². Takes θ² \[rad²\].
 #[inline]
 pub fn d_coeff(theta2: f64) -> f64 {
     // Below θ = 0.1 five terms of the Bernoulli series (ratio ~(θ/2π)² per term); up to π a

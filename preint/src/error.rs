@@ -13,7 +13,7 @@ pub enum PreintError {
     NonFinite {
         /// Sample index.
         index: usize,
-        /// Sample timestamp [ns].
+        /// Sample timestamp \[ns\].
         t_ns: i64,
         /// `"gyro"` or `"acc"`.
         field: &'static str,
@@ -23,7 +23,7 @@ pub enum PreintError {
     DuplicateTimestamp {
         /// Sample index.
         index: usize,
-        /// Sample timestamp [ns].
+        /// Sample timestamp \[ns\].
         t_ns: i64,
     },
     /// A timestamp is earlier than the previous one (Δt < 0).
@@ -31,9 +31,9 @@ pub enum PreintError {
     DecreasingTimestamp {
         /// Sample index.
         index: usize,
-        /// Sample timestamp [ns].
+        /// Sample timestamp \[ns\].
         t_ns: i64,
-        /// Previous sample timestamp [ns].
+        /// Previous sample timestamp \[ns\].
         prev_t_ns: i64,
     },
     /// The gap to the previous sample exceeds `PreintParams::max_gap_ns`.
@@ -43,11 +43,11 @@ pub enum PreintError {
     GapTooLarge {
         /// Sample index.
         index: usize,
-        /// Sample timestamp [ns].
+        /// Sample timestamp \[ns\].
         t_ns: i64,
-        /// Gap to the previous sample [ns].
+        /// Gap to the previous sample \[ns\].
         gap_ns: i64,
-        /// Configured maximum [ns].
+        /// Configured maximum \[ns\].
         max_gap_ns: i64,
     },
     /// The window holds fewer than two samples (no interval to integrate).
@@ -59,19 +59,19 @@ pub enum PreintError {
     /// The keyframe interval `[t_i, t_j]` is empty or reversed (Δt ≤ 0).
     #[error("keyframe window [{t_i_ns}, {t_j_ns}] ns has non-positive duration")]
     NonPositiveWindow {
-        /// Keyframe i time [ns].
+        /// Keyframe i time \[ns\].
         t_i_ns: i64,
-        /// Keyframe j time [ns].
+        /// Keyframe j time \[ns\].
         t_j_ns: i64,
     },
     /// A keyframe time lies outside the time span of the given samples.
     #[error("keyframe time {t_ns} ns is outside the samples [{first_ns}, {last_ns}] ns")]
     KeyframeOutsideSamples {
-        /// Keyframe time [ns].
+        /// Keyframe time \[ns\].
         t_ns: i64,
-        /// First sample time [ns] (`i64::MAX` if there are none).
+        /// First sample time \[ns\] (`i64::MAX` if there are none).
         first_ns: i64,
-        /// Last sample time [ns] (`i64::MIN` if there are none).
+        /// Last sample time \[ns\] (`i64::MIN` if there are none).
         last_ns: i64,
     },
     /// Re-integration was asked for, but `PreintParams::keep_samples` is off so the samples

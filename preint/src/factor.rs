@@ -21,8 +21,8 @@
 //!
 //! | block | perturbation |
 //! |---|---|
-//! | `phi_i`, `phi_j` | `R ← R·Exp(δφ)` (right, body frame) [rad] |
-//! | `p_i`, `p_j` | `p ← p + R·δp` (body frame — to first order GTSAM's `Pose3` retract `[dw, dt]`, `dt` in body) [m] |
+//! | `phi_i`, `phi_j` | `R ← R·Exp(δφ)` (right, body frame) \[rad\] |
+//! | `p_i`, `p_j` | `p ← p + R·δp` (body frame — to first order GTSAM's `Pose3` retract `[dw, dt]`, `dt` in body) \[m\] |
 //! | `v_i`, `v_j` | `v ← v + δv` (world frame, GTSAM's `ImuFactor` velocity) [m/s] |
 //! | `bg_i`, `ba_i` | `b_g,i ← b_g,i + δb_g` [rad/s], `b_a,i ← b_a,i + δb_a` [m/s²] |
 //! | `bg_j`, `ba_j` | same for the bias at j (combined factor only; zero in [`ImuFactor`]) |
@@ -81,7 +81,7 @@ pub enum FactorError {
     /// `delta_t` is zero or negative.
     #[error("preintegrated measurement has non-positive Δt = {delta_t} s")]
     NonPositiveDeltaT {
-        /// The offending Δt [s].
+        /// The offending Δt \[s\].
         delta_t: f64,
     },
     /// The covariance is not (numerically) symmetric positive definite, so it has no

@@ -239,9 +239,9 @@ pub fn check_si_units(samples: &[ImuSample], source_name: &str) -> Result<(), Io
 /// One row of an EuRoC ground-truth file: the full state of the body at `t_ns`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GroundTruthState {
-    /// Timestamp [ns].
+    /// Timestamp \[ns\].
     pub t_ns: i64,
-    /// Position of the body in the world frame [m].
+    /// Position of the body in the world frame \[m\].
     pub p: Vector3<f64>,
     /// Attitude, body→world (Hamilton; `v_world = q v_body q⁻¹`).
     pub q: UnitQuaternion<f64>,
@@ -374,7 +374,7 @@ const KALIBR_KEYS: [&str; 5] = [
 ];
 
 /// Parses a Kalibr `imu.yaml` (flat `key: value` lines; `#` comments and unknown keys such as
-/// `rostopic` are ignored). All five keys of [`KALIBR_KEYS`] are required; values must be finite
+/// `rostopic` are ignored). All five keys of `KALIBR_KEYS` are required; values must be finite
 /// and non-negative (`update_rate` positive).
 pub fn parse_kalibr_yaml(text: &str, source_name: &str) -> Result<ImuNoise, IoError> {
     let mut vals: [Option<f64>; 5] = [None; 5];

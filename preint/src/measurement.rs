@@ -22,8 +22,8 @@ pub type Cov9 = SMatrix<f64, 9, 9>;
 pub type Cov15 = SMatrix<f64, 15, 15>;
 
 /// The five bias Jacobians of the preintegrated deltas (Forster eq. 44), evaluated at
-/// `bias_hat`. Units: ∂ΔR/∂b_g [rad/(rad/s)] = [s], ∂Δv/∂b_g [m/s/(rad/s)], ∂Δv/∂b_a [s],
-/// ∂Δp/∂b_g [m/(rad/s)], ∂Δp/∂b_a [s²].
+/// `bias_hat`. Units: ∂ΔR/∂b_g [rad/(rad/s)] = \[s\], ∂Δv/∂b_g [m/s/(rad/s)], ∂Δv/∂b_a \[s\],
+/// ∂Δp/∂b_g [m/(rad/s)], ∂Δp/∂b_a \[s²\].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BiasJacobians {
     /// ∂ΔR/∂b_g (right perturbation of ΔR).
@@ -59,15 +59,15 @@ pub const MAX_EDGE_SOURCES: usize = 10;
 /// enter the neighbouring window, and its first-order effect on this window's error.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EdgeSource {
-    /// Timestamp of the stream sample [ns]; identifies the sample across windows of the same
+    /// Timestamp of the stream sample \[ns\]; identifies the sample across windows of the same
     /// stream.
     pub t_ns: i64,
     /// `∂[δφ, δv, δp]/∂[n_g, n_a]` (9×6): rows in the chart of this module (error at `t_j`,
     /// order [δφ, δv, δp]), columns the sample's gyro [rad/s] and accelerometer [m/s²] noise.
     pub gain: SMatrix<f64, 9, 6>,
-    /// Interval to the previous stream sample [s], `0.0` if unknown to this window.
+    /// Interval to the previous stream sample \[s\], `0.0` if unknown to this window.
     pub left_s: f64,
-    /// Interval to the next stream sample [s], `0.0` if unknown to this window.
+    /// Interval to the next stream sample \[s\], `0.0` if unknown to this window.
     pub right_s: f64,
     /// The sample is near the start of the window (it may be shared with the window before).
     pub start: bool,
@@ -171,7 +171,7 @@ impl EdgeNoise {
     }
 
     /// Noise covariance of a source whose intervals to its neighbours are `left_s`, `right_s`
-    /// [s]: `diag(Σ_g, Σ_a)·white_scale(cell_rule.cell_s(left_s, right_s))` (6×6, order
+    /// \[s\]: `diag(Σ_g, Σ_a)·white_scale(cell_rule.cell_s(left_s, right_s))` (6×6, order
     /// [n_g, n_a]).
     pub fn sample_cov(&self, left_s: f64, right_s: f64) -> SMatrix<f64, 6, 6> {
         let s = white_scale(self.cell_rule.cell_s(left_s, right_s));
@@ -190,17 +190,17 @@ impl EdgeNoise {
 /// `R_j = R_i ΔR`, `v_j = v_i + gΔt + R_i Δv`, `p_j = p_i + v_iΔt + ½gΔt² + R_i Δp`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PreintegratedImu {
-    /// Keyframe i time [ns].
+    /// Keyframe i time \[ns\].
     pub t_i_ns: i64,
-    /// Keyframe j time [ns].
+    /// Keyframe j time \[ns\].
     pub t_j_ns: i64,
-    /// Δt = t_j − t_i [s].
+    /// Δt = t_j − t_i \[s\].
     pub delta_t: f64,
     /// ΔR_ij (rotation from body j to body i).
     pub delta_r: SO3,
     /// Δv_ij [m/s], frame i.
     pub delta_v: Vector3<f64>,
-    /// Δp_ij [m], frame i.
+    /// Δp_ij \[m\], frame i.
     pub delta_p: Vector3<f64>,
     /// Covariance of [δφ, δv, δp] (white measurement noise, plus integration noise if set).
     pub cov: Cov9,

@@ -81,9 +81,9 @@ pub enum MergeError {
         "windows are not consecutive: first ends at {a_t_j_ns} ns, second starts at {b_t_i_ns} ns"
     )]
     NotConsecutive {
-        /// End of the first window [ns].
+        /// End of the first window \[ns\].
         a_t_j_ns: i64,
-        /// Start of the second window [ns].
+        /// Start of the second window \[ns\].
         b_t_i_ns: i64,
     },
     /// The two windows were integrated with different bias estimates (compared exactly);

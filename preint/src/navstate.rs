@@ -1,6 +1,6 @@
 //! Navigation state `(R, p, v)` and its prediction from a preintegrated measurement.
 //!
-//! Frames: `R` rotates body → world (`x_w = R x_b`); `p` [m] and `v` [m/s] are the body origin's
+//! Frames: `R` rotates body → world (`x_w = R x_b`); `p` \[m\] and `v` [m/s] are the body origin's
 //! position and velocity in the world frame (z up; gravity is carried by the
 //! [`PreintegratedImu`], default `(0, 0, −9.81)` m/s²).
 //!
@@ -34,7 +34,7 @@ pub type NavTangent = SVector<f64, 9>;
 pub struct NavState {
     /// Attitude, rotation body → world.
     pub r: SO3,
-    /// Position of the body origin in the world frame [m].
+    /// Position of the body origin in the world frame \[m\].
     pub p: Vector3<f64>,
     /// Velocity of the body origin in the world frame [m/s].
     pub v: Vector3<f64>,
@@ -47,7 +47,7 @@ impl Default for NavState {
 }
 
 impl NavState {
-    /// A state from its attitude (body → world), world position [m] and world velocity [m/s].
+    /// A state from its attitude (body → world), world position \[m\] and world velocity [m/s].
     pub fn new(r: SO3, p: Vector3<f64>, v: Vector3<f64>) -> Self {
         Self { r, p, v }
     }
@@ -116,7 +116,7 @@ impl lie::Manifold for NavState {
 /// p_j = p_i + v_i Δt + ½ g Δt² + R_i Δp(b)
 /// ```
 ///
-/// `g = pim.gravity` [m/s², world], `Δt = pim.delta_t` [s]. `bias` is the bias at keyframe i
+/// `g = pim.gravity` [m/s², world], `Δt = pim.delta_t` \[s\]. `bias` is the bias at keyframe i
 /// (order [b_g, b_a]); the correction is first order in `bias − pim.bias_hat`.
 pub fn predict(pim: &PreintegratedImu, state_i: &NavState, bias: &ImuBias) -> NavState {
     let (dr, dv, dp) = pim.corrected(bias);

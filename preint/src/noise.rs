@@ -4,11 +4,11 @@
 //! Users confuse a noise *density* with a per-sample standard deviation more than anything
 //! else, so the unit is in every name and the discrete conversion lives in this module only:
 //! - white noise of power spectral density `Σ` (= σ², σ in unit/√Hz) carried by a sample whose
-//!   time cell is `c` [s] has covariance `Σ·white_scale(c) = Σ/c` ([`white_scale`],
+//!   time cell is `c` \[s\] has covariance `Σ·white_scale(c) = Σ/c` ([`white_scale`],
 //!   [`white_sample_variance`]); for a uniform stream sampled every Δt, `c = Δt` and the
 //!   per-sample std is `σ/√Δt`;
 //! - a bias random walk of density `Σ_b` (= σ_b², σ_b in unit/s/√Hz) adds `Σ_b·walk_scale(h) =
-//!   Σ_b h` over a step of `h` [s] ([`walk_scale`], [`walk_step_variance`]); std `σ_b √h`;
+//!   Σ_b h` over a step of `h` \[s\] ([`walk_scale`], [`walk_step_variance`]); std `σ_b √h`;
 //! - the time cell of a sample follows from the intervals to its neighbours by the scheme's
 //!   [`CellRule`].
 //!
@@ -16,7 +16,7 @@
 //! [`white_scale`] of each sample's cell and by [`walk_scale`] of each interval; nothing else
 //! in the crate converts densities.
 
-/// How the time cell `c` [s] of a sample follows from the intervals to its neighbours (its
+/// How the time cell `c` \[s\] of a sample follows from the intervals to its neighbours (its
 /// white noise then has covariance `Σ/c`, see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum CellRule {
@@ -30,8 +30,8 @@ pub enum CellRule {
 }
 
 impl CellRule {
-    /// The cell [s] from the intervals to the previous (`left_s`) and next (`right_s`) sample
-    /// [s]; an interval is `0.0` when that neighbour does not exist (or is unknown). Returns
+    /// The cell \[s\] from the intervals to the previous (`left_s`) and next (`right_s`) sample
+    /// \[s\]; an interval is `0.0` when that neighbour does not exist (or is unknown). Returns
     /// `f64::INFINITY` (so [`white_scale`] = 0) if neither neighbour is known.
     #[inline(always)]
     pub fn cell_s(self, left_s: f64, right_s: f64) -> f64 {
@@ -46,7 +46,7 @@ impl CellRule {
 }
 
 /// The factor turning a white-noise power spectral density into the covariance of one sample
-/// whose time cell is `cell_s` [s]: `1/c` [1/s] (a sample is the mean of the continuous noise
+/// whose time cell is `cell_s` \[s\]: `1/c` [1/s] (a sample is the mean of the continuous noise
 /// over its cell). The one definition of the white-noise conversion in the crate.
 #[inline(always)]
 pub fn white_scale(cell_s: f64) -> f64 {
@@ -54,21 +54,21 @@ pub fn white_scale(cell_s: f64) -> f64 {
 }
 
 /// Discrete variance of one sample: `psd·white_scale(cell_s)` = `σ²/c` for a density `σ`
-/// (`psd = σ²`, e.g. [rad²/s] for the gyro) and a cell `c` [s].
+/// (`psd = σ²`, e.g. [rad²/s] for the gyro) and a cell `c` \[s\].
 #[inline(always)]
 pub fn white_sample_variance(psd: f64, cell_s: f64) -> f64 {
     psd * white_scale(cell_s)
 }
 
 /// The factor turning a random-walk density into the variance added over a step of `h_s`
-/// [s]: `h` [s]. The one definition of the random-walk conversion in the crate.
+/// \[s\]: `h` \[s\]. The one definition of the random-walk conversion in the crate.
 #[inline(always)]
 pub fn walk_scale(h_s: f64) -> f64 {
     h_s
 }
 
 /// Variance of one random-walk step: `psd·walk_scale(h_s)` = `σ_b² h` for a density `σ_b`
-/// (`psd = σ_b²`, e.g. [rad²/s³] for the gyro bias) over `h` [s].
+/// (`psd = σ_b²`, e.g. [rad²/s³] for the gyro bias) over `h` \[s\].
 #[inline(always)]
 pub fn walk_step_variance(psd: f64, h_s: f64) -> f64 {
     psd * walk_scale(h_s)
@@ -85,7 +85,7 @@ pub struct ImuNoise {
     pub acc_noise_density: f64,
     /// Accelerometer bias random walk σ_ba [m/s³/√Hz] (`accelerometer_random_walk`).
     pub acc_random_walk: f64,
-    /// Nominal sample rate [Hz] (`update_rate`); informational, Δt comes from timestamps.
+    /// Nominal sample rate \[Hz\] (`update_rate`); informational, Δt comes from timestamps.
     pub update_rate_hz: f64,
 }
 
@@ -113,27 +113,27 @@ impl ImuNoise {
         }
     }
 
-    /// Per-sample gyro white-noise std [rad/s] for a sample period (cell) `dt_s` [s]:
+    /// Per-sample gyro white-noise std [rad/s] for a sample period (cell) `dt_s` \[s\]:
     /// `√(white_sample_variance(σ_g², Δt))` = σ_g/√Δt.
     #[inline]
     pub fn gyro_sample_std(&self, dt_s: f64) -> f64 {
         white_sample_variance(self.gyro_noise_density.powi(2), dt_s).sqrt()
     }
 
-    /// Per-sample accelerometer white-noise std [m/s²] for a period `dt_s` [s]: σ_a/√Δt.
+    /// Per-sample accelerometer white-noise std [m/s²] for a period `dt_s` \[s\]: σ_a/√Δt.
     #[inline]
     pub fn acc_sample_std(&self, dt_s: f64) -> f64 {
         white_sample_variance(self.acc_noise_density.powi(2), dt_s).sqrt()
     }
 
-    /// Std of one gyro-bias random-walk step [rad/s] over `dt_s` [s]:
+    /// Std of one gyro-bias random-walk step [rad/s] over `dt_s` \[s\]:
     /// `√(walk_step_variance(σ_bg², Δt))` = σ_bg·√Δt.
     #[inline]
     pub fn gyro_bias_step_std(&self, dt_s: f64) -> f64 {
         walk_step_variance(self.gyro_random_walk.powi(2), dt_s).sqrt()
     }
 
-    /// Std of one accelerometer-bias random-walk step [m/s²] over `dt_s` [s]: σ_ba·√Δt.
+    /// Std of one accelerometer-bias random-walk step [m/s²] over `dt_s` \[s\]: σ_ba·√Δt.
     #[inline]
     pub fn acc_bias_step_std(&self, dt_s: f64) -> f64 {
         walk_step_variance(self.acc_random_walk.powi(2), dt_s).sqrt()

@@ -108,7 +108,7 @@ pub struct PreintParams {
     pub reintegrate_gyro_threshold: f64,
     /// Re-integrate when ‖δb_a‖ exceeds this [m/s²]; default [`DEFAULT_REINTEGRATE_ACC`].
     pub reintegrate_acc_threshold: f64,
-    /// Largest allowed gap between consecutive samples [ns]; default [`DEFAULT_MAX_GAP_NS`].
+    /// Largest allowed gap between consecutive samples \[ns\]; default [`DEFAULT_MAX_GAP_NS`].
     pub max_gap_ns: i64,
     /// Keep the samples for re-integration after a bias change; default `true`. Without them
     /// [`Preintegrator::measurement_for_bias`](crate::Preintegrator::measurement_for_bias)

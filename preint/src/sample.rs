@@ -10,7 +10,7 @@ use nalgebra::Vector3;
 /// - `acc`: specific force a_m [m/s²] (reads about +9.81 on the up axis at rest).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ImuSample {
-    /// Timestamp [ns].
+    /// Timestamp \[ns\].
     pub t_ns: i64,
     /// Gyroscope reading ω_m [rad/s], body frame.
     pub gyro: Vector3<f64>,
@@ -19,7 +19,7 @@ pub struct ImuSample {
 }
 
 impl ImuSample {
-    /// A sample from its timestamp [ns], gyro [rad/s] and accelerometer [m/s²] readings.
+    /// A sample from its timestamp \[ns\], gyro [rad/s] and accelerometer [m/s²] readings.
     pub fn new(t_ns: i64, gyro: Vector3<f64>, acc: Vector3<f64>) -> Self {
         Self { t_ns, gyro, acc }
     }

@@ -45,7 +45,7 @@ pub fn write_json(name: &str, value: &serde_json::Value) -> PathBuf {
     path
 }
 
-/// Rotation angle [rad] of `aᵀ b` (geodesic distance on SO(3)).
+/// Rotation angle \[rad\] of `aᵀ b` (geodesic distance on SO(3)).
 pub fn rot_angle(a: &SO3, b: &SO3) -> f64 {
     a.inverse().compose(b).log().norm()
 }

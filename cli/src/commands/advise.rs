@@ -10,8 +10,8 @@
 //!    estimated by Richardson extrapolation, `|Δ_rk4(h) − Δ_rk4(2h)| / (2⁴ − 1)`.
 //! 3. For each scheme and each decimation d ∈ {1, 2, 4, …} (every d-th sample, i.e. what an IMU
 //!    sampling the same signal at rate/d would deliver, without its internal filtering) the
-//!    discretisation error is the distance to the reference: rotation angle [rad], |Δv| [m/s],
-//!    |Δp| [m], the maximum over windows.
+//!    discretisation error is the distance to the reference: rotation angle \[rad\], |Δv| [m/s],
+//!    |Δp| \[m\], the maximum over windows.
 //! 4. The noise σ is from the preintegrated covariance at that rate: `√trace` of the δφ, δv and
 //!    δp blocks (the RMS norm of each error vector).
 //! 5. A (scheme, rate) is acceptable when all three errors are below `fraction·σ`; the cheapest
@@ -36,7 +36,7 @@ pub struct Candidate {
     pub scheme: Scheme,
     /// Decimation factor (1 = the recording's rate).
     pub decimation: usize,
-    /// Sample rate [Hz].
+    /// Sample rate \[Hz\].
     pub rate_hz: f64,
     /// Discretisation error, max over windows: [rotation rad, velocity m/s, position m].
     pub disc_err: [f64; 3],

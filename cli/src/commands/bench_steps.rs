@@ -2,7 +2,7 @@
 //!
 //! For each rate, noise-free samples of the scene on the grid `t_k = k·round(1e9/rate)` ns are
 //! preintegrated over `[1 s, 1 s + window]` and compared with the scene's exact deltas
-//! (`sim::exact_deltas`): rotation error = angle of `ΔR*ᵀΔR` [rad], velocity and position errors
+//! (`sim::exact_deltas`): rotation error = angle of `ΔR*ᵀΔR` \[rad\], velocity and position errors
 //! = norms [m/s, m]. Cost = measured ns/sample of the scheme (with covariance and bias Jacobians)
 //! × rate = ns per second of IMU data.
 
@@ -28,7 +28,7 @@ pub fn ideal_sample(scene: &dyn sim::Scene, t_ns: i64, g: &Vector3<f64>) -> prei
 pub struct Row {
     /// Scheme.
     pub scheme: Scheme,
-    /// Sample rate [Hz].
+    /// Sample rate \[Hz\].
     pub rate: f64,
     /// Measured cost [ns/sample].
     pub ns_per_sample: f64,
@@ -37,7 +37,7 @@ pub struct Row {
 }
 
 impl Row {
-    /// Cost per second of IMU data [ns].
+    /// Cost per second of IMU data \[ns\].
     pub fn cost_per_s(&self) -> f64 {
         self.ns_per_sample * self.rate
     }

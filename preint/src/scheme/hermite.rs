@@ -46,7 +46,7 @@
 //! sample's noise enters once with the sum of its gains over every interval that reads it.
 //!
 //! At [`crate::Level::Deltas`] the same rules are rearranged so that everything but one
-//! quaternion product and two rotations is independent of ΔR ([`deltas`]).
+//! quaternion product and two rotations is independent of ΔR (the `deltas` submodule).
 
 pub(crate) mod deltas;
 
