@@ -39,7 +39,7 @@ enum NoiseKind {
     Gen(GenQ),
 }
 
-/// A stream sample referenced by a window edge, with its intervals [s] to its stream
+/// A stream sample referenced by a window edge, with its intervals \[s\] to its stream
 /// neighbours (0 if none).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct Src {
@@ -85,7 +85,7 @@ struct Cap {
     g: Blk96,
     /// Timestamp of the sample itself.
     node_t: i64,
-    /// Intervals to its window neighbours [s] (0 if none).
+    /// Intervals to its window neighbours \[s\] (0 if none).
     left: f64,
     right: f64,
 }
@@ -100,7 +100,7 @@ struct Core {
     ctx_after: Option<Node>,
     /// Origin of the pulled-back error.
     origin: Origin,
-    /// Midpoint: length of the last interval integrated [s].
+    /// Midpoint: length of the last interval integrated \[s\].
     h_prev: f64,
     /// rk4: the last stencil's weights, and the slice path's.
     weights: hermite::Weights,
@@ -147,7 +147,7 @@ impl Core {
         &self.ring[(j + self.cb) % RING]
     }
 
-    /// Intervals [s] from window sample `j` to its window neighbours (0 if none; `total`
+    /// Intervals \[s\] from window sample `j` to its window neighbours (0 if none; `total`
     /// samples if known).
     #[inline(always)]
     fn intervals(&self, j: usize, total: usize) -> (f64, f64) {
@@ -619,7 +619,7 @@ impl Core {
         }
     }
 
-    /// Integration noise of an interval of length `h` [s]. GTSAM adds it to δp in the
+    /// Integration noise of an interval of length `h` \[s\]. GTSAM adds it to δp in the
     /// body-(k+1) chart, i.e. `ΔR_k+1 Σ_int ΔR_k+1ᵀ h` in frame i; its pulled-back gain is the
     /// same (it has no ψ row).
     #[inline(always)]
@@ -677,7 +677,7 @@ pub struct Preintegrator {
     lin: bool,
     spec: WindowSpec,
     check_gaps: bool,
-    /// Largest accepted gap [ns] (`u64::MAX` without the gap check).
+    /// Largest accepted gap \[ns\] (`u64::MAX` without the gap check).
     gap_limit: u64,
     samples: Vec<ImuSample>,
     first_t_ns: i64,

@@ -390,8 +390,8 @@ fn mul_skew(m: &M3, u: &V3) -> M3 {
     -skew_mul(u, &m.transpose()).transpose()
 }
 
-/// The transition `Φ` between two nodes (see module doc): duration `h` [s], `U1` [m/s],
-/// `U2` [m].
+/// The transition `Φ` between two nodes (see module doc): duration `h` \[s\], `U1` [m/s],
+/// `U2` \[m\].
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Transition {
     pub h: f64,
@@ -465,7 +465,7 @@ pub(crate) struct Origin {
 }
 
 impl Origin {
-    /// `Φ_k⁻¹` for node k at `t_ns` [ns] with deltas `(v, p)`; the first call (node 1) fixes
+    /// `Φ_k⁻¹` for node k at `t_ns` \[ns\] with deltas `(v, p)`; the first call (node 1) fixes
     /// the origin there.
     #[inline(always)]
     pub(crate) fn pull_back(&mut self, t_ns: i64, v: &V3, p: &V3) -> PullBack {
@@ -485,7 +485,7 @@ impl Origin {
         }
     }
 
-    /// `Φ_k` for node k at `t_ns` [ns] with deltas `(v, p)`: what pushes a pulled-back
+    /// `Φ_k` for node k at `t_ns` \[ns\] with deltas `(v, p)`: what pushes a pulled-back
     /// quantity forward to that node.
     pub(crate) fn push_to(&self, t_ns: i64, v: &V3, p: &V3) -> Transition {
         let tau = span_s(self.t_ns, t_ns);
@@ -502,9 +502,9 @@ impl Origin {
 pub(crate) struct PullBack {
     /// `V = Δv_k − Δv_o` [m/s].
     pub dv: V3,
-    /// `W − τ V = Δp_k − Δp_o − τ Δv_k` [m].
+    /// `W − τ V = Δp_k − Δp_o − τ Δv_k` \[m\].
     pub w: V3,
-    /// `τ = t_k − t_o` [s].
+    /// `τ = t_k − t_o` \[s\].
     pub tau: f64,
 }
 

@@ -274,9 +274,9 @@ mod tests {
 }
 
 /// Four `f64` lanes in one AVX register, for x86-64 processors that have AVX2 (checked at
-/// run time by the caller: see [`super::avx2`]). Every method may only run on such a processor:
+/// run time by the caller: see [`avx2`]). Every method may only run on such a processor:
 /// the rk4 slice path calls them only inside a `#[target_feature(enable = "avx2")]` function
-/// that it enters after [`super::avx2`] returned true.
+/// that it enters after [`avx2`] returned true.
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod quad {
     use super::{F2, Lane, estrin5};

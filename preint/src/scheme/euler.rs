@@ -25,7 +25,7 @@ pub(crate) struct EulerGain {
     pub cp0: f64,
 }
 
-/// One Euler interval of length `h` [s] holding node `n0` and ending at `t1_ns`; with `LIN`,
+/// One Euler interval of length `h` \[s\] holding node `n0` and ending at `t1_ns`; with `LIN`,
 /// its transition and the gain of `n0` pulled back to `o`.
 #[inline(always)]
 pub(crate) fn step<const LIN: bool>(

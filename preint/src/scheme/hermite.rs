@@ -61,7 +61,7 @@ use crate::simd::{Lane, quad::F4};
 use lie::hat;
 use lie::so3::{RodriguesCoeffs, i_plus_hat_hat2};
 
-/// The weights of an interval's rules, functions of its length `h` [s] alone.
+/// The weights of an interval's rules, functions of its length `h` \[s\] alone.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct Rule {
     pub h: f64,
@@ -83,7 +83,7 @@ impl Rule {
 }
 
 /// The derivative at node `x_m` (m = 0, 1, 2) of the quadratic through three nodes at `t`
-/// [ns], as `α (f₂ − f₁) + β (f₁ − f₀)`: returns `(α, β)` [1/s]. A function of the time stamps
+/// \[ns\], as `α (f₂ − f₁) + β (f₁ − f₀)`: returns `(α, β)` [1/s]. A function of the time stamps
 /// alone, so every path that differentiates at the same node with the same nodes gets the
 /// same weights. Uniform spacing h: `(1/2h, 1/2h)` centred, `(−1/2h, 3/2h)` forward,
 /// `(3/2h, −1/2h)` backward.
@@ -196,7 +196,7 @@ impl Weights {
 }
 
 /// The steady state's weights ([`Weights`] for the centred stencil `{k, k+1, k+2}` of node
-/// k+1), keyed by the two intervals [ns]: what the slice path needs per sample.
+/// k+1), keyed by the two intervals \[ns\]: what the slice path needs per sample.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct SteadyWeights {
     key: (i64, i64),
@@ -206,7 +206,7 @@ pub(crate) struct SteadyWeights {
 }
 
 impl SteadyWeights {
-    /// The weights for the nodes at `t` [ns] (the default key (0, 0) matches no stream).
+    /// The weights for the nodes at `t` \[ns\] (the default key (0, 0) matches no stream).
     #[inline(always)]
     fn of(&mut self, t: [i64; 3]) -> &Self {
         let key = (t[1].wrapping_sub(t[0]), t[2].wrapping_sub(t[1]));
@@ -224,7 +224,7 @@ impl SteadyWeights {
 }
 
 /// [`SteadyWeights`] of two consecutive intervals, one per [`F2`] lane (what
-/// [`deltas::Carry::prepare_pairs`] needs per pair), keyed by the three intervals [ns]. Every
+/// [`deltas::Carry::prepare_pairs`] needs per pair), keyed by the three intervals \[ns\]. Every
 /// lane holds exactly what [`SteadyWeights::of`] gives for its interval.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct PairWeights {
@@ -238,7 +238,7 @@ pub(crate) struct PairWeights {
 
 impl PairWeights {
     /// The weights of intervals `[t₀, t₁]` and `[t₁, t₂]` (nodes `t₁`, `t₂`) for the nodes at
-    /// `t` [ns].
+    /// `t` \[ns\].
     #[inline(always)]
     fn of(&mut self, t: [i64; 4]) -> &Self {
         let key = (
@@ -269,7 +269,7 @@ impl PairWeights {
 }
 
 /// [`SteadyWeights`] of four consecutive intervals, one per [`F4`] lane (what
-/// [`deltas::Carry::prepare_quads`] needs per quad), keyed by the five intervals [ns] the four
+/// [`deltas::Carry::prepare_quads`] needs per quad), keyed by the five intervals \[ns\] the four
 /// stencils span.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy)]
@@ -306,7 +306,7 @@ impl std::fmt::Debug for QuadWeights {
 #[cfg(target_arch = "x86_64")]
 impl QuadWeights {
     /// The weights of intervals `[t_j, t_j+1]` (nodes `t_j+1`), j = 0…3, for the nodes at `t`
-    /// [ns].
+    /// \[ns\].
     #[inline(always)]
     fn of(&mut self, t: [i64; 6]) -> &Self {
         let key = std::array::from_fn(|j| t[j + 1].wrapping_sub(t[j]));

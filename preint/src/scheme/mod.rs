@@ -13,7 +13,7 @@ use crate::sample::{ImuBias, ImuSample};
 use lie::so3::exp_quat_coeffs;
 use nalgebra::Matrix3;
 
-/// A bias-corrected sample: time [ns], `ω` [rad/s], `a` [m/s²].
+/// A bias-corrected sample: time \[ns\], `ω` [rad/s], `a` [m/s²].
 ///
 /// Aligned so that `w` and `a` each start a 16-byte pair: the vector stores that write a node
 /// and the loads that read it soon after then cover the same bytes (a load spanning two
@@ -45,7 +45,7 @@ impl Node {
     }
 }
 
-/// Running deltas: `ΔR_k = r·R(q)`, `Δv_k` [m/s], `Δp_k` [m]; `u_last = ΔR_k a_k` cached by
+/// Running deltas: `ΔR_k = r·R(q)`, `Δv_k` [m/s], `Δp_k` \[m\]; `u_last = ΔR_k a_k` cached by
 /// the schemes that evaluate the acceleration at both ends of an interval.
 ///
 /// ΔR is accumulated in one of two forms, and the other stays exactly the identity: as the
@@ -155,7 +155,7 @@ impl Quat {
         }
     }
 
-    /// `q ⊗ Exp(k w)` for a rate `w` [rad/s] and a time `k` [s], with θ² formed as `|w|²·k²`:
+    /// `q ⊗ Exp(k w)` for a rate `w` [rad/s] and a time `k` \[s\], with θ² formed as `|w|²·k²`:
     /// `|w|²` does not wait for `k`, which shortens each step's chain of dependent operations
     /// (the steps of a loop overlap only as far as the out-of-order window reaches).
     #[inline(always)]
@@ -216,7 +216,7 @@ impl Quat {
     }
 }
 
-/// `(t1 − t0)·1e-9` [s] computed in i128, so any pair of i64 timestamps is safe.
+/// `(t1 − t0)·1e-9` \[s\] computed in i128, so any pair of i64 timestamps is safe.
 #[inline(always)]
 pub(crate) fn span_s(t0_ns: i64, t1_ns: i64) -> f64 {
     // Same integer, same rounding: the i64 → f64 conversion is a single instruction, the

@@ -555,7 +555,7 @@ struct Interval {
 
 struct Link {
     samples: Vec<ImuSample>,
-    /// White-noise covariance Σ_φ of the link rotation [rad²].
+    /// White-noise covariance Σ_φ of the link rotation \[rad²\].
     cov: Matrix3<f64>,
     /// `U` with `UᵀU = Σ_φ⁻¹`.
     sqrt_info: Matrix3<f64>,

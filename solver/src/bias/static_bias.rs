@@ -145,7 +145,7 @@ struct StaticProblem {
 }
 
 impl LeastSquares for StaticProblem {
-    /// (params = [b_g] or [b_g, b_a], R_wb).
+    /// (params = `[b_g]` or `[b_g, b_a]`, R_wb).
     type State = (DVector<f64>, SO3);
     fn residual_jacobian(&self, x: &Self::State) -> (DVector<f64>, DMatrix<f64>) {
         let (p, r) = x;

@@ -134,7 +134,7 @@ fn prepare<T: Lane>(
 }
 
 /// One prepared interval, laid out for [`State::step`]: `E = (c, e_x, e_y, e_z)` as the pairs
-/// `(c, e_x)`, `(e_y, e_z)`; `(x_i, y_i)` by component; `(h, h)` [s].
+/// `(c, e_x)`, `(e_y, e_z)`; `(x_i, y_i)` by component; `(h, h)` \[s\].
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C)]
 pub(crate) struct Record {
@@ -274,7 +274,7 @@ pub(crate) fn step(d: &mut Deltas, c: &Rule, n0: &Node, n1: &Node, dw1: &V3, da1
 }
 
 /// What the slice path carries from one interval to the next (steady state): nodes k and
-/// k+1 (time [ns], bias-corrected `ω`, `a`), and node k's `ω̇_k` and `s_k`.
+/// k+1 (time \[ns\], bias-corrected `ω`, `a`), and node k's `ω̇_k` and `s_k`.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Carry {
     t0: i64,
