@@ -17,8 +17,9 @@ use crate::propagation::{
     rot_cols,
 };
 use crate::sample::{ImuBias, ImuSample};
-use crate::scheme::hermite::deltas::{Carry, Record, State};
+use crate::scheme::hermite::deltas::{Carry, LaneWeights, Record, State};
 use crate::scheme::{Deltas, Node, euler, hermite, midpoint, span_s};
+use crate::simd::F2;
 use lie::SO3;
 
 const RING: usize = 8;
@@ -106,10 +107,10 @@ struct Core {
     weights: hermite::Weights,
     steady: hermite::SteadyWeights,
     /// The same for two intervals at a time (the rk4 slice path).
-    pairs: hermite::PairWeights,
+    pairs: LaneWeights<F2>,
     /// Four at a time (the rk4 slice path with AVX2).
     #[cfg(target_arch = "x86_64")]
-    quads: hermite::QuadWeights,
+    quads: LaneWeights<crate::simd::quad::F4>,
     /// Window intervals integrated.
     done: usize,
     d: Deltas,
@@ -484,7 +485,7 @@ impl Core {
             #[cfg(not(target_arch = "x86_64"))]
             let i = 0;
             let even = i + ((m - i) & !1);
-            carry.prepare_pairs(&rest[i..even], bias, &mut self.pairs, &mut buf[i..even]);
+            carry.prepare_wide(&rest[i..even], bias, &mut self.pairs, &mut buf[i..even]);
             if m > even {
                 buf[even] = carry.prepare_one(&rest[even], bias, &mut self.steady);
             }
@@ -805,9 +806,9 @@ impl Preintegrator {
                 h_prev: 0.0,
                 weights: hermite::Weights::default(),
                 steady: hermite::SteadyWeights::default(),
-                pairs: hermite::PairWeights::default(),
+                pairs: LaneWeights::default(),
                 #[cfg(target_arch = "x86_64")]
-                quads: hermite::QuadWeights::default(),
+                quads: LaneWeights::default(),
                 done: 0,
                 d: Deltas::default(),
                 e: ErrorState::default(),

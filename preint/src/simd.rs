@@ -352,6 +352,18 @@ pub(crate) mod quad {
         }
     }
 
+    impl Default for F4 {
+        fn default() -> Self {
+            Self::splat(0.0)
+        }
+    }
+
+    impl std::fmt::Debug for F4 {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            write!(f, "F4({:?})", self.lanes())
+        }
+    }
+
     macro_rules! quad_op {
         ($tr:ident, $m:ident, $avx:ident) => {
             impl $tr for F4 {

@@ -55,9 +55,6 @@ use crate::propagation::{
     Blk96, Cols6, Cols9, ErrorState, M3, Origin, Pending, PullBack, SLOTS, Transition, V3,
     rot_cols, skew_cols, skew_mul,
 };
-use crate::simd::F2;
-#[cfg(target_arch = "x86_64")]
-use crate::simd::{Lane, quad::F4};
 use lie::hat;
 use lie::so3::{RodriguesCoeffs, i_plus_hat_hat2};
 
@@ -220,115 +217,6 @@ impl SteadyWeights {
             };
         }
         self
-    }
-}
-
-/// [`SteadyWeights`] of two consecutive intervals, one per [`F2`] lane (what
-/// [`deltas::Carry::prepare_pairs`] needs per pair), keyed by the three intervals \[ns\]. Every
-/// lane holds exactly what [`SteadyWeights::of`] gives for its interval.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct PairWeights {
-    key: (i64, i64, i64),
-    h: F2,
-    h_2: F2,
-    h2_12: F2,
-    alpha: F2,
-    beta: F2,
-}
-
-impl PairWeights {
-    /// The weights of intervals `[t₀, t₁]` and `[t₁, t₂]` (nodes `t₁`, `t₂`) for the nodes at
-    /// `t` \[ns\].
-    #[inline(always)]
-    fn of(&mut self, t: [i64; 4]) -> &Self {
-        let key = (
-            t[1].wrapping_sub(t[0]),
-            t[2].wrapping_sub(t[1]),
-            t[3].wrapping_sub(t[2]),
-        );
-        if key != self.key {
-            self.refresh(t, key);
-        }
-        self
-    }
-
-    #[cold]
-    #[inline(never)]
-    fn refresh(&mut self, t: [i64; 4], key: (i64, i64, i64)) {
-        let (r0, r1) = (Rule::new(t[0], t[1]), Rule::new(t[1], t[2]));
-        let ((a0, b0), (a1, b1)) = (slopes([t[0], t[1], t[2]], 1), slopes([t[1], t[2], t[3]], 1));
-        *self = Self {
-            key,
-            h: F2::new(r0.h, r1.h),
-            h_2: F2::new(r0.h_2, r1.h_2),
-            h2_12: F2::new(r0.h2_12, r1.h2_12),
-            alpha: F2::new(a0, a1),
-            beta: F2::new(b0, b1),
-        };
-    }
-}
-
-/// [`SteadyWeights`] of four consecutive intervals, one per [`F4`] lane (what
-/// [`deltas::Carry::prepare_quads`] needs per quad), keyed by the five intervals \[ns\] the four
-/// stencils span.
-#[cfg(target_arch = "x86_64")]
-#[derive(Clone, Copy)]
-pub(crate) struct QuadWeights {
-    key: [i64; 5],
-    h: F4,
-    h_2: F4,
-    h2_12: F4,
-    alpha: F4,
-    beta: F4,
-}
-
-#[cfg(target_arch = "x86_64")]
-impl Default for QuadWeights {
-    fn default() -> Self {
-        Self {
-            key: [0; 5],
-            h: F4::splat(0.0),
-            h_2: F4::splat(0.0),
-            h2_12: F4::splat(0.0),
-            alpha: F4::splat(0.0),
-            beta: F4::splat(0.0),
-        }
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-impl std::fmt::Debug for QuadWeights {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "QuadWeights {{ key: {:?} }}", self.key)
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-impl QuadWeights {
-    /// The weights of intervals `[t_j, t_j+1]` (nodes `t_j+1`), j = 0…3, for the nodes at `t`
-    /// \[ns\].
-    #[inline(always)]
-    fn of(&mut self, t: [i64; 6]) -> &Self {
-        let key = std::array::from_fn(|j| t[j + 1].wrapping_sub(t[j]));
-        if key != self.key {
-            self.refresh(t, key);
-        }
-        self
-    }
-
-    #[cold]
-    #[inline(never)]
-    fn refresh(&mut self, t: [i64; 6], key: [i64; 5]) {
-        let rules: [Rule; 4] = std::array::from_fn(|j| Rule::new(t[j], t[j + 1]));
-        let ab: [(f64, f64); 4] = std::array::from_fn(|j| slopes([t[j], t[j + 1], t[j + 2]], 1));
-        *self = Self {
-            key,
-            h: F4::new(rules.map(|r| r.h)),
-            h_2: F4::new(rules.map(|r| r.h_2)),
-            h2_12: F4::new(rules.map(|r| r.h2_12)),
-            alpha: F4::new(ab.map(|p| p.0)),
-            beta: F4::new(ab.map(|p| p.1)),
-        };
     }
 }
 

@@ -15,13 +15,13 @@
 //! 3-vectors leaves a third of them scalar and adds shuffles), then accumulates the block. The
 //! one-by-one path ([`step`]) runs the same code in `f64`, so the two agree bit for bit.
 
-use super::{PairWeights, Rule, SteadyWeights};
+use super::{Rule, SteadyWeights, slopes};
 use crate::propagation::V3;
 use crate::sample::{ImuBias, ImuSample};
 use crate::scheme::{Deltas, Node, Quat};
-use crate::simd::{F2, Lane};
 #[cfg(target_arch = "x86_64")]
-use {super::QuadWeights, crate::simd::quad::F4};
+use crate::simd::quad::F4;
+use crate::simd::{F2, Lane};
 
 /// A 3-vector in lanes: `[x, y, z]`.
 type L3<T> = [T; 3];
@@ -349,8 +349,68 @@ impl Carry {
         Record::one(&e, &x, &y, c.rule.h)
     }
 
-    /// [`Carry::prepare_pairs`] four intervals at a time, one per [`F4`] lane (intervals k…k+3,
-    /// completed by samples k+2…k+5); `samples.len()` is a multiple of 4.
+    /// The intervals completed by `samples` (a multiple of `T::N` of them, all of which pass
+    /// the common-case test), `T::N` at a time: lane j holds interval k+j, completed by sample
+    /// k+2+j, with the same weights and operations as [`Carry::prepare_one`]. Writes
+    /// `out[..samples.len()]`.
+    #[inline(always)]
+    pub(crate) fn prepare_wide<T: Wide>(
+        &mut self,
+        samples: &[ImuSample],
+        bias: &ImuBias,
+        cache: &mut LaneWeights<T>,
+        out: &mut [Record],
+    ) {
+        let n = T::N;
+        let splat3 = |v: &V3| by3(|i| T::splat(v[i]));
+        let (bw, ba) = (splat3(&bias.gyro), splat3(&bias.acc));
+        // The previous block's new nodes: (…, k, k+1); (…, ω̇_k) and (…, s_k).
+        let last2 = |a: &V3, b: &V3| by3(|i| T::gather(|j| if j + 1 == n { b[i] } else { a[i] }));
+        let (mut wc, mut ac) = (last2(&self.w0, &self.w1), last2(&self.a0, &self.a1));
+        let (mut dprev, mut sprev) = (splat3(&self.dw0), splat3(&self.s0));
+        let mut t = [self.t0, self.t1, 0, 0, 0, 0];
+        for (q, rec) in samples.chunks_exact(n).zip(out.chunks_exact_mut(n)) {
+            // Nodes k+2…k+n+1 (new), k…k+n−1 and k+1…k+n.
+            let w2 = by3(|i| T::gather(|j| q[j].gyro[i]) - bw[i]);
+            let a2 = by3(|i| T::gather(|j| q[j].acc[i]) - ba[i]);
+            let (wn, an) = (
+                by3(|i| T::nodes(wc[i], w2[i])),
+                by3(|i| T::nodes(ac[i], a2[i])),
+            );
+            let (w0, w1, a0, a1) = (
+                by3(|i| wn[i].0),
+                by3(|i| wn[i].1),
+                by3(|i| an[i].0),
+                by3(|i| an[i].1),
+            );
+            for (tj, s) in t[2..].iter_mut().zip(q) {
+                *tj = s.t_ns;
+            }
+            let c = *cache.of(&t);
+            let dw1 = slope(&sub(&w2, &w1), &sub(&w1, &w0), c.alpha, c.beta);
+            let da1 = slope(&sub(&a2, &a1), &sub(&a1, &a0), c.alpha, c.beta);
+            let s1 = add(&cross(&w1, &a1), &da1);
+            let dw0 = by3(|i| T::after(dprev[i], dw1[i]));
+            let s0 = by3(|i| T::after(sprev[i], s1[i]));
+            let (e, x, y) = prepare(c.h_2, c.h2_12, &w0, &w1, &a0, &a1, &dw0, &s0, &dw1, &s1);
+            T::records(&e, &x, &y, c.h, rec);
+            (wc, ac, dprev, sprev) = (w2, a2, dw1, s1);
+            (t[0], t[1]) = (t[n], t[n + 1]);
+        }
+        let lane = |l: &L3<T>, j: usize| V3::new(l[0].lane(j), l[1].lane(j), l[2].lane(j));
+        *self = Self {
+            t0: t[0],
+            t1: t[1],
+            w0: lane(&wc, n - 2),
+            w1: lane(&wc, n - 1),
+            a0: lane(&ac, n - 2),
+            a1: lane(&ac, n - 1),
+            dw0: lane(&dprev, n - 1),
+            s0: lane(&sprev, n - 1),
+        };
+    }
+
+    /// [`Carry::prepare_wide`] in [`F4`] lanes, compiled for AVX2.
     ///
     /// Only for processors with AVX2 ([`crate::simd::avx2`]): the caller checks.
     #[cfg(target_arch = "x86_64")]
@@ -359,105 +419,120 @@ impl Carry {
         &mut self,
         samples: &[ImuSample],
         bias: &ImuBias,
-        cache: &mut QuadWeights,
+        cache: &mut LaneWeights<F4>,
         out: &mut [Record],
     ) {
-        let (bw, ba) = (
-            by3(|i| F4::splat(bias.gyro[i])),
-            by3(|i| F4::splat(bias.acc[i])),
-        );
-        // Nodes (·, ·, k, k+1); (·, ·, ·, ω̇_k) and (·, ·, ·, s_k).
-        let last2 = |a: &V3, b: &V3| by3(|i| F4::new([a[i], a[i], a[i], b[i]]));
-        let (mut wc, mut ac) = (last2(&self.w0, &self.w1), last2(&self.a0, &self.a1));
-        let (mut dprev, mut sprev) = (
-            by3(|i| F4::splat(self.dw0[i])),
-            by3(|i| F4::splat(self.s0[i])),
-        );
-        let (mut t0, mut t1) = (self.t0, self.t1);
-        for (q, rec) in samples.chunks_exact(4).zip(out.chunks_exact_mut(4)) {
-            let w2 =
-                by3(|i| F4::new([q[0].gyro[i], q[1].gyro[i], q[2].gyro[i], q[3].gyro[i]]) - bw[i]);
-            let a2 = by3(|i| F4::new([q[0].acc[i], q[1].acc[i], q[2].acc[i], q[3].acc[i]]) - ba[i]);
-            // Nodes (k…k+3) and (k+1…k+4).
-            let w0 = by3(|i| F4::straddle2(wc[i], w2[i]));
-            let a0 = by3(|i| F4::straddle2(ac[i], a2[i]));
-            let w1 = by3(|i| F4::odd_even(w0[i], w2[i]));
-            let a1 = by3(|i| F4::odd_even(a0[i], a2[i]));
-            let c = *cache.of([t0, t1, q[0].t_ns, q[1].t_ns, q[2].t_ns, q[3].t_ns]);
-            let dw1 = slope(&sub(&w2, &w1), &sub(&w1, &w0), c.alpha, c.beta);
-            let da1 = slope(&sub(&a2, &a1), &sub(&a1, &a0), c.alpha, c.beta);
-            let s1 = add(&cross(&w1, &a1), &da1);
-            let dw0 = by3(|i| F4::after(dprev[i], dw1[i]));
-            let s0 = by3(|i| F4::after(sprev[i], s1[i]));
-            let (e, x, y) = prepare(c.h_2, c.h2_12, &w0, &w1, &a0, &a1, &dw0, &s0, &dw1, &s1);
-            rec.copy_from_slice(&Record::four(&e, &x, &y, c.h));
-            (wc, ac, dprev, sprev) = (w2, a2, dw1, s1);
-            (t0, t1) = (q[2].t_ns, q[3].t_ns);
+        self.prepare_wide(samples, bias, cache, out);
+    }
+}
+
+/// A lane type that prepares `N` consecutive intervals at once ([`Carry::prepare_wide`]).
+pub(crate) trait Wide: Lane {
+    /// Lanes (intervals per step), at least 2.
+    const N: usize;
+    /// Lane j is `f(j)`.
+    fn gather(f: impl Fn(usize) -> f64) -> Self;
+    /// Lane `j`.
+    fn lane(self, j: usize) -> f64;
+    /// From the previous step's new nodes (k−N+2…k+1) and this step's (k+2…k+N+1): the
+    /// interval starts k…k+N−1 and ends k+1…k+N.
+    fn nodes(prev: Self, new: Self) -> (Self, Self);
+    /// `(prev_N−1, cur_0, …, cur_N−2)`: a node quantity one lane back.
+    fn after(prev: Self, cur: Self) -> Self;
+    /// Writes the `N` lanes' records to `out[..N]`.
+    fn records(e: &[Self; 4], x: &L3<Self>, y: &L3<Self>, h: Self, out: &mut [Record]);
+}
+
+impl Wide for F2 {
+    const N: usize = 2;
+    #[inline(always)]
+    fn gather(f: impl Fn(usize) -> f64) -> Self {
+        F2::new(f(0), f(1))
+    }
+    #[inline(always)]
+    fn lane(self, j: usize) -> f64 {
+        if j == 0 { self.lo() } else { self.hi() }
+    }
+    #[inline(always)]
+    fn nodes(prev: Self, new: Self) -> (Self, Self) {
+        (prev, F2::straddle(prev, new))
+    }
+    #[inline(always)]
+    fn after(prev: Self, cur: Self) -> Self {
+        F2::straddle(prev, cur)
+    }
+    #[inline(always)]
+    fn records(e: &[Self; 4], x: &L3<Self>, y: &L3<Self>, h: Self, out: &mut [Record]) {
+        out[..2].copy_from_slice(&Record::two(e, x, y, h));
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Wide for F4 {
+    const N: usize = 4;
+    #[inline(always)]
+    fn gather(f: impl Fn(usize) -> f64) -> Self {
+        F4::new([f(0), f(1), f(2), f(3)])
+    }
+    #[inline(always)]
+    fn lane(self, j: usize) -> f64 {
+        self.lanes()[j]
+    }
+    #[inline(always)]
+    fn nodes(prev: Self, new: Self) -> (Self, Self) {
+        let n0 = F4::straddle2(prev, new);
+        (n0, F4::odd_even(n0, new))
+    }
+    #[inline(always)]
+    fn after(prev: Self, cur: Self) -> Self {
+        F4::after(prev, cur)
+    }
+    #[inline(always)]
+    fn records(e: &[Self; 4], x: &L3<Self>, y: &L3<Self>, h: Self, out: &mut [Record]) {
+        out[..4].copy_from_slice(&Record::four(e, x, y, h));
+    }
+}
+
+/// [`SteadyWeights`] of `T::N` consecutive intervals, one per lane, keyed by the `T::N + 1`
+/// intervals [ns] their stencils span: every lane holds exactly what [`SteadyWeights::of`]
+/// gives for its interval.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct LaneWeights<T> {
+    key: [i64; 5],
+    h: T,
+    h_2: T,
+    h2_12: T,
+    alpha: T,
+    beta: T,
+}
+
+impl<T: Wide> LaneWeights<T> {
+    /// The weights of intervals `[t_j, t_j+1]` (nodes `t_j+1`), j < `T::N`, for the nodes at
+    /// `t[..T::N + 2]` \[ns\].
+    #[inline(always)]
+    fn of(&mut self, t: &[i64; 6]) -> &Self {
+        let mut key = [0; 5];
+        for j in 0..=T::N {
+            key[j] = t[j + 1].wrapping_sub(t[j]);
         }
-        let lane =
-            |l: &L3<F4>, j: usize| V3::new(l[0].lanes()[j], l[1].lanes()[j], l[2].lanes()[j]);
-        *self = Self {
-            t0,
-            t1,
-            w0: lane(&wc, 2),
-            w1: lane(&wc, 3),
-            a0: lane(&ac, 2),
-            a1: lane(&ac, 3),
-            dw0: lane(&dprev, 3),
-            s0: lane(&sprev, 3),
-        };
+        if key != self.key {
+            self.refresh(t, key);
+        }
+        self
     }
 
-    /// The intervals completed by `samples` (an even number of them, all of which pass the
-    /// common-case test), two at a time: lanes lo and hi hold intervals k and k+1, completed
-    /// by samples k+2 and k+3, with the same weights and operations as [`Carry::prepare_one`].
-    /// Writes `out[..samples.len()]`.
-    #[inline(always)]
-    pub(crate) fn prepare_pairs(
-        &mut self,
-        samples: &[ImuSample],
-        bias: &ImuBias,
-        cache: &mut PairWeights,
-        out: &mut [Record],
-    ) {
-        let lanes = |a: &V3, b: &V3| by3(|i| F2::new(a[i], b[i]));
-        let (bw, ba) = (
-            by3(|i| F2::splat(bias.gyro[i])),
-            by3(|i| F2::splat(bias.acc[i])),
-        );
-        // Nodes (k, k+1); (·, ω̇_k) and (·, s_k).
-        let (mut w01, mut a01) = (lanes(&self.w0, &self.w1), lanes(&self.a0, &self.a1));
-        let (mut dprev, mut sprev) = (lanes(&self.dw0, &self.dw0), lanes(&self.s0, &self.s0));
-        let (mut t0, mut t1) = (self.t0, self.t1);
-        for (pair, rec) in samples.chunks_exact(2).zip(out.chunks_exact_mut(2)) {
-            let (s2, s3) = (&pair[0], &pair[1]);
-            let w23 = by3(|i| F2::new(s2.gyro[i], s3.gyro[i]) - bw[i]);
-            let a23 = by3(|i| F2::new(s2.acc[i], s3.acc[i]) - ba[i]);
-            let w12 = by3(|i| F2::straddle(w01[i], w23[i]));
-            let a12 = by3(|i| F2::straddle(a01[i], a23[i]));
-            let c = *cache.of([t0, t1, s2.t_ns, s3.t_ns]);
-            let (alpha, beta) = (c.alpha, c.beta);
-            let dw1 = slope(&sub(&w23, &w12), &sub(&w12, &w01), alpha, beta);
-            let da1 = slope(&sub(&a23, &a12), &sub(&a12, &a01), alpha, beta);
-            let s1 = add(&cross(&w12, &a12), &da1);
-            let dw0 = by3(|i| F2::straddle(dprev[i], dw1[i]));
-            let s0 = by3(|i| F2::straddle(sprev[i], s1[i]));
-            let (e, x, y) = prepare(c.h_2, c.h2_12, &w01, &w12, &a01, &a12, &dw0, &s0, &dw1, &s1);
-            rec.copy_from_slice(&Record::two(&e, &x, &y, c.h));
-            (w01, a01, dprev, sprev) = (w23, a23, dw1, s1);
-            (t0, t1) = (s2.t_ns, s3.t_ns);
-        }
-        let lo = |l: &L3<F2>| V3::new(l[0].lo(), l[1].lo(), l[2].lo());
-        let hi = |l: &L3<F2>| V3::new(l[0].hi(), l[1].hi(), l[2].hi());
+    #[cold]
+    #[inline(never)]
+    fn refresh(&mut self, t: &[i64; 6], key: [i64; 5]) {
+        let rule = |j: usize| Rule::new(t[j], t[j + 1]);
+        let ab = |j: usize| slopes([t[j], t[j + 1], t[j + 2]], 1);
         *self = Self {
-            t0,
-            t1,
-            w0: lo(&w01),
-            w1: hi(&w01),
-            a0: lo(&a01),
-            a1: hi(&a01),
-            dw0: hi(&dprev),
-            s0: hi(&sprev),
+            key,
+            h: T::gather(|j| rule(j).h),
+            h_2: T::gather(|j| rule(j).h_2),
+            h2_12: T::gather(|j| rule(j).h2_12),
+            alpha: T::gather(|j| ab(j).0),
+            beta: T::gather(|j| ab(j).1),
         };
     }
 }
