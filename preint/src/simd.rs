@@ -1,12 +1,13 @@
-//! Two `f64` lanes in one SSE2 register (part of the x86-64 baseline, so no runtime
-//! detection and no special build), with a plain `[f64; 2]` on other targets.
+//! Lanes of `f64`: [`F2`], two in one SSE2 register (part of the x86-64 baseline, so no
+//! run-time detection and no special build; a plain `[f64; 2]` on other targets), and on
+//! x86-64 [`quad::F4`], four in one AVX register, for processors that have AVX2 ([`avx2`]).
 //!
-//! Every operation is the lane-wise IEEE operation, so a computation written once over
-//! [`Lane`] rounds identically whether it runs on `f64` or on `F2`: the rk4 slice path
-//! prepares two intervals at a time in `F2` lanes and the one-by-one path prepares one in
-//! `f64`, and their deltas are bit-identical (`preint/tests/deltas_fast_path.rs`). LLVM does not
-//! find this layout itself: it pairs the x and y components of one 3-vector and leaves z
-//! alone, and spends the difference on shuffles (a cross product) and register copies.
+//! Every operation is the lane-wise IEEE operation (no fused multiply-add), so a computation
+//! written once over [`Lane`] rounds identically on `f64`, `F2` and `F4`: the rk4 slice path
+//! prepares four or two intervals at a time and the one-by-one path prepares one in `f64`, and
+//! their deltas are bit-identical (`preint/tests/deltas_fast_path.rs`). LLVM does not find this
+//! layout itself: it pairs the x and y components of one 3-vector and leaves z alone, and
+//! spends the difference on shuffles (a cross product) and register copies.
 
 use std::ops::{Add, Mul, Neg, Sub};
 

@@ -10,10 +10,11 @@
 //!
 //! `E`, `x` and `y` do not depend on ΔR ([`prepare`]); what does is one quaternion product and
 //! two rotations by ΔR_k ([`State::step`]), and the rotations do not wait for ΔR_k+1. The
-//! slice path prepares a block of intervals two at a time, one per [`F2`] lane
-//! ([`Carry::prepare_pairs`]: every operation is then a packed one, where LLVM's own pairing of
-//! 3-vectors leaves a third of them scalar and adds shuffles), then accumulates the block. The
-//! one-by-one path ([`step`]) runs the same code in `f64`, so the two agree bit for bit.
+//! slice path prepares a block of intervals four at a time (one per [`F4`] lane, with AVX2)
+//! or two (one per [`F2`] lane) ([`Carry::prepare_wide`]: every operation is then a packed
+//! one, where LLVM's own pairing of 3-vectors leaves a third of them scalar and adds
+//! shuffles), then accumulates the block. The one-by-one path ([`step`]) runs the same code in
+//! `f64`, so they all agree bit for bit.
 
 use super::{Rule, SteadyWeights, slopes};
 use crate::propagation::V3;
