@@ -495,7 +495,7 @@ impl Wide for F4 {
 }
 
 /// [`SteadyWeights`] of `T::N` consecutive intervals, one per lane, keyed by the `T::N + 1`
-/// intervals [ns] their stencils span: every lane holds exactly what [`SteadyWeights::of`]
+/// intervals \[ns\] their stencils span: every lane holds exactly what [`SteadyWeights::of`]
 /// gives for its interval.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct LaneWeights<T> {
