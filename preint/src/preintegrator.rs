@@ -489,23 +489,52 @@ impl Core {
             if m > even {
                 buf[even] = carry.prepare_one(&rest[even], bias, &mut self.steady);
             }
-            let mut st = State::load(d);
-            for r in &buf[..m] {
-                st.step(r);
-                *done += 1;
-                if done.is_multiple_of(RENORM_EVERY) {
-                    // As `count_interval`.
-                    st.store(d);
-                    d.renormalize();
-                    st = State::load(d);
-                }
+            #[cfg(target_arch = "x86_64")]
+            if QUADS {
+                // SAFETY: as for `prepare_quads` above.
+                unsafe { Self::accumulate_avx2(d, done, &buf[..m]) };
+            } else {
+                Self::accumulate(d, done, &buf[..m]);
             }
-            st.store(d);
+            #[cfg(not(target_arch = "x86_64"))]
+            Self::accumulate(d, done, &buf[..m]);
             used += m;
             if m < RK4_BLOCK {
                 return used;
             }
         }
+    }
+
+    /// The chain through ΔR, Δv and Δp over prepared intervals, counting them (with the
+    /// re-orthonormalisation of [`Core::count_interval`]). Out of line: its registers are then
+    /// allocated for this loop alone (inlined, they moved with every change to the
+    /// preparation around it).
+    #[inline(never)]
+    fn accumulate(d: &mut Deltas, done: &mut usize, recs: &[Record]) {
+        Self::accumulate_inline(d, done, recs);
+    }
+
+    /// [`Core::accumulate`] compiled for AVX2 (VEX encoding; the same operations).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline(never)]
+    fn accumulate_avx2(d: &mut Deltas, done: &mut usize, recs: &[Record]) {
+        Self::accumulate_inline(d, done, recs);
+    }
+
+    #[inline(always)]
+    fn accumulate_inline(d: &mut Deltas, done: &mut usize, recs: &[Record]) {
+        let mut st = State::load(d);
+        for r in recs {
+            st.step(r);
+            *done += 1;
+            if done.is_multiple_of(RENORM_EVERY) {
+                st.store(d);
+                d.renormalize();
+                st = State::load(d);
+            }
+        }
+        st.store(d);
     }
 
     /// [`Core::rk4_blocks`] compiled for AVX2 (VEX encoding everywhere, four-lane

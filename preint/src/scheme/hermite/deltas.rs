@@ -387,7 +387,7 @@ impl Carry {
             for (tj, s) in t[2..].iter_mut().zip(q) {
                 *tj = s.t_ns;
             }
-            let c = *cache.of(&t);
+            let c = cache.of(&t);
             let dw1 = slope(&sub(&w2, &w1), &sub(&w1, &w0), c.alpha, c.beta);
             let da1 = slope(&sub(&a2, &a1), &sub(&a1, &a0), c.alpha, c.beta);
             let s1 = add(&cross(&w1, &a1), &da1);
@@ -516,7 +516,7 @@ impl<T: Wide> LaneWeights<T> {
         for j in 0..=T::N {
             key[j] = t[j + 1].wrapping_sub(t[j]);
         }
-        if key != self.key {
+        if key[..=T::N] != self.key[..=T::N] {
             self.refresh(t, key);
         }
         self
