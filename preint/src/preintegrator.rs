@@ -26,7 +26,7 @@ const RING: usize = 8;
 /// ΔR is re-orthonormalised (`R ← ½R(3I − RᵀR)`) every this many intervals.
 const RENORM_EVERY: usize = 1024;
 
-/// Intervals per block of [`Core::run_deltas_rk4`]: 64 × 88 bytes of prepared intervals stay
+/// Intervals per block of [`Core::run_deltas_rk4`]: 64 × 96 bytes of prepared intervals stay
 /// in the L1 cache.
 const RK4_BLOCK: usize = 64;
 /// Most edge samples whose gains are collected (rk4: context, 3 first, 3 last, context).

@@ -230,9 +230,9 @@ fn omega(c: &Rule, w0: &V3, w1: &V3, dw0: &V3, dw1: &V3) -> V3 {
 /// `Δp_k+1 − Δp_k = h/2 (Δv_k + Δv_k+1) + h²/12 (u_k − u_k+1)` (the corrected trapezoid for
 /// `ṗ = v`, `v̇ = u`).
 #[inline(always)]
-fn advance(h_2: f64, h2_12: f64, v0: &V3, u0: &V3, du0: &V3, u1: &V3, du1: &V3) -> (V3, V3) {
-    let v1 = v0 + ((u0 + u1) * h_2 + (du0 - du1) * h2_12);
-    let dp = (v0 + v1) * h_2 + (u0 - u1) * h2_12;
+fn advance(c: &Rule, v0: &V3, u0: &V3, du0: &V3, u1: &V3, du1: &V3) -> (V3, V3) {
+    let v1 = v0 + ((u0 + u1) * c.h_2 + (du0 - du1) * c.h2_12);
+    let dp = (v0 + v1) * c.h_2 + (u0 - u1) * c.h2_12;
     (v1, dp)
 }
 
@@ -284,7 +284,7 @@ pub(crate) fn step<const LIN: bool>(
     let (u0, du0) = (d.u_last, d.du_last);
     let (u1, du1) = (r1 * n1.a, r1 * s1);
     let v0 = d.v;
-    let (v1, dp) = advance(c.h_2, c.h2_12, &v0, &u0, &du0, &u1, &du1);
+    let (v1, dp) = advance(&c, &v0, &u0, &du0, &u1, &du1);
     d.p += dp;
     d.v = v1;
     d.r = r1;

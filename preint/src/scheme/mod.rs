@@ -110,12 +110,6 @@ pub(crate) struct Quat {
     pub v: V3,
 }
 
-impl Default for Quat {
-    fn default() -> Self {
-        Self::IDENTITY
-    }
-}
-
 impl Quat {
     pub(crate) const IDENTITY: Self = Self {
         w: 1.0,
@@ -127,24 +121,9 @@ impl Quat {
     /// [`Quat::mul_exp_scaled`]).
     #[inline(always)]
     pub(crate) fn mul_exp(&self, phi: &V3, theta2: f64) -> Self {
-        self.mul(&Self::exp(phi, theta2))
-    }
-
-    /// `Exp(φ) = (cos(θ/2), (sin(θ/2)/θ) φ)` ([`exp_quat_coeffs`]), given `theta2 = θ²`.
-    #[inline(always)]
-    pub(crate) fn exp(phi: &V3, theta2: f64) -> Self {
         let (c, s) = exp_quat_coeffs(theta2);
-        Self {
-            w: c,
-            v: V3::new(s * phi.x, s * phi.y, s * phi.z),
-        }
-    }
-
-    /// The Hamilton product `self ⊗ e`.
-    #[inline(always)]
-    pub(crate) fn mul(&self, e: &Self) -> Self {
         let (w, x, y, z) = (self.w, self.v.x, self.v.y, self.v.z);
-        let (c, ex, ey, ez) = (e.w, e.v.x, e.v.y, e.v.z);
+        let (ex, ey, ez) = (s * phi.x, s * phi.y, s * phi.z);
         Self {
             w: w * c - x * ex - y * ey - z * ez,
             v: V3::new(
