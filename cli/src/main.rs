@@ -96,6 +96,53 @@ pub enum Command {
         #[arg(long)]
         no_unit_check: bool,
     },
+    /// Evaluate the IMU factor at ground-truth states: residual, whitened residual and χ² of the
+    /// window between the ground-truth rows nearest to --from and --to (is this IMU consistent
+    /// with this ground truth?). The window is preintegrated with the ground truth's bias at
+    /// keyframe i; --combined evaluates the 15-dim factor with the biases at i and j too.
+    /// ImuFactor holds the bias constant over the window: on data whose bias drifts within
+    /// the window (any real IMU over long windows), use --combined, whose weight includes the
+    /// bias random walk. The χ² includes the ground truth's own errors unless they are given.
+    Factor {
+        /// IMU CSV file (EuRoC imu0 format).
+        #[arg(long)]
+        imu: PathBuf,
+        /// Ground truth (EuRoC state_groundtruth_estimate0 format: p (m), q wxyz body->world,
+        /// v (m/s), b_g (rad/s), b_a (m/s^2)), world frame z up.
+        #[arg(long)]
+        poses: PathBuf,
+        /// Keyframe i: the ground-truth row nearest to this time (ns).
+        #[arg(long, allow_hyphen_values = true)]
+        from: i64,
+        /// Keyframe j: the ground-truth row nearest to this time (ns).
+        #[arg(long, allow_hyphen_values = true)]
+        to: i64,
+        /// Integration scheme: euler, midpoint or rk4.
+        #[arg(long, default_value = "midpoint")]
+        scheme: String,
+        /// Kalibr imu.yaml with the noise densities (default: EuRoC figures).
+        #[arg(long)]
+        noise: Option<PathBuf>,
+        /// Gravity magnitude G (m/s^2); gravity is (0, 0, -G).
+        #[arg(long, default_value_t = 9.81)]
+        gravity: f64,
+        /// Evaluate CombinedImuFactor (15-dim residual with the bias change b_j - b_i, weighted
+        /// by the covariance with the bias random walk) instead of ImuFactor (9-dim).
+        #[arg(long)]
+        combined: bool,
+        /// Standard deviation of the ground truth's attitudes (rad), added to the weight.
+        #[arg(long, default_value_t = 0.0)]
+        pose_rot_std: f64,
+        /// Standard deviation of the ground truth's positions (m), added to the weight.
+        #[arg(long, default_value_t = 0.0)]
+        pose_pos_std: f64,
+        /// Standard deviation of the ground truth's velocities (m/s), added to the weight.
+        #[arg(long, default_value_t = 0.0)]
+        vel_std: f64,
+        /// Skip the check that the data looks like SI units (m/s^2, rad/s).
+        #[arg(long)]
+        no_unit_check: bool,
+    },
     /// Estimate IMU biases with Gauss-Newton, modelling only what the data makes observable.
     Calibrate {
         /// IMU CSV file (EuRoC imu0 format).

@@ -273,3 +273,101 @@ fn report_writes_a_page_and_every_chart_it_references() {
         assert!((7.5..10.5).contains(&v), "{k}: {v}");
     }
 }
+
+/// `integrate --json` prints the error state's 15×15 covariance and the combined factor's
+/// residual covariance; both equal GTSAM 4.3's (`preintMeasCov()`, `residualCovariance()` of
+/// `PreintegratedCombinedMeasurementsManifold`, fixture `combined_example.gtsam.json`) after
+/// the documented reordering and rotation `T P · Pᵀ Tᵀ`, and differ from each other exactly
+/// by the sign of the delta–bias blocks.
+#[test]
+fn integrate_covariance15_and_residual_covariance15_match_gtsam() {
+    let fx: Value = serde_json::from_str(
+        &std::fs::read_to_string(repo("tests/fixtures/gtsam/combined_example.gtsam.json")).unwrap(),
+    )
+    .unwrap();
+    let d = tmp("cov15");
+    let yaml = d.join("imu.yaml");
+    std::fs::write(
+        &yaml,
+        "gyroscope_noise_density: 1.6968e-4\ngyroscope_random_walk: 1.9393e-5\n\
+         accelerometer_noise_density: 2.0e-3\naccelerometer_random_walk: 3.0e-3\nupdate_rate: 200.0\n",
+    )
+    .unwrap();
+    let out = json(&[
+        "integrate",
+        "--imu",
+        &repo("tests/fixtures/gtsam/example.csv"),
+        "--scheme",
+        "euler",
+        "--noise",
+        yaml.to_str().unwrap(),
+        "--bias-gyro=0.001,-0.002,0.0005",
+        "--bias-acc",
+        "0.02,-0.01,0.03",
+    ]);
+    let m = |v: &Value| -> Vec<Vec<f64>> {
+        v.as_array()
+            .unwrap()
+            .iter()
+            .map(|r| {
+                r.as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|x| x.as_f64().unwrap())
+                    .collect()
+            })
+            .collect()
+    };
+    let (c15, r15, dr) = (
+        m(&out["covariance15"]),
+        m(&out["residual_covariance15"]),
+        m(&out["delta_R"]),
+    );
+    for i in 0..15 {
+        for j in 0..15 {
+            let s = if (i < 9) != (j < 9) { -1.0 } else { 1.0 };
+            assert_eq!(r15[i][j], s * c15[i][j], "({i}, {j})");
+        }
+    }
+    // GTSAM index g ↔ ours PERM[g]; T rotates GTSAM's pos and vel rows/columns by ΔRᵀ.
+    const PERM: [usize; 15] = [0, 1, 2, 6, 7, 8, 3, 4, 5, 12, 13, 14, 9, 10, 11];
+    let t = |g: usize, k: usize| -> f64 {
+        if (3..9).contains(&g) {
+            if g / 3 == k / 3 {
+                dr[k % 3][g % 3]
+            } else {
+                0.0
+            }
+        } else if g == k {
+            1.0
+        } else {
+            0.0
+        }
+    };
+    for (ours, key) in [(&c15, "preint_meas_cov"), (&r15, "residual_covariance")] {
+        let theirs = m(&fx[key]);
+        let mut worst = 0.0f64;
+        for a in 0..15 {
+            for b in 0..15 {
+                let mut v = 0.0;
+                for k in 0..15 {
+                    for l in 0..15 {
+                        let (tk, tl) = (t(a, k), t(b, l));
+                        if tk != 0.0 && tl != 0.0 {
+                            v += tk * ours[PERM[k]][PERM[l]] * tl;
+                        }
+                    }
+                }
+                let s = (theirs[a][a] * theirs[b][b]).sqrt();
+                worst = worst.max((v - theirs[a][b]).abs() / s);
+            }
+        }
+        assert!(worst < 1e-12, "{key}: {worst:e}");
+    }
+    assert!(
+        out["covariance_notes"]["residual_covariance15"]
+            .as_str()
+            .unwrap()
+            .contains("CombinedImuFactor")
+    );
+}

@@ -373,7 +373,10 @@ fn residual9(
 
 /// Forster's IMU factor between `(NavState_i, NavState_j, bias_i)` (module docs for the
 /// residual [r_φ, r_v, r_p], perturbations and Jacobians). It reads only a
-/// [`PreintegratedImu`] and weights the residual with its 9×9 covariance `cov`.
+/// [`PreintegratedImu`] and weights the residual with its 9×9 covariance `cov` (the residual
+/// is `−[δφ, δv, δp]` to first order, whose covariance is `cov`). The bias is held constant
+/// over the window: on data whose bias drifts noticeably within a window, use
+/// [`CombinedImuFactor`], whose covariance includes the random walk.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImuFactor {
     pim: PreintegratedImu,
@@ -458,9 +461,12 @@ impl ImuFactor {
 
 /// The combined IMU factor between `(NavState_i, NavState_j, b_i, b_j)`: residual
 /// `[r_φ, r_v, r_p, b_g,j − b_g,i, b_a,j − b_a,i]` (15-dim; the first nine as in [`ImuFactor`],
-/// evaluated with `b_i`), weighted by the combined covariance `cov15`
-/// [δφ, δv, δp, δb_g, δb_a] which includes the bias random walk over the window and its
-/// correlation with the deltas (GTSAM `CombinedImuFactor` semantics).
+/// evaluated with `b_i`), weighted by the covariance of that residual,
+/// [`PreintegratedImu::residual_cov15`]: the bias random walk over the window and its
+/// correlation with the deltas, with the sign of the residual (the deltas' rows are
+/// true ⊖ measured, the bias rows `b_j − b_i`; `cov15` itself is the error state's
+/// covariance, measured ⊖ true, and has the opposite delta–bias blocks). GTSAM
+/// `CombinedImuFactor` semantics, as weighted by GTSAM 4.3's `residualCovariance()`.
 ///
 /// Jacobians: the first nine rows as in [`ImuFactor`]; the bias rows are `−I` w.r.t. `δb_i`
 /// and `+I` w.r.t. `δb_j` (additive bias perturbations, order [b_g, b_a]).
@@ -471,7 +477,8 @@ pub struct CombinedImuFactor {
 }
 
 impl CombinedImuFactor {
-    /// Builds the factor; computes the square-root information of `pim.cov15`.
+    /// Builds the factor; computes the square-root information of
+    /// [`pim.residual_cov15()`](PreintegratedImu::residual_cov15).
     ///
     /// Errors: [`FactorError::LevelTooLow`] unless `pim.level` is [`Level::Combined`]; else as
     /// [`ImuFactor::new`]; a zero bias random walk makes `cov15` singular
@@ -487,7 +494,7 @@ impl CombinedImuFactor {
         if !pim.cov15.iter().all(|x| x.is_finite()) {
             return Err(FactorError::NonFinite { field: "cov15" });
         }
-        let sqrt_info = sqrt_information(&pim.cov15)?;
+        let sqrt_info = sqrt_information(&pim.residual_cov15())?;
         Ok(Self { pim, sqrt_info })
     }
 
@@ -496,7 +503,9 @@ impl CombinedImuFactor {
         &self.pim
     }
 
-    /// Square-root information `U` of `cov15` (upper triangular, `cov15⁻¹ = UᵀU`).
+    /// Square-root information `U` of the residual covariance `Σ_r =`
+    /// [`residual_cov15`](PreintegratedImu::residual_cov15) (upper triangular, `Σ_r⁻¹ = UᵀU`),
+    /// order [r_φ, r_v, r_p, r_bg, r_ba].
     pub fn sqrt_information(&self) -> &SMatrix<f64, 15, 15> {
         &self.sqrt_info
     }
@@ -564,7 +573,8 @@ impl CombinedImuFactor {
         (self.sqrt_info * r, j.left_mul(&self.sqrt_info))
     }
 
-    /// `rᵀ cov15⁻¹ r` (χ² with 15 dof).
+    /// `rᵀ Σ_r⁻¹ r` with `Σ_r` = [`residual_cov15`](PreintegratedImu::residual_cov15) (χ² with
+    /// 15 dof).
     pub fn chi2(
         &self,
         state_i: &NavState,

@@ -12,7 +12,9 @@ pub mod navstate;
 pub mod noise;
 pub mod sample;
 
-pub use measurement::{BiasJacobians, Cov9, Cov15, EdgeNoise, EdgeSource, PreintegratedImu};
+pub use measurement::{
+    BiasJacobians, Cov9, Cov15, EdgeNoise, EdgeSource, PreintegratedImu, negate_delta_bias_blocks,
+};
 pub use noise::{CellRule, ImuNoise};
 pub use sample::{ImuBias, ImuSample, dt_seconds};
 

@@ -21,6 +21,19 @@ pub type Cov9 = SMatrix<f64, 9, 9>;
 /// 15×15 covariance, order [δφ, δv, δp, δb_g, δb_a].
 pub type Cov15 = SMatrix<f64, 15, 15>;
 
+/// `D M D` with `D = diag(−I₉, I₆)`: the 9×6 and 6×9 blocks of `m` negated, the 9×9 and 6×6
+/// blocks kept. Maps the covariance of `[δ, δb]` to that of `[−δ, δb]` and back.
+pub fn negate_delta_bias_blocks(m: &Cov15) -> Cov15 {
+    let mut out = *m;
+    for r in 0..9 {
+        for c in 9..15 {
+            out[(r, c)] = -m[(r, c)];
+            out[(c, r)] = -m[(c, r)];
+        }
+    }
+    out
+}
+
 /// The five bias Jacobians of the preintegrated deltas (Forster eq. 44), evaluated at
 /// `bias_hat`. Units: ∂ΔR/∂b_g [rad/(rad/s)] = \[s\], ∂Δv/∂b_g [m/s/(rad/s)], ∂Δv/∂b_a \[s\],
 /// ∂Δp/∂b_g [m/(rad/s)], ∂Δp/∂b_a \[s²\].
@@ -204,8 +217,15 @@ pub struct PreintegratedImu {
     pub delta_p: Vector3<f64>,
     /// Covariance of [δφ, δv, δp] (white measurement noise, plus integration noise if set).
     pub cov: Cov9,
-    /// Covariance of [δφ, δv, δp, δb_g, δb_a] including the bias random walk over the window
-    /// (`δb = b_j − b_i`), for a combined factor.
+    /// Covariance of the error state `[δφ, δv, δp, δb_g, δb_a]` including the bias random walk
+    /// over the window: `[δφ, δv, δp]` = measured ⊖ true deltas (the chart of this module, as
+    /// `cov`) and `δb = b_j − b_i` [rad/s, m/s²]. A gyro bias that drifts up makes the
+    /// measured rotation run ahead, so the delta–bias blocks are those of this error, **not**
+    /// of a factor residual (which is true ⊖ measured for the deltas): weight a residual with
+    /// [`residual_cov15`](Self::residual_cov15). This is what [`merge`](crate::merge()) composes, and equals
+    /// GTSAM 4.3's `PreintegratedCombinedMeasurements::preintMeasCov()` after reordering to
+    /// [rot, pos, vel, b_a, b_g] and rotating the pos and vel blocks by `ΔRᵀ` (GTSAM's
+    /// `NavState` chart; `preint/tests/combined_gtsam.rs`).
     pub cov15: Cov15,
     /// Bias Jacobians at `bias_hat`.
     pub jac: BiasJacobians,
@@ -232,6 +252,21 @@ impl PreintegratedImu {
         let v = self.delta_v - reference.delta_v;
         let p = self.delta_p - reference.delta_p;
         SVector::<f64, 9>::from_column_slice(&[r.x, r.y, r.z, v.x, v.y, v.z, p.x, p.y, p.z])
+    }
+
+    /// Covariance of the residual of [`CombinedImuFactor`](crate::CombinedImuFactor),
+    /// `r = [r_φ, r_v, r_p, b_g,j − b_g,i, b_a,j − b_a,i]`, at the true states.
+    ///
+    /// To first order `[r_φ, r_v, r_p] = −[δφ, δv, δp]` (the factor compares the true relative
+    /// motion with the measured one: `r_φ = Log(ΔRᵀ R_iᵀR_j) = Log(Exp(−δφ))`) while the bias
+    /// rows are `+δb`, so with `D = diag(−I₉, I₆)` this is `D·cov15·D`: `cov15` with its 9×6
+    /// and 6×9 delta–bias blocks negated. The 9×9 block is `cov15`'s (the sign of a whole
+    /// vector does not change its covariance), and `cov` is likewise the covariance of
+    /// [`ImuFactor`](crate::ImuFactor)'s residual. GTSAM 4.3's combined factor residual is
+    /// `[e, b_i − b_j]` with `e ≈ +δ` in its chart: its `residualCovariance()` is this matrix
+    /// after the reordering and rotation described at [`cov15`](Self::cov15).
+    pub fn residual_cov15(&self) -> Cov15 {
+        negate_delta_bias_blocks(&self.cov15)
     }
 
     /// Deltas corrected to first order for a new bias estimate `bias` (Forster eq. 44):

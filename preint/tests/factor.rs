@@ -501,9 +501,18 @@ fn combined_factor_bias_rows_and_whitening() {
         .amax()
             < 1e-15
     );
+    // The factor weights its residual [−δ, b_j − b_i] with D cov15 D, D = diag(−I₉, I₆)
+    // (`PreintegratedImu::residual_cov15`), not with the error state's cov15.
+    let d = Cov15::from_diagonal(&SVector::<f64, 15>::from_fn(
+        |i, _| {
+            if i < 9 { -1.0 } else { 1.0 }
+        },
+    ));
+    let sigma_r = d * pim.cov15 * d;
+    assert_eq!(pim.residual_cov15(), sigma_r);
     let u = f.sqrt_information();
-    assert!((u.transpose() * u * pim.cov15 - Cov15::identity()).amax() < 1e-9);
-    let chi2_ref = r.dot(&pim.cov15.lu().solve(&r).unwrap());
+    assert!((u.transpose() * u * sigma_r - Cov15::identity()).amax() < 1e-9);
+    let chi2_ref = r.dot(&sigma_r.lu().solve(&r).unwrap());
     assert!((f.chi2(&xi, &xj, &bi, &bj) - chi2_ref).abs() < 1e-9 * chi2_ref);
     let (rw, jw) = f.evaluate_whitened(&xi, &xj, &bi, &bj);
     let (_, j) = f.evaluate(&xi, &xj, &bi, &bj);

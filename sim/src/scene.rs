@@ -9,6 +9,7 @@ use crate::scenes::{
 };
 use lie::SO3;
 use nalgebra::Vector3;
+use preint::ImuSample;
 
 /// The exact kinematic state of the body at one instant (SI units).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -26,6 +27,19 @@ pub struct SceneState {
     pub omega_b: Vector3<f64>,
     /// Its time derivative `ω̇_b` [rad/s²], body frame.
     pub omega_dot_b: Vector3<f64>,
+}
+
+impl SceneState {
+    /// What an ideal IMU (no bias, noise or scale error) reads in this state at `t_ns`: gyro
+    /// `ω_b` [rad/s], accelerometer the specific force `R_wbᵀ(a − g)` [m/s²] for the world
+    /// gravity `gravity` (e.g. `(0, 0, −9.81)`), both in the body frame.
+    pub fn ideal_sample(&self, t_ns: i64, gravity: &Vector3<f64>) -> ImuSample {
+        ImuSample::new(
+            t_ns,
+            self.omega_b,
+            self.r_wb.inverse().act(&(self.a - gravity)),
+        )
+    }
 }
 
 /// A trajectory with analytic derivatives, defined for every `t_s` (seconds from the scene

@@ -95,6 +95,26 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         "covariance": rows(&m.cov),
         "covariance15_order": "[dphi, dv, dp, db_g, db_a]",
         "covariance15": rows(&m.cov15),
+        "residual_covariance15_order": "[r_phi, r_v, r_p, r_bg, r_ba]",
+        "residual_covariance15": rows(&m.residual_cov15()),
+        "covariance_notes": {
+            "covariance": "covariance of the error [dphi, dv, dp] = measured minus true deltas \
+                (dphi: DR_measured = DR_true Exp(dphi)); white measurement noise. It is also the \
+                covariance of ImuFactor's residual [r_phi, r_v, r_p] (= -[dphi, dv, dp]).",
+            "covariance15": "covariance of the error state [dphi, dv, dp, db_g, db_a], db = b_j - b_i, \
+                with the bias random walk over the window; what merging windows composes. A gyro \
+                bias that drifts up makes the measured rotation run ahead: the delta-bias blocks \
+                are those of measured minus true.",
+            "residual_covariance15": "covariance of CombinedImuFactor's residual [r_phi, r_v, r_p, \
+                b_g,j - b_g,i, b_a,j - b_a,i] at the true states (the deltas' rows are true minus \
+                measured): covariance15 with its 9x6 and 6x9 delta-bias blocks negated. Weight a \
+                combined residual with this one.",
+            "gtsam": "GTSAM 4.3 orders [rot, pos, vel, b_a, b_g] and expresses pos and vel errors \
+                rotated by delta_R^T: with P the reordering and T = diag(I, delta_R^T, delta_R^T, I, I), \
+                PreintegratedCombinedMeasurements::preintMeasCov() = T P covariance15 P^T T^T and \
+                residualCovariance() = T P residual_covariance15 P^T T^T (tested to 1e-12 on \
+                PreintegratedCombinedMeasurementsManifold, the euler scheme).",
+        },
         "bias_hat": {"gyro": list(&bias.gyro), "acc": list(&bias.acc)},
         "gravity": list(&m.gravity),
         "noise": {

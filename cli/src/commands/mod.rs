@@ -36,6 +36,7 @@ pub fn run(cli: &Cli) -> Result<Output, CliError> {
         Command::BenchSteps { .. } => bench_steps::run(&cli.command),
         Command::Simulate { .. } => simulate::run(&cli.command),
         Command::Calibrate { .. } => calibrate::run(&cli.command),
+        Command::Factor { .. } => factor::run(&cli.command),
         Command::Report { .. } => report::run(&cli.command),
     }
 }
@@ -44,6 +45,7 @@ pub mod advise;
 pub mod allan;
 pub mod bench_steps;
 pub mod calibrate;
+pub mod factor;
 pub mod integrate;
 pub mod report;
 pub mod simulate;
