@@ -2,8 +2,8 @@
 //! Run: `cargo bench -p lie --bench lie`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use lie::{SE3, SO3, jr, jr_inv};
 use nalgebra::{Vector3, Vector6};
+use preint_lie::{SE3, SO3, jr, jr_inv};
 use sophus_lie::{Isometry3F64, Rotation3F64};
 use std::hint::black_box;
 

@@ -1,8 +1,8 @@
 //! Shared test helpers (included by `mod common;`).
 #![allow(dead_code)]
 
-use lie::Manifold;
 use nalgebra::DMatrix;
+use preint_lie::Manifold;
 
 /// Central-difference Jacobian on manifolds: column k = (f(x⊕h e_k) ⊖ f(x⊕−h e_k)) / 2h, both
 /// local coordinates taken at f(x).

@@ -5,8 +5,8 @@
 
 mod common;
 use common::*;
-use lie::{Manifold, SE3, SO3};
 use nalgebra::{DVector, SVector, Vector3, Vector6};
+use preint_lie::{Manifold, SE3, SO3};
 use std::f64::consts::PI;
 
 /// `(dist(x ⊕ (y ⊖ x), y), max |(x ⊕ δ) ⊖ x − δ| / scale)`.

@@ -4,9 +4,9 @@
 
 mod common;
 use common::*;
-use lie::se3::{self, hat6, q_coeffs, vee6};
-use lie::{SE3, SO3};
 use nalgebra::{Matrix4, Matrix6, Vector3, Vector6};
+use preint_lie::se3::{self, hat6, q_coeffs, vee6};
+use preint_lie::{SE3, SO3};
 use proptest::prelude::*;
 use std::f64::consts::PI;
 

@@ -5,9 +5,9 @@
 
 mod common;
 use common::*;
-use lie::so3::{RodriguesCoeffs, d_coeff, exp_coeffs, exp_quat_coeffs, jac_coeffs};
-use lie::{SO3, hat, jl, jl_inv, jr, jr_inv, vee};
 use nalgebra::{Matrix3, Quaternion, Rotation3, Unit, UnitQuaternion, Vector3};
+use preint_lie::so3::{RodriguesCoeffs, d_coeff, exp_coeffs, exp_quat_coeffs, jac_coeffs};
+use preint_lie::{SO3, hat, jl, jl_inv, jr, jr_inv, vee};
 use proptest::prelude::*;
 use std::f64::consts::PI;
 

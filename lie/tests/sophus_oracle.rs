@@ -3,8 +3,8 @@
 
 mod common;
 use common::*;
-use lie::{SE3, SO3, jl, jl_inv};
 use nalgebra::{Vector3, Vector6};
+use preint_lie::{SE3, SO3, jl, jl_inv};
 use sophus_lie::{Isometry3F64, Rotation3F64};
 
 fn angles() -> Vec<Vector3<f64>> {
@@ -57,7 +57,7 @@ fn se3_exp_log_agree_with_sophus() {
         if phi.norm() > 0.0 && phi.norm() <= 1e-3 {
             // sophus-rs truncates V = Jl(θ) to I + ½θ̂ below θ = 1e-3 (error θ²|ρ|/6). Ours
             // matches the matrix-exponential series; theirs is off by about that amount.
-            let series = taylor_exp(&lie::se3::hat6(&x));
+            let series = taylor_exp(&preint_lie::se3::hat6(&x));
             assert!((ours.matrix() - series).amax() < 1e-15);
             let off = (theirs.matrix() - series).amax();
             assert!(

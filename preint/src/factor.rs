@@ -65,8 +65,8 @@ use crate::measurement::PreintegratedImu;
 use crate::navstate::{NavState, predict};
 use crate::params::Level;
 use crate::sample::ImuBias;
-use lie::{SO3, hat};
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector};
+use preint_lie::{SO3, hat};
 use thiserror::Error;
 
 /// Why a factor could not be built.

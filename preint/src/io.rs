@@ -13,8 +13,8 @@
 
 use crate::noise::ImuNoise;
 use crate::sample::{ImuBias, ImuSample};
-use lie::SO3;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use preint_lie::SO3;
 use std::fmt::Write as _;
 use std::path::Path;
 

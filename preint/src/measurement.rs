@@ -13,8 +13,8 @@
 use crate::noise::{CellRule, white_scale};
 use crate::params::Level;
 use crate::sample::ImuBias;
-use lie::SO3;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
+use preint_lie::SO3;
 
 /// 9×9 covariance of the preintegration error, order [δφ, δv, δp].
 pub type Cov9 = SMatrix<f64, 9, 9>;

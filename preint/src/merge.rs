@@ -69,8 +69,8 @@
 
 use crate::measurement::{BiasJacobians, Cov9, Cov15, EdgeNoise, EdgeSource, PreintegratedImu};
 use crate::params::Level;
-use lie::hat;
 use nalgebra::{Matrix3, SMatrix};
+use preint_lie::hat;
 use thiserror::Error;
 
 /// Why two preintegrations cannot be merged.

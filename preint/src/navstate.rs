@@ -5,7 +5,7 @@
 //! [`PreintegratedImu`], default `(0, 0, −9.81)` m/s²).
 //!
 //! **Tangent space and perturbation** (used by [`NavState::retract`], [`NavState::local`], the
-//! [`lie::Manifold`] impl and every Jacobian of [`crate::factor`]): a 9-vector in the order
+//! [`preint_lie::Manifold`] impl and every Jacobian of [`crate::factor`]): a 9-vector in the order
 //! **[δφ, δp, δv]** (rad, m, m/s) with
 //!
 //! ```text
@@ -22,8 +22,8 @@
 
 use crate::measurement::PreintegratedImu;
 use crate::sample::ImuBias;
-use lie::SO3;
 use nalgebra::{SVector, Vector3};
+use preint_lie::SO3;
 
 /// A 9-vector in the [`NavState`] tangent order [δφ, δp, δv] (rad, m, m/s).
 pub type NavTangent = SVector<f64, 9>;
@@ -93,7 +93,7 @@ impl NavState {
     }
 }
 
-impl lie::Manifold for NavState {
+impl preint_lie::Manifold for NavState {
     fn dim(&self) -> usize {
         9
     }

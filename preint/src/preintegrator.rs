@@ -20,7 +20,7 @@ use crate::sample::{ImuBias, ImuSample};
 use crate::scheme::hermite::deltas::{Carry, LaneWeights, Record, State};
 use crate::scheme::{Deltas, Node, euler, hermite, midpoint, span_s};
 use crate::simd::F2;
-use lie::SO3;
+use preint_lie::SO3;
 
 const RING: usize = 8;
 /// ΔR is re-orthonormalised (`R ← ½R(3I − RᵀR)`) every this many intervals.

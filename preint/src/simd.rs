@@ -23,7 +23,7 @@ pub(crate) trait Lane:
 {
     /// `x` in every lane.
     fn splat(x: f64) -> Self;
-    /// [`lie::so3::exp_quat_coeffs`] in every lane.
+    /// [`preint_lie::so3::exp_quat_coeffs`] in every lane.
     fn exp_quat_coeffs(theta2: Self) -> (Self, Self);
 }
 
@@ -35,11 +35,11 @@ impl Lane for f64 {
 
     #[inline(always)]
     fn exp_quat_coeffs(theta2: Self) -> (Self, Self) {
-        lie::so3::exp_quat_coeffs(theta2)
+        preint_lie::so3::exp_quat_coeffs(theta2)
     }
 }
 
-/// `c₀ + (c₁x + x²((c₂ + c₃x) + c₄x²))` in every lane: [`lie::so3::EXP_QUAT_SERIES`]'s order.
+/// `c₀ + (c₁x + x²((c₂ + c₃x) + c₄x²))` in every lane: [`preint_lie::so3::EXP_QUAT_SERIES`]'s order.
 #[inline(always)]
 fn estrin5<T: Lane>(x: T, c: &[f64; 5]) -> T {
     let k = |i: usize| T::splat(c[i]);
@@ -213,11 +213,11 @@ impl Lane for F2 {
     }
 
     /// Both lanes' series at once when both angles are below the series' range end (every
-    /// per-sample angle), in the order [`lie::so3::EXP_QUAT_SERIES`] prescribes; otherwise
+    /// per-sample angle), in the order [`preint_lie::so3::EXP_QUAT_SERIES`] prescribes; otherwise
     /// lane by lane.
     #[inline(always)]
     fn exp_quat_coeffs(theta2: Self) -> (Self, Self) {
-        use lie::so3::{EXP_QUAT_SERIES, EXP_QUAT_SERIES_BELOW};
+        use preint_lie::so3::{EXP_QUAT_SERIES, EXP_QUAT_SERIES_BELOW};
         let (lo, hi) = (theta2.lo(), theta2.hi());
         if lo < EXP_QUAT_SERIES_BELOW && hi < EXP_QUAT_SERIES_BELOW {
             (
@@ -225,8 +225,8 @@ impl Lane for F2 {
                 estrin5(theta2, &EXP_QUAT_SERIES[1]),
             )
         } else {
-            let (c0, s0) = lie::so3::exp_quat_coeffs(lo);
-            let (c1, s1) = lie::so3::exp_quat_coeffs(hi);
+            let (c0, s0) = preint_lie::so3::exp_quat_coeffs(lo);
+            let (c1, s1) = preint_lie::so3::exp_quat_coeffs(hi);
             (Self::new(c0, c1), Self::new(s0, s1))
         }
     }
@@ -261,8 +261,8 @@ mod tests {
         for &t0 in &thetas {
             for &t1 in &thetas {
                 let (c, s) = F2::exp_quat_coeffs(F2::new(t0 * t0, t1 * t1));
-                let (c0, s0) = lie::so3::exp_quat_coeffs(t0 * t0);
-                let (c1, s1) = lie::so3::exp_quat_coeffs(t1 * t1);
+                let (c0, s0) = preint_lie::so3::exp_quat_coeffs(t0 * t0);
+                let (c1, s1) = preint_lie::so3::exp_quat_coeffs(t1 * t1);
                 let bits = |x: f64| x.to_bits();
                 assert_eq!(
                     [c.lo(), c.hi(), s.lo(), s.hi()].map(bits),
@@ -398,7 +398,7 @@ pub(crate) mod quad {
         /// otherwise lane by lane (as [`super::F2`]).
         #[inline(always)]
         fn exp_quat_coeffs(theta2: Self) -> (Self, Self) {
-            use lie::so3::{EXP_QUAT_SERIES, EXP_QUAT_SERIES_BELOW};
+            use preint_lie::so3::{EXP_QUAT_SERIES, EXP_QUAT_SERIES_BELOW};
             let l = theta2.lanes();
             if l.iter().all(|&t| t < EXP_QUAT_SERIES_BELOW) {
                 (
@@ -406,7 +406,7 @@ pub(crate) mod quad {
                     estrin5(theta2, &EXP_QUAT_SERIES[1]),
                 )
             } else {
-                let [c0, c1, c2, c3] = l.map(lie::so3::exp_quat_coeffs);
+                let [c0, c1, c2, c3] = l.map(preint_lie::so3::exp_quat_coeffs);
                 (
                     Self::new([c0.0, c1.0, c2.0, c3.0]),
                     Self::new([c0.1, c1.1, c2.1, c3.1]),

@@ -20,13 +20,13 @@
 //! Each of the three is asserted; the χ² test also checks that weighting with `cov15` itself
 //! would miss GTSAM's χ² (so the test tells the two signs apart).
 
-use lie::SO3;
 use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
 use preint::io::read_euroc_imu;
 use preint::{
     CombinedImuFactor, ImuBias, ImuNoise, Level, NavState, PreintParams, PreintegratedImu, Scheme,
     factor::sqrt_information, preintegrate,
 };
+use preint_lie::SO3;
 use serde_json::Value;
 use std::path::PathBuf;
 

@@ -1,13 +1,13 @@
 //! ImuFactor / CombinedImuFactor / NavState / predict: hand-computed values, every Jacobian block
 //! against central differences on the manifold, whitening, typed errors.
 
-use lie::{Manifold, SO3};
 use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, SVector, Vector3};
 use preint::factor::{FactorJacobians, sqrt_information};
 use preint::{
     BiasJacobians, CombinedImuFactor, Cov9, Cov15, EdgeNoise, FactorError, ImuBias, ImuFactor,
     Level, NavState, PreintegratedImu, predict,
 };
+use preint_lie::{Manifold, SO3};
 
 /// xorshift64* — deterministic, no dev-dependency.
 struct Rng(u64);

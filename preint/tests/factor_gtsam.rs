@@ -19,12 +19,12 @@
 //! `/work/.venv-oracle/bin/python /work/shared/oracle/gtsam_preint.py X.csv factor_X.params.json --out factor_X.gtsam.json`
 //! from `tests/fixtures/gtsam/` (see `factor_README.md` there).
 
-use lie::{SO3, hat, jl_inv};
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
 use preint::{
     BiasJacobians, Cov9, Cov15, EdgeNoise, ImuBias, ImuFactor, Level, NavState, PreintegratedImu,
     predict,
 };
+use preint_lie::{SO3, hat, jl_inv};
 use std::path::PathBuf;
 
 // ------------------------------------------------------------------ minimal JSON reader

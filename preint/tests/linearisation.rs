@@ -20,13 +20,13 @@
 //! model is far off: the previous boundary model by ≥ 7e-3 (midpoint, rk4, last test), a
 //! merge without the shared samples by ≥ 1e-3.
 
-use lie::SO3;
 use nalgebra::{Matrix3, SMatrix, Vector3};
 use preint::window::window_samples;
 use preint::{
     ImuBias, ImuSample, Level, PreintParams, PreintegratedImu, Preintegrator, Scheme, merge,
     preintegrate,
 };
+use preint_lie::SO3;
 
 type V3 = Vector3<f64>;
 type M9 = SMatrix<f64, 9, 9>;

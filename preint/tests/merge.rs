@@ -5,12 +5,12 @@
 //! covariance; without it midpoint and rk4 are off by ≈ 3e-3–5e-3). Levels are respected.
 //! `tests/linearisation.rs` checks merges between samples against numeric differentiation.
 
-use lie::{SO3, hat, jr};
 use nalgebra::{Matrix3, SMatrix, Vector3};
 use preint::{
     BiasJacobians, Cov9, Cov15, EdgeNoise, ImuBias, ImuNoise, ImuSample, Level, MergeError,
     PreintParams, PreintegratedImu, Scheme, merge, preintegrate,
 };
+use preint_lie::{SO3, hat, jr};
 
 struct Rng(u64);
 impl Rng {

@@ -4,9 +4,9 @@
 mod common;
 
 use common::*;
-use lie::SO3;
 use nalgebra::{Cholesky, DMatrix, DVector, Matrix3, SMatrix};
 use preint::{ImuBias, ImuSample, Level, PreintParams, PreintegratedImu, Preintegrator, Scheme};
+use preint_lie::SO3;
 
 const SCHEMES: [Scheme; 3] = [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4];
 

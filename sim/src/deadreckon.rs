@@ -16,7 +16,7 @@
 //! **Attitude update `R ⊞ θ` (θ = body rotation vector over the step)**
 //! - [`Attitude::Quaternion`]: the notes' first-order `q ← q ⊗ [1, ½θ]`, then `q ← q/‖q‖`
 //!   (rotation angle `2 atan(‖θ‖/2) = ‖θ‖ − ‖θ‖³/12 + …`: local error O(Δt³)).
-//! - [`Attitude::Matrix`]: exact `R ← R·Exp(θ)` (Rodrigues, [`lie::SO3::exp`]).
+//! - [`Attitude::Matrix`]: exact `R ← R·Exp(θ)` (Rodrigues, [`preint_lie::SO3::exp`]).
 //! - [`Attitude::EulerZyx`]: ZYX angles Θ = (roll φ, pitch θ, yaw ψ), `R = Rz(ψ)Ry(θ)Rx(φ)`,
 //!   `Θ̇ = E(φ, θ) ω_b` ([`crate::scene::body_rate_to_euler_rate`], singular at θ = ±90°).
 //!   Euler rule: `Θ ← Θ + E(Θ) ω_k Δt`; midpoint rule (explicit midpoint, second order):
@@ -32,9 +32,9 @@
 //! difference on the same θ), measured 4.00× smaller per rate doubling.
 
 use crate::scene::{body_rate_to_euler_rate, rot_zyx};
-use lie::SO3;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 use preint::{ImuBias, ImuSample, NavState};
+use preint_lie::SO3;
 
 /// Time-discretisation rule (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -1,8 +1,8 @@
 //! Exact preintegrated measurements from a scene (ground truth for preintegrators).
 
 use crate::scene::{Scene, t_s};
-use lie::SO3;
 use nalgebra::Vector3;
+use preint_lie::SO3;
 
 /// The exact preintegrated deltas between `t_i_ns` and `t_j_ns` (Forster 2017, eq. 33, with
 /// the true, bias-free motion), `Δt = (t_j − t_i)·1e-9` s:

@@ -7,9 +7,9 @@
 use crate::scenes::{
     EulerScene, GimbalLockScene, MultiPoseStaticScene, SeedEllipseScene, SpinScene, StaticScene,
 };
-use lie::SO3;
 use nalgebra::Vector3;
 use preint::ImuSample;
+use preint_lie::SO3;
 
 /// The exact kinematic state of the body at one instant (SI units).
 #[derive(Clone, Copy, Debug, PartialEq)]

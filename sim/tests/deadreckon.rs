@@ -5,7 +5,7 @@
 
 use nalgebra::Vector3;
 use preint::{ImuBias, NavState};
-use sim::{
+use preint_sim::{
     Attitude, Rule, Scene, SceneState, SimConfig, dead_reckon, euler_zyx_angles, euler_zyx_of,
     rotation_error, simulate, t_s,
 };
@@ -28,7 +28,7 @@ fn final_errors(scene: &dyn Scene, rate: f64, dur: f64, rule: Rule, att: Attitud
 }
 
 fn ratios(rule: Rule, att: Attitude) -> Vec<(f64, f64)> {
-    let scene = sim::SeedEllipseScene;
+    let scene = preint_sim::SeedEllipseScene;
     let e: Vec<_> = [100.0, 200.0, 400.0]
         .iter()
         .map(|&r| final_errors(&scene, r, 4.0, rule, att))
@@ -88,7 +88,7 @@ fn max_rot_error(scene: &dyn Scene, rate: f64, dur: f64, rule: Rule, att: Attitu
 /// Max over the run of `|quaternion ⊖ matrix|` [rad] and the matrix run's max rotation error
 /// against the truth, on `seed-ellipse` (4 s) at `rate` with `rule`.
 fn quat_vs_matrix(rate: f64, rule: Rule) -> (f64, f64) {
-    let scene = sim::SeedEllipseScene;
+    let scene = preint_sim::SeedEllipseScene;
     let out = simulate(&scene, rate, 4.0, &SimConfig::noise_free(), 0).unwrap();
     let s0 = scene.state(0.0);
     let init = NavState::new(s0.r_wb, s0.p, s0.v);
@@ -147,7 +147,7 @@ fn quaternion_and_matrix_agree_to_second_order_under_both_rules() {
 fn euler_angles_match_away_from_gimbal_lock() {
     // seed-ellipse keeps |pitch| ≤ 0.2 rad: the Euler-angle integrator is as accurate as the
     // matrix one (same order, comparable constant).
-    let scene = sim::SeedEllipseScene;
+    let scene = preint_sim::SeedEllipseScene;
     for rule in [Rule::Euler, Rule::Midpoint] {
         let e_zyx = max_rot_error(&scene, 200.0, 6.0, rule, Attitude::EulerZyx);
         let e_mat = max_rot_error(&scene, 200.0, 6.0, rule, Attitude::Matrix);
@@ -162,7 +162,7 @@ fn euler_angles_match_away_from_gimbal_lock() {
 #[test]
 fn euler_zyx_angles_are_the_states_dead_reckon_integrates() {
     // The raw-angle API used below must describe the same integration as dead_reckon.
-    let scene = sim::SeedEllipseScene;
+    let scene = preint_sim::SeedEllipseScene;
     let out = simulate(&scene, 200.0, 2.0, &SimConfig::noise_free(), 0).unwrap();
     let s0 = scene.state(0.0);
     let init = NavState::new(s0.r_wb, s0.p, s0.v);
@@ -175,7 +175,11 @@ fn euler_zyx_angles_are_the_states_dead_reckon_integrates() {
         let angles = euler_zyx_angles(&out.samples, &euler_zyx_of(&s0.r_wb), &bias.gyro, rule);
         assert_eq!(angles.len(), traj.len());
         for (e, x) in angles.iter().zip(&traj) {
-            assert_eq!(sim::scene::rot_zyx(e).matrix(), x.r.matrix(), "{rule:?}");
+            assert_eq!(
+                preint_sim::scene::rot_zyx(e).matrix(),
+                x.r.matrix(),
+                "{rule:?}"
+            );
         }
     }
     assert!(euler_zyx_angles(&[], &Vector3::zeros(), &Vector3::zeros(), Rule::Euler).is_empty());
@@ -197,7 +201,7 @@ impl Scene for Shifted {
         "gimbal-lock-shifted"
     }
     fn state(&self, t: f64) -> SceneState {
-        sim::GimbalLockScene.state(t + self.0)
+        preint_sim::GimbalLockScene.state(t + self.0)
     }
 }
 
@@ -356,7 +360,7 @@ fn euler_angles_started_at_gimbal_lock_fail_at_every_rate() {
     let scene = Shifted(2.0);
     let s0 = scene.state(0.0);
     let e0 = euler_zyx_of(&s0.r_wb);
-    let rate0 = (sim::scene::body_rate_to_euler_rate(&e0) * s0.omega_b).amax();
+    let rate0 = (preint_sim::scene::body_rate_to_euler_rate(&e0) * s0.omega_b).amax();
     println!(
         "start at the lock: pitch − π/2 = {:e}, |E(Θ₀)ω₀|∞ = {rate0:.3e} rad/s, |ω₀| = {:.3} rad/s",
         e0.y - std::f64::consts::FRAC_PI_2,

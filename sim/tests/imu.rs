@@ -3,7 +3,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 use preint::{ImuBias, ImuNoise};
-use sim::{
+use preint_sim::{
     Scene, SimConfig, SimError, StaticScene, scale_misalignment, scene_by_name, simulate, t_s,
 };
 
@@ -23,7 +23,7 @@ fn static_noise_free_reads_plus_g_rotated_into_the_body() {
         assert_eq!(s.gyro, Vector3::zeros());
     }
     // Level: exactly (0, 0, 9.81).
-    let level = StaticScene::new(lie::SO3::identity(), Vector3::zeros());
+    let level = StaticScene::new(preint_lie::SO3::identity(), Vector3::zeros());
     let out = simulate(&level, 100.0, 0.1, &SimConfig::noise_free(), 0).unwrap();
     assert_eq!(out.samples[3].acc, Vector3::new(0.0, 0.0, 9.81));
 }
@@ -117,7 +117,7 @@ fn noise_statistics_over_1e5_samples() {
 #[test]
 fn same_seed_gives_identical_samples_and_different_seeds_differ() {
     let cfg = SimConfig::with_noise(ImuNoise::euroc());
-    let scene = sim::SeedEllipseScene;
+    let scene = preint_sim::SeedEllipseScene;
     let a = simulate(&scene, 200.0, 2.0, &cfg, 123).unwrap();
     let b = simulate(&scene, 200.0, 2.0, &cfg, 123).unwrap();
     let c = simulate(&scene, 200.0, 2.0, &cfg, 124).unwrap();
@@ -172,7 +172,7 @@ fn generator_is_chacha12_keyed_with_the_little_endian_seed() {
     for seed in [0u64, 1, 0x0123_4567_89ab_cdef] {
         let mut key = [0u8; 32];
         key[..8].copy_from_slice(&seed.to_le_bytes());
-        let mut rng = sim::rng_from_seed(seed);
+        let mut rng = preint_sim::rng_from_seed(seed);
         for block in 0..2 {
             let want = chacha_block(&key, block, 12);
             let got: Vec<u32> = (0..16).map(|_| rng.next_u32()).collect();
@@ -215,7 +215,7 @@ fn scale_factor_and_misalignment_are_applied() {
     );
     cfg.gyro_scale = Matrix3::from_diagonal(&Vector3::new(1.01, 1.0, 0.99));
     cfg.initial_bias = ImuBias::new(Vector3::new(0.1, 0.2, 0.3), Vector3::new(-0.1, 0.0, 0.1));
-    let scene = sim::SeedEllipseScene;
+    let scene = preint_sim::SeedEllipseScene;
     let out = simulate(&scene, 50.0, 1.0, &cfg, 0).unwrap();
     let s = &out.samples[10];
     let st = scene.state(t_s(s.t_ns));

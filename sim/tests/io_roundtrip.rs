@@ -1,14 +1,14 @@
 //! Dataset writer: EuRoC imu / ground truth and Kalibr yaml round trips are lossless.
 
 use preint::ImuNoise;
-use sim::{SimConfig, simulate, write_dataset};
+use preint_sim::{SimConfig, simulate, write_dataset};
 
 #[test]
 fn euroc_and_kalibr_round_trip_is_bit_exact() {
     let noise = ImuNoise::euroc();
     let mut cfg = SimConfig::with_noise(noise);
     cfg.initial_bias.gyro.x = 1e-3;
-    let scene = sim::scene_by_name("aggressive").unwrap();
+    let scene = preint_sim::scene_by_name("aggressive").unwrap();
     let out = simulate(scene.as_ref(), 200.0, 3.0, &cfg, 9).unwrap();
     let dir = std::env::temp_dir().join(format!("sim-roundtrip-{}", std::process::id()));
     let files = write_dataset(&dir, &out, &noise).unwrap();
@@ -35,7 +35,7 @@ fn euroc_and_kalibr_round_trip_is_bit_exact() {
 
 #[test]
 fn ground_truth_quaternion_is_body_to_world_wxyz() {
-    let scene = sim::StaticScene::default();
+    let scene = preint_sim::StaticScene::default();
     let out = simulate(&scene, 10.0, 0.1, &SimConfig::noise_free(), 0).unwrap();
     let text = preint::io::euroc_groundtruth_string(&out.truth);
     let row: Vec<f64> = text

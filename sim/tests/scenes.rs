@@ -4,7 +4,7 @@
 
 use nalgebra::{Rotation3, Vector3};
 use preint::{ImuBias, NavState};
-use sim::{
+use preint_sim::{
     Attitude, Rule, SCENE_NAMES, Scene, SimConfig, dead_reckon, exact_deltas, scene_by_name,
     simulate,
 };
@@ -62,7 +62,7 @@ fn analytic_derivatives_match_finite_differences_for_every_scene() {
 
 #[test]
 fn seed_ellipse_matches_the_course_formulas() {
-    let scene = sim::SeedEllipseScene;
+    let scene = preint_sim::SeedEllipseScene;
     let k = std::f64::consts::PI / 10.0;
     for t in [0.0, 0.8, 3.3, 17.0] {
         let s = scene.state(t);
@@ -92,16 +92,16 @@ fn spin_scene_spins_at_10_rad_s_about_a_tilted_axis() {
 
 #[test]
 fn gimbal_lock_scene_reaches_pitch_90_degrees_exactly() {
-    let scene = sim::GimbalLockScene;
-    for t in sim::GimbalLockScene::LOCK_TIMES_S {
-        let pitch = sim::euler_zyx_of(&scene.state(t).r_wb).y;
+    let scene = preint_sim::GimbalLockScene;
+    for t in preint_sim::GimbalLockScene::LOCK_TIMES_S {
+        let pitch = preint_sim::euler_zyx_of(&scene.state(t).r_wb).y;
         assert!(
             (pitch.abs() - std::f64::consts::FRAC_PI_2).abs() < 1e-6,
             "t={t}: {pitch}"
         );
     }
     // …and is away from it in between.
-    let pitch = sim::euler_zyx_of(&scene.state(4.0).r_wb).y;
+    let pitch = preint_sim::euler_zyx_of(&scene.state(4.0).r_wb).y;
     assert!(pitch.abs() < 1.4, "{pitch}");
 }
 
@@ -130,7 +130,7 @@ fn aggressive_scene_has_its_documented_bandwidth_rates_and_pitch_bound() {
         for (peak, v) in a.iter_mut().zip(s.a.iter()) {
             *peak = peak.max(v.abs());
         }
-        pitch = pitch.max(sim::euler_zyx_of(&s.r_wb).y.abs());
+        pitch = pitch.max(preint_sim::euler_zyx_of(&s.r_wb).y.abs());
     }
     println!(
         "aggressive: peak |a| per axis {a:.3?} m/s², peak |ω_b| {w:.3} rad/s, max |pitch| {pitch:.4} rad"
@@ -156,7 +156,7 @@ fn aggressive_scene_has_its_documented_bandwidth_rates_and_pitch_bound() {
     for k in 0..n {
         let t = k as f64 * 0.01;
         let s = scene.state(t);
-        let e = sim::euler_zyx_of(&s.r_wb);
+        let e = preint_sim::euler_zyx_of(&s.r_wb);
         let wrap = |x: f64| {
             (x + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
         };
@@ -188,11 +188,11 @@ fn gimbal_lock_scene_flips_the_zyx_branch_with_bounded_euler_rates() {
     // 90° and turns back; R is smooth. The Euler rates Θ̇ = E(Θ)ω_b of the exact trajectory
     // stay bounded on both sides: at the lock ω_b = (0, π²/16, π/8) lies in the range of
     // W(φ, π/2) for exactly the roll the trajectory has there, tan φ = −2/π.
-    let scene = sim::GimbalLockScene;
+    let scene = preint_sim::GimbalLockScene;
     let (before, after) = (scene.state(2.0 - 1e-6), scene.state(2.0 + 1e-6));
     let (eb, ea) = (
-        sim::euler_zyx_of(&before.r_wb),
-        sim::euler_zyx_of(&after.r_wb),
+        preint_sim::euler_zyx_of(&before.r_wb),
+        preint_sim::euler_zyx_of(&after.r_wb),
     );
     let pi = std::f64::consts::PI;
     assert!(
@@ -213,8 +213,9 @@ fn gimbal_lock_scene_flips_the_zyx_branch_with_bounded_euler_rates() {
             continue;
         }
         let s = scene.state(t);
-        let e = sim::euler_zyx_of(&s.r_wb);
-        max_rate = max_rate.max((sim::scene::body_rate_to_euler_rate(&e) * s.omega_b).amax());
+        let e = preint_sim::euler_zyx_of(&s.r_wb);
+        max_rate =
+            max_rate.max((preint_sim::scene::body_rate_to_euler_rate(&e) * s.omega_b).amax());
     }
     println!("gimbal-lock: max exact Euler rate on [0, 3] s {max_rate:.3} rad/s");
     assert!(max_rate < 0.85, "{max_rate}");
@@ -222,7 +223,7 @@ fn gimbal_lock_scene_flips_the_zyx_branch_with_bounded_euler_rates() {
 
 #[test]
 fn multi_pose_static_covers_plus_and_minus_g_on_each_axis() {
-    let scene = sim::MultiPoseStaticScene::default();
+    let scene = preint_sim::MultiPoseStaticScene::default();
     let mut seen = [[false; 2]; 3];
     for (t0, t1) in scene.static_intervals() {
         for t in [t0 + 0.1, 0.5 * (t0 + t1), t1 - 0.1] {
@@ -254,7 +255,7 @@ fn multi_pose_static_covers_plus_and_minus_g_on_each_axis() {
 #[test]
 fn exact_deltas_of_a_static_body_are_the_accelerometer_reading_integrated() {
     // At rest the specific force is f = R_wbᵀ(−g), so Δv = f Δt and Δp = ½ f Δt², ΔR = I.
-    let scene = sim::StaticScene::default();
+    let scene = preint_sim::StaticScene::default();
     let (dr, dv, dp) = exact_deltas(&scene, 1_000_000_000, 3_500_000_000, G);
     let f = scene.r_wb.inverse() * (-G);
     assert!(dr.log().norm() < 1e-15);

@@ -15,7 +15,7 @@
 //! - `PREINT_FULL=1` runs the heavy Monte Carlo / long-stream cases at full size (see each test).
 //! - `EVIDENCE_OUT=DIR` writes the JSON records to `DIR` instead of `<workspace>/target/evidence`.
 
-use lie::SO3;
+use preint_lie::SO3;
 use std::path::PathBuf;
 
 /// `<workspace>/tests/data` (real recordings, see its README).

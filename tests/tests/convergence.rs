@@ -5,7 +5,7 @@
 //! 25·2^k Hz up to 3200 Hz. Samples are the ideal IMU readings computed here from the scene's
 //! analytic state (`ω_m = ω_b`, `a_m = R_wbᵀ(a − g)`, g = (0, 0, −9.81)) on a grid that extends
 //! 3 samples beyond each end of the window; `preint::preintegrate` cuts the window. Errors
-//! against `sim::exact_deltas` (which uses only the scene's states at 1 s and 2 s): rotation
+//! against `preint_sim::exact_deltas` (which uses only the scene's states at 1 s and 2 s): rotation
 //! `|Log(ΔR*ᵀΔR)|` [rad], `|Δv − Δv*|` [m/s], `|Δp − Δp*|` [m]. Nothing asserted here is
 //! computed by the code under test.
 //!
@@ -24,7 +24,7 @@
 //! artefact. The widths of the intervals (±0.1, ±0.15) absorb the sub-leading terms that
 //! remain at 100 Hz; a scheme of the wrong order misses them by ≥ 0.8.
 //!
-//! A second test checks that these ideal readings equal `sim::simulate`'s noise-free output
+//! A second test checks that these ideal readings equal `preint_sim::simulate`'s noise-free output
 //! (≤ 1e-12), so the numbers also describe simulated datasets.
 //!
 //! Output: a table of the errors at 200 Hz on stdout (`--nocapture`) and in
@@ -33,7 +33,7 @@
 use evidence::{loglog_slope, rot_angle, write_json};
 use nalgebra::Vector3;
 use preint::{ImuBias, ImuSample, Level, PreintParams, Scheme, preintegrate};
-use sim::{Scene, exact_deltas, scene_by_name, t_s};
+use preint_sim::{Scene, exact_deltas, scene_by_name, t_s};
 
 const T_I: i64 = 1_000_000_000;
 const T_J: i64 = 2_000_000_000;
@@ -149,14 +149,20 @@ fn convergence_orders_and_accuracy_at_200_hz() {
 }
 
 /// The ideal readings used above (computed here from the scene's analytic state) are the same
-/// as `sim::simulate`'s noise-free output, so these results hold for simulated datasets too.
+/// as `preint_sim::simulate`'s noise-free output, so these results hold for simulated datasets too.
 #[test]
 fn ideal_readings_match_the_simulator() {
     let g = Vector3::new(0.0, 0.0, -9.81);
     for name in ["seed-ellipse", "aggressive"] {
         let scene = scene_by_name(name).unwrap();
-        let out = sim::simulate(scene.as_ref(), 200.0, 2.0, &sim::SimConfig::noise_free(), 1)
-            .expect("simulate");
+        let out = preint_sim::simulate(
+            scene.as_ref(),
+            200.0,
+            2.0,
+            &preint_sim::SimConfig::noise_free(),
+            1,
+        )
+        .expect("simulate");
         assert_eq!(out.samples.len(), 401);
         for s in &out.samples {
             let mine = ideal(scene.as_ref(), s.t_ns, &g);

@@ -49,7 +49,7 @@ use preint::{
     CombinedImuFactor, ImuBias, ImuFactor, ImuNoise, ImuSample, Level, NavState, PreintParams,
     PreintegratedImu, Preintegrator, Scheme, merge, preintegrate,
 };
-use sim::{Scene, scene_by_name, t_s};
+use preint_sim::{Scene, scene_by_name, t_s};
 
 const T_I: i64 = 1_000_000_000;
 const PERIOD: i64 = 5_000_000;

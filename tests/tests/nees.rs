@@ -35,7 +35,7 @@ use nalgebra::{SMatrix, SVector, Vector3};
 use preint::{
     ImuBias, ImuNoise, ImuSample, Level, PreintParams, PreintegratedImu, Preintegrator, Scheme,
 };
-use sim::{Scene, scene_by_name, t_s};
+use preint_sim::{Scene, scene_by_name, t_s};
 
 const T_I: i64 = 1_000_000_000;
 const PERIOD: i64 = 5_000_000;

@@ -108,7 +108,7 @@ fn integrated_yaw_follows_gps_heading() {
         let params = PreintParams::default()
             .with_scheme(scheme)
             .with_level(Level::Deltas);
-        let mut r = lie::SO3::from_matrix(&r0);
+        let mut r = preint_lie::SO3::from_matrix(&r0);
         let mut yaw = vec![r.matrix()[(1, 0)].atan2(r.matrix()[(0, 0)])];
         for w in gps.windows(2) {
             let pim = preintegrate(&params, &ImuBias::zero(), &imu, w[0].0, w[1].0)

@@ -1,7 +1,7 @@
 //! Stability: where each method stops working, and where ours does not.
 //!
 //! 1. `gimbal_lock_breaks_euler_angles_only` — scene `gimbal-lock` (pitch sweeps through ±90° at
-//!    t ≈ 1.95 s and 4.34 s), ideal samples at 200 Hz over 6 s, `sim::dead_reckon` with the
+//!    t ≈ 1.95 s and 4.34 s), ideal samples at 200 Hz over 6 s, `preint_sim::dead_reckon` with the
 //!    midpoint rule and three attitude representations, plus our SO(3) preintegration chained
 //!    over 0.5 s windows. Asserted: ZYX-Euler-angle integration ends ≥ 1e-2 rad off the scene's
 //!    attitude (or non-finite) *and* ≥ 100× the quaternion/matrix error (measured: 1.9e-2 rad,
@@ -22,7 +22,7 @@
 //!    by one constant in frame i, which cancels in the end corrections `h²/12 (u̇_k − u̇_k+1)`
 //!    (the window path gives the edge nodes centred stencils too). The previous rk4
 //!    (Gauss–Legendre Magnus with Simpson's rule on cubics) was off by 0.076 m/s here. All
-//!    errors vs `sim::exact_deltas` go to `target/evidence/fast_spin_10hz.json`.
+//!    errors vs `preint_sim::exact_deltas` go to `target/evidence/fast_spin_10hz.json`.
 //! 3. `ten_million_samples_one_window` — constant ω = (0.3, −0.2, 0.5) rad/s and specific force,
 //!    1 kHz, 10⁷ samples (2.8 h) in one window, `keep_samples = false`. Reference: the closed
 //!    forms `ΔR = Exp(ωT)`, `Δv = [T I + (1−cos θ)/|ω| n̂ + (T − sin θ/|ω|) n̂²] a`,
@@ -44,7 +44,7 @@
 //!    stays below 0.5σ for every ‖δb_g‖ (0.1σ just below its 0.01 rad/s threshold, 0 above) and
 //!    reports `reintegrated` exactly when ‖δb_g‖ > 0.01. Because "re-integration vs
 //!    re-integration" is partly self-referential, rk4 is also checked against the scene's
-//!    exact deltas (`sim::exact_deltas`; rk4's own discretisation error is ≈ 1e-3σ here):
+//!    exact deltas (`preint_sim::exact_deltas`; rk4's own discretisation error is ≈ 1e-3σ here):
 //!    automatic < 0.5σ at every ‖δb_g‖, first-order > 1σ at 0.1 rad/s.
 //!    Record: `target/evidence/bias_jump.json`.
 //! 5. `factor_log_exp_near_zero_and_pi` — an `ImuFactor` whose keyframes are ≈ π apart
@@ -58,15 +58,15 @@
 //!    offending input (non-finite value → `NonFinite`, t ≤ previous → `Duplicate`/`Decreasing`).
 
 use evidence::{loglog_slope, rot_angle, write_json};
-use lie::{SO3, hat};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use preint::io::{parse_euroc_groundtruth, parse_euroc_imu};
 use preint::{
     ImuBias, ImuFactor, ImuNoise, ImuSample, Level, NavState, PreintError, PreintParams,
     Preintegrator, Scheme, preintegrate,
 };
+use preint_lie::{SO3, hat};
+use preint_sim::{Attitude, Rule, Scene, dead_reckon, exact_deltas, scene_by_name, t_s};
 use proptest::prelude::*;
-use sim::{Attitude, Rule, Scene, dead_reckon, exact_deltas, scene_by_name, t_s};
 
 const SCHEMES: [Scheme; 3] = [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4];
 
@@ -90,7 +90,7 @@ fn max_dead_reckon_error(scene: &dyn Scene, samples: &[ImuSample], att: Attitude
     let errs: Vec<f64> = out
         .iter()
         .zip(samples)
-        .map(|(x, s)| sim::rotation_error(&x.r, &scene.state(t_s(s.t_ns)).r_wb))
+        .map(|(x, s)| preint_sim::rotation_error(&x.r, &scene.state(t_s(s.t_ns)).r_wb))
         .collect();
     let max = errs.iter().cloned().fold(
         0.0,

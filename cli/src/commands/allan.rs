@@ -6,8 +6,8 @@ use super::{CliError, Output};
 use crate::Command;
 use crate::charts::{Chart, Series, draw};
 use preint::io::{read_euroc_imu, write_kalibr_yaml};
+use preint_calib::allan::ImuAllan;
 use serde_json::json;
-use solver::allan::ImuAllan;
 use std::fmt::Write as _;
 use std::path::Path;
 

@@ -2,7 +2,7 @@
 //!
 //! For each rate, noise-free samples of the scene on the grid `t_k = k·round(1e9/rate)` ns are
 //! preintegrated over `[1 s, 1 s + window]` and compared with the scene's exact deltas
-//! (`sim::exact_deltas`): rotation error = angle of `ΔR*ᵀΔR` \[rad\], velocity and position errors
+//! (`preint_sim::exact_deltas`): rotation error = angle of `ΔR*ᵀΔR` \[rad\], velocity and position errors
 //! = norms [m/s, m]. Cost = measured ns/sample of the scheme (with covariance and bias Jacobians)
 //! × rate = ns per second of IMU data.
 
@@ -18,8 +18,12 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 /// Noise-free, bias-free reading of `scene` at `t_ns`: `ω_b` and `R_wbᵀ(a − g)`.
-pub fn ideal_sample(scene: &dyn sim::Scene, t_ns: i64, g: &Vector3<f64>) -> preint::ImuSample {
-    let s = scene.state(sim::t_s(t_ns));
+pub fn ideal_sample(
+    scene: &dyn preint_sim::Scene,
+    t_ns: i64,
+    g: &Vector3<f64>,
+) -> preint::ImuSample {
+    let s = scene.state(preint_sim::t_s(t_ns));
     preint::ImuSample::new(t_ns, s.omega_b, s.r_wb.inverse().act(&(s.a - g)))
 }
 
@@ -45,10 +49,10 @@ impl Row {
 
 /// Errors of every scheme at every rate on `scene_name` (noise-free), plus measured costs.
 pub fn measure(scene_name: &str, rates: &[f64], window_s: f64) -> Result<Vec<Row>, CliError> {
-    let scene = sim::scene_by_name(scene_name).ok_or_else(|| {
+    let scene = preint_sim::scene_by_name(scene_name).ok_or_else(|| {
         CliError::Usage(format!(
             "unknown scene `{scene_name}`; expected one of {}",
-            sim::SCENE_NAMES.join(", ")
+            preint_sim::SCENE_NAMES.join(", ")
         ))
     })?;
     if !(window_s.is_finite() && window_s > 0.0) {
@@ -59,7 +63,7 @@ pub fn measure(scene_name: &str, rates: &[f64], window_s: f64) -> Result<Vec<Row
     let g = Vector3::new(0.0, 0.0, -9.81);
     let t_i: i64 = 1_000_000_000;
     let t_j = t_i + (window_s * 1e9).round() as i64;
-    let (r_true, v_true, p_true) = sim::exact_deltas(scene.as_ref(), t_i, t_j, g);
+    let (r_true, v_true, p_true) = preint_sim::exact_deltas(scene.as_ref(), t_i, t_j, g);
     let schemes = [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4];
     let ns = best_ns_per_sample(&schemes, Level::Covariance, &synthetic_stream(50_000), 3)?;
     let cost: std::collections::HashMap<_, _> =

@@ -16,14 +16,14 @@ use crate::Command;
 use nalgebra::Vector3;
 use preint::io::{check_si_units, read_euroc_groundtruth, read_euroc_imu};
 use preint::{ImuSample, PreintParams, Scheme};
-use serde_json::{Value, json};
-use solver::bias::{
+use preint_calib::bias::{
     KnownPose, KnownPoseOptions, MultiPoseOptions, StaticOptions, StillOptions,
     calibrate_known_poses, calibrate_multi_pose, calibrate_static, detect_still_intervals,
 };
+use serde_json::{Value, json};
 
 /// A solver error, prefixed with the IMU file it came from.
-fn fail_in(imu: &std::path::Path) -> impl Fn(solver::bias::BiasError) -> CliError + '_ {
+fn fail_in(imu: &std::path::Path) -> impl Fn(preint_calib::bias::BiasError) -> CliError + '_ {
     move |e| CliError::Failed(format!("{}: {e}", imu.display()))
 }
 
@@ -32,7 +32,7 @@ fn opt3(v: Option<Vector3<f64>>) -> Value {
 }
 
 /// Number of still intervals whose mean specific-force directions differ pairwise by > 20°.
-fn distinct_attitudes(samples: &[ImuSample], ivs: &[solver::bias::StillInterval]) -> usize {
+fn distinct_attitudes(samples: &[ImuSample], ivs: &[preint_calib::bias::StillInterval]) -> usize {
     let mut dirs: Vec<Vector3<f64>> = Vec::new();
     for iv in ivs {
         let m: Vector3<f64> = samples[iv.start..iv.end]

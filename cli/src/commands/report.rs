@@ -13,8 +13,8 @@ use crate::charts::{Chart, Series, draw};
 use crate::html::Page;
 use nalgebra::{Vector3, Vector6};
 use preint::{ImuBias, ImuNoise, Level, NavState, PreintParams, Scheme, preintegrate};
+use preint_calib::allan::ImuAllan;
 use serde_json::json;
-use solver::allan::ImuAllan;
 use std::path::Path;
 
 fn fail(e: impl std::fmt::Display) -> CliError {
@@ -24,22 +24,30 @@ fn fail(e: impl std::fmt::Display) -> CliError {
 /// Mean NEES of `runs` noisy preintegrations of `scene` (200 Hz, window [1 s, 2 s], EuRoC white
 /// noise, fixed zero bias) against the noise-free run of the same scheme.
 pub fn mean_nees(scene: &str, scheme: Scheme, runs: u64) -> Result<f64, CliError> {
-    let sc = sim::scene_by_name(scene).ok_or_else(|| fail(format!("unknown scene {scene}")))?;
+    let sc =
+        preint_sim::scene_by_name(scene).ok_or_else(|| fail(format!("unknown scene {scene}")))?;
     let noise = ImuNoise::euroc();
     let params = PreintParams::from_noise(&noise)
         .with_scheme(scheme)
         .with_level(Level::Covariance);
     let (t_i, t_j) = (1_000_000_000, 2_000_000_000);
-    let clean =
-        sim::simulate(sc.as_ref(), 200.0, 3.0, &sim::SimConfig::noise_free(), 0).map_err(fail)?;
+    let clean = preint_sim::simulate(
+        sc.as_ref(),
+        200.0,
+        3.0,
+        &preint_sim::SimConfig::noise_free(),
+        0,
+    )
+    .map_err(fail)?;
     let m0 = preintegrate(&params, &ImuBias::zero(), &clean.samples, t_i, t_j).map_err(fail)?;
-    let cfg = sim::SimConfig {
+    let cfg = preint_sim::SimConfig {
         bias_random_walk: false,
-        ..sim::SimConfig::with_noise(noise)
+        ..preint_sim::SimConfig::with_noise(noise)
     };
     let mut sum = 0.0;
     for seed in 0..runs {
-        let noisy = sim::simulate(sc.as_ref(), 200.0, 3.0, &cfg, 1000 + seed).map_err(fail)?;
+        let noisy =
+            preint_sim::simulate(sc.as_ref(), 200.0, 3.0, &cfg, 1000 + seed).map_err(fail)?;
         let m = preintegrate(&params, &ImuBias::zero(), &noisy.samples, t_i, t_j).map_err(fail)?;
         let e = m.delta_error(&m0);
         let chol = m
@@ -146,7 +154,8 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
     tick("Monte Carlo NEES");
     // 3. Gimbal lock.
     page.h2("Where methods fail: Euler angles at gimbal lock");
-    let sc = sim::scene_by_name("gimbal-lock").ok_or_else(|| fail("no gimbal-lock scene"))?;
+    let sc =
+        preint_sim::scene_by_name("gimbal-lock").ok_or_else(|| fail("no gimbal-lock scene"))?;
     let g = Vector3::new(0.0, 0.0, -9.81);
     let step = 5_000_000i64;
     let samples: Vec<_> = (0..=2400)
@@ -156,16 +165,16 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
     let init = NavState::new(s0.r_wb, s0.p, s0.v);
     let mut series = Vec::new();
     for (name, att) in [
-        ("quaternion", sim::Attitude::Quaternion),
-        ("rotation matrix (Exp)", sim::Attitude::Matrix),
-        ("Euler angles ZYX", sim::Attitude::EulerZyx),
+        ("quaternion", preint_sim::Attitude::Quaternion),
+        ("rotation matrix (Exp)", preint_sim::Attitude::Matrix),
+        ("Euler angles ZYX", preint_sim::Attitude::EulerZyx),
     ] {
-        let tr = sim::dead_reckon(
+        let tr = preint_sim::dead_reckon(
             &samples,
             &init,
             &ImuBias::zero(),
             &g,
-            sim::Rule::Midpoint,
+            preint_sim::Rule::Midpoint,
             att,
         );
         let pts = tr
@@ -173,10 +182,10 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
             .zip(&samples)
             .step_by(10)
             .map(|(x, s)| {
-                let truth = sc.state(sim::t_s(s.t_ns)).r_wb;
-                let e = sim::rotation_error(&truth, &x.r);
+                let truth = sc.state(preint_sim::t_s(s.t_ns)).r_wb;
+                let e = preint_sim::rotation_error(&truth, &x.r);
                 (
-                    sim::t_s(s.t_ns),
+                    preint_sim::t_s(s.t_ns),
                     if e.is_finite() {
                         e.max(1e-16)
                     } else {
@@ -206,19 +215,20 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
     tick("gimbal lock");
     // 4. Bias calibration from a simulated static recording.
     page.h2("Bias calibration from a simulated static recording");
-    let st = sim::scene_by_name("static").ok_or_else(|| fail("no static scene"))?;
+    let st = preint_sim::scene_by_name("static").ok_or_else(|| fail("no static scene"))?;
     let truth_bias = ImuBias::new(
         Vector3::new(0.002, -0.0015, 0.001),
         Vector3::new(0.05, -0.03, 0.02),
     );
-    let cfg = sim::SimConfig {
+    let cfg = preint_sim::SimConfig {
         initial_bias: truth_bias,
         bias_random_walk: false,
-        ..sim::SimConfig::with_noise(ImuNoise::euroc())
+        ..preint_sim::SimConfig::with_noise(ImuNoise::euroc())
     };
-    let rec = sim::simulate(st.as_ref(), 200.0, 60.0, &cfg, 42).map_err(fail)?;
-    let cal = solver::bias::calibrate_static(&rec.samples, &ImuNoise::euroc(), &Default::default())
-        .map_err(fail)?;
+    let rec = preint_sim::simulate(st.as_ref(), 200.0, 60.0, &cfg, 42).map_err(fail)?;
+    let cal =
+        preint_calib::bias::calibrate_static(&rec.samples, &ImuNoise::euroc(), &Default::default())
+            .map_err(fail)?;
     let rows: Vec<Vec<String>> = (0..3)
         .map(|k| {
             vec![
@@ -246,11 +256,11 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         update_rate_hz: 100.0,
         ..ImuNoise::euroc()
     };
-    let hour = sim::simulate(
+    let hour = preint_sim::simulate(
         st.as_ref(),
         100.0,
         3600.0,
-        &sim::SimConfig::with_noise(noise),
+        &preint_sim::SimConfig::with_noise(noise),
         7,
     )
     .map_err(fail)?;

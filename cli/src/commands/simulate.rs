@@ -18,10 +18,10 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
     else {
         unreachable!()
     };
-    let sc = sim::scene_by_name(scene).ok_or_else(|| {
+    let sc = preint_sim::scene_by_name(scene).ok_or_else(|| {
         CliError::Usage(format!(
             "unknown scene `{scene}`; expected one of {}",
-            sim::SCENE_NAMES.join(", ")
+            preint_sim::SCENE_NAMES.join(", ")
         ))
     })?;
     let noise_model: Option<ImuNoise> = match noise.as_deref() {
@@ -30,15 +30,15 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         None => Some(ImuNoise::euroc()),
     };
     let cfg = match noise_model {
-        Some(n) => sim::SimConfig::with_noise(n),
-        None => sim::SimConfig::noise_free(),
+        Some(n) => preint_sim::SimConfig::with_noise(n),
+        None => preint_sim::SimConfig::noise_free(),
     };
-    let data = sim::simulate(sc.as_ref(), *rate, *duration, &cfg, *seed)
+    let data = preint_sim::simulate(sc.as_ref(), *rate, *duration, &cfg, *seed)
         .map_err(|e| CliError::Failed(e.to_string()))?;
     std::fs::create_dir_all(out)
         .map_err(|e| CliError::Failed(format!("{}: {e}", out.display())))?;
     let yaml_noise = noise_model.unwrap_or(ImuNoise::zero(*rate));
-    let files: Vec<String> = sim::write_dataset(out, &data, &yaml_noise)
+    let files: Vec<String> = preint_sim::write_dataset(out, &data, &yaml_noise)
         .map_err(|e| CliError::Failed(e.to_string()))?
         .iter()
         .map(|p| p.display().to_string())

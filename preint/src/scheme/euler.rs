@@ -11,7 +11,7 @@
 
 use super::{Deltas, Node, s_plus_hat_hat2};
 use crate::propagation::{Cols9, M3, Origin, PullBack, Transition, skew_cols};
-use lie::so3::{RodriguesCoeffs, i_plus_hat_hat2};
+use preint_lie::so3::{RodriguesCoeffs, i_plus_hat_hat2};
 
 /// Sample k's pulled-back gain: gyro columns `g`, accelerometer columns `r0·(cv, cp)`
 /// (`cp0`: `c_p` in rotated coordinates), and the pull-back `pb = Φ_k+1⁻¹` used.

@@ -55,8 +55,8 @@ use crate::propagation::{
     Blk96, Cols6, Cols9, ErrorState, M3, Origin, Pending, PullBack, SLOTS, Transition, V3,
     rot_cols, skew_cols, skew_mul,
 };
-use lie::hat;
-use lie::so3::{RodriguesCoeffs, i_plus_hat_hat2};
+use preint_lie::hat;
+use preint_lie::so3::{RodriguesCoeffs, i_plus_hat_hat2};
 
 /// The weights of an interval's rules, functions of its length `h` \[s\] alone.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

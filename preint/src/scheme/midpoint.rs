@@ -18,7 +18,7 @@
 
 use super::{Deltas, Node, s_plus_hat_hat2};
 use crate::propagation::{MidGain, Origin, Transition};
-use lie::so3::{RodriguesCoeffs, i_plus_hat_hat2};
+use preint_lie::so3::{RodriguesCoeffs, i_plus_hat_hat2};
 
 /// One midpoint interval between nodes `n0` and `n1` of length `h` \[s\]; gains are pulled back
 /// to `o`. Uses `d.u_last = ΔR_k a_k` and sets it to `ΔR_k+1 a_k+1`. With `LIN`, returns the

@@ -10,8 +10,8 @@ pub mod midpoint;
 
 use crate::propagation::{M3, V3};
 use crate::sample::{ImuBias, ImuSample};
-use lie::so3::exp_quat_coeffs;
 use nalgebra::Matrix3;
+use preint_lie::so3::exp_quat_coeffs;
 
 /// A bias-corrected sample: time \[ns\], `ω` [rad/s], `a` [m/s²].
 ///
@@ -207,7 +207,7 @@ pub(crate) fn span_s(t0_ns: i64, t1_ns: i64) -> f64 {
 }
 
 /// `s I + α[φ]× + β[φ]×²`, built entry-wise from `[φ]×² = φφᵀ − θ²I` (no 3×3 products): with
-/// Rodrigues' coefficients `(b, c)` ([`lie::so3::RodriguesCoeffs`]), `s·Jl(φ)` is
+/// Rodrigues' coefficients `(b, c)` ([`preint_lie::so3::RodriguesCoeffs`]), `s·Jl(φ)` is
 /// `(s, s b, s c)` and `s·Jr(φ)` is `(s, −s b, s c)`.
 #[inline(always)]
 pub(crate) fn s_plus_hat_hat2(phi: &V3, s: f64, alpha: f64, beta: f64) -> M3 {

@@ -2,9 +2,9 @@
 //! and small utilities. Independent of the code under test (only `lie` Exp/Log).
 #![allow(dead_code)]
 
-use lie::SO3;
 use nalgebra::{Matrix3, Vector3};
 use preint::{ImuSample, PreintegratedImu};
+use preint_lie::SO3;
 
 pub type V3 = Vector3<f64>;
 

@@ -2,8 +2,8 @@
 //! kinematics `Θ̇ = E(Θ)ω` are singular, while it also rolls.
 
 use crate::scene::{Scene, SceneState};
-use lie::SO3;
 use nalgebra::Vector3;
+use preint_lie::SO3;
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, FRAC_PI_8, SQRT_2};
 
 /// `gimbal-lock`: the body pitches through the vertical while rolling about the world x axis.

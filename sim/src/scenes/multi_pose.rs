@@ -1,8 +1,8 @@
 //! `multi-pose-static`: still poses joined by smooth rotations (multi-position calibration).
 
 use crate::scene::{Scene, SceneState};
-use lie::SO3;
 use nalgebra::Vector3;
+use preint_lie::SO3;
 use std::f64::consts::{FRAC_PI_2, PI};
 
 /// Quintic blend `s(τ) = 10τ³ − 15τ⁴ + 6τ⁵` on `τ ∈ [0, 1]` (clamped outside) with its

@@ -1,8 +1,8 @@
 //! `spin`: fast rotation about a tilted axis.
 
 use crate::scene::{Scene, SceneState, rot_zyx};
-use lie::SO3;
 use nalgebra::Vector3;
+use preint_lie::SO3;
 
 /// `spin`: constant-rate rotation about an axis fixed in the body, at a fixed position:
 /// `R_wb(t) = R_0·Exp(ω_b t)`, `ω_b = rate·n_b` (constant, so `ω̇_b = 0`), `p = p_0`,

@@ -1,8 +1,8 @@
 //! `static`: a body at rest.
 
 use crate::scene::{Scene, SceneState, rot_zyx};
-use lie::SO3;
 use nalgebra::Vector3;
+use preint_lie::SO3;
 
 /// `static`: the body at rest at position `p` \[m\] with fixed attitude `r_wb` (body→world):
 /// `v = a = 0`, `ω_b = ω̇_b = 0`. A noise-free accelerometer reads `R_wbᵀ·(0, 0, +9.81)`.
