@@ -84,7 +84,7 @@ fn monte_carlo_200_trials_with_noisy_poses_from_sim() {
     let mut naive_v = Zs::new("v (pose noise ignored)");
     let mut chi = Vec::new();
     let mut naive_chi = Vec::new();
-    let params = PreintParams::from_noise(&noise).with_scheme(Scheme::Rk4);
+    let params = PreintParams::from_noise(&noise).with_scheme(Scheme::Hermite4);
     for seed in 0..trials {
         let out = simulate(&scene, 200.0, 10.0, &cfg, 1000 + seed).unwrap();
         let mut rng = rng_from_seed(50_000 + seed);

@@ -26,7 +26,7 @@ use preint_calib::{CheckOptions, NumDiffOptions, check_jacobian, to_dmatrix};
 use preint_lie::{Manifold, SO3};
 use preint_sim::{EulerScene, Scene, SimConfig, SpinScene, StaticScene, simulate};
 
-const SCHEMES: [Scheme; 3] = [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4];
+const SCHEMES: [Scheme; 3] = [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4];
 
 struct Window {
     name: &'static str,

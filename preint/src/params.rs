@@ -15,13 +15,14 @@ pub enum Scheme {
     /// `ω̄ = ½(ω_k + ω_k+1)`, `ΔR_k+1 = ΔR_k Exp(ω̄ h)`, `ā = ½(ΔR_k a_k + ΔR_k+1 a_k+1)`,
     /// `Δv_k+1 = Δv_k + ā h`, `Δp_k+1 = Δp_k + Δv_k h + ½ ā h²`. Global error O(h²).
     Midpoint,
-    /// 4th-order scheme (the name is the command line's; it is a Hermite–Magnus scheme, not a
-    /// Runge–Kutta method): each node's `ω̇`, `ȧ` from the quadratic through it and its two
+    /// 4th-order Hermite–Magnus scheme (`hermite4`; the command line also accepts `rk4`, the
+    /// name users look for, although it is not a Runge–Kutta method): each node's `ω̇`, `ȧ`
+    /// from the quadratic through it and its two
     /// neighbours; `Ω = h/2(ω_k+ω_k+1) + h²/12(ω̇_k − ω̇_k+1 + ω_k×ω_k+1)` (4th-order Magnus);
     /// Δv by the corrected trapezoid on `u = ΔR a` with `u̇ = ΔR(ω×a + ȧ)`, Δp by the corrected
     /// trapezoid on `v`. One Exp per interval. Global error O(h⁴). See
     /// [`crate::scheme::hermite`].
-    Rk4,
+    Hermite4,
 }
 
 impl Scheme {
@@ -30,7 +31,7 @@ impl Scheme {
     pub fn cell_rule(self) -> CellRule {
         match self {
             Scheme::Euler => CellRule::Held,
-            Scheme::Midpoint | Scheme::Rk4 => CellRule::Centered,
+            Scheme::Midpoint | Scheme::Hermite4 => CellRule::Centered,
         }
     }
 }

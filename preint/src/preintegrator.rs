@@ -616,8 +616,8 @@ impl Core {
         } else {
             match cfg.scheme {
                 Scheme::Euler | Scheme::Midpoint => n.saturating_sub(2),
-                Scheme::Rk4 if cb == 0 && n < 4 => 0,
-                Scheme::Rk4 => n.saturating_sub(2),
+                Scheme::Hermite4 if cb == 0 && n < 4 => 0,
+                Scheme::Hermite4 => n.saturating_sub(2),
             }
         };
         // In streaming mode `n` is a lower bound of the window size that is large enough for
@@ -628,7 +628,7 @@ impl Core {
             match cfg.scheme {
                 Scheme::Euler => self.euler_interval::<N, LIN>(cfg, noise, k, total, fin),
                 Scheme::Midpoint => self.midpoint_interval::<N, LIN>(cfg, noise, k, fin),
-                Scheme::Rk4 => self.rk4_interval::<N, LIN>(cfg, noise, k, fin),
+                Scheme::Hermite4 => self.rk4_interval::<N, LIN>(cfg, noise, k, fin),
             }
             self.interval_done();
         }
@@ -646,7 +646,7 @@ impl Core {
                     let lr = self.intervals(n - 1, n);
                     self.capture_or_add(cfg, noise, cb + n - 1, &g, lr);
                 }
-                Scheme::Rk4 => self.retire_below(cfg, noise, usize::MAX, true),
+                Scheme::Hermite4 => self.retire_below(cfg, noise, usize::MAX, true),
             }
         }
     }
@@ -766,7 +766,7 @@ impl Preintegrator {
         };
         let (e0, e1) = match params.scheme {
             Scheme::Euler | Scheme::Midpoint => (2, 2),
-            Scheme::Rk4 => (3, 3),
+            Scheme::Hermite4 => (3, 3),
         };
         let cfg = Cfg {
             scheme: params.scheme,
@@ -796,7 +796,7 @@ impl Preintegrator {
         } else {
             Vec::new()
         };
-        let rk4 = params.scheme == Scheme::Rk4;
+        let rk4 = params.scheme == Scheme::Hermite4;
         let ctx_before = spec
             .start
             .ctx
@@ -968,7 +968,7 @@ impl Preintegrator {
     pub fn integrate_slice(&mut self, samples: &[ImuSample]) -> Result<(), PreintError> {
         let fast = !self.lin;
         // Euler and midpoint need two nodes, rk4 three (see `run_deltas_rk4`).
-        let min_n = if self.cfg.scheme == Scheme::Rk4 { 3 } else { 2 };
+        let min_n = if self.cfg.scheme == Scheme::Hermite4 { 3 } else { 2 };
         let mut i = 0;
         while i < samples.len() {
             if fast && self.core.n >= min_n && self.core.done + 2 == self.core.n {
@@ -977,7 +977,7 @@ impl Preintegrator {
                 let used = match self.cfg.scheme {
                     Scheme::Midpoint => self.core.run_deltas::<true>(rest, bias, last, gap),
                     Scheme::Euler => self.core.run_deltas::<false>(rest, bias, last, gap),
-                    Scheme::Rk4 => self.core.run_deltas_rk4(rest, bias, last, gap),
+                    Scheme::Hermite4 => self.core.run_deltas_rk4(rest, bias, last, gap),
                 };
                 if used > 0 {
                     self.last_t_ns = rest[used - 1].t_ns;

@@ -216,7 +216,7 @@ fn boundary(
     }
     let (start, len) = match scheme {
         Scheme::Euler | Scheme::Midpoint => (m - 1, 2),
-        Scheme::Rk4 => {
+        Scheme::Hermite4 => {
             let len = n.min(4);
             (m.saturating_sub(2).min(n - len), len)
         }
@@ -228,7 +228,7 @@ fn boundary(
             side.w[1] = lam;
             interpolate_linear(&samples[m - 1], &samples[m], t_ns)
         }
-        Scheme::Rk4 => {
+        Scheme::Hermite4 => {
             let mut times = [0i64; 4];
             for (t, s) in times.iter_mut().zip(&samples[start..start + len]) {
                 *t = s.t_ns;
@@ -292,7 +292,7 @@ fn plan(
     } else {
         hi
     };
-    let rk4 = scheme == Scheme::Rk4;
+    let rk4 = scheme == Scheme::Hermite4;
     let (bi, node_i, mut start) = boundary(scheme, samples, t_i_ns, lo);
     let (bj, node_j, mut end) = boundary(scheme, samples, t_j_ns, mj);
     // Stream samples strictly inside, and the context samples (rk4).

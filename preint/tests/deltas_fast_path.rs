@@ -54,7 +54,7 @@ fn one_by_one(pi: &mut Preintegrator, s: &[ImuSample]) -> Result<(), PreintError
 /// Makes sample `s` invalid, given the sample before it.
 type Spoil = fn(&mut ImuSample, &ImuSample);
 
-const SCHEMES: [Scheme; 3] = [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4];
+const SCHEMES: [Scheme; 3] = [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4];
 
 #[test]
 fn slice_equals_one_by_one_bit_for_bit() {

@@ -34,7 +34,7 @@ type M96 = SMatrix<f64, 9, 6>;
 
 const TOL: f64 = 1e-9;
 const EPS: f64 = 1e-3;
-const SCHEMES: [Scheme; 3] = [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4];
+const SCHEMES: [Scheme; 3] = [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4];
 
 /// Smooth motion sampled from t = 1 s every 5 ms (± 1.5 ms uniform jitter if asked).
 fn stream(n: usize, jitter: bool) -> Vec<ImuSample> {

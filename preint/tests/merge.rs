@@ -323,7 +323,7 @@ fn merge_equals_whole_window_every_scheme() {
         Vector3::new(0.003, 0.0, -0.01),
         Vector3::new(-0.1, 0.2, 0.05),
     );
-    for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4] {
+    for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4] {
         let p = params.clone().with_scheme(scheme);
         for (i, k, j) in [(3, 50, 117), (3, 4, 117), (0, 60, 120), (10, 11, 12)] {
             let w = |a: usize, b: usize| preintegrate(&p, &bias, &s, s[a].t_ns, s[b].t_ns).unwrap();
@@ -338,7 +338,7 @@ fn merge_equals_whole_window_every_scheme() {
             eprintln!("{scheme:?} split {i}-{k}-{j}: merged as independent: cov rel {e:.1e}");
             assert!((e > 1e-4) == (scheme != Scheme::Euler), "{scheme:?}: {e}");
         }
-        if scheme != Scheme::Rk4 {
+        if scheme != Scheme::Hermite4 {
             let run = |x: &[ImuSample]| {
                 let mut pi = preint::Preintegrator::new(p.clone(), bias).unwrap();
                 pi.integrate_slice(x).unwrap();

@@ -33,7 +33,7 @@ fn cell_rules() {
     let (l, r) = (0.004, 0.006);
     assert_eq!(Scheme::Euler.cell_rule(), CellRule::Held);
     assert_eq!(Scheme::Midpoint.cell_rule(), CellRule::Centered);
-    assert_eq!(Scheme::Rk4.cell_rule(), CellRule::Centered);
+    assert_eq!(Scheme::Hermite4.cell_rule(), CellRule::Centered);
     // Euler holds a sample over the interval after it; the last sample falls back to the one
     // before.
     assert_eq!(CellRule::Held.cell_s(l, r), r);

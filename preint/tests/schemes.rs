@@ -8,7 +8,7 @@ use nalgebra::{Cholesky, DMatrix, DVector, Matrix3, SMatrix};
 use preint::{ImuBias, ImuSample, Level, PreintParams, PreintegratedImu, Preintegrator, Scheme};
 use preint_lie::SO3;
 
-const SCHEMES: [Scheme; 3] = [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4];
+const SCHEMES: [Scheme; 3] = [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4];
 
 fn run(params: &PreintParams, bias: &ImuBias, s: &[ImuSample]) -> PreintegratedImu {
     let mut pi = Preintegrator::new(params.clone(), *bias).unwrap();
@@ -30,7 +30,7 @@ fn convergence_orders_on_analytic_motion() {
     for (scheme, rates, lo, hi) in [
         (Scheme::Euler, &[100.0, 200.0, 400.0, 800.0][..], 0.9, 1.1),
         (Scheme::Midpoint, &[50.0, 100.0, 200.0, 400.0][..], 1.9, 2.1),
-        (Scheme::Rk4, &[25.0, 50.0, 100.0, 200.0][..], 3.7, 4.5),
+        (Scheme::Hermite4, &[25.0, 50.0, 100.0, 200.0][..], 3.7, 4.5),
     ] {
         let prm = params(scheme, Level::Deltas);
         let mut hs = vec![];
@@ -204,7 +204,7 @@ fn covariance_matches_monte_carlo() {
         (Scheme::Euler, false),
         (Scheme::Midpoint, false),
         (Scheme::Midpoint, true),
-        (Scheme::Rk4, false),
+        (Scheme::Hermite4, false),
     ] {
         let mut prm = params(scheme, Level::Covariance);
         prm.gyro_cov *= 100.0;
@@ -402,7 +402,7 @@ fn rk4_is_exact_for_cubic_rates_and_forces() {
         let ev = (ma.delta_v - v_exact).norm();
         let ep = (ma.delta_p - p_exact).norm();
         eprintln!("{scheme:?}: rotation {er:.2e} rad, velocity {ev:.2e} m/s, position {ep:.2e} m");
-        if scheme == Scheme::Rk4 {
+        if scheme == Scheme::Hermite4 {
             assert!(er < 1e-14, "rk4 rotation error {er}");
             assert!(ev < 1e-13, "rk4 velocity error {ev}");
             assert!(ep < 1e-9, "rk4 position error {ep}");

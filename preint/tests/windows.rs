@@ -44,7 +44,7 @@ fn with_boundary(scheme: Scheme, stream: &[ImuSample], b: i64) -> Vec<ImuSample>
         .unwrap();
     let mut out: Vec<_> = stream
         .iter()
-        .filter(|x| scheme != Scheme::Rk4 || (x.t_ns - b).abs() * 8 >= step)
+        .filter(|x| scheme != Scheme::Hermite4 || (x.t_ns - b).abs() * 8 >= step)
         .copied()
         .collect();
     let k = out.iter().position(|x| x.t_ns > b).unwrap();
@@ -69,7 +69,7 @@ fn consecutive_windows_compose_to_the_whole() {
     let (a, c) = (12_345_678, 1_500_001_234);
     // Mid-interval, 1 µs after and before a sample, and on a sample.
     for b in [777_777_777, 775_001_000, 779_999_000, 780_000_000] {
-        for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4] {
+        for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4] {
             let p = prm(scheme);
             let ab = preintegrate(&p, &bias, &stream, a, b).unwrap();
             let bc = preintegrate(&p, &bias, &stream, b, c).unwrap();
@@ -92,7 +92,7 @@ fn consecutive_windows_compose_to_the_whole() {
             let exact_tol = match scheme {
                 Scheme::Euler => 2e-2,
                 Scheme::Midpoint => 1e-4,
-                Scheme::Rk4 => 1e-8,
+                Scheme::Hermite4 => 1e-8,
             };
             assert!(
                 r.minus(&rx).norm() < exact_tol
@@ -110,7 +110,7 @@ fn consecutive_windows_compose_to_the_whole() {
 #[test]
 fn rk4_one_sided_edges_compose_only_to_the_integration_error() {
     let stream = Scene::smooth().samples(5_000_000, 2_000_000_000);
-    let p = prm(Scheme::Rk4);
+    let p = prm(Scheme::Hermite4);
     let run = |s: &[ImuSample]| {
         let mut pi = preint::Preintegrator::new(p.clone(), ImuBias::zero()).unwrap();
         pi.integrate_slice(s).unwrap();
@@ -157,7 +157,7 @@ fn window_boundaries_use_samples_at_keyframe_times_and_interpolate_otherwise() {
     assert_eq!(w[1..w.len() - 1], s[3..=9]);
     assert!((w[0].gyro - lerp(&s, 12_000_000).gyro).norm() < 1e-15);
     // rk4: cubic boundary sample, 4th-order accurate on the smooth signal.
-    let w = window_samples(Scheme::Rk4, &s, 12_000_000, 47_500_000, i64::MAX).unwrap();
+    let w = window_samples(Scheme::Hermite4, &s, 12_000_000, 47_500_000, i64::MAX).unwrap();
     let truth = scene.sample(12_000_000);
     assert!(
         (w[0].gyro - truth.gyro).norm() < 1e-6,
@@ -166,7 +166,7 @@ fn window_boundaries_use_samples_at_keyframe_times_and_interpolate_otherwise() {
     );
     assert!((lerp(&s, 12_000_000).gyro - truth.gyro).norm() > 1e-5);
     // rk4 drops a stream sample closer than 1/8 interval to the boundary.
-    let w = window_samples(Scheme::Rk4, &s, 14_500_000, 47_500_000, i64::MAX).unwrap();
+    let w = window_samples(Scheme::Hermite4, &s, 14_500_000, 47_500_000, i64::MAX).unwrap();
     assert_eq!(w[1].t_ns, 20_000_000);
 }
 

@@ -77,7 +77,7 @@ fn convergence_orders_and_accuracy_at_200_hz() {
     let schemes = [
         (Scheme::Euler, "euler", 0.9, 1.1),
         (Scheme::Midpoint, "midpoint", 1.85, 2.15),
-        (Scheme::Rk4, "rk4", 3.7, f64::INFINITY),
+        (Scheme::Hermite4, "rk4", 3.7, f64::INFINITY),
     ];
     let what = ["rot_rad", "vel_mps", "pos_m"];
     let mut at200 = serde_json::Map::new();

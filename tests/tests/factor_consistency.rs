@@ -56,7 +56,7 @@ const PERIOD: i64 = 5_000_000;
 const SCHEMES: [(Scheme, &str); 3] = [
     (Scheme::Euler, "euler"),
     (Scheme::Midpoint, "midpoint"),
-    (Scheme::Rk4, "rk4"),
+    (Scheme::Hermite4, "rk4"),
 ];
 
 fn realisations() -> usize {

@@ -76,7 +76,7 @@ fn euroc_v1_01_one_second_windows() {
 
     let (imu_first, imu_last) = (imu[0].t_ns, imu[imu.len() - 1].t_ns);
     let mut table = serde_json::Map::new();
-    for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4] {
+    for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4] {
         let params = PreintParams::from_noise(&noise)
             .with_scheme(scheme)
             .with_level(Level::Covariance);

@@ -104,7 +104,7 @@ fn integrated_yaw_follows_gps_heading() {
         .filter(|g| g.0 >= imu[0].t_ns && g.0 <= imu[imu.len() - 1].t_ns)
         .collect();
 
-    for scheme in [Scheme::Midpoint, Scheme::Rk4] {
+    for scheme in [Scheme::Midpoint, Scheme::Hermite4] {
         let params = PreintParams::default()
             .with_scheme(scheme)
             .with_level(Level::Deltas);

@@ -68,7 +68,7 @@ use preint_lie::{SO3, hat};
 use preint_sim::{Attitude, Rule, Scene, dead_reckon, exact_deltas, scene_by_name, t_s};
 use proptest::prelude::*;
 
-const SCHEMES: [Scheme; 3] = [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4];
+const SCHEMES: [Scheme; 3] = [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4];
 
 fn g() -> Vector3<f64> {
     Vector3::new(0.0, 0.0, -9.81)
@@ -335,7 +335,7 @@ fn bias_jump_first_order_vs_reintegration() {
             rec.push(serde_json::json!({"scheme": format!("{scheme:?}"), "dbg": mag,
                 "first_order_sigma": e1, "automatic_sigma": e_auto, "reintegrated": upd.reintegrated}));
             assert_eq!(upd.reintegrated, mag > threshold, "{scheme:?} at {mag}");
-            if scheme == Scheme::Rk4 {
+            if scheme == Scheme::Hermite4 {
                 // Independent reference: the scene's exact deltas (rk4's discretisation error
                 // at 200 Hz is ≈ 1e-3σ, see convergence.rs).
                 let exact = exact_deltas(ag.as_ref(), 1_000_000_000, 2_000_000_000, g());

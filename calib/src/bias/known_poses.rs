@@ -589,7 +589,7 @@ mod tests {
                 }
             })
             .collect();
-        let params = PreintParams::from_noise(&ImuNoise::euroc()).with_scheme(Scheme::Rk4);
+        let params = PreintParams::from_noise(&ImuNoise::euroc()).with_scheme(Scheme::Hermite4);
         Setup {
             samples: out.samples,
             truth: out.truth,

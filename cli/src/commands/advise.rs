@@ -108,7 +108,7 @@ pub fn evaluate(
     };
     let bias = ImuBias::zero();
     // Cost per sample does not depend on the rate: measured once per scheme (best of 5).
-    const SCHEMES: [Scheme; 3] = [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4];
+    const SCHEMES: [Scheme; 3] = [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4];
     let ns = best_ns_per_sample(&SCHEMES, Level::Covariance, &synthetic_stream(20_000), 5)?;
     let mut out = Vec::new();
     let mut d = 1;
@@ -126,7 +126,7 @@ pub fn evaluate(
                     .min(dec.len() - 1);
                 let t_j = dec[j0].t_ns;
                 let reference = preintegrate(
-                    &params(Scheme::Rk4, Level::Deltas),
+                    &params(Scheme::Hermite4, Level::Deltas),
                     &bias,
                     samples,
                     t_i,
@@ -136,11 +136,11 @@ pub fn evaluate(
                 let m = preintegrate(&params(scheme, Level::Covariance), &bias, &dec, t_i, t_j)
                     .map_err(fail)?;
                 let mut e = errors(&m, &reference);
-                if d == 1 && scheme == Scheme::Rk4 {
+                if d == 1 && scheme == Scheme::Hermite4 {
                     // Richardson estimate of the reference's own error.
                     let half: Vec<ImuSample> = samples.iter().step_by(2).copied().collect();
                     let coarse =
-                        preintegrate(&params(Scheme::Rk4, Level::Deltas), &bias, &half, t_i, t_j);
+                        preintegrate(&params(Scheme::Hermite4, Level::Deltas), &bias, &half, t_i, t_j);
                     if let Ok(c) = coarse {
                         e = errors(&c, &reference).map(|x| x / 15.0);
                     }
@@ -182,7 +182,7 @@ pub fn recommend(c: &[Candidate]) -> Option<&Candidate> {
     let rank = |s: Scheme| match s {
         Scheme::Euler => 0,
         Scheme::Midpoint => 1,
-        Scheme::Rk4 => 2,
+        Scheme::Hermite4 => 2,
     };
     ok().filter(|c| c.cost_ns_per_s <= COST_TIE * best)
         .min_by(|a, b| {
@@ -327,7 +327,7 @@ mod tests {
         let c = [
             cand(Scheme::Euler, 12.5, 3356.0, true),
             cand(Scheme::Midpoint, 12.5, 3260.0, true),
-            cand(Scheme::Rk4, 12.5, 13895.0, true),
+            cand(Scheme::Hermite4, 12.5, 13895.0, true),
         ];
         assert_eq!(recommend(&c).unwrap().scheme, Scheme::Euler);
         // Midpoint 30 % cheaper: it wins.
@@ -339,10 +339,10 @@ mod tests {
         // The cheapest is not acceptable: the cheapest acceptable one is chosen.
         let c = [
             cand(Scheme::Euler, 25.0, 1_000.0, false),
-            cand(Scheme::Rk4, 25.0, 20_000.0, true),
+            cand(Scheme::Hermite4, 25.0, 20_000.0, true),
             cand(Scheme::Midpoint, 200.0, 40_000.0, true),
         ];
-        assert_eq!(recommend(&c).unwrap().scheme, Scheme::Rk4);
+        assert_eq!(recommend(&c).unwrap().scheme, Scheme::Hermite4);
         assert!(recommend(&[cand(Scheme::Euler, 25.0, 1.0, false)]).is_none());
     }
 }

@@ -64,7 +64,7 @@ pub fn measure(scene_name: &str, rates: &[f64], window_s: f64) -> Result<Vec<Row
     let t_i: i64 = 1_000_000_000;
     let t_j = t_i + (window_s * 1e9).round() as i64;
     let (r_true, v_true, p_true) = preint_sim::exact_deltas(scene.as_ref(), t_i, t_j, g);
-    let schemes = [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4];
+    let schemes = [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4];
     let ns = best_ns_per_sample(&schemes, Level::Covariance, &synthetic_stream(50_000), 3)?;
     let cost: std::collections::HashMap<_, _> =
         schemes.iter().map(|&s| scheme_name(s)).zip(ns).collect();
@@ -80,7 +80,7 @@ pub fn measure(scene_name: &str, rates: &[f64], window_s: f64) -> Result<Vec<Row
         let samples: Vec<_> = (k0..=k1)
             .map(|k| ideal_sample(scene.as_ref(), k * step, &g))
             .collect();
-        for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4] {
+        for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4] {
             let params = PreintParams::from_noise(&ImuNoise::euroc())
                 .with_scheme(scheme)
                 .with_level(Level::Deltas)
@@ -128,7 +128,7 @@ pub fn order(rows: &[Row], scheme: Scheme, comp: usize) -> Option<f64> {
 pub fn charts(rows: &[Row], scene: &str, dir: &Path) -> Result<Vec<String>, CliError> {
     std::fs::create_dir_all(dir)
         .map_err(|e| CliError::Failed(format!("{}: {e}", dir.display())))?;
-    let schemes = [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4];
+    let schemes = [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4];
     let mut series: Vec<Series> = schemes
         .iter()
         .map(|&s| {
@@ -215,7 +215,7 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         .map(|r| json!({"scheme": scheme_name(r.scheme), "rate": r.rate, "ns_per_sample": r.ns_per_sample,
                         "cost_ns_per_s": r.cost_per_s(), "rot_err": r.err[0], "vel_err": r.err[1], "pos_err": r.err[2]}))
         .collect();
-    let orders: serde_json::Map<String, serde_json::Value> = [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4]
+    let orders: serde_json::Map<String, serde_json::Value> = [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4]
         .iter()
         .map(|&s| (scheme_name(s).to_string(), json!({"rot": order(&rows, s, 0), "vel": order(&rows, s, 1), "pos": order(&rows, s, 2)})))
         .collect();
@@ -244,7 +244,7 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
             r.err[2]
         );
     }
-    for s in [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4] {
+    for s in [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4] {
         let f = |c| order(&rows, s, c).map_or("-".into(), |o: f64| format!("{o:.2}"));
         let _ = writeln!(
             h,

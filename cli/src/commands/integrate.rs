@@ -13,7 +13,7 @@ pub fn parse_scheme(s: &str) -> Result<Scheme, CliError> {
     match s {
         "euler" => Ok(Scheme::Euler),
         "midpoint" => Ok(Scheme::Midpoint),
-        "rk4" | "high-order" => Ok(Scheme::Rk4),
+        "rk4" | "high-order" => Ok(Scheme::Hermite4),
         _ => Err(CliError::Usage(format!(
             "unknown scheme `{s}`: expected euler, midpoint or rk4"
         ))),
@@ -25,7 +25,7 @@ pub fn scheme_name(s: Scheme) -> &'static str {
     match s {
         Scheme::Euler => "euler",
         Scheme::Midpoint => "midpoint",
-        Scheme::Rk4 => "rk4",
+        Scheme::Hermite4 => "rk4",
     }
 }
 

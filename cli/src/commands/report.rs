@@ -134,7 +134,7 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
     let mut nees_rows = Vec::new();
     let mut nees_json = serde_json::Map::new();
     for scene in ["seed-ellipse", "aggressive"] {
-        for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4] {
+        for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4] {
             let n = mean_nees(scene, scheme, runs)?;
             nees_rows.push(vec![
                 scene.to_string(),

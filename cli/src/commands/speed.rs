@@ -84,7 +84,7 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         "{:<10} {:>12} {:>16} {:>14}",
         "scheme", "deltas only", "+cov+bias jac", "+15x15 cov"
     );
-    for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Rk4] {
+    for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4] {
         let d = median_ns_per_sample(scheme, Level::Deltas, &stream, 11)?;
         let c = median_ns_per_sample(scheme, Level::Covariance, &stream, 11)?;
         let c15 = median_ns_per_sample(scheme, Level::Combined, &stream, 11)?;

@@ -1,4 +1,4 @@
-//! High-order scheme (`Scheme::Rk4`): two-point Hermite quadrature with exact end-point
+//! High-order scheme (`Scheme::Hermite4`): two-point Hermite quadrature with exact end-point
 //! derivatives, 4th order in the step with one Exp per interval.
 //!
 //! Every node m carries, besides its sample `(ω_m, a_m)`, the derivatives `ω̇_m`, `ȧ_m` of the

@@ -562,7 +562,7 @@ mod tests {
 
     fn run(s: &[ImuSample], chunks: &[usize], portable: bool) -> crate::PreintegratedImu {
         let mut prm = PreintParams::default()
-            .with_scheme(Scheme::Rk4)
+            .with_scheme(Scheme::Hermite4)
             .with_level(Level::Deltas);
         prm.keep_samples = false;
         let bias = ImuBias::new(
