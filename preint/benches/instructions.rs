@@ -1,0 +1,41 @@
+//! The loop whose instructions per sample `tools/instructions.sh` counts with valgrind's
+//! callgrind: `integrate_slice` over the stream of `preint speed` and the criterion bench
+//! (`preint::sample::synthetic_stream`, 200 Hz, EuRoC densities, `keep_samples` off).
+//!
+//! `cargo bench -p preint --bench instructions -- SCHEME LEVEL N` runs it once (SCHEME:
+//! euler | midpoint | hermite4, LEVEL: deltas | covariance | combined); it prints nothing but a
+//! checksum, so that the work is not optimised away. Without arguments (as `cargo bench` runs
+//! every bench) it does nothing.
+
+use preint::sample::synthetic_stream;
+use preint::{ImuBias, ImuNoise, Level, PreintParams, Preintegrator, Scheme};
+use std::hint::black_box;
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).filter(|a| a != "--bench").collect();
+    if args.len() < 3 {
+        return;
+    }
+    let scheme = match args[0].as_str() {
+        "euler" => Scheme::Euler,
+        "midpoint" => Scheme::Midpoint,
+        "hermite4" => Scheme::Hermite4,
+        s => panic!("unknown scheme {s}"),
+    };
+    let level = match args[1].as_str() {
+        "deltas" => Level::Deltas,
+        "covariance" => Level::Covariance,
+        "combined" => Level::Combined,
+        s => panic!("unknown level {s}"),
+    };
+    let n: usize = args[2].parse().expect("sample count");
+    let s = synthetic_stream(n);
+    let mut prm = PreintParams::from_noise(&ImuNoise::euroc())
+        .with_scheme(scheme)
+        .with_level(level);
+    prm.keep_samples = false;
+    let mut pi = Preintegrator::new(prm, ImuBias::zero()).unwrap();
+    pi.integrate_slice(black_box(&s)).unwrap();
+    let m = black_box(pi.finish().unwrap());
+    println!("{}", m.delta_p.x + m.cov[(8, 8)]);
+}
