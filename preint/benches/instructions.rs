@@ -12,7 +12,10 @@ use preint::{ImuBias, ImuNoise, Level, PreintParams, Preintegrator, Scheme};
 use std::hint::black_box;
 
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).filter(|a| a != "--bench").collect();
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| a != "--bench")
+        .collect();
     if args.len() < 3 {
         return;
     }

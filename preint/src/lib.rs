@@ -19,11 +19,11 @@ pub use noise::{CellRule, ImuNoise};
 pub use sample::{ImuBias, ImuSample, dt_seconds};
 
 pub mod error;
+pub(crate) mod fast;
 pub mod params;
 pub mod preintegrator;
 pub(crate) mod propagation;
 pub mod scheme;
-pub(crate) mod simd;
 pub mod window;
 
 pub use error::PreintError;

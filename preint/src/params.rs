@@ -2,39 +2,9 @@
 //! what to compute, bias re-integration thresholds and the largest allowed sample gap.
 
 use crate::error::PreintError;
-use crate::noise::{CellRule, ImuNoise};
+use crate::noise::ImuNoise;
+pub use crate::scheme::Scheme;
 use nalgebra::{Matrix3, Vector3};
-
-/// Integration scheme. N samples in a window make N−1 intervals `[t_k, t_k+1]`, `h = t_k+1 − t_k`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Scheme {
-    /// Forster 2017 (= GTSAM `PreintegratedImuMeasurementsManifold`): sample k held over
-    /// interval k; `ΔR_k+1 = ΔR_k Exp(ω_k h)`, `Δv_k+1 = Δv_k + ΔR_k a_k h`,
-    /// `Δp_k+1 = Δp_k + Δv_k h + ½ ΔR_k a_k h²`. Global error O(h).
-    Euler,
-    /// `ω̄ = ½(ω_k + ω_k+1)`, `ΔR_k+1 = ΔR_k Exp(ω̄ h)`, `ā = ½(ΔR_k a_k + ΔR_k+1 a_k+1)`,
-    /// `Δv_k+1 = Δv_k + ā h`, `Δp_k+1 = Δp_k + Δv_k h + ½ ā h²`. Global error O(h²).
-    Midpoint,
-    /// 4th-order Hermite–Magnus scheme (`hermite4`; the command line also accepts `rk4`, the
-    /// name users look for, although it is not a Runge–Kutta method): each node's `ω̇`, `ȧ`
-    /// from the quadratic through it and its two
-    /// neighbours; `Ω = h/2(ω_k+ω_k+1) + h²/12(ω̇_k − ω̇_k+1 + ω_k×ω_k+1)` (4th-order Magnus);
-    /// Δv by the corrected trapezoid on `u = ΔR a` with `u̇ = ΔR(ω×a + ȧ)`, Δp by the corrected
-    /// trapezoid on `v`. One Exp per interval. Global error O(h⁴). See
-    /// [`crate::scheme::hermite`].
-    Hermite4,
-}
-
-impl Scheme {
-    /// How a sample's noise cell follows from its neighbours in this scheme (see
-    /// [`crate::noise`]): [`CellRule::Held`] for Euler, [`CellRule::Centered`] otherwise.
-    pub fn cell_rule(self) -> CellRule {
-        match self {
-            Scheme::Euler => CellRule::Held,
-            Scheme::Midpoint | Scheme::Hermite4 => CellRule::Centered,
-        }
-    }
-}
 
 /// What the preintegrator computes per sample. Ordered: `Deltas < Covariance < Combined`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]

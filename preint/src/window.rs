@@ -56,6 +56,7 @@
 use crate::error::PreintError;
 use crate::measurement::PreintegratedImu;
 use crate::params::{PreintParams, Scheme};
+use crate::preintegrator::validation::check_sample;
 use crate::preintegrator::{Preintegrator, Side, Src, WindowSpec};
 use crate::sample::{ImuBias, ImuSample};
 use crate::scheme::span_s;
@@ -122,42 +123,8 @@ pub fn check_samples(
     max_gap_ns: i64,
 ) -> Result<(), PreintError> {
     for index in range {
-        let s = &samples[index];
-        for (v, field) in [(&s.gyro, "gyro"), (&s.acc, "acc")] {
-            if !v.iter().all(|x| x.is_finite()) {
-                return Err(PreintError::NonFinite {
-                    index,
-                    t_ns: s.t_ns,
-                    field,
-                });
-            }
-        }
-        if index > 0 {
-            let prev = samples[index - 1].t_ns;
-            if s.t_ns == prev {
-                return Err(PreintError::DuplicateTimestamp {
-                    index,
-                    t_ns: s.t_ns,
-                });
-            }
-            if s.t_ns < prev {
-                return Err(PreintError::DecreasingTimestamp {
-                    index,
-                    t_ns: s.t_ns,
-                    prev_t_ns: prev,
-                });
-            }
-            let gap = s.t_ns as i128 - prev as i128;
-            if gap > max_gap_ns as i128 {
-                let gap_ns = i64::try_from(gap).unwrap_or(i64::MAX);
-                return Err(PreintError::GapTooLarge {
-                    index,
-                    t_ns: s.t_ns,
-                    gap_ns,
-                    max_gap_ns,
-                });
-            }
-        }
+        let prev = index.checked_sub(1).map(|i| samples[i].t_ns);
+        check_sample(&samples[index], index, prev, Some(max_gap_ns))?;
     }
     Ok(())
 }
@@ -214,28 +181,29 @@ fn boundary(
         side.nw = 1;
         return (Ok(m), samples[m], side);
     }
-    let (start, len) = match scheme {
-        Scheme::Euler | Scheme::Midpoint => (m - 1, 2),
-        Scheme::Hermite4 => {
-            let len = n.min(4);
-            (m.saturating_sub(2).min(n - len), len)
-        }
+    // Linear through the two bracketing samples for a two-point stencil, else Lagrange
+    // through as many stream samples as the stencil has (two on each side for the Hermite
+    // scheme, one-sided at the stream ends).
+    let (before, after) = scheme.stencil_reach();
+    let points = before + 2 + after;
+    let (start, len) = if points == 2 {
+        (m - 1, 2)
+    } else {
+        let len = n.min(points);
+        (m.saturating_sub(points / 2).min(n - len), len)
     };
-    let b = match scheme {
-        Scheme::Euler | Scheme::Midpoint => {
-            let lam = linear_weight(samples[m - 1].t_ns, samples[m].t_ns, t_ns);
-            side.w[0] = 1.0 - lam;
-            side.w[1] = lam;
-            interpolate_linear(&samples[m - 1], &samples[m], t_ns)
+    let b = if points == 2 {
+        let lam = linear_weight(samples[m - 1].t_ns, samples[m].t_ns, t_ns);
+        side.w[0] = 1.0 - lam;
+        side.w[1] = lam;
+        interpolate_linear(&samples[m - 1], &samples[m], t_ns)
+    } else {
+        let mut times = [0i64; 4];
+        for (t, s) in times.iter_mut().zip(&samples[start..start + len]) {
+            *t = s.t_ns;
         }
-        Scheme::Hermite4 => {
-            let mut times = [0i64; 4];
-            for (t, s) in times.iter_mut().zip(&samples[start..start + len]) {
-                *t = s.t_ns;
-            }
-            side.w = lagrange_weights(&times[..len], t_ns);
-            interpolate_lagrange(&samples[start..start + len], t_ns)
-        }
+        side.w = lagrange_weights(&times[..len], t_ns);
+        interpolate_lagrange(&samples[start..start + len], t_ns)
     };
     for k in start..start + len {
         push_src(&mut side, samples, k);
@@ -292,10 +260,11 @@ fn plan(
     } else {
         hi
     };
-    let rk4 = scheme == Scheme::Hermite4;
+    let (before, after) = scheme.stencil_reach();
+    let wide = before + after > 0;
     let (bi, node_i, mut start) = boundary(scheme, samples, t_i_ns, lo);
     let (bj, node_j, mut end) = boundary(scheme, samples, t_j_ns, mj);
-    // Stream samples strictly inside, and the context samples (rk4).
+    // Stream samples strictly inside, and the context samples (wide stencils).
     let (mut inner_lo, mut ctx_before) = match bi {
         Ok(m) => (m + 1, m.checked_sub(1)),
         Err(m) => (m, Some(m - 1)),
@@ -304,7 +273,7 @@ fn plan(
         Ok(m) => (m, Some(m + 1).filter(|&k| k < n)),
         Err(m) => (m, Some(m)),
     };
-    if rk4 {
+    if wide {
         if let Err(m) = bi {
             let step = samples[m].t_ns - samples[m - 1].t_ns;
             if too_close(samples[m].t_ns, t_i_ns, step) {

@@ -139,8 +139,13 @@ pub fn evaluate(
                 if d == 1 && scheme == Scheme::Hermite4 {
                     // Richardson estimate of the reference's own error.
                     let half: Vec<ImuSample> = samples.iter().step_by(2).copied().collect();
-                    let coarse =
-                        preintegrate(&params(Scheme::Hermite4, Level::Deltas), &bias, &half, t_i, t_j);
+                    let coarse = preintegrate(
+                        &params(Scheme::Hermite4, Level::Deltas),
+                        &bias,
+                        &half,
+                        t_i,
+                        t_j,
+                    );
                     if let Ok(c) = coarse {
                         e = errors(&c, &reference).map(|x| x / 15.0);
                     }

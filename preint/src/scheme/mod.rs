@@ -1,17 +1,154 @@
-//! Integration schemes: one interval `[t_k, t_k+1]` of the deltas and, when asked, its
-//! linearisation (transition and per-sample gains, see the internal `propagation` module).
+//! Integration schemes: what one interval `[t_k, t_k+1]` does to the deltas, and its
+//! linearisation in the one shape every scheme shares.
 //!
-//! Every scheme works on bias-corrected samples `ω = ω_m − b̂_g`, `a = a_m − b̂_a` and updates
-//! `ΔR_k+1 = ΔR_k Exp(Ω_k)`, `Δv`, `Δp` in frame i (gravity excluded, Forster eq. 33).
+//! Every scheme works on bias-corrected samples `ω = ω_m − b̂_g`, `a = a_m − b̂_a` ([`Node`]) and
+//! updates `ΔR_k+1 = ΔR_k Exp(Ω_k)`, `Δv`, `Δp` in frame i (gravity excluded, Forster et al.
+//! 2017, eq. 33). A scheme is one file implementing [`IntervalScheme`]:
+//!
+//! - its stencil (which samples interval k reads) and its noise cell rule;
+//! - [`IntervalScheme::step`]: the deltas over one interval;
+//! - [`IntervalScheme::linearise`]: the transition of the rotated error and the gain of each
+//!   stencil sample ([`Linearisation`]), from which the scheme-agnostic `propagation` module
+//!   builds the covariance, the bias Jacobians and the combined covariance;
+//! - optionally a faster implementation of its deltas alone (`Fast`, in the `fast` module).
+//!
+//! and one line in the registry below, which makes it a [`Scheme`] of the public API.
+//!
+//! | scheme | stencil of interval k | order | file |
+//! |---|---|---|---|
+//! | [`Scheme::Euler`] | k (held over the interval) | 1 | [`euler`] |
+//! | [`Scheme::Midpoint`] | k, k+1 | 2 | [`midpoint`] |
+//! | [`Scheme::Hermite4`] | k−1 … k+2 | 4 | [`hermite4`] |
 
 pub mod euler;
-pub mod hermite;
+pub mod hermite4;
+pub(crate) mod linearisation;
 pub mod midpoint;
 
-use crate::propagation::{M3, V3};
+use crate::fast::FastDeltas;
+use crate::noise::CellRule;
+use crate::propagation::blocks::{M3, V3};
 use crate::sample::{ImuBias, ImuSample};
+pub(crate) use linearisation::{GainCoef, GainForm, Linearisation, MAX_STENCIL, NodeTermsOf};
 use nalgebra::Matrix3;
-use preint_lie::so3::exp_quat_coeffs;
+
+/// One scheme: its stencil, noise cells, deltas step and linearisation (module docs).
+pub(crate) trait IntervalScheme: Copy + Default + std::fmt::Debug + 'static {
+    /// Samples interval k reads before node k and after node k+1: its stencil is
+    /// `k − NODES_BEFORE … k + 1 + NODES_AFTER`. A keyframe between samples gets a boundary
+    /// sample interpolated through as many stream samples (linear for two, cubic Lagrange for
+    /// four), and a wider stencil reads context samples beyond the window's edges
+    /// ([`crate::window`]).
+    const NODES_BEFORE: usize;
+    /// See [`IntervalScheme::NODES_BEFORE`].
+    const NODES_AFTER: usize;
+    /// Whether sample k+1's noise enters interval k (false for a scheme that holds sample k
+    /// over the interval).
+    const END_NODE_NOISE: bool;
+    /// How a sample's noise cell follows from its neighbours ([`crate::noise`]).
+    const CELL_RULE: CellRule;
+    /// Which parts of the gain basis this scheme uses.
+    const GAIN_FORM: GainForm;
+    /// What the scheme carries from one interval to the next (e.g. `ΔR_k a_k`).
+    type Carry: Copy + Default + std::fmt::Debug;
+    /// What [`IntervalScheme::step`] hands to [`IntervalScheme::linearise`].
+    type Step: Copy;
+    /// The node terms of its gains: `()`, or `[NodeTerms; 2]` for a scheme whose gains depend on
+    /// the rates' derivatives at the nodes ([`linearisation`]).
+    type NodeTerms: NodeTermsOf;
+    /// Its deltas alone at [`crate::Level::Deltas`] (the `fast` module), or
+    /// [`crate::fast::Plain`] for none.
+    type Fast: FastDeltas;
+
+    /// Number of stencil samples.
+    const STENCIL: usize = Self::NODES_BEFORE + 2 + Self::NODES_AFTER;
+
+    /// Prepares the carry for a window whose first node is `first`.
+    fn start(carry: &mut Self::Carry, first: &Node);
+    /// Integrates the interval from node `st.k` to node `st.k + 1`.
+    fn step(d: &mut Deltas, carry: &mut Self::Carry, st: &Stencil) -> Self::Step;
+    /// The interval's transition and its stencil samples' gains, in rotated coordinates at
+    /// node k+1.
+    fn linearise(step: &Self::Step, st: &Stencil) -> Linearisation<Self::NodeTerms>;
+}
+
+/// The registry: one line per scheme (its `Scheme` variant, type, name and accepted aliases).
+macro_rules! registry {
+    ($d:tt $( $(#[$doc:meta])* $variant:ident => $ty:ty, $name:literal $(| $alias:literal)* ;)*) => {
+        /// Integration scheme. N samples in a window make N−1 intervals `[t_k, t_k+1]`,
+        /// `h = t_k+1 − t_k`.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        pub enum Scheme {
+            $( $(#[$doc])* $variant, )*
+        }
+
+        impl Scheme {
+            /// Every scheme, in the order of the registry.
+            pub const ALL: &'static [Scheme] = &[$(Scheme::$variant),*];
+
+            /// The scheme's name (`euler`, `midpoint`, `hermite4`).
+            pub fn name(self) -> &'static str {
+                match self { $(Scheme::$variant => $name,)* }
+            }
+
+            /// The scheme called `name` or one of its aliases (`rk4` and `high-order` for
+            /// `hermite4`).
+            pub fn from_name(name: &str) -> Option<Self> {
+                match name {
+                    $($name $(| $alias)* => Some(Scheme::$variant),)*
+                    _ => None,
+                }
+            }
+        }
+
+        /// `with_scheme!(value, S => body)`: `body` with `S` the [`IntervalScheme`] type of
+        /// the scheme `value`.
+        macro_rules! with_scheme {
+            ($d value:expr, $d s:ident => $d body:expr) => {
+                match $d value {
+                    $( crate::scheme::Scheme::$variant => {
+                        #[allow(dead_code)]
+                        type $d s = $ty;
+                        $d body
+                    } )*
+                }
+            };
+        }
+        pub(crate) use with_scheme;
+    };
+}
+
+registry! { $
+    /// Forster et al. 2017 (= GTSAM `PreintegratedImuMeasurementsManifold`): sample k held
+    /// over interval k; `ΔR_k+1 = ΔR_k Exp(ω_k h)`, `Δv_k+1 = Δv_k + ΔR_k a_k h`,
+    /// `Δp_k+1 = Δp_k + Δv_k h + ½ ΔR_k a_k h²`. Global error O(h). See [`euler`].
+    Euler => crate::scheme::euler::Euler, "euler";
+    /// `ω̄ = ½(ω_k + ω_k+1)`, `ΔR_k+1 = ΔR_k Exp(ω̄ h)`, `ā = ½(ΔR_k a_k + ΔR_k+1 a_k+1)`,
+    /// `Δv_k+1 = Δv_k + ā h`, `Δp_k+1 = Δp_k + Δv_k h + ½ ā h²`. Global error O(h²). See
+    /// [`midpoint`].
+    Midpoint => crate::scheme::midpoint::Midpoint, "midpoint";
+    /// 4th-order Hermite–Magnus scheme (the command line also accepts `rk4`, the name users
+    /// look for, although it is not a Runge–Kutta method): each node's `ω̇`, `ȧ` from the
+    /// quadratic through it and its two neighbours;
+    /// `Ω = h/2(ω_k+ω_k+1) + h²/12(ω̇_k − ω̇_k+1 + ω_k×ω_k+1)` (4th-order Magnus); Δv by the
+    /// corrected trapezoid on `u = ΔR a` with `u̇ = ΔR(ω×a + ȧ)`, Δp by the corrected trapezoid
+    /// on `v`. One Exp per interval. Global error O(h⁴). See [`hermite4`].
+    Hermite4 => crate::scheme::hermite4::Hermite4, "hermite4" | "rk4" | "high-order";
+}
+
+impl Scheme {
+    /// How a sample's noise cell follows from its neighbours in this scheme (see
+    /// [`crate::noise`]): [`CellRule::Held`] for Euler, [`CellRule::Centered`] otherwise.
+    pub fn cell_rule(self) -> CellRule {
+        with_scheme!(self, S => S::CELL_RULE)
+    }
+
+    /// Samples interval k reads before node k and after node k+1 (`(0, 0)` for Euler and
+    /// midpoint, `(1, 1)` for the Hermite scheme).
+    pub fn stencil_reach(self) -> (usize, usize) {
+        with_scheme!(self, S => (S::NODES_BEFORE, S::NODES_AFTER))
+    }
+}
 
 /// A bias-corrected sample: time \[ns\], `ω` [rad/s], `a` [m/s²].
 ///
@@ -45,157 +182,69 @@ impl Node {
     }
 }
 
-/// Running deltas: `ΔR_k = r·R(q)`, `Δv_k` [m/s], `Δp_k` \[m\]; `u_last = ΔR_k a_k` cached by
-/// the schemes that evaluate the acceleration at both ends of an interval.
-///
-/// ΔR is accumulated in one of two forms, and the other stays exactly the identity: as the
-/// unit quaternion `q` by every scheme at [`crate::Level::Deltas`] (a product is 28 flops
-/// instead of 45, a rotation of a vector 30 instead of 15 + the Exp matrix's 20, and 4 numbers
-/// in registers instead of 9), as the matrix `r` everywhere else (the gains need ΔR_k and
-/// ΔR_k+1 as matrices). The two agree to round-off (`preint/tests/deltas_fast_path.rs`).
+/// The nodes interval k reads: `nodes[..len]` are consecutive samples (positions ≥ `len` may
+/// be any node: their weights are zero), node k is at position `k`, node k+1 at `k + 1`.
+/// `first`: the window's first interval.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Stencil<'a> {
+    pub nodes: [&'a Node; MAX_STENCIL],
+    pub len: usize,
+    pub k: usize,
+    pub first: bool,
+}
+
+impl Stencil<'_> {
+    /// Node k.
+    #[inline(always)]
+    pub(crate) fn n0(&self) -> &Node {
+        self.nodes[self.k]
+    }
+
+    /// Node k+1.
+    #[inline(always)]
+    pub(crate) fn n1(&self) -> &Node {
+        self.nodes[self.k + 1]
+    }
+
+    /// The interval's length `h` \[s\].
+    #[inline(always)]
+    pub(crate) fn h(&self) -> f64 {
+        span_s(self.n0().t_ns, self.n1().t_ns)
+    }
+}
+
+/// ΔR is re-orthonormalised (`R ← ½R(3I − RᵀR)`) every this many intervals.
+pub(crate) const RENORM_EVERY: usize = 1024;
+
+/// Running deltas: `ΔR_k` (a rotation matrix), `Δv_k` [m/s], `Δp_k` \[m\], frame i.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Deltas {
     pub r: M3,
-    pub q: Quat,
     pub v: V3,
     pub p: V3,
-    pub u_last: V3,
-    /// `u̇_k = ΔR_k s_k`, `s_k = ω_k × a_k + ȧ_k`, and `ω̇_k` at the last node (the Hermite
-    /// scheme; `du_last` with ΔR as the matrix `r`, `s_last` (frame k) with the quaternion).
-    pub du_last: V3,
-    pub s_last: V3,
-    pub dw_last: V3,
 }
 
 impl Default for Deltas {
     fn default() -> Self {
         Self {
             r: M3::identity(),
-            q: Quat::IDENTITY,
             v: V3::zeros(),
             p: V3::zeros(),
-            u_last: V3::zeros(),
-            du_last: V3::zeros(),
-            s_last: V3::zeros(),
-            dw_last: V3::zeros(),
         }
     }
 }
 
 impl Deltas {
-    /// ΔR as a matrix: `r·R(q)`, exact because one factor is the identity (`I·M` and `M·I`
-    /// add only exact zeros).
-    #[inline]
-    pub(crate) fn delta_r(&self) -> M3 {
-        debug_assert!(self.r == M3::identity() || self.q == Quat::IDENTITY);
-        self.r * self.q.matrix()
-    }
-
-    /// Re-orthonormalises ΔR to first order, `R(3I − RᵀR)/2` and `q(3 − |q|²)/2`; the
-    /// identity (the form not in use) is a fixed point of both, exactly.
+    /// Re-orthonormalises ΔR to first order, `R(3I − RᵀR)/2`.
     #[inline]
     pub(crate) fn renormalize(&mut self) {
         let r = self.r;
         self.r = r * (M3::identity() * 3.0 - r.transpose() * r) * 0.5;
-        self.q.renormalize();
     }
 }
 
-/// A unit quaternion `(w, v)`, Hamilton convention: `R(q) x = q ⊗ x ⊗ q*` (Solà 2017,
-/// "Quaternion kinematics for the error-state Kalman filter": the product, §1.2.2, and the
-/// vector rotation formula).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Quat {
-    pub w: f64,
-    pub v: V3,
-}
-
-impl Quat {
-    pub(crate) const IDENTITY: Self = Self {
-        w: 1.0,
-        v: V3::new(0.0, 0.0, 0.0),
-    };
-
-    /// `q ⊗ Exp(φ)`, `Exp(φ) = (cos(θ/2), (sin(θ/2)/θ) φ)` ([`exp_quat_coeffs`]), given
-    /// `theta2 = θ²` (which the caller can form without waiting for φ, see
-    /// [`Quat::mul_exp_scaled`]).
-    #[inline(always)]
-    pub(crate) fn mul_exp(&self, phi: &V3, theta2: f64) -> Self {
-        let (c, s) = exp_quat_coeffs(theta2);
-        let (w, x, y, z) = (self.w, self.v.x, self.v.y, self.v.z);
-        let (ex, ey, ez) = (s * phi.x, s * phi.y, s * phi.z);
-        Self {
-            w: w * c - x * ex - y * ey - z * ez,
-            v: V3::new(
-                w * ex + x * c + y * ez - z * ey,
-                w * ey - x * ez + y * c + z * ex,
-                w * ez + x * ey - y * ex + z * c,
-            ),
-        }
-    }
-
-    /// `q ⊗ Exp(k w)` for a rate `w` [rad/s] and a time `k` \[s\], with θ² formed as `|w|²·k²`:
-    /// `|w|²` does not wait for `k`, which shortens each step's chain of dependent operations
-    /// (the steps of a loop overlap only as far as the out-of-order window reaches).
-    #[inline(always)]
-    pub(crate) fn mul_exp_scaled(&self, w: &V3, k: f64) -> Self {
-        self.mul_exp(&(w * k), w.norm_squared() * (k * k))
-    }
-
-    /// `R(q) x = x + w t + v × t`, `t = 2 v × x` (unit q).
-    #[inline(always)]
-    pub(crate) fn rotate(&self, x: &V3) -> V3 {
-        let (w, u) = (self.w, &self.v);
-        let t = [
-            2.0 * (u.y * x.z - u.z * x.y),
-            2.0 * (u.z * x.x - u.x * x.z),
-            2.0 * (u.x * x.y - u.y * x.x),
-        ];
-        V3::new(
-            x.x + w * t[0] + (u.y * t[2] - u.z * t[1]),
-            x.y + w * t[1] + (u.z * t[0] - u.x * t[2]),
-            x.z + w * t[2] + (u.x * t[1] - u.y * t[0]),
-        )
-    }
-
-    /// `R(q/|q|)`: normalised first, so the drift since the last [`Quat::renormalize`] does
-    /// not reach the matrix.
-    pub(crate) fn matrix(&self) -> M3 {
-        let (w, v) = (self.w, &self.v);
-        self.scaled_matrix(2.0 / (w * w + v.x * v.x + v.y * v.y + v.z * v.z))
-    }
-
-    /// `I + s (w[v]× + [v]×²)` written entry-wise (`R(q)` for `s = 2/|q|²`).
-    #[inline(always)]
-    fn scaled_matrix(&self, s: f64) -> M3 {
-        let (w, x, y, z) = (self.w, self.v.x, self.v.y, self.v.z);
-        let (sx, sy, sz) = (s * x, s * y, s * z);
-        let (xx, yy, zz) = (x * sx, y * sy, z * sz);
-        let (xy, xz, yz) = (x * sy, x * sz, y * sz);
-        let (wx, wy, wz) = (w * sx, w * sy, w * sz);
-        Matrix3::new(
-            1.0 - (yy + zz),
-            xy - wz,
-            xz + wy,
-            xy + wz,
-            1.0 - (xx + zz),
-            yz - wx,
-            xz - wy,
-            yz + wx,
-            1.0 - (xx + yy),
-        )
-    }
-
-    /// `q (3 − |q|²)/2`: one Newton step towards |q| = 1.
-    #[inline]
-    pub(crate) fn renormalize(&mut self) {
-        let k = 0.5 * (3.0 - (self.w * self.w + self.v.norm_squared()));
-        self.w *= k;
-        self.v *= k;
-    }
-}
-
-/// `(t1 − t0)·1e-9` \[s\] computed in i128, so any pair of i64 timestamps is safe.
+/// `(t1 − t0)·1e-9` \[s\] computed in i128 when the i64 difference overflows, so any pair of
+/// i64 timestamps is safe.
 #[inline(always)]
 pub(crate) fn span_s(t0_ns: i64, t1_ns: i64) -> f64 {
     // Same integer, same rounding: the i64 → f64 conversion is a single instruction, the
@@ -208,7 +257,7 @@ pub(crate) fn span_s(t0_ns: i64, t1_ns: i64) -> f64 {
 
 /// `s I + α[φ]× + β[φ]×²`, built entry-wise from `[φ]×² = φφᵀ − θ²I` (no 3×3 products): with
 /// Rodrigues' coefficients `(b, c)` ([`preint_lie::so3::RodriguesCoeffs`]), `s·Jl(φ)` is
-/// `(s, s b, s c)` and `s·Jr(φ)` is `(s, −s b, s c)`.
+/// `(s, s b, s c)` and `s·Jr(φ)` is `(s, −s b, s c)` (Solà et al. 2018, eqs. 143–146).
 #[inline(always)]
 pub(crate) fn s_plus_hat_hat2(phi: &V3, s: f64, alpha: f64, beta: f64) -> M3 {
     let (x, y, z) = (phi.x, phi.y, phi.z);

@@ -3,9 +3,9 @@
 //! x86-64 [`quad::F4`], four in one AVX register, for processors that have AVX2 ([`avx2`]).
 //!
 //! Every operation is the lane-wise IEEE operation (no fused multiply-add), so a computation
-//! written once over [`Lane`] rounds identically on `f64`, `F2` and `F4`: the rk4 slice path
+//! written once over [`Lane`] rounds identically on `f64`, `F2` and `F4`: the Hermite slice path
 //! prepares four or two intervals at a time and the one-by-one path prepares one in `f64`, and
-//! their deltas are bit-identical (`preint/tests/deltas_fast_path.rs`). LLVM does not find this
+//! their deltas are bit-identical (the tests of [`super::hermite4`] and `preint/tests/deltas_fast_path.rs`). LLVM does not find this
 //! layout itself: it pairs the x and y components of one 3-vector and leaves z alone, and
 //! spends the difference on shuffles (a cross product) and register copies.
 
@@ -276,7 +276,7 @@ mod tests {
 
 /// Four `f64` lanes in one AVX register, for x86-64 processors that have AVX2 (checked at
 /// run time by the caller: see [`avx2`]). Every method may only run on such a processor:
-/// the rk4 slice path calls them only inside a `#[target_feature(enable = "avx2")]` function
+/// the Hermite slice path calls them only inside a `#[target_feature(enable = "avx2")]` function
 /// that it enters after [`avx2`] returned true.
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod quad {

@@ -1,4 +1,5 @@
-//! The Hermite scheme at [`crate::Level::Deltas`]: ΔR as a quaternion, no linearisation.
+//! The Hermite scheme ([`crate::scheme::hermite4`]) at [`crate::Level::Deltas`]: ΔR as a
+//! quaternion, no linearisation.
 //!
 //! With `E = Exp(Ω)` (so `ΔR_k+1 = ΔR_k E`) and `s_m = ω_m × a_m + ȧ_m` (so
 //! `u̇_m = ΔR_m s_m`), the velocity and position rules of the parent module become
@@ -10,19 +11,50 @@
 //!
 //! `E`, `x` and `y` do not depend on ΔR ([`prepare`]); what does is one quaternion product and
 //! two rotations by ΔR_k ([`State::step`]), and the rotations do not wait for ΔR_k+1. The
-//! slice path prepares a block of intervals four at a time (one per [`F4`] lane, with AVX2)
-//! or two (one per [`F2`] lane) ([`Carry::prepare_wide`]: every operation is then a packed
-//! one, where LLVM's own pairing of 3-vectors leaves a third of them scalar and adds
-//! shuffles), then accumulates the block. The one-by-one path ([`step`]) runs the same code in
-//! `f64`, so they all agree bit for bit.
+//! slice path takes the samples in blocks of [`BLOCK`]: it prepares a block's intervals four
+//! at a time (one per [`F4`] lane, with AVX2) or two (one per [`F2`] lane)
+//! ([`Carry::prepare_wide`]: every operation is then a packed one, where LLVM's own pairing of
+//! 3-vectors leaves a third of them scalar and adds shuffles), then accumulates the block. The
+//! one-by-one path ([`step`]) runs the same code in `f64`, so they all agree bit for bit.
 
-use super::{Rule, SteadyWeights, slopes};
-use crate::propagation::V3;
-use crate::sample::{ImuBias, ImuSample};
-use crate::scheme::{Deltas, Node, Quat};
 #[cfg(target_arch = "x86_64")]
-use crate::simd::quad::F4;
-use crate::simd::{F2, Lane};
+use super::lanes::quad::F4;
+use super::lanes::{F2, Lane};
+use super::quat::Quat;
+use super::{FastDeltas, QuatDeltas};
+use crate::preintegrator::validation::common_case;
+use crate::propagation::blocks::{M3, V3};
+use crate::sample::{ImuBias, ImuSample};
+use crate::scheme::hermite4::{Hermite4, Rule, Weights, slopes};
+use crate::scheme::{Node, RENORM_EVERY, Stencil};
+
+/// The steady state's weights ([`Weights`] for the centred stencil `{k, k+1, k+2}` of node
+/// k+1), keyed by the two intervals \[ns\]: what the slice path needs per sample.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct SteadyWeights {
+    key: (i64, i64),
+    rule: Rule,
+    alpha: f64,
+    beta: f64,
+}
+
+impl SteadyWeights {
+    /// The weights for the nodes at `t` \[ns\] (the default key (0, 0) matches no stream).
+    #[inline(always)]
+    fn of(&mut self, t: [i64; 3]) -> &Self {
+        let key = (t[1].wrapping_sub(t[0]), t[2].wrapping_sub(t[1]));
+        if key != self.key {
+            let (alpha, beta) = slopes(t, 1);
+            *self = Self {
+                key,
+                rule: Rule::new(t[0], t[1]),
+                alpha,
+                beta,
+            };
+        }
+        self
+    }
+}
 
 /// A 3-vector in lanes: `[x, y, z]`.
 type L3<T> = [T; 3];
@@ -207,7 +239,7 @@ pub(crate) struct State {
 
 impl State {
     #[inline(always)]
-    pub(crate) fn load(d: &Deltas) -> Self {
+    pub(crate) fn load(d: &QuatDeltas) -> Self {
         let (q, v, p) = (&d.q, &d.v, &d.p);
         Self {
             qa: F2::new(q.w, q.v.x),
@@ -217,7 +249,7 @@ impl State {
     }
 
     #[inline(always)]
-    pub(crate) fn store(&self, d: &mut Deltas) {
+    pub(crate) fn store(&self, d: &mut QuatDeltas) {
         d.q = Quat {
             w: self.qa.lo(),
             v: V3::new(self.qa.hi(), self.qb.lo(), self.qb.hi()),
@@ -250,28 +282,30 @@ impl State {
     }
 }
 
-/// One interval of the one-by-one path (nodes `n0`, `n1`, node k+1's derivatives `dw1`,
-/// `da1`; node k's are `d.dw_last`, `d.s_last`), as [`Carry`] computes it.
-#[inline(always)]
-pub(crate) fn step(d: &mut Deltas, c: &Rule, n0: &Node, n1: &Node, dw1: &V3, da1: &V3) {
-    let s1 = add(&cross(&l3(&n1.w), &l3(&n1.a)), &l3(da1));
-    let (e, x, y) = prepare(
-        c.h_2,
-        c.h2_12,
-        &l3(&n0.w),
-        &l3(&n1.w),
-        &l3(&n0.a),
-        &l3(&n1.a),
-        &l3(&d.dw_last),
-        &l3(&d.s_last),
-        &l3(dw1),
-        &s1,
-    );
-    let mut st = State::load(d);
-    st.step(&Record::one(&e, &x, &y, c.h));
-    st.store(d);
-    d.dw_last = *dw1;
-    d.s_last = v3(&s1);
+impl HermiteDeltas {
+    /// One interval of the one-by-one path (nodes `n0`, `n1`, node k+1's derivatives `dw1`,
+    /// `da1`; node k's are `self.dw_last`, `self.s_last`), as [`Carry`] computes it.
+    #[inline(always)]
+    fn interval(&mut self, c: &Rule, n0: &Node, n1: &Node, dw1: &V3, da1: &V3) {
+        let s1 = add(&cross(&l3(&n1.w), &l3(&n1.a)), &l3(da1));
+        let (e, x, y) = prepare(
+            c.h_2,
+            c.h2_12,
+            &l3(&n0.w),
+            &l3(&n1.w),
+            &l3(&n0.a),
+            &l3(&n1.a),
+            &l3(&self.dw_last),
+            &l3(&self.s_last),
+            &l3(dw1),
+            &s1,
+        );
+        let mut st = State::load(&self.d);
+        st.step(&Record::one(&e, &x, &y, c.h));
+        st.store(&mut self.d);
+        self.dw_last = *dw1;
+        self.s_last = v3(&s1);
+    }
 }
 
 /// What the slice path carries from one interval to the next (steady state): nodes k and
@@ -289,8 +323,8 @@ pub(crate) struct Carry {
 }
 
 impl Carry {
-    /// From nodes k and k+1 and node k's `ω̇_k` and `s_k` (`d.dw_last`, `d.s_last`).
-    pub(crate) fn new(n0: &Node, n1: &Node, d: &Deltas) -> Self {
+    /// From nodes k and k+1 and node k's `ω̇_k` and `s_k`.
+    pub(crate) fn new(n0: &Node, n1: &Node, dw0: V3, s0: V3) -> Self {
         Self {
             t0: n0.t_ns,
             t1: n1.t_ns,
@@ -298,15 +332,14 @@ impl Carry {
             w1: n1.w,
             a0: n0.a,
             a1: n1.a,
-            dw0: d.dw_last,
-            s0: d.s_last,
+            dw0,
+            s0,
         }
     }
 
-    /// Stores `ω̇` and `s` of the newest complete node in `d`.
-    pub(crate) fn finish(&self, d: &mut Deltas) {
-        d.dw_last = self.dw0;
-        d.s_last = self.s0;
+    /// `ω̇` and `s` of the newest complete node.
+    pub(crate) fn finish(&self) -> (V3, V3) {
+        (self.dw0, self.s0)
     }
 
     /// Interval k, completed by the new sample k+2 (`s`, corrected with `bias`): the weights
@@ -413,7 +446,7 @@ impl Carry {
 
     /// [`Carry::prepare_wide`] in [`F4`] lanes, compiled for AVX2.
     ///
-    /// Only for processors with AVX2 ([`crate::simd::avx2`]): the caller checks.
+    /// Only for processors with AVX2 ([`super::lanes::avx2`]): the caller checks.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     pub(crate) fn prepare_quads(
@@ -538,9 +571,209 @@ impl<T: Wide> LaneWeights<T> {
     }
 }
 
+/// Intervals per block of the slice path: 64 × 96 bytes of prepared intervals stay in the L1
+/// cache.
+const BLOCK: usize = 64;
+
+/// The Hermite scheme's deltas alone: ΔR as a quaternion, node k's `ω̇_k` and `s_k`, and the
+/// weights of the one-by-one path, the steady state and the lanes.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct HermiteDeltas {
+    d: QuatDeltas,
+    dw_last: V3,
+    s_last: V3,
+    weights: Weights,
+    steady: SteadyWeights,
+    /// Two intervals at a time.
+    pairs: LaneWeights<F2>,
+    /// Four at a time (with AVX2).
+    #[cfg(target_arch = "x86_64")]
+    quads: LaneWeights<F4>,
+}
+
+/// The slice path's arguments: the samples, the bias estimate, the last timestamp before
+/// them \[ns\] and the largest gap \[ns\].
+type SliceArgs<'a> = (&'a [ImuSample], &'a ImuBias, i64, u64);
+
+impl FastDeltas for HermiteDeltas {
+    const ENABLED: bool = true;
+    const SLICE_FROM: usize = 3;
+
+    fn start(&mut self, _: &Node) {}
+
+    /// The interval's node derivatives from the plain scheme's weights (the same stencils,
+    /// so the same derivatives), then [`HermiteDeltas::interval`].
+    #[inline(always)]
+    fn step(&mut self, st: &Stencil) {
+        let (c, d0, d1) = Hermite4::node_rates(&mut self.weights, st);
+        let (n0, n1) = (st.n0(), st.n1());
+        if st.first {
+            let (dw0, da0) = d0.of(st);
+            self.dw_last = dw0;
+            self.s_last = s_of(&n0.w, &n0.a, &da0);
+        }
+        let (dw1, da1) = d1.of(st);
+        self.interval(&c, n0, n1, &dw1, &da1);
+    }
+
+    /// In the steady state (every interval but the last two integrated) each new sample k+2
+    /// completes the derivative stencil `{k, k+1, k+2}` of node k+1 and so interval k, which
+    /// [`HermiteDeltas::step`] would integrate with the same weights and operations. What the
+    /// next interval needs of nodes k and k+1 is carried ([`Carry`]). A slice shorter than a
+    /// block is taken one interval at a time.
+    #[inline(never)]
+    fn run_slice(
+        &mut self,
+        last: &[Node; 2],
+        samples: &[ImuSample],
+        bias: &ImuBias,
+        last_t_ns: i64,
+        gap_limit: u64,
+        done: &mut usize,
+    ) -> usize {
+        let mut d = self.d;
+        let mut carry = Carry::new(&last[0], &last[1], self.dw_last, self.s_last);
+        let used = if samples.len() < BLOCK {
+            let w = &mut self.steady;
+            super::slice_loop(samples, last_t_ns, gap_limit, &mut d, done, |d, s| {
+                let r = carry.prepare_one(s, bias, w);
+                let mut st = State::load(d);
+                st.step(&r);
+                st.store(d);
+            })
+        } else {
+            let args = (samples, bias, last_t_ns, gap_limit);
+            #[cfg(target_arch = "x86_64")]
+            if super::lanes::avx2() {
+                // SAFETY: this processor has AVX2.
+                unsafe { self.blocks_avx2(&mut carry, &mut d, done, args) }
+            } else {
+                self.blocks::<false>(&mut carry, &mut d, done, args)
+            }
+            #[cfg(not(target_arch = "x86_64"))]
+            self.blocks::<false>(&mut carry, &mut d, done, args)
+        };
+        (self.dw_last, self.s_last) = carry.finish();
+        self.d = d;
+        used
+    }
+
+    fn renormalize(&mut self) {
+        self.d.q.renormalize();
+    }
+
+    fn deltas(&self) -> (M3, V3, V3) {
+        self.d.deltas()
+    }
+}
+
+impl HermiteDeltas {
+    /// The blocks of the slice path: per block of up to [`BLOCK`] samples that pass the
+    /// common-case test, the intervals they complete are prepared four at a time (`QUADS`,
+    /// AVX2 only), two at a time and one at a time, then accumulated.
+    #[inline(always)]
+    fn blocks<const QUADS: bool>(
+        &mut self,
+        carry: &mut Carry,
+        d: &mut QuatDeltas,
+        done: &mut usize,
+        (samples, bias, last_t_ns, gap_limit): SliceArgs,
+    ) -> usize {
+        let mut buf = [Record::default(); BLOCK];
+        let (mut used, mut last) = (0, last_t_ns);
+        loop {
+            let rest = &samples[used..];
+            let mut m = 0;
+            for s in rest.iter().take(BLOCK) {
+                if !common_case(s, last, gap_limit) {
+                    break;
+                }
+                last = s.t_ns;
+                m += 1;
+            }
+            #[cfg(target_arch = "x86_64")]
+            let i = if QUADS {
+                let i = m & !3;
+                // SAFETY: `QUADS` only from `blocks_avx2`, entered on processors with AVX2.
+                unsafe { carry.prepare_quads(&rest[..i], bias, &mut self.quads, &mut buf[..i]) };
+                i
+            } else {
+                0
+            };
+            #[cfg(not(target_arch = "x86_64"))]
+            let i = 0;
+            let even = i + ((m - i) & !1);
+            carry.prepare_wide(&rest[i..even], bias, &mut self.pairs, &mut buf[i..even]);
+            if m > even {
+                buf[even] = carry.prepare_one(&rest[even], bias, &mut self.steady);
+            }
+            #[cfg(target_arch = "x86_64")]
+            if QUADS {
+                // SAFETY: as for `prepare_quads` above.
+                unsafe { accumulate_avx2(d, done, &buf[..m]) };
+            } else {
+                accumulate(d, done, &buf[..m]);
+            }
+            #[cfg(not(target_arch = "x86_64"))]
+            accumulate(d, done, &buf[..m]);
+            used += m;
+            if m < BLOCK {
+                return used;
+            }
+        }
+    }
+
+    /// [`HermiteDeltas::blocks`] compiled for AVX2 (VEX encoding everywhere, four-lane
+    /// preparation). The same operations, so the same bits.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn blocks_avx2(
+        &mut self,
+        carry: &mut Carry,
+        d: &mut QuatDeltas,
+        done: &mut usize,
+        args: SliceArgs,
+    ) -> usize {
+        self.blocks::<true>(carry, d, done, args)
+    }
+}
+
+/// The chain through ΔR, Δv and Δp over prepared intervals, counting them (with the
+/// re-orthonormalisation every [`RENORM_EVERY`] intervals). Out of line: its registers are
+/// then allocated for this loop alone (inlined into the SSE2 block loop, they moved with every
+/// change to the preparation around it). The AVX2 copy is inlined into
+/// [`HermiteDeltas::blocks_avx2`] (its 3-operand encoding needs no register copies).
+#[inline(never)]
+fn accumulate(d: &mut QuatDeltas, done: &mut usize, recs: &[Record]) {
+    accumulate_inline(d, done, recs);
+}
+
+/// [`accumulate`] compiled for AVX2 (VEX encoding; the same operations).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline(never)]
+fn accumulate_avx2(d: &mut QuatDeltas, done: &mut usize, recs: &[Record]) {
+    accumulate_inline(d, done, recs);
+}
+
+#[inline(always)]
+fn accumulate_inline(d: &mut QuatDeltas, done: &mut usize, recs: &[Record]) {
+    let mut st = State::load(d);
+    for r in recs {
+        st.step(r);
+        *done += 1;
+        if done.is_multiple_of(RENORM_EVERY) {
+            st.store(d);
+            d.q.renormalize();
+            st = State::load(d);
+        }
+    }
+    st.store(d);
+}
+
 #[cfg(test)]
 mod tests {
-    use crate::simd::NO_AVX2;
+    use crate::fast::lanes::NO_AVX2;
     use crate::{ImuBias, ImuSample, Level, PreintParams, Preintegrator, Scheme};
     use nalgebra::Vector3;
 

@@ -1,0 +1,128 @@
+//! Deltas-only paths of the schemes with the stencil `{k, k+1}` ([`crate::scheme::euler`],
+//! [`crate::scheme::midpoint`]): the same rules with ΔR as a quaternion, one by one and
+//! straight from a slice (bit for bit the same).
+
+use super::{FastDeltas, QuatDeltas, slice_loop};
+use crate::propagation::blocks::{M3, V3};
+use crate::sample::{ImuBias, ImuSample};
+use crate::scheme::{Node, Stencil, span_s};
+
+/// Euler: `Δp += Δv h + ½ ΔR_k a_k h²`, `Δv += ΔR_k a_k h`, `ΔR ← ΔR_k Exp(ω_k h)`.
+#[inline(always)]
+fn euler(d: &mut QuatDeltas, n0: &Node, h: f64) {
+    let u = d.q.rotate(&n0.a);
+    let h2 = 0.5 * h * h;
+    d.p += d.v * h + u * h2;
+    d.v += u * h;
+    d.q = d.q.mul_exp_scaled(&n0.w, h);
+}
+
+/// Midpoint: `ΔR_k+1 = ΔR_k Exp(½(ω_k + ω_k+1) h)`, `ā = ½(u_last + ΔR_k+1 a_k+1)`,
+/// `Δp += Δv h + ½ ā h²`, `Δv += ā h`; `u_last ← ΔR_k+1 a_k+1`.
+#[inline(always)]
+fn midpoint(d: &mut QuatDeltas, u_last: &mut V3, n0: &Node, n1: &Node, h: f64) {
+    let q1 = d.q.mul_exp_scaled(&(n0.w + n1.w), 0.5 * h);
+    let u1 = q1.rotate(&n1.a);
+    let abar = (*u_last + u1) * 0.5;
+    let hh = 0.5 * h * h;
+    d.p += d.v * h + abar * hh;
+    d.v += abar * h;
+    d.q = q1;
+    *u_last = u1;
+}
+
+/// The Euler scheme's deltas alone.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct EulerDeltas {
+    d: QuatDeltas,
+}
+
+/// The midpoint scheme's deltas alone, with `ΔR_k a_k`.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct MidpointDeltas {
+    d: QuatDeltas,
+    u_last: V3,
+}
+
+impl FastDeltas for EulerDeltas {
+    const ENABLED: bool = true;
+    const SLICE_FROM: usize = 2;
+
+    fn start(&mut self, _: &Node) {}
+
+    #[inline(always)]
+    fn step(&mut self, st: &Stencil) {
+        euler(&mut self.d, st.n0(), st.h());
+    }
+
+    #[inline(never)]
+    fn run_slice(
+        &mut self,
+        last: &[Node; 2],
+        samples: &[ImuSample],
+        bias: &ImuBias,
+        last_t_ns: i64,
+        gap_limit: u64,
+        done: &mut usize,
+    ) -> usize {
+        let [mut n0, mut n1] = *last;
+        let mut d = self.d;
+        let used = slice_loop(samples, last_t_ns, gap_limit, &mut d, done, |d, s| {
+            euler(d, &n0, span_s(n0.t_ns, n1.t_ns));
+            (n0, n1) = (n1, Node::corrected(s, bias));
+        });
+        self.d = d;
+        used
+    }
+
+    fn renormalize(&mut self) {
+        self.d.q.renormalize();
+    }
+
+    fn deltas(&self) -> (M3, V3, V3) {
+        self.d.deltas()
+    }
+}
+
+impl FastDeltas for MidpointDeltas {
+    const ENABLED: bool = true;
+    const SLICE_FROM: usize = 2;
+
+    fn start(&mut self, first: &Node) {
+        // ΔR_0 a_0 = a_0.
+        self.u_last = first.a;
+    }
+
+    #[inline(always)]
+    fn step(&mut self, st: &Stencil) {
+        midpoint(&mut self.d, &mut self.u_last, st.n0(), st.n1(), st.h());
+    }
+
+    #[inline(never)]
+    fn run_slice(
+        &mut self,
+        last: &[Node; 2],
+        samples: &[ImuSample],
+        bias: &ImuBias,
+        last_t_ns: i64,
+        gap_limit: u64,
+        done: &mut usize,
+    ) -> usize {
+        let [mut n0, mut n1] = *last;
+        let (mut d, mut u_last) = (self.d, self.u_last);
+        let used = slice_loop(samples, last_t_ns, gap_limit, &mut d, done, |d, s| {
+            midpoint(d, &mut u_last, &n0, &n1, span_s(n0.t_ns, n1.t_ns));
+            (n0, n1) = (n1, Node::corrected(s, bias));
+        });
+        (self.d, self.u_last) = (d, u_last);
+        used
+    }
+
+    fn renormalize(&mut self) {
+        self.d.q.renormalize();
+    }
+
+    fn deltas(&self) -> (M3, V3, V3) {
+        self.d.deltas()
+    }
+}

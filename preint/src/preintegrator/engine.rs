@@ -1,0 +1,543 @@
+//! The interval loop of one scheme: the window's samples as nodes in a ring, each interval
+//! integrated once its stencil has arrived, its linearisation handed to the propagator, and
+//! each sample's noise added (or, near the window's edges, its gain collected) once no later
+//! interval reads it.
+//!
+//! Intervals are processed with a lag of one sample: a sample's noise needs its time cell,
+//! which the next sample gives, and the last samples of a window are edge samples, which only
+//! [`Core::measurement`] knows. That integrates the rest on a copy, so more samples may be
+//! added afterwards.
+
+use super::edges::{EdgeGains, EdgeLayout, WindowSpec, resolve};
+use super::output::Chart;
+use crate::fast::FastDeltas;
+use crate::measurement::{EdgeNoise, PreintegratedImu};
+use crate::noise::{walk_scale, white_scale};
+use crate::params::{CovShape, Level};
+use crate::propagation::blocks::{Gain96, PackedSym9};
+use crate::propagation::transition::Origin;
+use crate::propagation::{
+    AnisotropicNoise, BiasWalk, ErrorState, IsotropicNoise, NoiseCov, SampleGain,
+};
+use crate::sample::{ImuBias, ImuSample};
+use crate::scheme::{Deltas, IntervalScheme, Node, RENORM_EVERY, Stencil, span_s};
+use nalgebra::{Matrix3, Vector3};
+
+/// Nodes kept: enough for every stencil and for the slice path's write-back.
+const RING: usize = 8;
+
+/// The white-noise covariance, in the shape decided once at construction.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum NoiseKind {
+    Isotropic(IsotropicNoise),
+    Anisotropic(AnisotropicNoise),
+}
+
+impl NoiseKind {
+    /// `P += G Q Gᵀ` with `Q = diag(Σ_g, Σ_a)·s`.
+    pub(crate) fn add_full(&self, p: &mut PackedSym9, g: &Gain96, s: f64) {
+        match self {
+            NoiseKind::Isotropic(q) => q.add_full(p, g, s),
+            NoiseKind::Anisotropic(q) => q.add_full(p, g, s),
+        }
+    }
+}
+
+/// What the loop needs of the parameters, fixed at construction.
+#[derive(Clone, Debug)]
+pub(crate) struct Fixed {
+    pub bias_hat: ImuBias,
+    pub gravity: Vector3<f64>,
+    pub level: Level,
+    pub gyro_cov: Matrix3<f64>,
+    pub acc_cov: Matrix3<f64>,
+    pub noise: NoiseKind,
+    pub walk: BiasWalk,
+    pub int_cov: Option<CovShape>,
+    pub spec: WindowSpec,
+}
+
+/// The loop of scheme `S` over one window.
+#[derive(Clone, Debug)]
+pub(crate) struct Core<S: IntervalScheme> {
+    fixed: Fixed,
+    ring: [Node; RING],
+    /// Window samples pushed.
+    n: usize,
+    /// 1 if a context sample precedes the window (it is `ring[0]`, extended index 0).
+    ctx_before: usize,
+    ctx_after: Option<Node>,
+    first_t_ns: i64,
+    origin: Origin,
+    /// Window intervals integrated.
+    done: usize,
+    d: Deltas,
+    carry: S::Carry,
+    fast: S::Fast,
+    e: ErrorState,
+    edges: EdgeGains,
+}
+
+/// Hands retired samples' noise to the covariance, or their gains to the edge store.
+struct Retirer<'a, N> {
+    ring: &'a [Node; RING],
+    ctx_after: Option<&'a Node>,
+    edges: &'a mut EdgeGains,
+    noise: &'a N,
+    ctx_before: usize,
+    n: usize,
+    at_end: bool,
+}
+
+impl<N: NoiseCov> Retirer<'_, N> {
+    /// Node at extended index `i`.
+    #[inline(always)]
+    fn ext(&self, i: usize) -> &Node {
+        match self.ctx_after {
+            Some(c) if i == self.ctx_before + self.n => c,
+            _ => &self.ring[i % RING],
+        }
+    }
+
+    /// Retires sample `id` (extended index) with its total gain.
+    #[inline(always)]
+    fn retire<S: IntervalScheme>(&mut self, p: &mut PackedSym9, id: usize, gain: &SampleGain) {
+        let (cb, n) = (self.ctx_before, self.n);
+        let in_window = id >= cb && id < cb + n;
+        let (left, right) = if in_window {
+            let j = id - cb;
+            let total = if self.at_end { n } else { usize::MAX };
+            let t = self.ring[id % RING].t_ns;
+            let left = if j > 0 {
+                span_s(self.ring[(id - 1) % RING].t_ns, t)
+            } else {
+                0.0
+            };
+            let right = if j + 1 < total {
+                span_s(t, self.ring[(id + 1) % RING].t_ns)
+            } else {
+                0.0
+            };
+            (left, right)
+        } else {
+            (0.0, 0.0)
+        };
+        let edge = !in_window
+            || id - cb < edge_count::<S>()
+            || (self.at_end && id - cb + edge_count::<S>() >= n);
+        if edge
+            && self
+                .edges
+                .push(id, self.ext(id).t_ns, &gain.full(), left, right)
+        {
+            return;
+        }
+        gain.add_noise(p, self.noise, white_scale(S::CELL_RULE.cell_s(left, right)));
+    }
+}
+
+/// First and last window samples whose gains are collected: those whose stencils or cells
+/// may reach across the window's edge.
+const fn edge_count<S: IntervalScheme>() -> usize {
+    S::NODES_BEFORE + 2
+}
+
+impl<S: IntervalScheme> Core<S> {
+    /// An empty loop; the context samples of `fixed.spec` are used if `S`'s stencil reaches
+    /// beyond the window.
+    pub(crate) fn new(fixed: Fixed) -> Self {
+        let wide = S::NODES_BEFORE + S::NODES_AFTER > 0;
+        let bias = fixed.bias_hat;
+        let corrected =
+            |s: &Option<ImuSample>| s.filter(|_| wide).map(|s| Node::corrected(&s, &bias));
+        let ctx_before = corrected(&fixed.spec.start.ctx);
+        let ctx_after = corrected(&fixed.spec.end.ctx);
+        let mut ring = [Node::default(); RING];
+        if let Some(c) = ctx_before {
+            ring[0] = c;
+        }
+        Self {
+            fixed,
+            ring,
+            n: 0,
+            ctx_before: usize::from(ctx_before.is_some()),
+            ctx_after,
+            first_t_ns: 0,
+            origin: Origin::default(),
+            done: 0,
+            d: Deltas::default(),
+            carry: S::Carry::default(),
+            fast: S::Fast::default(),
+            e: ErrorState::default(),
+            edges: EdgeGains::default(),
+        }
+    }
+
+    fn linearise(&self) -> bool {
+        self.fixed.level != Level::Deltas
+    }
+
+    /// Window samples pushed.
+    pub(crate) fn len(&self) -> usize {
+        self.n
+    }
+
+    /// Window sample `j`.
+    #[inline(always)]
+    fn node(&self, j: usize) -> &Node {
+        &self.ring[(j + self.ctx_before) % RING]
+    }
+
+    /// Adds the node of a valid sample and integrates the intervals that became ready.
+    #[inline(always)]
+    pub(crate) fn push(&mut self, s: &ImuSample) {
+        let node = Node::corrected(s, &self.fixed.bias_hat);
+        if self.n == 0 {
+            self.first_t_ns = s.t_ns;
+            S::start(&mut self.carry, &node);
+            self.fast.start(&node);
+        }
+        self.ring[(self.n + self.ctx_before) % RING] = node;
+        self.n += 1;
+        self.advance(false);
+    }
+
+    #[inline(always)]
+    fn advance(&mut self, at_end: bool) {
+        match (self.linearise(), self.fixed.noise) {
+            (false, _) => self
+                .advance_with::<IsotropicNoise, false>(&IsotropicNoise { g: 0.0, a: 0.0 }, at_end),
+            (true, NoiseKind::Isotropic(q)) => self.advance_with::<_, true>(&q, at_end),
+            (true, NoiseKind::Anisotropic(q)) => self.advance_with::<_, true>(&q, at_end),
+        }
+    }
+
+    /// Whether interval `k` can be integrated while samples are still arriving: its stencil
+    /// has arrived, and the samples it retires cannot be the window's last.
+    #[inline(always)]
+    fn ready(&self, k: usize) -> bool {
+        let start = (k + self.ctx_before).saturating_sub(S::NODES_BEFORE);
+        k + 2 < self.n && start + S::STENCIL <= self.ctx_before + self.n
+    }
+
+    /// Integrates every interval that is ready; with `at_end`, all remaining intervals and
+    /// the remaining noise (the window then has exactly `self.n` samples).
+    #[inline(always)]
+    fn advance_with<N: NoiseCov, const LIN: bool>(&mut self, noise: &N, at_end: bool) {
+        let n = self.n;
+        while self.done + 1 < n && (at_end || self.ready(self.done)) {
+            if at_end {
+                self.interval::<N, LIN, true>(noise, self.done);
+            } else {
+                self.interval::<N, LIN, false>(noise, self.done);
+            }
+            self.done += 1;
+            if self.done.is_multiple_of(RENORM_EVERY) {
+                self.renormalize();
+            }
+        }
+        if at_end && LIN && n >= 2 {
+            let last = self.ctx_before + n - 1;
+            let r_last = self.d.r;
+            let (e, mut r) = self.split(noise, true);
+            if S::NODES_BEFORE + S::NODES_AFTER == 0 {
+                e.retire_last::<S>(last, &r_last, |p, id, g| r.retire::<S>(p, id, g));
+            } else {
+                e.retire_below(usize::MAX, |p, id, g| r.retire::<S>(p, id, g));
+            }
+        }
+    }
+
+    fn renormalize(&mut self) {
+        if self.linearise() || !<S::Fast as FastDeltas>::ENABLED {
+            self.d.renormalize();
+        } else {
+            self.fast.renormalize();
+        }
+    }
+
+    /// The error state and a [`Retirer`] borrowing the ring and the edge store.
+    #[inline(always)]
+    fn split<'a, N>(
+        &'a mut self,
+        noise: &'a N,
+        at_end: bool,
+    ) -> (&'a mut ErrorState, Retirer<'a, N>) {
+        let Self {
+            ring,
+            ctx_after,
+            edges,
+            e,
+            ctx_before,
+            n,
+            ..
+        } = self;
+        let r = Retirer {
+            ring,
+            ctx_after: ctx_after.as_ref(),
+            edges,
+            noise,
+            ctx_before: *ctx_before,
+            n: *n,
+            at_end,
+        };
+        (e, r)
+    }
+
+    /// Interval `k` (out of line: it keeps the per-interval code small enough for the
+    /// compiler to inline the fixed-size matrix operations).
+    #[inline(never)]
+    fn interval<N: NoiseCov, const LIN: bool, const AT_END: bool>(&mut self, noise: &N, k: usize) {
+        let at_end = AT_END;
+        let Self {
+            fixed,
+            ring,
+            n,
+            ctx_before,
+            ctx_after,
+            origin,
+            d,
+            carry,
+            fast,
+            e,
+            edges,
+            ..
+        } = self;
+        let (s0, st) = stencil::<S>(ring, ctx_after.as_ref(), *ctx_before, *n, k, at_end);
+        if !LIN && <S::Fast as FastDeltas>::ENABLED {
+            fast.step(&st);
+            return;
+        }
+        let mut r = Retirer {
+            ring,
+            ctx_after: ctx_after.as_ref(),
+            edges,
+            noise,
+            ctx_before: *ctx_before,
+            n: *n,
+            at_end,
+        };
+        if LIN && S::NODES_BEFORE + S::NODES_AFTER > 0 {
+            e.retire_below(s0, |p, id, g| r.retire::<S>(p, id, g));
+        }
+        let step = S::step(d, carry, &st);
+        if !LIN {
+            return;
+        }
+        let lin = S::linearise(&step, &st);
+        let pb = origin.pull_back(st.n1().t_ns, &d.v, &d.p);
+        e.interval::<S>(&lin, &pb, s0, st.k, st.len, &fixed.walk, |p, id, g| {
+            r.retire::<S>(p, id, g)
+        });
+        int_cov(fixed, e, d, lin.tr.h);
+    }
+
+    /// The slice path of [`crate::Level::Deltas`] (the `fast` module), when the loop is in its
+    /// steady state: integrates the leading samples of `samples` that pass the common-case
+    /// test and returns how many; 0 when not applicable.
+    pub(crate) fn run_slice(
+        &mut self,
+        samples: &[ImuSample],
+        last_t_ns: i64,
+        gap_limit: u64,
+    ) -> usize {
+        let n = self.n;
+        if self.linearise()
+            || !<S::Fast as FastDeltas>::ENABLED
+            || n < <S::Fast as FastDeltas>::SLICE_FROM
+            || self.done + 2 != n
+        {
+            return 0;
+        }
+        let last = [*self.node(n - 2), *self.node(n - 1)];
+        let bias = self.fixed.bias_hat;
+        let used = self
+            .fast
+            .run_slice(&last, samples, &bias, last_t_ns, gap_limit, &mut self.done);
+        // The ring as pushing the samples one by one would have left it.
+        self.n += used;
+        let keep = used.min(RING);
+        for (i, s) in samples[used - keep..used].iter().enumerate() {
+            let j = self.n - keep + i;
+            self.ring[(j + self.ctx_before) % RING] = Node::corrected(s, &bias);
+        }
+        used
+    }
+
+    /// The measurement over the samples pushed so far (integrated on a copy).
+    pub(crate) fn measurement(&self) -> PreintegratedImu {
+        let mut core = self.clone();
+        core.advance(true);
+        core.output()
+    }
+
+    fn output(&self) -> PreintegratedImu {
+        let fixed = &self.fixed;
+        let (r, v, p) = if self.linearise() || !<S::Fast as FastDeltas>::ENABLED {
+            (self.d.r, self.d.v, self.d.p)
+        } else {
+            self.fast.deltas()
+        };
+        let last_t_ns = self.node(self.n - 1).t_ns;
+        let mut chart = Chart::zeros();
+        let mut edge_noise = EdgeNoise::default();
+        if self.linearise() {
+            // Pulled back to the origin → pushed forward to the end (rotated coordinates) →
+            // the documented chart.
+            let tr = self.origin.push_to(last_t_ns, &v, &p);
+            let mut pw = self.e.p;
+            let layout = EdgeLayout {
+                ctx_before: self.ctx_before,
+                n: self.n,
+                first: edge_count::<S>(),
+                last: edge_count::<S>(),
+            };
+            let noise = fixed.noise;
+            edge_noise = resolve(
+                &self.edges,
+                layout,
+                &fixed.spec,
+                S::CELL_RULE,
+                (fixed.gyro_cov, fixed.acc_cov),
+                &mut pw,
+                &tr,
+                &r.transpose(),
+                |p, g, s| noise.add_full(p, g, s),
+            );
+            chart = Chart::of(&self.e, &pw, &tr, &r, &fixed.walk);
+        }
+        PreintegratedImu {
+            t_i_ns: self.first_t_ns,
+            t_j_ns: last_t_ns,
+            delta_t: span_s(self.first_t_ns, last_t_ns),
+            delta_r: preint_lie::SO3::from_matrix_unchecked(r),
+            delta_v: v,
+            delta_p: p,
+            cov: chart.cov,
+            cov15: chart.cov15,
+            jac: chart.jac,
+            bias_hat: fixed.bias_hat,
+            gravity: fixed.gravity,
+            level: fixed.level,
+            edge_noise,
+        }
+    }
+}
+
+/// Interval `k`: its stencil's first extended index, and the stencil (node k at `st.k`).
+#[inline(always)]
+fn stencil<'a, S: IntervalScheme>(
+    ring: &'a [Node; RING],
+    ctx_after: Option<&'a Node>,
+    cb: usize,
+    n: usize,
+    k: usize,
+    at_end: bool,
+) -> (usize, Stencil<'a>) {
+    let ke = k + cb;
+    let with_ctx = at_end && ctx_after.is_some();
+    let len = cb + n + usize::from(with_ctx);
+    let m = len.min(S::STENCIL);
+    let s0 = if at_end {
+        ke.saturating_sub(S::NODES_BEFORE).min(len - m)
+    } else {
+        ke.saturating_sub(S::NODES_BEFORE)
+    };
+    let at = |i: usize| &ring[i % RING];
+    let mut nodes = [at(s0), at(s0 + 1), at(s0 + 2), at(s0 + 3)];
+    if with_ctx {
+        // The context sample after the window, at extended index `cb + n`.
+        let c = ctx_after.expect("with_ctx");
+        for (j, x) in nodes.iter_mut().enumerate() {
+            if s0 + j == cb + n {
+                *x = c;
+            }
+        }
+    }
+    let st = Stencil {
+        nodes,
+        len: m,
+        k: ke - s0,
+        first: k == 0,
+    };
+    (s0, st)
+}
+
+/// Integration noise of an interval of length `h` \[s\]. GTSAM adds it to δp in the
+/// body-(k+1) chart, i.e. `ΔR_k+1 Σ_int ΔR_k+1ᵀ h` in frame i; its pulled-back gain is the
+/// same (it has no ψ row).
+#[inline(always)]
+fn int_cov(fixed: &Fixed, e: &mut ErrorState, d: &Deltas, h: f64) {
+    if let Some(ic) = &fixed.int_cov {
+        let ws = walk_scale(h);
+        match ic {
+            CovShape::Isotropic(s) => e.p.add_pp_diag(s * ws),
+            CovShape::General(m) => {
+                let r = &d.r;
+                e.p.add_pp(&(r * m * r.transpose() * ws));
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fast::Plain;
+    use crate::preintegrator::fixed;
+    use crate::scheme::midpoint::Midpoint;
+    use crate::scheme::{Linearisation, linearisation::GainForm};
+    use crate::{ImuNoise, PreintParams, Scheme};
+
+    /// The midpoint scheme without its fast path: what a new scheme without one runs.
+    #[derive(Clone, Copy, Debug, Default)]
+    struct PlainMidpoint;
+
+    impl IntervalScheme for PlainMidpoint {
+        const NODES_BEFORE: usize = Midpoint::NODES_BEFORE;
+        const NODES_AFTER: usize = Midpoint::NODES_AFTER;
+        const END_NODE_NOISE: bool = Midpoint::END_NODE_NOISE;
+        const CELL_RULE: crate::CellRule = Midpoint::CELL_RULE;
+        const GAIN_FORM: GainForm = Midpoint::GAIN_FORM;
+        type Carry = <Midpoint as IntervalScheme>::Carry;
+        type Step = <Midpoint as IntervalScheme>::Step;
+        type NodeTerms = ();
+        type Fast = Plain;
+        fn start(c: &mut Self::Carry, first: &Node) {
+            Midpoint::start(c, first)
+        }
+        fn step(d: &mut Deltas, c: &mut Self::Carry, st: &Stencil) -> Self::Step {
+            Midpoint::step(d, c, st)
+        }
+        fn linearise(s: &Self::Step, st: &Stencil) -> Linearisation {
+            Midpoint::linearise(s, st)
+        }
+    }
+
+    fn run<S: IntervalScheme>(level: Level) -> PreintegratedImu {
+        let p = PreintParams::from_noise(&ImuNoise::euroc())
+            .with_scheme(Scheme::Midpoint)
+            .with_level(level);
+        let mut core = Core::<S>::new(fixed(&p, ImuBias::zero(), WindowSpec::default()));
+        for s in crate::sample::synthetic_stream(3000) {
+            core.push(&s);
+        }
+        core.measurement()
+    }
+
+    /// A scheme without a fast path integrates its deltas with its plain step at
+    /// `Level::Deltas`: the same bits as the deltas at `Level::Covariance` (the same step), and
+    /// the fast quaternion path's deltas to round-off.
+    #[test]
+    fn a_scheme_without_a_fast_path_runs_its_plain_step_at_every_level() {
+        let plain = run::<PlainMidpoint>(Level::Deltas);
+        let cov = run::<Midpoint>(Level::Covariance);
+        let fast = run::<Midpoint>(Level::Deltas);
+        assert_eq!(plain.delta_r, cov.delta_r);
+        assert_eq!((plain.delta_v, plain.delta_p), (cov.delta_v, cov.delta_p));
+        assert_eq!(plain.cov, crate::Cov9::zeros());
+        let dr = (plain.delta_r.matrix() - fast.delta_r.matrix()).amax();
+        assert!(dr > 0.0 && dr < 1e-13, "{dr}");
+        assert!((plain.delta_v - fast.delta_v).amax() < 1e-12 * fast.delta_v.amax());
+    }
+}
