@@ -14,7 +14,9 @@ IMU CSV (EuRoC imu0): a header line starting with '#', then rows of
   timestamp [ns], w_x, w_y, w_z [rad/s], a_x, a_y, a_z [m/s^2]   (body frame, gyro first)
 Noise file (Kalibr imu.yaml): continuous-time densities, not per-sample standard deviations:
   gyroscope_noise_density [rad/s/sqrt(Hz)], gyroscope_random_walk [rad/s^2/sqrt(Hz)],
-  accelerometer_noise_density [m/s^2/sqrt(Hz)], accelerometer_random_walk [m/s^3/sqrt(Hz)], update_rate [Hz].";
+  accelerometer_noise_density [m/s^2/sqrt(Hz)], accelerometer_random_walk [m/s^3/sqrt(Hz)], update_rate [Hz].
+Schemes: euler (1st order), midpoint (2nd order), hermite4 (4th-order Hermite-Magnus, uses the \
+neighbouring samples; printed as hermite4, also accepted as rk4 or high-order).";
 
 /// On-manifold IMU preintegration: simulate, integrate, calibrate, measure noise, and chart
 /// accuracy against cost.

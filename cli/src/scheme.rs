@@ -10,9 +10,9 @@ pub enum Scheme {
     Euler,
     /// Second order (the mean of the samples at both ends of each interval).
     Midpoint,
-    /// Fourth order, Hermite–Magnus (uses the neighbouring samples); also accepted as
+    /// Fourth order, Hermite–Magnus (uses the neighbouring samples); also accepted as rk4 and
     /// high-order.
-    #[value(name = "rk4", alias = "high-order")]
+    #[value(name = "hermite4", alias = "rk4", alias = "high-order")]
     Hermite4,
 }
 
@@ -33,12 +33,12 @@ pub const ALL: [preint::Scheme; 3] = [
     preint::Scheme::Hermite4,
 ];
 
-/// The scheme's name as printed in JSON and text: `euler`, `midpoint` or `rk4`.
+/// The scheme's name as printed in JSON and text: `euler`, `midpoint` or `hermite4`.
 pub fn label(s: preint::Scheme) -> &'static str {
     match s {
         preint::Scheme::Euler => "euler",
         preint::Scheme::Midpoint => "midpoint",
-        preint::Scheme::Hermite4 => "rk4",
+        preint::Scheme::Hermite4 => "hermite4",
     }
 }
 
@@ -62,7 +62,8 @@ impl TypedValueParser for SchemeParser {
                 clap::Error::raw(
                     ErrorKind::InvalidValue,
                     format!(
-                        "unknown scheme `{}`: expected euler, midpoint or rk4\n",
+                        "unknown scheme `{}`: expected euler, midpoint or hermite4 (also \
+                         accepted: rk4, high-order)\n",
                         value.to_string_lossy()
                     ),
                 )
@@ -89,6 +90,7 @@ mod tests {
         for (input, want) in [
             ("euler", Scheme::Euler),
             ("midpoint", Scheme::Midpoint),
+            ("hermite4", Scheme::Hermite4),
             ("rk4", Scheme::Hermite4),
             ("high-order", Scheme::Hermite4),
         ] {
@@ -99,6 +101,6 @@ mod tests {
             let name = s.to_possible_value().unwrap().get_name().to_string();
             assert_eq!(label((*s).into()), name);
         }
-        assert_eq!(ALL.map(label), ["euler", "midpoint", "rk4"]);
+        assert_eq!(ALL.map(label), ["euler", "midpoint", "hermite4"]);
     }
 }

@@ -204,7 +204,7 @@ fn advise_asks_for_high_order_on_aggressive_motion() {
         "--noise",
         d.join("imu.yaml").to_str().unwrap(),
     ]);
-    assert_eq!(adv["recommended_scheme"], "rk4", "{adv}");
+    assert_eq!(adv["recommended_scheme"], "hermite4", "{adv}");
 }
 
 #[test]
@@ -223,7 +223,7 @@ fn bench_steps_orders_and_charts() {
     let ord = |s: &str| out["fitted_order"][s]["rot"].as_f64().unwrap();
     assert!((ord("euler") - 1.0).abs() < 0.15, "{}", ord("euler"));
     assert!((ord("midpoint") - 2.0).abs() < 0.2, "{}", ord("midpoint"));
-    assert!(ord("rk4") > 3.5, "{}", ord("rk4"));
+    assert!(ord("hermite4") > 3.5, "{}", ord("hermite4"));
     for f in out["files"].as_array().unwrap() {
         let svg = std::fs::read_to_string(f.as_str().unwrap()).unwrap();
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
@@ -344,5 +344,48 @@ fn integrate_covariance15_and_residual_covariance15_match_gtsam() {
             .as_str()
             .unwrap()
             .contains("CombinedImuFactor")
+    );
+}
+
+/// `--scheme` takes euler, midpoint and hermite4, and rk4 and high-order for hermite4; the
+/// output names the scheme hermite4 (JSON and text); `-h` lists the values; an unknown name is a
+/// usage error naming the accepted ones.
+#[test]
+fn scheme_names_and_aliases() {
+    let imu = repo("tests/fixtures/gtsam/example.csv");
+    let outs: Vec<Value> = ["hermite4", "rk4", "high-order"]
+        .iter()
+        .map(|s| json(&["integrate", "--imu", &imu, "--scheme", s]))
+        .collect();
+    for o in &outs {
+        assert_eq!(o["scheme"], "hermite4");
+        assert_eq!(o["delta_p"], outs[0]["delta_p"]);
+    }
+    for s in ["euler", "midpoint"] {
+        assert_eq!(
+            json(&["integrate", "--imu", &imu, "--scheme", s])["scheme"],
+            s
+        );
+    }
+    let o = run(&["integrate", "--imu", &imu, "--scheme", "rk4"]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("scheme hermite4"));
+    for sub in ["integrate", "factor"] {
+        let h = String::from_utf8_lossy(&run(&[sub, "-h"]).stdout).to_string();
+        assert!(
+            h.contains("[possible values: euler, midpoint, hermite4]") && h.contains("rk4"),
+            "{h}"
+        );
+    }
+    let h = String::from_utf8_lossy(&run(&["--help"]).stdout).to_string();
+    assert!(
+        h.contains("printed as hermite4, also accepted as rk4"),
+        "{h}"
+    );
+    let o = run(&["integrate", "--imu", &imu, "--scheme", "rk5"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        err.contains("unknown scheme `rk5`") && err.contains("hermite4"),
+        "{err}"
     );
 }

@@ -53,7 +53,7 @@ pub fn measure(scene_name: &str, rates: &[f64], window_s: f64) -> Result<Vec<Row
         if step <= 0 {
             return Err(CliError::Usage(format!("rate {rate} Hz is too high")));
         }
-        // Grid covering the window plus four samples each side (rk4 needs neighbours).
+        // Grid covering the window plus four samples each side (hermite4 needs neighbours).
         let (k0, k1) = (t_i / step - 4, t_j / step + 5);
         let samples: Vec<_> = (k0..=k1)
             .map(|k| {

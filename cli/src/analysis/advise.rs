@@ -6,7 +6,7 @@
 //!    error is a property of the motion, and comparing noisy decimated samples would measure the
 //!    noise (it enters a decimated-vs-full difference at ≈ σ√(d − 1)).
 //! 1. Windows of `--window` seconds are laid over the recording (at most 24, evenly spread).
-//! 2. Reference: the 4th-order scheme (rk4) at the recording's rate. The reference's own
+//! 2. Reference: the 4th-order scheme (hermite4) at the recording's rate. The reference's own
 //!    error is estimated by Richardson extrapolation, `|Δ₄(h) − Δ₄(2h)| / (2⁴ − 1)`.
 //! 3. For each scheme and each decimation d ∈ {1, 2, 4, …} (every d-th sample, i.e. what an IMU
 //!    sampling the same signal at rate/d would deliver, without its internal filtering) the
@@ -62,7 +62,7 @@ fn sigma(m: &PreintegratedImu) -> [f64; 3] {
 }
 
 /// Window starts \[ns\] and the window length \[ns\]: evenly spread over the recording, at
-/// most 24, leaving 64 sample periods on each side for rk4's neighbours.
+/// most 24, leaving 64 sample periods on each side for hermite4's neighbours.
 fn windows(samples: &[ImuSample], window_s: f64) -> Result<(Vec<i64>, i64), CliError> {
     let n = samples.len();
     let span = samples[n - 1].t_ns - samples[0].t_ns;
@@ -179,7 +179,7 @@ pub fn evaluate(
 pub const COST_TIE: f64 = 1.15;
 
 /// The cheapest acceptable candidate, if any; among those within [`COST_TIE`] of the cheapest,
-/// the simplest scheme (euler, then midpoint, then rk4), then the cheapest: model no more than
+/// the simplest scheme (euler, then midpoint, then hermite4), then the cheapest: model no more than
 /// the scene needs, and do not let timing noise decide between near-equal costs.
 pub fn recommend(c: &[Candidate]) -> Option<&Candidate> {
     let ok = || c.iter().filter(|c| c.acceptable);

@@ -83,7 +83,7 @@ pub fn to_json(a: &Advice) -> Value {
         "fraction": a.args.fraction, "window_s": a.args.window,
         "denoise_cutoff_hz": {"gyro": a.cutoffs[0], "acc": a.cutoffs[1]},
         "candidates": rows,
-        "method": "white noise removed by a zero-phase low-pass whose cutoff makes the residual match the noise density; reference = rk4 at the recording's rate; disc_err = max over windows of the distance to it; noise_sigma = sqrt(trace) of each covariance block",
+        "method": "white noise removed by a zero-phase low-pass whose cutoff makes the residual match the noise density; reference = hermite4 at the recording's rate; disc_err = max over windows of the distance to it; noise_sigma = sqrt(trace) of each covariance block",
     })
 }
 
@@ -122,7 +122,7 @@ pub fn to_text(a: &Advice) -> String {
         None => {
             let _ = writeln!(
                 h,
-                "no scheme keeps the discretisation error below {fraction}·σ at these rates: use rk4 at the full rate, or record faster"
+                "no scheme keeps the discretisation error below {fraction}·σ at these rates: use hermite4 at the full rate, or record faster"
             );
         }
     }

@@ -47,7 +47,8 @@ pub struct Args {
     /// Keyframe j: the ground-truth row nearest to this time (ns).
     #[arg(long, allow_hyphen_values = true)]
     pub to: i64,
-    /// Integration scheme: euler, midpoint or rk4.
+    /// Integration scheme: euler, midpoint or hermite4 (printed as hermite4; rk4 and
+    /// high-order are accepted for it).
     #[arg(long, value_parser = SchemeParser, default_value = "midpoint")]
     pub scheme: scheme::Scheme,
     /// Kalibr imu.yaml with the noise densities (default: EuRoC figures).

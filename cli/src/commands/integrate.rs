@@ -16,7 +16,8 @@ pub struct Args {
     /// IMU CSV file (EuRoC imu0 format).
     #[arg(long)]
     pub imu: PathBuf,
-    /// Integration scheme: euler, midpoint or rk4 (4th order, uses neighbouring samples).
+    /// Integration scheme: euler, midpoint or hermite4 (printed as hermite4; rk4 and
+    /// high-order are accepted for it).
     #[arg(long, value_parser = SchemeParser, default_value = "midpoint")]
     pub scheme: scheme::Scheme,
     /// Kalibr imu.yaml with the noise densities (default: EuRoC figures).
