@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{json, run, tmp, vec3};
+use common::{json, run, tmp, vec3, write, write_imu_csv};
 use nalgebra::Vector3;
 use preint::io::read_euroc_groundtruth;
 use std::path::Path;
@@ -29,17 +29,10 @@ fn mean_true_bias(gt: &Path, from: i64, to: i64) -> (Vector3<f64>, Vector3<f64>)
 
 fn simulate(scene: &str, duration: &str, seed: &str, name: &str) -> std::path::PathBuf {
     let d = tmp(name);
-    json(&[
-        "simulate",
-        "--scene",
-        scene,
-        "--duration",
-        duration,
-        "--seed",
-        seed,
-        "--out",
-        d.to_str().unwrap(),
-    ]);
+    common::simulate(
+        &d,
+        &["--scene", scene, "--duration", duration, "--seed", seed],
+    );
     d
 }
 
@@ -184,13 +177,12 @@ fn calibrate_bad_input_is_a_usage_error() {
         assert!(err.starts_with("preint: error:"), "{a:?}: {err}");
     }
     // Poses that do not overlap the samples.
-    let poses = d.join("few.csv");
-    std::fs::write(
-        &poses,
+    let poses = write(
+        &d,
+        "few.csv",
         "#t,px,py,pz,qw,qx,qy,qz,vx,vy,vz,bgx,bgy,bgz,bax,bay,baz\n\
          99000000000,0,0,0,1,0,0,0,0,0,0,0,0,0,0,0,0\n",
-    )
-    .unwrap();
+    );
     let o = run(&[
         "calibrate",
         "--imu",
@@ -204,12 +196,8 @@ fn calibrate_bad_input_is_a_usage_error() {
         "{err}"
     );
     // A solver error names the IMU file it came from.
-    let short = d.join("two.csv");
-    std::fs::write(
-        &short,
-        "#timestamp [ns],wx,wy,wz,ax,ay,az\n1000,0,0,0,0,0,9.81\n5001000,0,0,0,0,0,9.81\n",
-    )
-    .unwrap();
+    let at_rest = [0.0, 0.0, 0.0, 0.0, 0.0, 9.81];
+    let short = write_imu_csv(&d, "two.csv", &[(1000, at_rest), (5_001_000, at_rest)]);
     let o = run(&["calibrate", "--imu", short.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(

@@ -3,7 +3,10 @@
 
 mod common;
 
-use common::{json, repo, run, tmp, vec3};
+use common::{
+    EUROC_DENSITIES, json, matrix, repo, run, simulate, tmp, vec3, write, write_imu_csv,
+    write_noise_yaml,
+};
 use serde_json::Value;
 
 #[test]
@@ -49,12 +52,12 @@ fn integrate_euler_matches_the_gtsam_fixture() {
 #[test]
 fn bad_input_names_file_line_and_problem() {
     let d = tmp("bad");
-    let f = d.join("imu.csv");
-    std::fs::write(
-        &f,
+    // Line 3 has six columns.
+    let f = write(
+        &d,
+        "imu.csv",
         "#timestamp [ns],wx,wy,wz,ax,ay,az\n1000,0,0,0,0,0,9.81\n2000,0,0,0,0,9.81\n",
-    )
-    .unwrap();
+    );
     let o = run(&["integrate", "--imu", f.to_str().unwrap()]);
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
@@ -63,7 +66,8 @@ fn bad_input_names_file_line_and_problem() {
         "{err}"
     );
 
-    std::fs::write(&f, "#h\n1000,0,0,0,0,0,9.81\n1000,0,0,0,0,0,9.81\n").unwrap();
+    let at_rest = [0.0, 0.0, 0.0, 0.0, 0.0, 9.81];
+    write_imu_csv(&d, "imu.csv", &[(1000, at_rest), (1000, at_rest)]);
     let err = String::from_utf8_lossy(&run(&["integrate", "--imu", f.to_str().unwrap()]).stderr)
         .to_string();
     assert!(
@@ -72,11 +76,8 @@ fn bad_input_names_file_line_and_problem() {
     );
 
     // Accelerometer in g instead of m/s².
-    std::fs::write(
-        &f,
-        "#h\n1000,0,0,0,0,0,1.0\n2000,0,0,0,0,0,1.0\n3000,0,0,0,0,0,1.0\n",
-    )
-    .unwrap();
+    let in_g = [0.0, 0.0, 0.0, 0.0, 0.0, 1.0];
+    write_imu_csv(&d, "imu.csv", &[(1000, in_g), (2000, in_g), (3000, in_g)]);
     let o = run(&["integrate", "--imu", f.to_str().unwrap()]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("9.80665"));
@@ -115,19 +116,19 @@ fn bad_input_names_file_line_and_problem() {
 #[test]
 fn simulate_then_integrate_allan_and_advise() {
     let d = tmp("sim");
-    let out = json(&[
-        "simulate",
-        "--scene",
-        "static",
-        "--rate",
-        "100",
-        "--duration",
-        "400",
-        "--seed",
-        "7",
-        "--out",
-        d.to_str().unwrap(),
-    ]);
+    let out = simulate(
+        &d,
+        &[
+            "--scene",
+            "static",
+            "--rate",
+            "100",
+            "--duration",
+            "400",
+            "--seed",
+            "7",
+        ],
+    );
     assert_eq!(out["scene"], "static");
     assert_eq!(out["samples"], 40001);
     let imu = d.join("imu.csv");
@@ -192,17 +193,10 @@ fn simulate_then_integrate_allan_and_advise() {
 #[test]
 fn advise_asks_for_high_order_on_aggressive_motion() {
     let d = tmp("aggr");
-    json(&[
-        "simulate",
-        "--scene",
-        "aggressive",
-        "--rate",
-        "400",
-        "--duration",
-        "30",
-        "--out",
-        d.to_str().unwrap(),
-    ]);
+    simulate(
+        &d,
+        &["--scene", "aggressive", "--rate", "400", "--duration", "30"],
+    );
     let adv = json(&[
         "advise",
         "--imu",
@@ -210,7 +204,7 @@ fn advise_asks_for_high_order_on_aggressive_motion() {
         "--noise",
         d.join("imu.yaml").to_str().unwrap(),
     ]);
-    assert_eq!(adv["recommended_scheme"], "rk4", "{adv}");
+    assert_eq!(adv["recommended_scheme"], "hermite4", "{adv}");
 }
 
 #[test]
@@ -229,7 +223,7 @@ fn bench_steps_orders_and_charts() {
     let ord = |s: &str| out["fitted_order"][s]["rot"].as_f64().unwrap();
     assert!((ord("euler") - 1.0).abs() < 0.15, "{}", ord("euler"));
     assert!((ord("midpoint") - 2.0).abs() < 0.2, "{}", ord("midpoint"));
-    assert!(ord("rk4") > 3.5, "{}", ord("rk4"));
+    assert!(ord("hermite4") > 3.5, "{}", ord("hermite4"));
     for f in out["files"].as_array().unwrap() {
         let svg = std::fs::read_to_string(f.as_str().unwrap()).unwrap();
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
@@ -286,13 +280,7 @@ fn integrate_covariance15_and_residual_covariance15_match_gtsam() {
     )
     .unwrap();
     let d = tmp("cov15");
-    let yaml = d.join("imu.yaml");
-    std::fs::write(
-        &yaml,
-        "gyroscope_noise_density: 1.6968e-4\ngyroscope_random_walk: 1.9393e-5\n\
-         accelerometer_noise_density: 2.0e-3\naccelerometer_random_walk: 3.0e-3\nupdate_rate: 200.0\n",
-    )
-    .unwrap();
+    let yaml = write_noise_yaml(&d, "imu.yaml", EUROC_DENSITIES, 200.0);
     let out = json(&[
         "integrate",
         "--imu",
@@ -305,23 +293,10 @@ fn integrate_covariance15_and_residual_covariance15_match_gtsam() {
         "--bias-acc",
         "0.02,-0.01,0.03",
     ]);
-    let m = |v: &Value| -> Vec<Vec<f64>> {
-        v.as_array()
-            .unwrap()
-            .iter()
-            .map(|r| {
-                r.as_array()
-                    .unwrap()
-                    .iter()
-                    .map(|x| x.as_f64().unwrap())
-                    .collect()
-            })
-            .collect()
-    };
     let (c15, r15, dr) = (
-        m(&out["covariance15"]),
-        m(&out["residual_covariance15"]),
-        m(&out["delta_R"]),
+        matrix(&out["covariance15"]),
+        matrix(&out["residual_covariance15"]),
+        matrix(&out["delta_R"]),
     );
     for i in 0..15 {
         for j in 0..15 {
@@ -345,7 +320,7 @@ fn integrate_covariance15_and_residual_covariance15_match_gtsam() {
         }
     };
     for (ours, key) in [(&c15, "preint_meas_cov"), (&r15, "residual_covariance")] {
-        let theirs = m(&fx[key]);
+        let theirs = matrix(&fx[key]);
         let mut worst = 0.0f64;
         for a in 0..15 {
             for b in 0..15 {
@@ -369,5 +344,48 @@ fn integrate_covariance15_and_residual_covariance15_match_gtsam() {
             .as_str()
             .unwrap()
             .contains("CombinedImuFactor")
+    );
+}
+
+/// `--scheme` takes euler, midpoint and hermite4, and rk4 and high-order for hermite4; the
+/// output names the scheme hermite4 (JSON and text); `-h` lists the values; an unknown name is a
+/// usage error naming the accepted ones.
+#[test]
+fn scheme_names_and_aliases() {
+    let imu = repo("tests/fixtures/gtsam/example.csv");
+    let outs: Vec<Value> = ["hermite4", "rk4", "high-order"]
+        .iter()
+        .map(|s| json(&["integrate", "--imu", &imu, "--scheme", s]))
+        .collect();
+    for o in &outs {
+        assert_eq!(o["scheme"], "hermite4");
+        assert_eq!(o["delta_p"], outs[0]["delta_p"]);
+    }
+    for s in ["euler", "midpoint"] {
+        assert_eq!(
+            json(&["integrate", "--imu", &imu, "--scheme", s])["scheme"],
+            s
+        );
+    }
+    let o = run(&["integrate", "--imu", &imu, "--scheme", "rk4"]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("scheme hermite4"));
+    for sub in ["integrate", "factor"] {
+        let h = String::from_utf8_lossy(&run(&[sub, "-h"]).stdout).to_string();
+        assert!(
+            h.contains("[possible values: euler, midpoint, hermite4]") && h.contains("rk4"),
+            "{h}"
+        );
+    }
+    let h = String::from_utf8_lossy(&run(&["--help"]).stdout).to_string();
+    assert!(
+        h.contains("printed as hermite4, also accepted as rk4"),
+        "{h}"
+    );
+    let o = run(&["integrate", "--imu", &imu, "--scheme", "rk5"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        err.contains("unknown scheme `rk5`") && err.contains("hermite4"),
+        "{err}"
     );
 }

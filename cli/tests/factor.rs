@@ -2,42 +2,32 @@
 
 mod common;
 
-use common::{json, run, tmp, vec3};
+use common::{EUROC_DENSITIES, json, nums, run, simulate, tmp, vec3, write_noise_yaml};
 use serde_json::Value;
 
 /// Simulates `aggressive` at 200 Hz with the EuRoC densities, with (`walk`) or without the
 /// bias random walk.
-fn simulate(dir: &std::path::Path, seed: u64, duration: &str, walk: bool) {
-    let yaml = dir.join("noise.yaml");
-    let rw = if walk {
-        (1.9393e-5, 3.0e-3)
-    } else {
-        (0.0, 0.0)
-    };
-    std::fs::write(
-        &yaml,
-        format!(
-            "gyroscope_noise_density: 1.6968e-4\ngyroscope_random_walk: {}\n\
-             accelerometer_noise_density: 2.0e-3\naccelerometer_random_walk: {}\nupdate_rate: 200.0\n",
-            rw.0, rw.1
-        ),
-    )
-    .unwrap();
-    let out = json(&[
-        "simulate",
-        "--noise",
-        yaml.to_str().unwrap(),
-        "--scene",
-        "aggressive",
-        "--rate",
-        "200",
-        "--duration",
-        duration,
-        "--seed",
-        &seed.to_string(),
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
+fn simulate_aggressive(dir: &std::path::Path, seed: u64, duration: &str, walk: bool) {
+    let mut d = EUROC_DENSITIES;
+    if !walk {
+        (d[1], d[3]) = (0.0, 0.0);
+    }
+    let yaml = write_noise_yaml(dir, "noise.yaml", d, 200.0);
+    let out = simulate(
+        dir,
+        &[
+            "--noise",
+            yaml.to_str().unwrap(),
+            "--scene",
+            "aggressive",
+            "--rate",
+            "200",
+            "--duration",
+            duration,
+            "--seed",
+            &seed.to_string(),
+        ],
+    );
     assert_eq!(out["scene"], "aggressive");
 }
 
@@ -56,14 +46,6 @@ fn factor(dir: &std::path::Path, extra: &[&str]) -> Value {
     args.push(yaml.to_str().unwrap());
     args.extend_from_slice(extra);
     json(&args)
-}
-
-fn nums(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect()
 }
 
 /// On simulated data (EuRoC densities) the factor at the simulator's truth has χ² distributed
@@ -89,9 +71,9 @@ fn chi2_at_the_simulated_truth_is_consistent() {
             "--scheme",
             "rk4",
         ];
-        simulate(&d, seed + 100, "3", false);
+        simulate_aggressive(&d, seed + 100, "3", false);
         let f9 = factor(&d, &range);
-        simulate(&d, seed + 100, "3", true);
+        simulate_aggressive(&d, seed + 100, "3", true);
         let mut args = range.to_vec();
         args.push("--combined");
         let f15 = factor(&d, &args);
@@ -131,7 +113,7 @@ fn chi2_at_the_simulated_truth_is_consistent() {
 #[test]
 fn ground_truth_noise_lowers_chi2() {
     let d = tmp("factor-gtnoise");
-    simulate(&d, 7, "3", false);
+    simulate_aggressive(&d, 7, "3", false);
     let base = ["--from", "1000000000", "--to", "2000000000"];
     let plain = factor(&d, &base)["chi2"].as_f64().unwrap();
     let mut args = base.to_vec();
@@ -147,7 +129,7 @@ fn ground_truth_noise_lowers_chi2() {
 #[test]
 fn bad_keyframes_and_flags_are_usage_errors() {
     let d = tmp("factor-bad");
-    simulate(&d, 1, "1", true);
+    simulate_aggressive(&d, 1, "1", true);
     let imu = d.join("imu.csv");
     let gt = d.join("groundtruth.csv");
     let base = [

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{json, repo, run, tmp, vec3};
+use common::{json, matrix, repo, run, tmp, vec3, write_imu_csv};
 use nalgebra::{Matrix3, Vector3};
 use preint::io::read_euroc_groundtruth;
 
@@ -16,7 +16,7 @@ fn arg3(v: &Vector3<f64>) -> String {
 }
 
 fn mat(v: &serde_json::Value) -> Matrix3<f64> {
-    let r: Vec<[f64; 3]> = v.as_array().unwrap().iter().map(vec3).collect();
+    let r = matrix(v);
     Matrix3::from_fn(|i, j| r[i][j])
 }
 
@@ -64,8 +64,8 @@ fn integrate_follows_euroc_ground_truth() {
 }
 
 /// `calibrate --poses` on 40 s of EuRoC with the vicon2gt attitudes and positions as known
-/// poses (pose noise 0.1° and 5 mm, as the solver's EuRoC test). vicon2gt estimates a time-varying bias; our constant-bias estimate is compared with
-/// its average over the segment: within 2e-3 rad/s for the gyro (about 20× our σ; the
+/// poses (pose noise 0.1° and 5 mm, as preint-calib's EuRoC test). vicon2gt estimates a
+/// time-varying bias; our constant-bias estimate is compared with its average over the segment: within 2e-3 rad/s for the gyro (about 20× our σ; the
 /// reference's own bias varies by ≈ 1e-3 rad/s over the segment) and 0.05 m/s² for the
 /// accelerometer (its bias reference varies by several 0.01 m/s² over the run).
 #[test]
@@ -107,8 +107,8 @@ fn calibrate_with_known_poses_on_euroc() {
 /// deg/s, accelerometer in g, seconds). The file is not EuRoC format: `allan` must refuse it
 /// with a message naming the line and the problem (its header line has no `#`, and its times
 /// are seconds). Converted here to EuRoC (ns, rad/s, m/s²), the fitted white-noise densities
-/// are checked against the curators' overlapping Allan deviations of the raw 100 Hz run
-/// (shared/data/static_adis16405/README.txt), which do not come from this code:
+/// are checked against the curators' overlapping Allan deviations of the raw 100 Hz run (source
+/// and x-axis figures in tests/data/README.md), which do not come from this code:
 /// - gyro: white noise dominates from 0.1 to 1 s (σ falls by √10 there: 0.125 → 0.041 deg/s on
 ///   x), so N = σ(1 s) within 15 % (0.041/0.043/0.039 deg/s);
 /// - accelerometer: σ falls by only ≈ 2 between 0.1 and 1 s, so other noise matters at 1 s. Allan
@@ -129,24 +129,20 @@ fn allan_on_the_static_adis16405_hour() {
     );
 
     let text = std::fs::read_to_string(&src).unwrap();
-    let mut csv = String::from("#timestamp [ns],w_x,w_y,w_z,a_x,a_y,a_z\n");
-    for (k, line) in text.lines().skip(1).enumerate() {
-        let c: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
-        let d2r = std::f64::consts::PI / 180.0;
-        csv.push_str(&format!(
-            "{},{},{},{},{},{},{}\n",
-            k as i64 * 100_000_000,
-            c[1] * d2r,
-            c[2] * d2r,
-            c[3] * d2r,
-            c[4] * 9.80665,
-            c[5] * 9.80665,
-            c[6] * 9.80665
-        ));
-    }
+    let d2r = std::f64::consts::PI / 180.0;
+    let rows: Vec<(i64, [f64; 6])> = text
+        .lines()
+        .skip(1)
+        .enumerate()
+        .map(|(k, line)| {
+            let c: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+            let (w, a) = (d2r, 9.80665);
+            let v = [c[1] * w, c[2] * w, c[3] * w, c[4] * a, c[5] * a, c[6] * a];
+            (k as i64 * 100_000_000, v)
+        })
+        .collect();
     let d = tmp("adis");
-    let f = d.join("adis_euroc.csv");
-    std::fs::write(&f, csv).unwrap();
+    let f = write_imu_csv(&d, "adis_euroc.csv", &rows);
     let out = json(&[
         "allan",
         "--imu",
@@ -189,7 +185,7 @@ fn speed_reports_every_scheme_and_level() {
         .iter()
         .map(|s| s["scheme"].as_str().unwrap())
         .collect();
-    assert_eq!(names, ["euler", "midpoint", "rk4"]);
+    assert_eq!(names, ["euler", "midpoint", "hermite4"]);
     for s in schemes {
         for level in ["deltas", "covariance", "combined"] {
             let v = s["ns_per_sample"][level].as_f64().unwrap();

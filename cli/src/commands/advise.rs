@@ -1,245 +1,101 @@
-//! `preint advise`: the cheapest scheme and lowest rate whose discretisation error stays below a
-//! fraction of the noise-induced standard deviation of the preintegrated deltas.
-//!
-//! Method (everything estimated from the recording itself):
-//! 0. The white noise is separated from the motion (see [`crate::denoise`]): discretisation
-//!    error is a property of the motion, and comparing noisy decimated samples would measure the
-//!    noise (it enters a decimated-vs-full difference at ≈ σ√(d − 1)).
-//! 1. Windows of `--window` seconds are laid over the recording (at most 24, evenly spread).
-//! 2. Reference: the 4th-order scheme at the recording's rate. The reference's own error is
-//!    estimated by Richardson extrapolation, `|Δ_rk4(h) − Δ_rk4(2h)| / (2⁴ − 1)`.
-//! 3. For each scheme and each decimation d ∈ {1, 2, 4, …} (every d-th sample, i.e. what an IMU
-//!    sampling the same signal at rate/d would deliver, without its internal filtering) the
-//!    discretisation error is the distance to the reference: rotation angle \[rad\], |Δv| [m/s],
-//!    |Δp| \[m\], the maximum over windows.
-//! 4. The noise σ is from the preintegrated covariance at that rate: `√trace` of the δφ, δv and
-//!    δp blocks (the RMS norm of each error vector).
-//! 5. A (scheme, rate) is acceptable when all three errors are below `fraction·σ`; the cheapest
-//!    acceptable one (ns/sample measured on this machine × rate) is recommended, where costs
-//!    within 15 % of the cheapest count as equal and the simplest scheme among them wins.
+//! `preint advise`: the cheapest scheme and lowest rate whose discretisation error stays below
+//! a fraction of the noise-induced standard deviation, estimated from the recording itself
+//! (method: [`crate::analysis::advise`], after [`crate::analysis::denoise`]).
 
-use super::integrate::{noise_or_default, scheme_name};
-use super::speed::{best_ns_per_sample, synthetic_stream};
-use super::{CliError, Output};
-use crate::Command;
-use preint::io::{check_si_units, read_euroc_imu};
-use preint::{
-    ImuBias, ImuNoise, ImuSample, Level, PreintParams, PreintegratedImu, Scheme, preintegrate,
-};
-use serde_json::json;
+use crate::analysis::advise::{Candidate, evaluate, recommend};
+use crate::analysis::denoise::denoise;
+use crate::{CliError, Output, checks, input, noise, scheme};
+use serde_json::{Value, json};
 use std::fmt::Write as _;
+use std::path::PathBuf;
 
-/// One (scheme, rate) evaluation.
+/// Flags of `preint advise`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    /// IMU CSV file (EuRoC imu0 format).
+    #[arg(long)]
+    pub imu: PathBuf,
+    /// Kalibr imu.yaml with the noise densities.
+    #[arg(long)]
+    pub noise: PathBuf,
+    /// Preintegration window (s).
+    #[arg(long, default_value_t = 1.0)]
+    pub window: f64,
+    /// Allowed discretisation error as a fraction of the noise σ.
+    #[arg(long, default_value_t = 0.1)]
+    pub fraction: f64,
+}
+
+/// The evaluation and the recommendation.
 #[derive(Clone, Debug)]
-pub struct Candidate {
-    /// Integration scheme.
-    pub scheme: Scheme,
-    /// Decimation factor (1 = the recording's rate).
-    pub decimation: usize,
-    /// Sample rate \[Hz\].
-    pub rate_hz: f64,
-    /// Discretisation error, max over windows: [rotation rad, velocity m/s, position m].
-    pub disc_err: [f64; 3],
-    /// Noise-induced σ (RMS norm) at that rate: [rad, m/s, m].
-    pub noise_sigma: [f64; 3],
-    /// Cost [ns per second of IMU data] on this machine.
-    pub cost_ns_per_s: f64,
-    /// All three errors below `fraction·σ`.
-    pub acceptable: bool,
+pub struct Advice {
+    /// The flags it ran with.
+    pub args: Args,
+    /// Number of samples in the recording.
+    pub samples: usize,
+    /// Low-pass cutoffs \[Hz\] chosen for (gyro, accelerometer); `None`: left unfiltered.
+    pub cutoffs: [Option<f64>; 2],
+    /// Every (scheme, rate) evaluated.
+    pub candidates: Vec<Candidate>,
+    /// Index of the recommended candidate, if any is acceptable.
+    pub recommended: Option<usize>,
 }
 
-fn errors(a: &PreintegratedImu, b: &PreintegratedImu) -> [f64; 3] {
-    [
-        a.delta_r.minus(&b.delta_r).norm(),
-        (a.delta_v - b.delta_v).norm(),
-        (a.delta_p - b.delta_p).norm(),
-    ]
-}
-
-fn sigma(m: &PreintegratedImu) -> [f64; 3] {
-    let tr = |k: usize| {
-        (0..3)
-            .map(|i| m.cov[(3 * k + i, 3 * k + i)])
-            .sum::<f64>()
-            .sqrt()
-    };
-    [tr(0), tr(1), tr(2)]
-}
-
-/// Evaluates every scheme at the recording's rate and at decimated rates (see the module docs).
-pub fn evaluate(
-    samples: &[ImuSample],
-    noise: &ImuNoise,
-    gravity: f64,
-    window_s: f64,
-    fraction: f64,
-) -> Result<Vec<Candidate>, CliError> {
-    let fail = |e: preint::PreintError| CliError::Failed(e.to_string());
-    let n = samples.len();
-    let span = samples[n - 1].t_ns - samples[0].t_ns;
-    let w_ns = (window_s * 1e9).round() as i64;
-    if w_ns <= 0 || w_ns > span {
-        return Err(CliError::Usage(format!(
-            "--window {window_s} s must be positive and at most the recording's length ({:.3} s)",
-            span as f64 * 1e-9
-        )));
+impl Advice {
+    /// The recommended candidate, if any.
+    pub fn recommendation(&self) -> Option<&Candidate> {
+        self.recommended.map(|i| &self.candidates[i])
     }
-    let dt_s = span as f64 * 1e-9 / (n - 1) as f64;
-    // Window starts: evenly spread, at most 24, leaving room for rk4's neighbours.
-    let margin = 64 * (span / (n as i64 - 1).max(1));
-    let usable = span - w_ns - 2 * margin;
-    if usable < 0 {
-        return Err(CliError::Usage(format!(
-            "recording of {:.3} s ({n} samples) too short for a {window_s} s window: advise needs \
-             the window plus 64 samples on each side ({:.3} s in all); give a shorter --window",
-            span as f64 * 1e-9,
-            (w_ns + 2 * margin) as f64 * 1e-9
-        )));
-    }
-    let nw = (usable / w_ns + 1).clamp(1, 24);
-    let starts: Vec<i64> = (0..nw)
-        .map(|k| samples[0].t_ns + margin + if nw > 1 { usable * k / (nw - 1) } else { 0 })
-        .collect();
-    let params = |s: Scheme, level: Level| {
-        PreintParams::from_noise(noise)
-            .with_scheme(s)
-            .with_level(level)
-            .with_gravity(nalgebra::Vector3::new(0.0, 0.0, -gravity))
-    };
-    let bias = ImuBias::zero();
-    // Cost per sample does not depend on the rate: measured once per scheme (best of 5).
-    const SCHEMES: [Scheme; 3] = [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4];
-    let ns = best_ns_per_sample(&SCHEMES, Level::Covariance, &synthetic_stream(20_000), 5)?;
-    let mut out = Vec::new();
-    let mut d = 1;
-    while dt_s * d as f64 <= window_s / 8.0 && 1.0 / (dt_s * d as f64) >= 5.0 {
-        let dec: Vec<ImuSample> = samples.iter().step_by(d).copied().collect();
-        for (ks, scheme) in SCHEMES.into_iter().enumerate() {
-            let mut err = [0.0f64; 3];
-            let mut sig = [0.0f64; 3];
-            for &t0 in &starts {
-                // Keyframes on the decimated grid so no boundary interpolation enters.
-                let i0 = dec.partition_point(|s| s.t_ns < t0);
-                let t_i = dec[i0].t_ns;
-                let j0 = dec
-                    .partition_point(|s| s.t_ns < t_i + w_ns)
-                    .min(dec.len() - 1);
-                let t_j = dec[j0].t_ns;
-                let reference = preintegrate(
-                    &params(Scheme::Hermite4, Level::Deltas),
-                    &bias,
-                    samples,
-                    t_i,
-                    t_j,
-                )
-                .map_err(fail)?;
-                let m = preintegrate(&params(scheme, Level::Covariance), &bias, &dec, t_i, t_j)
-                    .map_err(fail)?;
-                let mut e = errors(&m, &reference);
-                if d == 1 && scheme == Scheme::Hermite4 {
-                    // Richardson estimate of the reference's own error.
-                    let half: Vec<ImuSample> = samples.iter().step_by(2).copied().collect();
-                    let coarse = preintegrate(
-                        &params(Scheme::Hermite4, Level::Deltas),
-                        &bias,
-                        &half,
-                        t_i,
-                        t_j,
-                    );
-                    if let Ok(c) = coarse {
-                        e = errors(&c, &reference).map(|x| x / 15.0);
-                    }
-                }
-                let s = sigma(&m);
-                for k in 0..3 {
-                    err[k] = err[k].max(e[k]);
-                    sig[k] = sig[k].max(s[k]);
-                }
-            }
-            let rate = 1.0 / (dt_s * d as f64);
-            let cost = ns[ks] * rate;
-            let acceptable = (0..3).all(|k| err[k] < fraction * sig[k]);
-            out.push(Candidate {
-                scheme,
-                decimation: d,
-                rate_hz: rate,
-                disc_err: err,
-                noise_sigma: sig,
-                cost_ns_per_s: cost,
-                acceptable,
-            });
-        }
-        d *= 2;
-    }
-    Ok(out)
 }
 
-/// Costs within this factor of the cheapest count as equal: run-to-run timing on a shared
-/// machine moves by tens of %, so a smaller measured difference says nothing.
-const COST_TIE: f64 = 1.15;
-
-/// The cheapest acceptable candidate, if any; among those within [`COST_TIE`] of the cheapest,
-/// the simplest scheme (euler, then midpoint, then rk4), then the cheapest: model no more than
-/// the scene needs, and do not let timing noise decide between near-equal costs.
-pub fn recommend(c: &[Candidate]) -> Option<&Candidate> {
-    let ok = || c.iter().filter(|c| c.acceptable);
-    let best = ok().map(|c| c.cost_ns_per_s).min_by(f64::total_cmp)?;
-    let rank = |s: Scheme| match s {
-        Scheme::Euler => 0,
-        Scheme::Midpoint => 1,
-        Scheme::Hermite4 => 2,
-    };
-    ok().filter(|c| c.cost_ns_per_s <= COST_TIE * best)
-        .min_by(|a, b| {
-            rank(a.scheme)
-                .cmp(&rank(b.scheme))
-                .then(a.cost_ns_per_s.total_cmp(&b.cost_ns_per_s))
-        })
+/// Reads the recording, separates noise from motion and evaluates every scheme and rate.
+pub fn compute(args: &Args) -> Result<Advice, CliError> {
+    checks::positive("--fraction", args.fraction)?;
+    let noise = noise::or_default(Some(&args.noise))?;
+    let samples = input::read_imu(&args.imu, true)?;
+    let (signal, cutoffs) = denoise(&samples, noise.gyro_noise_density, noise.acc_noise_density);
+    let candidates = evaluate(&signal, &noise, 9.81, args.window, args.fraction)?;
+    let recommended =
+        recommend(&candidates).and_then(|r| candidates.iter().position(|c| std::ptr::eq(c, r)));
+    Ok(Advice {
+        args: args.clone(),
+        samples: samples.len(),
+        cutoffs,
+        candidates,
+        recommended,
+    })
 }
 
-pub fn run(cmd: &Command) -> Result<Output, CliError> {
-    let Command::Advise {
-        imu,
-        noise,
-        window,
-        fraction,
-    } = cmd
-    else {
-        unreachable!()
-    };
-    if !(fraction.is_finite() && *fraction > 0.0) {
-        return Err(CliError::Usage(format!(
-            "--fraction must be positive, got {fraction}"
-        )));
-    }
-    let noise = noise_or_default(Some(noise))?;
-    let samples = read_euroc_imu(imu)?;
-    check_si_units(&samples, &imu.display().to_string())?;
-    let (signal, cutoffs) =
-        crate::denoise::denoise(&samples, noise.gyro_noise_density, noise.acc_noise_density);
-    let cands = evaluate(&signal, &noise, 9.81, *window, *fraction)?;
-    let rec = recommend(&cands);
-    let rows: Vec<_> = cands
+/// The JSON form: the recommendation, the cutoffs and every candidate.
+pub fn to_json(a: &Advice) -> Value {
+    let rec = a.recommendation();
+    let rows: Vec<_> = a
+        .candidates
         .iter()
-        .map(|c| json!({"scheme": scheme_name(c.scheme), "rate": c.rate_hz, "decimation": c.decimation,
+        .map(|c| json!({"scheme": scheme::label(c.scheme), "rate": c.rate_hz, "decimation": c.decimation,
             "disc_err": {"rot_rad": c.disc_err[0], "vel_m_s": c.disc_err[1], "pos_m": c.disc_err[2]},
             "noise_sigma": {"rot_rad": c.noise_sigma[0], "vel_m_s": c.noise_sigma[1], "pos_m": c.noise_sigma[2]},
             "cost_ns_per_s": c.cost_ns_per_s, "acceptable": c.acceptable}))
         .collect();
-    let json = json!({
-        "recommended_scheme": rec.map(|c| scheme_name(c.scheme)),
+    json!({
+        "recommended_scheme": rec.map(|c| scheme::label(c.scheme)),
         "recommended_rate": rec.map(|c| c.rate_hz),
-        "fraction": fraction, "window_s": window,
-        "denoise_cutoff_hz": {"gyro": cutoffs[0], "acc": cutoffs[1]},
+        "fraction": a.args.fraction, "window_s": a.args.window,
+        "denoise_cutoff_hz": {"gyro": a.cutoffs[0], "acc": a.cutoffs[1]},
         "candidates": rows,
-        "method": "white noise removed by a zero-phase low-pass whose cutoff makes the residual match the noise density; reference = rk4 at the recording's rate; disc_err = max over windows of the distance to it; noise_sigma = sqrt(trace) of each covariance block",
-    });
+        "method": "white noise removed by a zero-phase low-pass whose cutoff makes the residual match the noise density; reference = hermite4 at the recording's rate; disc_err = max over windows of the distance to it; noise_sigma = sqrt(trace) of each covariance block",
+    })
+}
+
+/// The human summary: the cutoffs, a table of every candidate and the recommendation.
+pub fn to_text(a: &Advice) -> String {
+    let (window, fraction) = (a.args.window, a.args.fraction);
     let mut h = String::new();
     let _ = writeln!(
         h,
         "{}: {} samples; window {window} s; threshold {fraction}·σ",
-        imu.display(),
-        samples.len()
+        a.args.imu.display(),
+        a.samples
     );
     let fmt_cut = |c: Option<f64>| {
         c.map_or(
@@ -250,9 +106,39 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
     let _ = writeln!(
         h,
         "signal/noise separation: zero-phase low-pass at gyro {}, accelerometer {}",
-        fmt_cut(cutoffs[0]),
-        fmt_cut(cutoffs[1])
+        fmt_cut(a.cutoffs[0]),
+        fmt_cut(a.cutoffs[1])
     );
+    h.push_str(&table(&a.candidates));
+    match a.recommendation() {
+        Some(c) => {
+            let _ = writeln!(
+                h,
+                "recommended: {} at {:.1} Hz (cheapest whose discretisation error < {fraction}·σ on rotation, velocity and position)",
+                scheme::label(c.scheme),
+                c.rate_hz
+            );
+        }
+        None => {
+            let _ = writeln!(
+                h,
+                "no scheme keeps the discretisation error below {fraction}·σ at these rates: use hermite4 at the full rate, or record faster"
+            );
+        }
+    }
+    if a.cutoffs.iter().any(Option::is_none) {
+        let _ = writeln!(
+            h,
+            "note: the signal above the motion band is not white noise of the stated density (vibration, or a \
+                             density set too low): the errors above include that high-frequency content."
+        );
+    }
+    h
+}
+
+/// One line per candidate: errors and σ per component, cost, `ok` when acceptable.
+fn table(candidates: &[Candidate]) -> String {
+    let mut h = String::new();
     let _ = writeln!(
         h,
         "{:<9} {:>9} {:>11} {:>11} {:>11} {:>11} {:>11} {:>11} {:>12}",
@@ -266,11 +152,11 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         "pos σ",
         "µs/s data"
     );
-    for c in &cands {
+    for c in candidates {
         let _ = writeln!(
             h,
             "{:<9} {:>9.1} {:>11.2e} {:>11.2e} {:>11.2e} {:>11.2e} {:>11.2e} {:>11.2e} {:>12.1}{}",
-            scheme_name(c.scheme),
+            scheme::label(c.scheme),
             c.rate_hz,
             c.disc_err[0],
             c.noise_sigma[0],
@@ -282,72 +168,14 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
             if c.acceptable { "  ok" } else { "" }
         );
     }
-    match rec {
-        Some(c) => {
-            let _ = writeln!(
-                h,
-                "recommended: {} at {:.1} Hz (cheapest whose discretisation error < {fraction}·σ on rotation, velocity and position)",
-                scheme_name(c.scheme),
-                c.rate_hz
-            );
-        }
-        None => {
-            let _ = writeln!(
-                h,
-                "no scheme keeps the discretisation error below {fraction}·σ at these rates: use rk4 at the full rate, or record faster"
-            );
-        }
-    }
-    if cutoffs.iter().any(Option::is_none) {
-        let _ = writeln!(
-            h,
-            "note: the signal above the motion band is not white noise of the stated density (vibration, or a \
-                             density set too low): the errors above include that high-frequency content."
-        );
-    }
-    Ok(Output { human: h, json })
+    h
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn cand(scheme: Scheme, rate_hz: f64, cost: f64, acceptable: bool) -> Candidate {
-        Candidate {
-            scheme,
-            decimation: 1,
-            rate_hz,
-            disc_err: [0.0; 3],
-            noise_sigma: [1.0; 3],
-            cost_ns_per_s: cost,
-            acceptable,
-        }
-    }
-
-    /// Near-equal costs (within 15 %) go to the simpler scheme; a clearly cheaper scheme wins;
-    /// unacceptable candidates never do.
-    #[test]
-    fn recommend_breaks_near_ties_towards_the_simpler_scheme() {
-        // The static case CI once saw: midpoint measured 3 % cheaper than euler at 12.5 Hz.
-        let c = [
-            cand(Scheme::Euler, 12.5, 3356.0, true),
-            cand(Scheme::Midpoint, 12.5, 3260.0, true),
-            cand(Scheme::Hermite4, 12.5, 13895.0, true),
-        ];
-        assert_eq!(recommend(&c).unwrap().scheme, Scheme::Euler);
-        // Midpoint 30 % cheaper: it wins.
-        let c = [
-            cand(Scheme::Euler, 400.0, 50_000.0, true),
-            cand(Scheme::Midpoint, 50.0, 35_000.0, true),
-        ];
-        assert_eq!(recommend(&c).unwrap().scheme, Scheme::Midpoint);
-        // The cheapest is not acceptable: the cheapest acceptable one is chosen.
-        let c = [
-            cand(Scheme::Euler, 25.0, 1_000.0, false),
-            cand(Scheme::Hermite4, 25.0, 20_000.0, true),
-            cand(Scheme::Midpoint, 200.0, 40_000.0, true),
-        ];
-        assert_eq!(recommend(&c).unwrap().scheme, Scheme::Hermite4);
-        assert!(recommend(&[cand(Scheme::Euler, 25.0, 1.0, false)]).is_none());
-    }
+/// Runs `preint advise`.
+pub fn run(args: &Args) -> Result<Output, CliError> {
+    let a = compute(args)?;
+    Ok(Output {
+        human: to_text(&a),
+        json: to_json(&a),
+    })
 }

@@ -10,29 +10,76 @@
 //! - otherwise the single-attitude static problem: gyro bias and roll/pitch; the accelerometer
 //!   bias is not separable from tilt and is reported as unobservable (`acc_bias: null`).
 
-use super::integrate::noise_or_default;
-use super::{CliError, Output, list};
-use crate::Command;
+use crate::format::{list, opt_list};
+use crate::{CliError, Output, checks, noise};
 use nalgebra::Vector3;
-use preint::io::{check_si_units, read_euroc_groundtruth, read_euroc_imu};
-use preint::{ImuSample, PreintParams, Scheme};
+use preint::io::{read_euroc_groundtruth, read_euroc_imu};
+use preint::{ImuNoise, ImuSample, PreintParams, Scheme};
 use preint_calib::bias::{
-    KnownPose, KnownPoseOptions, MultiPoseOptions, StaticOptions, StillOptions,
-    calibrate_known_poses, calibrate_multi_pose, calibrate_static, detect_still_intervals,
+    KnownPose, KnownPoseCalibration, KnownPoseOptions, MultiPoseCalibration, MultiPoseOptions,
+    StaticCalibration, StaticOptions, StillInterval, StillOptions, calibrate_known_poses,
+    calibrate_multi_pose, calibrate_static, detect_still_intervals,
 };
 use serde_json::{Value, json};
+use std::path::{Path, PathBuf};
 
-/// A solver error, prefixed with the IMU file it came from.
-fn fail_in(imu: &std::path::Path) -> impl Fn(preint_calib::bias::BiasError) -> CliError + '_ {
-    move |e| CliError::Failed(format!("{}: {e}", imu.display()))
+/// Flags of `preint calibrate`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    /// IMU CSV file (EuRoC imu0 format).
+    #[arg(long)]
+    pub imu: PathBuf,
+    /// Known poses (EuRoC ground-truth format) for the known-pose problem.
+    #[arg(long)]
+    pub poses: Option<PathBuf>,
+    /// Kalibr imu.yaml with the noise densities (default: EuRoC figures).
+    #[arg(long)]
+    pub noise: Option<PathBuf>,
+    /// Gravity magnitude G (m/s^2).
+    #[arg(long, default_value_t = 9.81)]
+    pub gravity: f64,
+    /// Use only samples (and poses) with timestamps >= this, in ns.
+    #[arg(long, allow_hyphen_values = true)]
+    pub from: Option<i64>,
+    /// Use only samples (and poses) with timestamps <= this, in ns.
+    #[arg(long, allow_hyphen_values = true)]
+    pub to: Option<i64>,
+    /// Known-pose problem: standard deviation of the given attitudes in rad (0: exact).
+    /// E.g. 1.75e-3 (0.1°) and --pose-pos-std 0.005 for motion capture such as EuRoC's.
+    #[arg(long, default_value_t = 0.0)]
+    pub pose_rot_std: f64,
+    /// Known-pose problem: standard deviation of the given positions in m (0: exact).
+    #[arg(long, default_value_t = 0.0)]
+    pub pose_pos_std: f64,
 }
 
-fn opt3(v: Option<Vector3<f64>>) -> Value {
-    v.map_or(Value::Null, |v| list(&v))
+/// The problem solved and its estimates.
+#[derive(Clone, Debug)]
+pub enum Calibration {
+    /// Known poses: biases, velocities and the gravity direction.
+    KnownPoses {
+        /// The pose file, as printed.
+        source: String,
+        /// Number of poses used (≥ 0.5 s apart, inside the IMU time span).
+        poses: usize,
+        /// The stated pose noise: attitude \[rad\], position \[m\].
+        pose_std: (f64, f64),
+        /// The estimates.
+        c: Box<KnownPoseCalibration>,
+    },
+    /// Still intervals at ≥ 3 distinct attitudes: both biases, scale factors if BIC says so.
+    MultiPose(Box<MultiPoseCalibration>),
+    /// One attitude: gyro bias, roll and pitch.
+    Static(Box<StaticCalibration>),
+}
+
+/// A solver error, prefixed with the IMU file it came from.
+fn fail_in(imu: &Path) -> impl Fn(preint_calib::bias::BiasError) -> CliError + '_ {
+    move |e| CliError::failed_in(imu, e)
 }
 
 /// Number of still intervals whose mean specific-force directions differ pairwise by > 20°.
-fn distinct_attitudes(samples: &[ImuSample], ivs: &[preint_calib::bias::StillInterval]) -> usize {
+fn distinct_attitudes(samples: &[ImuSample], ivs: &[StillInterval]) -> usize {
     let mut dirs: Vec<Vector3<f64>> = Vec::new();
     for iv in ivs {
         let m: Vector3<f64> = samples[iv.start..iv.end]
@@ -47,111 +94,77 @@ fn distinct_attitudes(samples: &[ImuSample], ivs: &[preint_calib::bias::StillInt
     dirs.len()
 }
 
-pub fn run(cmd: &Command) -> Result<Output, CliError> {
-    let Command::Calibrate {
-        imu,
-        poses,
-        noise,
-        gravity,
-        from,
-        to,
-        pose_rot_std,
-        pose_pos_std,
-    } = cmd
-    else {
-        unreachable!()
-    };
-    let fail = fail_in(imu);
-    for (name, v) in [
-        ("--pose-rot-std", pose_rot_std),
-        ("--pose-pos-std", pose_pos_std),
-    ] {
-        if !(v.is_finite() && *v >= 0.0) {
-            return Err(CliError::Usage(format!(
-                "{name} must be a non-negative number, got {v}"
-            )));
-        }
-    }
-    if !(gravity.is_finite() && *gravity > 0.0) {
-        return Err(CliError::Usage(format!(
-            "--gravity must be a positive number, got {gravity}"
-        )));
-    }
-    let noise = noise_or_default(noise.as_ref())?;
-    let mut samples = read_euroc_imu(imu)?;
-    let (lo, hi) = (from.unwrap_or(i64::MIN), to.unwrap_or(i64::MAX));
+/// Reads the samples in `[--from, --to]` and checks their units.
+fn read_samples(args: &Args) -> Result<Vec<ImuSample>, CliError> {
+    let mut samples = read_euroc_imu(&args.imu)?;
+    let (lo, hi) = (args.from.unwrap_or(i64::MIN), args.to.unwrap_or(i64::MAX));
     samples.retain(|s| s.t_ns >= lo && s.t_ns <= hi);
     if samples.len() < 2 {
         return Err(CliError::Failed(format!(
             "{}: fewer than two samples with timestamps in [{lo}, {hi}] ns",
-            imu.display()
+            args.imu.display()
         )));
     }
-    check_si_units(&samples, &imu.display().to_string())?;
-    let g = Vector3::new(0.0, 0.0, -gravity);
+    checks::si_units(&samples, &args.imu)?;
+    Ok(samples)
+}
+
+/// The known-pose problem on the poses of `pfile` inside the samples' time span.
+fn known_poses(
+    args: &Args,
+    pfile: &Path,
+    samples: &[ImuSample],
+    noise: &ImuNoise,
+) -> Result<Calibration, CliError> {
+    let gt = read_euroc_groundtruth(pfile)?;
+    let (t0, t1) = (samples[0].t_ns, samples[samples.len() - 1].t_ns);
+    let mut kp: Vec<KnownPose> = Vec::new();
+    for s in gt.iter().filter(|s| s.t_ns >= t0 && s.t_ns <= t1) {
+        if kp.last().is_none_or(|l| s.t_ns - l.t_ns >= 500_000_000) {
+            kp.push(KnownPose {
+                t_ns: s.t_ns,
+                r: s.rotation(),
+                p: s.p,
+            });
+        }
+    }
+    if kp.len() < 3 {
+        return Err(CliError::Failed(format!(
+            "{}: fewer than three poses inside the IMU time span (poses ≥ 0.5 s apart are used)",
+            pfile.display()
+        )));
+    }
+    let params = PreintParams::from_noise(noise)
+        .with_scheme(Scheme::Midpoint)
+        .with_gravity(Vector3::new(0.0, 0.0, -args.gravity));
+    let opts = KnownPoseOptions {
+        pose_rot_std: args.pose_rot_std,
+        pose_pos_std: args.pose_pos_std,
+        ..KnownPoseOptions::new(params)
+    };
+    let c = calibrate_known_poses(samples, &kp, &opts).map_err(fail_in(&args.imu))?;
+    Ok(Calibration::KnownPoses {
+        source: pfile.display().to_string(),
+        poses: kp.len(),
+        pose_std: (args.pose_rot_std, args.pose_pos_std),
+        c: Box::new(c),
+    })
+}
+
+/// Chooses the problem (module docs) and solves it.
+pub fn compute(args: &Args) -> Result<Calibration, CliError> {
+    checks::non_negative("--pose-rot-std", args.pose_rot_std)?;
+    checks::non_negative("--pose-pos-std", args.pose_pos_std)?;
+    checks::positive("--gravity", args.gravity)?;
+    let noise = noise::or_default(args.noise.as_deref())?;
+    let samples = read_samples(args)?;
+    if let Some(pfile) = &args.poses {
+        return known_poses(args, pfile, &samples, &noise);
+    }
+    let fail = fail_in(&args.imu);
+    let g = Vector3::new(0.0, 0.0, -args.gravity);
     let n = samples.len();
     let rate = (n - 1) as f64 / ((samples[n - 1].t_ns - samples[0].t_ns) as f64 * 1e-9);
-
-    if let Some(pfile) = poses {
-        let gt = read_euroc_groundtruth(pfile)?;
-        let (t0, t1) = (samples[0].t_ns, samples[n - 1].t_ns);
-        let mut kp: Vec<KnownPose> = Vec::new();
-        for s in gt.iter().filter(|s| s.t_ns >= t0 && s.t_ns <= t1) {
-            if kp.last().is_none_or(|l| s.t_ns - l.t_ns >= 500_000_000) {
-                kp.push(KnownPose {
-                    t_ns: s.t_ns,
-                    r: s.rotation(),
-                    p: s.p,
-                });
-            }
-        }
-        if kp.len() < 3 {
-            return Err(CliError::Failed(format!(
-                "{}: fewer than three poses inside the IMU time span (poses ≥ 0.5 s apart are used)",
-                pfile.display()
-            )));
-        }
-        let params = PreintParams::from_noise(&noise)
-            .with_scheme(Scheme::Midpoint)
-            .with_gravity(g);
-        let opts = KnownPoseOptions {
-            pose_rot_std: *pose_rot_std,
-            pose_pos_std: *pose_pos_std,
-            ..KnownPoseOptions::new(params)
-        };
-        let c = calibrate_known_poses(&samples, &kp, &opts).map_err(&fail)?;
-        let json = json!({
-            "model": "known-poses", "poses": kp.len(),
-            "gyro_bias": list(&c.bias.gyro), "gyro_bias_std": list(&c.gyro_bias_std),
-            "acc_bias": list(&c.bias.acc), "acc_bias_std": list(&c.acc_bias_std),
-            "gravity": list(&c.gravity), "gravity_std": list(&c.gravity_std), "gravity_tilt_deg": c.gravity_tilt.to_degrees(),
-            "pose_rot_std": pose_rot_std, "pose_pos_std": pose_pos_std,
-            "iterations": c.iterations, "cost": 0.5 * c.chi2, "chi2": c.chi2, "dof": c.dof,
-            "units": {"gyro_bias": "rad/s", "acc_bias": "m/s^2", "gravity": "m/s^2"},
-        });
-        let human = format!(
-            "known-pose calibration ({} poses from {}):\n  b_g = [{:.6}, {:.6}, {:.6}] ± [{:.1e}, {:.1e}, {:.1e}] rad/s\n  b_a = [{:.4}, {:.4}, {:.4}] ± [{:.1e}, {:.1e}, {:.1e}] m/s²\n  gravity tilt {:.3}°, χ²/dof = {:.2}, {} iterations\n",
-            kp.len(),
-            pfile.display(),
-            c.bias.gyro.x,
-            c.bias.gyro.y,
-            c.bias.gyro.z,
-            c.gyro_bias_std.x,
-            c.gyro_bias_std.y,
-            c.gyro_bias_std.z,
-            c.bias.acc.x,
-            c.bias.acc.y,
-            c.bias.acc.z,
-            c.acc_bias_std.x,
-            c.acc_bias_std.y,
-            c.acc_bias_std.z,
-            c.gravity_tilt.to_degrees(),
-            c.chi2 / c.dof.max(1) as f64,
-            c.iterations
-        );
-        return Ok(Output { human, json });
-    }
-
     let still =
         detect_still_intervals(&samples, &StillOptions::from_noise(&noise, rate)).map_err(&fail)?;
     if distinct_attitudes(&samples, &still) >= 3 {
@@ -160,74 +173,124 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
             ..Default::default()
         };
         let c = calibrate_multi_pose(&samples, &noise, &opts).map_err(&fail)?;
-        let fits: Vec<Value> = c.fits.iter().map(|f| json!({"model": format!("{:?}", f.model), "chi2": f.chi2,
-            "params": f.params, "bic": f.bic, "identifiable": f.identifiable, "converged": f.converged})).collect();
-        let chosen = c.fits.iter().find(|f| f.model == c.model);
-        let json = json!({
-            "model": format!("multi-pose/{:?}", c.model), "still_intervals": c.intervals.len(),
+        return Ok(Calibration::MultiPose(Box::new(c)));
+    }
+    let opts = StaticOptions {
+        gravity: g,
+        ..Default::default()
+    };
+    let c = calibrate_static(&samples, &noise, &opts).map_err(&fail)?;
+    Ok(Calibration::Static(Box::new(c)))
+}
+
+/// The JSON form: `model` names the problem; estimates with standard deviations, χ², units.
+pub fn to_json(cal: &Calibration) -> Value {
+    match cal {
+        Calibration::KnownPoses {
+            poses, pose_std, c, ..
+        } => json!({
+            "model": "known-poses", "poses": poses,
+            "gyro_bias": list(&c.bias.gyro), "gyro_bias_std": list(&c.gyro_bias_std),
+            "acc_bias": list(&c.bias.acc), "acc_bias_std": list(&c.acc_bias_std),
+            "gravity": list(&c.gravity), "gravity_std": list(&c.gravity_std), "gravity_tilt_deg": c.gravity_tilt.to_degrees(),
+            "pose_rot_std": pose_std.0, "pose_pos_std": pose_std.1,
+            "iterations": c.iterations, "cost": 0.5 * c.chi2, "chi2": c.chi2, "dof": c.dof,
+            "units": {"gyro_bias": "rad/s", "acc_bias": "m/s^2", "gravity": "m/s^2"},
+        }),
+        Calibration::MultiPose(c) => multi_pose_json(c),
+        Calibration::Static(c) => json!({
+            "model": "static-single-attitude",
             "gyro_bias": list(&c.gyro_bias), "gyro_bias_std": list(&c.gyro_bias_std),
-            "acc_bias": list(&c.acc_bias), "acc_bias_std": list(&c.acc_bias_std),
-            "acc_scale": opt3(c.acc_scale), "acc_scale_std": opt3(c.acc_scale_std),
-            "gyro_scale": opt3(c.gyro_scale), "gyro_scale_std": opt3(c.gyro_scale_std),
-            "model_selection": fits, "reason": c.reason,
-            "bias_reference_time_ns": c.reference_time_ns, "random_walk_marginalised": c.random_walk_marginalised,
-            "iterations": c.iterations, "cost": chosen.map(|f| 0.5 * f.chi2),
-            "units": {"gyro_bias": "rad/s", "acc_bias": "m/s^2", "scale": "dimensionless (1 = ideal)"},
-        });
-        let human = format!(
-            "multi-position calibration: {} still intervals; model {:?} ({})\n  b_g = [{:.6}, {:.6}, {:.6}] ± [{:.1e}, {:.1e}, {:.1e}] rad/s\n  b_a = [{:.4}, {:.4}, {:.4}] ± [{:.1e}, {:.1e}, {:.1e}] m/s²\n",
+            "acc_bias": opt_list(c.acc_bias), "acc_bias_std": opt_list(c.acc_bias_std), "acc_bias_note": c.acc_bias_note,
+            "roll": c.roll, "pitch": c.pitch, "roll_std": c.roll_std, "pitch_std": c.pitch_std,
+            "unobservable": c.unobservable, "measured_gyro_density": list(&c.measured_gyro_density),
+            "measured_acc_density": list(&c.measured_acc_density),
+            "iterations": c.iterations, "cost": 0.5 * c.chi2, "chi2": c.chi2, "dof": c.dof,
+            "units": {"gyro_bias": "rad/s", "roll": "rad", "pitch": "rad", "densities": "rad/s/sqrt(Hz), m/s^2/sqrt(Hz)"},
+        }),
+    }
+}
+
+fn multi_pose_json(c: &MultiPoseCalibration) -> Value {
+    let fits: Vec<Value> = c
+        .fits
+        .iter()
+        .map(|f| {
+            json!({"model": format!("{:?}", f.model), "chi2": f.chi2,
+        "params": f.params, "bic": f.bic, "identifiable": f.identifiable, "converged": f.converged})
+        })
+        .collect();
+    let chosen = c.fits.iter().find(|f| f.model == c.model);
+    json!({
+        "model": format!("multi-pose/{:?}", c.model), "still_intervals": c.intervals.len(),
+        "gyro_bias": list(&c.gyro_bias), "gyro_bias_std": list(&c.gyro_bias_std),
+        "acc_bias": list(&c.acc_bias), "acc_bias_std": list(&c.acc_bias_std),
+        "acc_scale": opt_list(c.acc_scale), "acc_scale_std": opt_list(c.acc_scale_std),
+        "gyro_scale": opt_list(c.gyro_scale), "gyro_scale_std": opt_list(c.gyro_scale_std),
+        "model_selection": fits, "reason": c.reason,
+        "bias_reference_time_ns": c.reference_time_ns, "random_walk_marginalised": c.random_walk_marginalised,
+        "iterations": c.iterations, "cost": chosen.map(|f| 0.5 * f.chi2),
+        "units": {"gyro_bias": "rad/s", "acc_bias": "m/s^2", "scale": "dimensionless (1 = ideal)"},
+    })
+}
+
+/// `  b_g = [x, y, z] ± [σx, σy, σz] rad/s`.
+fn gyro_line(b: &Vector3<f64>, s: &Vector3<f64>) -> String {
+    format!(
+        "  b_g = [{:.6}, {:.6}, {:.6}] ± [{:.1e}, {:.1e}, {:.1e}] rad/s\n",
+        b.x, b.y, b.z, s.x, s.y, s.z
+    )
+}
+
+/// `  b_a = [x, y, z] ± [σx, σy, σz] m/s²`.
+fn acc_line(b: &Vector3<f64>, s: &Vector3<f64>) -> String {
+    format!(
+        "  b_a = [{:.4}, {:.4}, {:.4}] ± [{:.1e}, {:.1e}, {:.1e}] m/s²\n",
+        b.x, b.y, b.z, s.x, s.y, s.z
+    )
+}
+
+/// The human summary: the problem solved and its estimates with standard deviations.
+pub fn to_text(cal: &Calibration) -> String {
+    match cal {
+        Calibration::KnownPoses {
+            source, poses, c, ..
+        } => format!(
+            "known-pose calibration ({poses} poses from {source}):\n{}{}  gravity tilt {:.3}°, \
+             χ²/dof = {:.2}, {} iterations\n",
+            gyro_line(&c.bias.gyro, &c.gyro_bias_std),
+            acc_line(&c.bias.acc, &c.acc_bias_std),
+            c.gravity_tilt.to_degrees(),
+            c.chi2 / c.dof.max(1) as f64,
+            c.iterations
+        ),
+        Calibration::MultiPose(c) => format!(
+            "multi-position calibration: {} still intervals; model {:?} ({})\n{}{}",
             c.intervals.len(),
             c.model,
             c.reason,
-            c.gyro_bias.x,
-            c.gyro_bias.y,
-            c.gyro_bias.z,
-            c.gyro_bias_std.x,
-            c.gyro_bias_std.y,
-            c.gyro_bias_std.z,
-            c.acc_bias.x,
-            c.acc_bias.y,
-            c.acc_bias.z,
-            c.acc_bias_std.x,
-            c.acc_bias_std.y,
-            c.acc_bias_std.z
-        );
-        return Ok(Output { human, json });
+            gyro_line(&c.gyro_bias, &c.gyro_bias_std),
+            acc_line(&c.acc_bias, &c.acc_bias_std)
+        ),
+        Calibration::Static(c) => format!(
+            "static calibration (one attitude, {:.1} s):\n{}  roll {:.4}° ± {:.1e}°, pitch {:.4}° \
+             ± {:.1e}°\n  b_a: not estimated ({})\n",
+            c.duration_s,
+            gyro_line(&c.gyro_bias, &c.gyro_bias_std),
+            c.roll.to_degrees(),
+            c.roll_std.to_degrees(),
+            c.pitch.to_degrees(),
+            c.pitch_std.to_degrees(),
+            c.acc_bias_note
+        ),
     }
+}
 
-    let c = calibrate_static(
-        &samples,
-        &noise,
-        &StaticOptions {
-            gravity: g,
-            ..Default::default()
-        },
-    )
-    .map_err(&fail)?;
-    let json = json!({
-        "model": "static-single-attitude",
-        "gyro_bias": list(&c.gyro_bias), "gyro_bias_std": list(&c.gyro_bias_std),
-        "acc_bias": opt3(c.acc_bias), "acc_bias_std": opt3(c.acc_bias_std), "acc_bias_note": c.acc_bias_note,
-        "roll": c.roll, "pitch": c.pitch, "roll_std": c.roll_std, "pitch_std": c.pitch_std,
-        "unobservable": c.unobservable, "measured_gyro_density": list(&c.measured_gyro_density),
-        "measured_acc_density": list(&c.measured_acc_density),
-        "iterations": c.iterations, "cost": 0.5 * c.chi2, "chi2": c.chi2, "dof": c.dof,
-        "units": {"gyro_bias": "rad/s", "roll": "rad", "pitch": "rad", "densities": "rad/s/sqrt(Hz), m/s^2/sqrt(Hz)"},
-    });
-    let human = format!(
-        "static calibration (one attitude, {:.1} s):\n  b_g = [{:.6}, {:.6}, {:.6}] ± [{:.1e}, {:.1e}, {:.1e}] rad/s\n  roll {:.4}° ± {:.1e}°, pitch {:.4}° ± {:.1e}°\n  b_a: not estimated ({})\n",
-        c.duration_s,
-        c.gyro_bias.x,
-        c.gyro_bias.y,
-        c.gyro_bias.z,
-        c.gyro_bias_std.x,
-        c.gyro_bias_std.y,
-        c.gyro_bias_std.z,
-        c.roll.to_degrees(),
-        c.roll_std.to_degrees(),
-        c.pitch.to_degrees(),
-        c.pitch_std.to_degrees(),
-        c.acc_bias_note
-    );
-    Ok(Output { human, json })
+/// Runs `preint calibrate`.
+pub fn run(args: &Args) -> Result<Output, CliError> {
+    let c = compute(args)?;
+    Ok(Output {
+        human: to_text(&c),
+        json: to_json(&c),
+    })
 }

@@ -15,28 +15,64 @@
 //! residual `U r` (`UᵀU = Σ⁻¹`, `U` upper triangular), `χ² = ‖U r‖²` with its χ² quantiles, and
 //! each block's marginal χ² (`r_bᵀ Σ_bb⁻¹ r_b`, 3 dof) to say which part disagrees.
 
-use super::integrate::{noise_or_default, parse_scheme, scheme_name};
-use super::{CliError, Output, list};
-use crate::Command;
-use nalgebra::{SMatrix, SVector, Vector3};
-use preint::factor::sqrt_information;
-use preint::io::{GroundTruthState, check_si_units, read_euroc_groundtruth, read_euroc_imu};
+//! The weighting and χ² are [`crate::analysis::consistency`].
+
+use crate::analysis::consistency::{Evaluation, TruthNoise, chi2_quantiles, evaluate};
+use crate::format::list;
+use crate::scheme::{self, SchemeParser};
+use crate::{CliError, Output, checks, input, noise};
+use nalgebra::Vector3;
+use preint::io::{GroundTruthState, read_euroc_groundtruth};
 use preint::{
     CombinedImuFactor, ImuBias, ImuFactor, Level, NavState, PreintParams, PreintegratedImu,
     preintegrate,
 };
 use serde_json::{Value, json};
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::PathBuf;
 
-/// χ² quantiles (scipy.stats.chi2.ppf) for 3, 9 and 15 degrees of freedom: (0.95, 0.99).
-fn chi2_quantiles(dof: usize) -> (f64, f64) {
-    match dof {
-        3 => (7.814_728, 11.344_867),
-        9 => (16.918_978, 21.665_994),
-        15 => (24.995_790, 30.577_914),
-        _ => unreachable!("dof {dof}"),
-    }
+/// Flags of `preint factor`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    /// IMU CSV file (EuRoC imu0 format).
+    #[arg(long)]
+    pub imu: PathBuf,
+    /// Ground truth (EuRoC state_groundtruth_estimate0 format: p (m), q wxyz body->world,
+    /// v (m/s), b_g (rad/s), b_a (m/s^2)), world frame z up.
+    #[arg(long)]
+    pub poses: PathBuf,
+    /// Keyframe i: the ground-truth row nearest to this time (ns).
+    #[arg(long, allow_hyphen_values = true)]
+    pub from: i64,
+    /// Keyframe j: the ground-truth row nearest to this time (ns).
+    #[arg(long, allow_hyphen_values = true)]
+    pub to: i64,
+    /// Integration scheme: euler, midpoint or hermite4 (printed as hermite4; rk4 and
+    /// high-order are accepted for it).
+    #[arg(long, value_parser = SchemeParser, default_value = "midpoint")]
+    pub scheme: scheme::Scheme,
+    /// Kalibr imu.yaml with the noise densities (default: EuRoC figures).
+    #[arg(long)]
+    pub noise: Option<PathBuf>,
+    /// Gravity magnitude G (m/s^2); gravity is (0, 0, -G).
+    #[arg(long, default_value_t = 9.81)]
+    pub gravity: f64,
+    /// Evaluate CombinedImuFactor (15-dim residual with the bias change b_j - b_i, weighted
+    /// by the covariance with the bias random walk) instead of ImuFactor (9-dim).
+    #[arg(long)]
+    pub combined: bool,
+    /// Standard deviation of the ground truth's attitudes (rad), added to the weight.
+    #[arg(long, default_value_t = 0.0)]
+    pub pose_rot_std: f64,
+    /// Standard deviation of the ground truth's positions (m), added to the weight.
+    #[arg(long, default_value_t = 0.0)]
+    pub pose_pos_std: f64,
+    /// Standard deviation of the ground truth's velocities (m/s), added to the weight.
+    #[arg(long, default_value_t = 0.0)]
+    pub vel_std: f64,
+    /// Skip the check that the data looks like SI units (m/s^2, rad/s).
+    #[arg(long)]
+    pub no_unit_check: bool,
 }
 
 const BLOCKS: [&str; 5] = ["rotation", "velocity", "position", "gyro_bias", "acc_bias"];
@@ -45,67 +81,99 @@ const ORDER: [&str; 15] = [
     "r_bg_x", "r_bg_y", "r_bg_z", "r_ba_x", "r_ba_y", "r_ba_z",
 ];
 
-/// The standard deviations of the ground truth's own errors (0: exact).
-#[derive(Clone, Copy, Debug)]
-struct TruthNoise {
-    rot_rad: f64,
-    pos_m: f64,
-    vel_m_s: f64,
-}
-
-/// A factor evaluated at the ground truth, weighted.
-struct Evaluation {
-    residual: Vec<f64>,
-    whitened: Vec<f64>,
-    chi2: f64,
-    /// Per 3-row block: `r_bᵀ Σ_bb⁻¹ r_b`.
-    marginal_chi2: Vec<f64>,
-}
-
-fn evaluate<const R: usize>(
-    r: SVector<f64, R>,
-    jac_i: SMatrix<f64, R, 9>,
-    jac_j: SMatrix<f64, R, 9>,
-    cov: SMatrix<f64, R, R>,
-    tn: TruthNoise,
-) -> Result<Evaluation, CliError> {
-    let mut s = SMatrix::<f64, 9, 9>::zeros();
-    for k in 0..3 {
-        s[(k, k)] = tn.rot_rad.powi(2);
-        s[(3 + k, 3 + k)] = tn.pos_m.powi(2);
-        s[(6 + k, 6 + k)] = tn.vel_m_s.powi(2);
-    }
-    let sigma = cov + jac_i * s * jac_i.transpose() + jac_j * s * jac_j.transpose();
-    let u = sqrt_information(&sigma).map_err(|e| CliError::Failed(format!("weight: {e}")))?;
-    let w = u * r;
-    let marginal_chi2 = (0..R / 3)
-        .map(|b| {
-            let rb = r.fixed_rows::<3>(3 * b).into_owned();
-            let sb = sigma.fixed_view::<3, 3>(3 * b, 3 * b).into_owned();
-            sb.cholesky().map_or(f64::NAN, |c| rb.dot(&c.solve(&rb)))
-        })
-        .collect();
-    Ok(Evaluation {
-        residual: r.iter().copied().collect(),
-        whitened: w.iter().copied().collect(),
-        chi2: w.norm_squared(),
-        marginal_chi2,
-    })
-}
-
-/// The ground-truth row nearest to `t_ns`.
-fn nearest(gt: &[GroundTruthState], t_ns: i64) -> &GroundTruthState {
-    let k = gt.partition_point(|s| s.t_ns < t_ns);
-    let candidates = [k.saturating_sub(1), k.min(gt.len() - 1)];
-    let best = candidates
-        .into_iter()
-        .min_by_key(|&c| (gt[c].t_ns - t_ns).unsigned_abs())
-        .unwrap();
-    &gt[best]
+/// Everything `factor` computes.
+#[derive(Clone, Debug)]
+pub struct FactorRun {
+    /// The IMU file, as printed.
+    pub imu: String,
+    /// The scheme used.
+    pub scheme: preint::Scheme,
+    /// `CombinedImuFactor` (else `ImuFactor`).
+    pub combined: bool,
+    /// Ground truth at keyframe i.
+    pub gi: GroundTruthState,
+    /// Ground truth at keyframe j.
+    pub gj: GroundTruthState,
+    /// `--from` and `--to` as given (ns).
+    pub requested: (i64, i64),
+    /// The window, preintegrated with the ground truth's bias at i.
+    pub pim: PreintegratedImu,
+    /// Number of samples with timestamps in the window.
+    pub samples: usize,
+    /// The ground truth's own errors added to the weight.
+    pub truth_noise: TruthNoise,
+    /// The weighted residual.
+    pub ev: Evaluation,
 }
 
 fn nav(s: &GroundTruthState) -> NavState {
     NavState::new(s.rotation(), s.p, s.v)
+}
+
+/// Reads the files, preintegrates the window between the keyframes and evaluates the factor.
+pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
+    let tn = TruthNoise {
+        rot_rad: args.pose_rot_std,
+        pos_m: args.pose_pos_std,
+        vel_m_s: args.vel_std,
+    };
+    checks::non_negative("--pose-rot-std", tn.rot_rad)?;
+    checks::non_negative("--pose-pos-std", tn.pos_m)?;
+    checks::non_negative("--vel-std", tn.vel_m_s)?;
+    checks::non_negative("--gravity", args.gravity)?;
+    let noise = noise::or_default(args.noise.as_deref())?;
+    let samples = input::read_imu(&args.imu, !args.no_unit_check)?;
+    let gt = read_euroc_groundtruth(&args.poses)?;
+    let (gi, gj) = (
+        *input::nearest_row(&gt, args.from),
+        *input::nearest_row(&gt, args.to),
+    );
+    if gj.t_ns <= gi.t_ns {
+        return Err(CliError::Usage(format!(
+            "{}: the ground-truth rows nearest to --from {} and --to {} are at {} and {} ns; \
+             they must be two different rows, the first earlier",
+            args.poses.display(),
+            args.from,
+            args.to,
+            gi.t_ns,
+            gj.t_ns
+        )));
+    }
+    let level = if args.combined {
+        Level::Combined
+    } else {
+        Level::Covariance
+    };
+    let scheme = args.scheme.into();
+    let params = PreintParams::from_noise(&noise)
+        .with_scheme(scheme)
+        .with_level(level)
+        .with_gravity(Vector3::new(0.0, 0.0, -args.gravity));
+    let pim = preintegrate(&params, &gi.bias, &samples, gi.t_ns, gj.t_ns)
+        .map_err(|e| CliError::failed_in(&args.imu, e))?;
+    let failed = |e: preint::FactorError| CliError::failed_in(&args.imu, e);
+    let (xi, xj) = (nav(&gi), nav(&gj));
+    let ev = if args.combined {
+        let f = CombinedImuFactor::new(pim.clone()).map_err(failed)?;
+        let (r, j) = f.evaluate(&xi, &xj, &gi.bias, &gj.bias);
+        evaluate(r, j.state_i(), j.state_j(), pim.residual_cov15(), tn)?
+    } else {
+        let f = ImuFactor::new(pim.clone()).map_err(failed)?;
+        let (r, j) = f.evaluate(&xi, &xj, &gi.bias);
+        evaluate(r, j.state_i(), j.state_j(), pim.cov, tn)?
+    };
+    Ok(FactorRun {
+        imu: args.imu.display().to_string(),
+        scheme,
+        combined: args.combined,
+        gi,
+        gj,
+        requested: (args.from, args.to),
+        samples: input::count_in(&samples, gi.t_ns, gj.t_ns),
+        pim,
+        truth_noise: tn,
+        ev,
+    })
 }
 
 fn state_json(s: &GroundTruthState) -> Value {
@@ -117,115 +185,17 @@ fn bias_json(b: &ImuBias) -> Value {
     json!({"gyro": list(&b.gyro), "acc": list(&b.acc)})
 }
 
-/// Everything `factor` computes.
-struct FactorRun {
-    scheme: &'static str,
-    combined: bool,
-    gi: GroundTruthState,
-    gj: GroundTruthState,
-    requested: (i64, i64),
-    pim: PreintegratedImu,
-    samples: usize,
-    truth_noise: TruthNoise,
-    ev: Evaluation,
+fn factor_name(combined: bool) -> &'static str {
+    if combined {
+        "CombinedImuFactor"
+    } else {
+        "ImuFactor"
+    }
 }
 
-fn compute(cmd: &Command) -> Result<FactorRun, CliError> {
-    let Command::Factor {
-        imu,
-        poses,
-        from,
-        to,
-        scheme,
-        noise,
-        gravity,
-        combined,
-        pose_rot_std,
-        pose_pos_std,
-        vel_std,
-        no_unit_check,
-    } = cmd
-    else {
-        unreachable!()
-    };
-    for (name, v) in [
-        ("--pose-rot-std", pose_rot_std),
-        ("--pose-pos-std", pose_pos_std),
-        ("--vel-std", vel_std),
-    ] {
-        if !(v.is_finite() && *v >= 0.0) {
-            return Err(CliError::Usage(format!(
-                "{name} must be a non-negative number, got {v}"
-            )));
-        }
-    }
-    if !(gravity.is_finite() && *gravity >= 0.0) {
-        return Err(CliError::Usage(format!(
-            "--gravity must be a non-negative number, got {gravity}"
-        )));
-    }
-    let scheme_v = parse_scheme(scheme)?;
-    let noise = noise_or_default(noise.as_ref())?;
-    let samples = read_euroc_imu(imu)?;
-    if !no_unit_check {
-        check_si_units(&samples, &imu.display().to_string())?;
-    }
-    let gt = read_euroc_groundtruth(poses)?;
-    let (gi, gj) = (*nearest(&gt, *from), *nearest(&gt, *to));
-    if gj.t_ns <= gi.t_ns {
-        return Err(CliError::Usage(format!(
-            "{}: the ground-truth rows nearest to --from {from} and --to {to} are at {} and {} ns; \
-             they must be two different rows, the first earlier",
-            poses.display(),
-            gi.t_ns,
-            gj.t_ns
-        )));
-    }
-    let level = if *combined {
-        Level::Combined
-    } else {
-        Level::Covariance
-    };
-    let params = PreintParams::from_noise(&noise)
-        .with_scheme(scheme_v)
-        .with_level(level)
-        .with_gravity(Vector3::new(0.0, 0.0, -gravity));
-    let pim = preintegrate(&params, &gi.bias, &samples, gi.t_ns, gj.t_ns)
-        .map_err(|e| CliError::Failed(format!("{}: {e}", imu.display())))?;
-    let n_used = samples
-        .iter()
-        .filter(|s| s.t_ns >= gi.t_ns && s.t_ns <= gj.t_ns)
-        .count();
-    let tn = TruthNoise {
-        rot_rad: *pose_rot_std,
-        pos_m: *pose_pos_std,
-        vel_m_s: *vel_std,
-    };
-    let failed = |e: preint::FactorError| CliError::Failed(format!("{}: {e}", imu.display()));
-    let (xi, xj) = (nav(&gi), nav(&gj));
-    let ev = if *combined {
-        let f = CombinedImuFactor::new(pim.clone()).map_err(failed)?;
-        let (r, j) = f.evaluate(&xi, &xj, &gi.bias, &gj.bias);
-        evaluate(r, j.state_i(), j.state_j(), pim.residual_cov15(), tn)?
-    } else {
-        let f = ImuFactor::new(pim.clone()).map_err(failed)?;
-        let (r, j) = f.evaluate(&xi, &xj, &gi.bias);
-        evaluate(r, j.state_i(), j.state_j(), pim.cov, tn)?
-    };
-    Ok(FactorRun {
-        scheme: scheme_name(scheme_v),
-        combined: *combined,
-        gi,
-        gj,
-        requested: (*from, *to),
-        pim,
-        samples: n_used,
-        truth_noise: tn,
-        ev,
-    })
-}
-
-fn to_json(f: &FactorRun) -> Value {
+/// The JSON form: keyframes, states, residual, whitened residual, χ² with quantiles, marginal
+/// χ² per block, the weight used and the units.
+pub fn to_json(f: &FactorRun) -> Value {
     let dof = f.ev.residual.len();
     let (q95, q99) = chi2_quantiles(dof);
     let (m95, m99) = chi2_quantiles(3);
@@ -235,8 +205,8 @@ fn to_json(f: &FactorRun) -> Value {
         .map(|(b, c)| ((*b).to_string(), json!(c)))
         .collect();
     json!({
-        "factor": if f.combined { "CombinedImuFactor" } else { "ImuFactor" },
-        "scheme": f.scheme,
+        "factor": factor_name(f.combined),
+        "scheme": scheme::label(f.scheme),
         "requested_ns": [f.requested.0, f.requested.1],
         "t_i_ns": f.gi.t_ns,
         "t_j_ns": f.gj.t_ns,
@@ -266,7 +236,8 @@ fn to_json(f: &FactorRun) -> Value {
     })
 }
 
-fn to_text(f: &FactorRun, imu: &Path) -> String {
+/// The human summary: keyframes, residual blocks with their marginal χ², χ² and verdict.
+pub fn to_text(f: &FactorRun) -> String {
     let dof = f.ev.residual.len();
     let (q95, q99) = chi2_quantiles(dof);
     let mut h = String::new();
@@ -274,13 +245,9 @@ fn to_text(f: &FactorRun, imu: &Path) -> String {
         h,
         "{}: {} at the ground truth, scheme {}, keyframes {} → {} ns (nearest rows to {} and {}), \
          Δt = {:.6} s, {} samples",
-        imu.display(),
-        if f.combined {
-            "CombinedImuFactor"
-        } else {
-            "ImuFactor"
-        },
-        f.scheme,
+        f.imu,
+        factor_name(f.combined),
+        scheme::label(f.scheme),
         f.gi.t_ns,
         f.gj.t_ns,
         f.requested.0,
@@ -319,8 +286,7 @@ fn to_text(f: &FactorRun, imu: &Path) -> String {
          quantiles 7.81 / 11.34",
         f.ev.chi2
     );
-    let tn = f.truth_noise;
-    if tn.rot_rad == 0.0 && tn.pos_m == 0.0 && tn.vel_m_s == 0.0 {
+    if f.truth_noise.is_exact() {
         let _ = writeln!(
             h,
             "weight: the factor's covariance only (the ground truth is taken as exact; give \
@@ -330,13 +296,11 @@ fn to_text(f: &FactorRun, imu: &Path) -> String {
     h
 }
 
-pub fn run(cmd: &Command) -> Result<Output, CliError> {
-    let Command::Factor { imu, .. } = cmd else {
-        unreachable!()
-    };
-    let f = compute(cmd)?;
+/// Runs `preint factor`.
+pub fn run(args: &Args) -> Result<Output, CliError> {
+    let f = compute(args)?;
     Ok(Output {
-        human: to_text(&f, imu),
+        human: to_text(&f),
         json: to_json(&f),
     })
 }

@@ -1,89 +1,131 @@
-//! `preint integrate`: preintegrate a window of a EuRoC IMU file.
+//! `preint integrate`: preintegrate a window of a EuRoC IMU file and print the deltas, their
+//! covariances and the bias Jacobians.
 
-use super::{CliError, Output, fmt_matrix, list, rows};
-use crate::Command;
+use crate::format::{list, rows, text_matrix};
+use crate::scheme::{self, SchemeParser};
+use crate::{CliError, Output, checks, input, noise};
 use nalgebra::Vector3;
-use preint::io::{check_si_units, read_euroc_imu, read_kalibr_yaml};
-use preint::{ImuBias, ImuNoise, Level, PreintParams, Scheme, preintegrate};
-use serde_json::json;
+use preint::{ImuBias, ImuNoise, Level, PreintParams, PreintegratedImu, preintegrate};
+use serde_json::{Value, json};
 use std::fmt::Write as _;
+use std::path::PathBuf;
 
-/// Parses a scheme name.
-pub fn parse_scheme(s: &str) -> Result<Scheme, CliError> {
-    match s {
-        "euler" => Ok(Scheme::Euler),
-        "midpoint" => Ok(Scheme::Midpoint),
-        "rk4" | "high-order" => Ok(Scheme::Hermite4),
-        _ => Err(CliError::Usage(format!(
-            "unknown scheme `{s}`: expected euler, midpoint or rk4"
-        ))),
-    }
+/// Flags of `preint integrate`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    /// IMU CSV file (EuRoC imu0 format).
+    #[arg(long)]
+    pub imu: PathBuf,
+    /// Integration scheme: euler, midpoint or hermite4 (printed as hermite4; rk4 and
+    /// high-order are accepted for it).
+    #[arg(long, value_parser = SchemeParser, default_value = "midpoint")]
+    pub scheme: scheme::Scheme,
+    /// Kalibr imu.yaml with the noise densities (default: EuRoC figures).
+    #[arg(long)]
+    pub noise: Option<PathBuf>,
+    /// Gravity magnitude G (m/s^2); gravity is (0, 0, -G).
+    #[arg(long, default_value_t = 9.81)]
+    pub gravity: f64,
+    /// Gyro bias estimate b_g (rad/s) as x,y,z (negative values allowed: --bias-gyro=-0.01,0,0).
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::parse::vec3)]
+    pub bias_gyro: Option<Vector3<f64>>,
+    /// Accelerometer bias estimate b_a (m/s^2) as x,y,z.
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::parse::vec3)]
+    pub bias_acc: Option<Vector3<f64>>,
+    /// First keyframe time in ns (default: first sample).
+    #[arg(long, allow_hyphen_values = true)]
+    pub from: Option<i64>,
+    /// Last keyframe time in ns (default: last sample).
+    #[arg(long, allow_hyphen_values = true)]
+    pub to: Option<i64>,
+    /// Skip the check that the data looks like SI units (m/s^2, rad/s).
+    #[arg(long)]
+    pub no_unit_check: bool,
 }
 
-/// Scheme name as printed.
-pub fn scheme_name(s: Scheme) -> &'static str {
-    match s {
-        Scheme::Euler => "euler",
-        Scheme::Midpoint => "midpoint",
-        Scheme::Hermite4 => "rk4",
-    }
+/// A preintegrated window.
+#[derive(Clone, Debug)]
+pub struct Integration {
+    /// The IMU file, as printed.
+    pub imu: String,
+    /// The scheme used.
+    pub scheme: preint::Scheme,
+    /// Number of samples with timestamps in the window.
+    pub samples: usize,
+    /// The noise densities used.
+    pub noise: ImuNoise,
+    /// Where they came from (file path or the defaults).
+    pub noise_source: String,
+    /// The bias estimate the window was integrated with.
+    pub bias: ImuBias,
+    /// The preintegrated measurement (with the 15×15 covariance).
+    pub pim: PreintegratedImu,
 }
 
-/// Reads the noise file, or the EuRoC figures when none is given.
-pub fn noise_or_default(path: Option<&std::path::PathBuf>) -> Result<ImuNoise, CliError> {
-    Ok(match path {
-        Some(p) => read_kalibr_yaml(p)?,
-        None => ImuNoise::euroc(),
-    })
-}
-
-pub fn run(cmd: &Command) -> Result<Output, CliError> {
-    let Command::Integrate {
-        imu,
-        scheme,
-        noise,
-        gravity,
-        bias_gyro,
-        bias_acc,
-        from,
-        to,
-        no_unit_check,
-    } = cmd
-    else {
-        unreachable!()
-    };
-    let scheme = parse_scheme(scheme)?;
-    if !(gravity.is_finite() && *gravity >= 0.0) {
-        return Err(CliError::Usage(format!(
-            "--gravity must be a non-negative number, got {gravity}"
-        )));
-    }
-    let noise_source = match noise {
-        Some(p) => p.display().to_string(),
-        None => "EuRoC / ADIS16448 defaults (no --noise)".to_string(),
-    };
-    let noise = noise_or_default(noise.as_ref())?;
-    let samples = read_euroc_imu(imu)?;
-    if !no_unit_check {
-        check_si_units(&samples, &imu.display().to_string())?;
-    }
-    let t_i = from.unwrap_or(samples[0].t_ns);
-    let t_j = to.unwrap_or(samples[samples.len() - 1].t_ns);
-    let bias = ImuBias::new(bias_gyro.unwrap_or_default(), bias_acc.unwrap_or_default());
+/// Reads the file and preintegrates `[--from, --to]` at [`Level::Combined`].
+pub fn compute(args: &Args) -> Result<Integration, CliError> {
+    checks::non_negative("--gravity", args.gravity)?;
+    let noise = noise::or_default(args.noise.as_deref())?;
+    let samples = input::read_imu(&args.imu, !args.no_unit_check)?;
+    let t_i = args.from.unwrap_or(samples[0].t_ns);
+    let t_j = args.to.unwrap_or(samples[samples.len() - 1].t_ns);
+    let bias = ImuBias::new(
+        args.bias_gyro.unwrap_or_default(),
+        args.bias_acc.unwrap_or_default(),
+    );
+    let scheme = args.scheme.into();
     let params = PreintParams::from_noise(&noise)
         .with_scheme(scheme)
         .with_level(Level::Combined)
-        .with_gravity(Vector3::new(0.0, 0.0, -gravity));
-    let m = preintegrate(&params, &bias, &samples, t_i, t_j)
-        .map_err(|e| CliError::Failed(format!("{}: {e}", imu.display())))?;
-    let n_used = samples
-        .iter()
-        .filter(|s| s.t_ns >= t_i && s.t_ns <= t_j)
-        .count();
+        .with_gravity(Vector3::new(0.0, 0.0, -args.gravity));
+    let pim = preintegrate(&params, &bias, &samples, t_i, t_j)
+        .map_err(|e| CliError::failed_in(&args.imu, e))?;
+    Ok(Integration {
+        imu: args.imu.display().to_string(),
+        scheme,
+        samples: input::count_in(&samples, t_i, t_j),
+        noise,
+        noise_source: noise::source(args.noise.as_deref()),
+        bias,
+        pim,
+    })
+}
+
+/// What each printed covariance describes, and how GTSAM's relate to them.
+fn covariance_notes() -> Value {
+    json!({
+        "covariance": "covariance of the error [dphi, dv, dp] = measured minus true deltas \
+            (dphi: DR_measured = DR_true Exp(dphi)); white measurement noise. It is also the \
+            covariance of ImuFactor's residual [r_phi, r_v, r_p] (= -[dphi, dv, dp]).",
+        "covariance15": "covariance of the error state [dphi, dv, dp, db_g, db_a], db = b_j - b_i, \
+            with the bias random walk over the window; what merging windows composes. A gyro \
+            bias that drifts up makes the measured rotation run ahead: the delta-bias blocks \
+            are those of measured minus true.",
+        "residual_covariance15": "covariance of CombinedImuFactor's residual [r_phi, r_v, r_p, \
+            b_g,j - b_g,i, b_a,j - b_a,i] at the true states (the deltas' rows are true minus \
+            measured): covariance15 with its 9x6 and 6x9 delta-bias blocks negated. Weight a \
+            combined residual with this one.",
+        "gtsam": "GTSAM 4.3 orders [rot, pos, vel, b_a, b_g] and expresses pos and vel errors \
+            rotated by delta_R^T: with P the reordering and T = diag(I, delta_R^T, delta_R^T, I, I), \
+            PreintegratedCombinedMeasurements::preintMeasCov() = T P covariance15 P^T T^T and \
+            residualCovariance() = T P residual_covariance15 P^T T^T (tested to 1e-12 on \
+            PreintegratedCombinedMeasurementsManifold, the euler scheme).",
+    })
+}
+
+/// The JSON form: deltas, covariances (with notes on what each describes), bias Jacobians, the noise
+/// used and the units.
+pub fn to_json(r: &Integration) -> Value {
+    let m = &r.pim;
     let jac = &m.jac;
-    let json = json!({
-        "scheme": scheme_name(scheme),
-        "samples": n_used,
+    let mut noise = noise::densities_json(&r.noise);
+    noise["source"] = json!(r.noise_source);
+    noise["units"] = json!(
+        "continuous-time densities: rad/s/sqrt(Hz), rad/s^2/sqrt(Hz), m/s^2/sqrt(Hz), m/s^3/sqrt(Hz)"
+    );
+    json!({
+        "scheme": scheme::label(r.scheme),
+        "samples": r.samples,
         "t_i_ns": m.t_i_ns,
         "t_j_ns": m.t_j_ns,
         "delta_t": m.delta_t,
@@ -97,48 +139,29 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         "covariance15": rows(&m.cov15),
         "residual_covariance15_order": "[r_phi, r_v, r_p, r_bg, r_ba]",
         "residual_covariance15": rows(&m.residual_cov15()),
-        "covariance_notes": {
-            "covariance": "covariance of the error [dphi, dv, dp] = measured minus true deltas \
-                (dphi: DR_measured = DR_true Exp(dphi)); white measurement noise. It is also the \
-                covariance of ImuFactor's residual [r_phi, r_v, r_p] (= -[dphi, dv, dp]).",
-            "covariance15": "covariance of the error state [dphi, dv, dp, db_g, db_a], db = b_j - b_i, \
-                with the bias random walk over the window; what merging windows composes. A gyro \
-                bias that drifts up makes the measured rotation run ahead: the delta-bias blocks \
-                are those of measured minus true.",
-            "residual_covariance15": "covariance of CombinedImuFactor's residual [r_phi, r_v, r_p, \
-                b_g,j - b_g,i, b_a,j - b_a,i] at the true states (the deltas' rows are true minus \
-                measured): covariance15 with its 9x6 and 6x9 delta-bias blocks negated. Weight a \
-                combined residual with this one.",
-            "gtsam": "GTSAM 4.3 orders [rot, pos, vel, b_a, b_g] and expresses pos and vel errors \
-                rotated by delta_R^T: with P the reordering and T = diag(I, delta_R^T, delta_R^T, I, I), \
-                PreintegratedCombinedMeasurements::preintMeasCov() = T P covariance15 P^T T^T and \
-                residualCovariance() = T P residual_covariance15 P^T T^T (tested to 1e-12 on \
-                PreintegratedCombinedMeasurementsManifold, the euler scheme).",
-        },
-        "bias_hat": {"gyro": list(&bias.gyro), "acc": list(&bias.acc)},
+        "covariance_notes": covariance_notes(),
+        "bias_hat": {"gyro": list(&r.bias.gyro), "acc": list(&r.bias.acc)},
         "gravity": list(&m.gravity),
-        "noise": {
-            "source": noise_source,
-            "gyroscope_noise_density": noise.gyro_noise_density,
-            "gyroscope_random_walk": noise.gyro_random_walk,
-            "accelerometer_noise_density": noise.acc_noise_density,
-            "accelerometer_random_walk": noise.acc_random_walk,
-            "units": "continuous-time densities: rad/s/sqrt(Hz), rad/s^2/sqrt(Hz), m/s^2/sqrt(Hz), m/s^3/sqrt(Hz)",
-        },
+        "noise": noise,
         "units": {"delta_t": "s", "delta_v": "m/s (body frame i)", "delta_p": "m (body frame i)",
                   "covariance": "rad^2, (m/s)^2, m^2 blocks", "jacobians": "d(delta)/d(bias), bias order [b_g, b_a]"},
         "jacobians": {
             "dR_dbg": rows(&jac.d_r_d_bg), "dv_dbg": rows(&jac.d_v_d_bg), "dv_dba": rows(&jac.d_v_d_ba),
             "dp_dbg": rows(&jac.d_p_d_bg), "dp_dba": rows(&jac.d_p_d_ba),
         },
-    });
+    })
+}
+
+/// The human summary: deltas, noise, 1σ, the 9×9 covariance and the five bias Jacobians.
+pub fn to_text(r: &Integration) -> String {
+    let (m, noise) = (&r.pim, &r.noise);
     let mut h = String::new();
     let _ = writeln!(
         h,
         "{}: {} samples, scheme {}, Δt = {:.9} s",
-        imu.display(),
-        n_used,
-        scheme_name(scheme),
+        r.imu,
+        r.samples,
+        scheme::label(r.scheme),
         m.delta_t
     );
     let phi = m.delta_r.log();
@@ -163,7 +186,8 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
     let sd: Vec<f64> = (0..9).map(|i| m.cov[(i, i)].sqrt()).collect();
     let _ = writeln!(
         h,
-        "noise: {noise_source}: σ_g = {:.4e} rad/s/√Hz, σ_a = {:.4e} m/s²/√Hz, σ_bg = {:.4e} rad/s²/√Hz, σ_ba = {:.4e} m/s³/√Hz",
+        "noise: {}: σ_g = {:.4e} rad/s/√Hz, σ_a = {:.4e} m/s²/√Hz, σ_bg = {:.4e} rad/s²/√Hz, σ_ba = {:.4e} m/s³/√Hz",
+        r.noise_source,
         noise.gyro_noise_density,
         noise.acc_noise_density,
         noise.gyro_random_walk,
@@ -175,7 +199,8 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         sd[0], sd[1], sd[2], sd[3], sd[4], sd[5], sd[6], sd[7], sd[8]
     );
     let _ = writeln!(h, "covariance, tangent order [δφ, δv, δp]:");
-    h.push_str(&fmt_matrix(&m.cov, "  "));
+    h.push_str(&text_matrix(&m.cov, "  "));
+    let jac = &m.jac;
     for (name, j) in [
         ("∂ΔR/∂b_g", &jac.d_r_d_bg),
         ("∂Δv/∂b_g", &jac.d_v_d_bg),
@@ -184,7 +209,16 @@ pub fn run(cmd: &Command) -> Result<Output, CliError> {
         ("∂Δp/∂b_a", &jac.d_p_d_ba),
     ] {
         let _ = writeln!(h, "{name}:");
-        h.push_str(&fmt_matrix(j, "  "));
+        h.push_str(&text_matrix(j, "  "));
     }
-    Ok(Output { human: h, json })
+    h
+}
+
+/// Runs `preint integrate`.
+pub fn run(args: &Args) -> Result<Output, CliError> {
+    let r = compute(args)?;
+    Ok(Output {
+        human: to_text(&r),
+        json: to_json(&r),
+    })
 }

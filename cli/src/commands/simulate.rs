@@ -1,61 +1,108 @@
-//! `preint simulate`: an IMU on a built-in scene, written as a EuRoC-style dataset.
+//! `preint simulate`: an IMU on a built-in scene, written as a EuRoC-style dataset
+//! (`imu.csv`, `groundtruth.csv`, `imu.yaml`).
 
-use super::{CliError, Output};
-use crate::Command;
+use crate::{CliError, Output, input, noise};
 use preint::ImuNoise;
 use preint::io::read_kalibr_yaml;
-use serde_json::json;
+use serde_json::{Value, json};
+use std::path::{Path, PathBuf};
 
-pub fn run(cmd: &Command) -> Result<Output, CliError> {
-    let Command::Simulate {
-        scene,
-        rate,
-        duration,
-        noise,
-        seed,
-        out,
-    } = cmd
-    else {
-        unreachable!()
-    };
-    let sc = preint_sim::scene_by_name(scene).ok_or_else(|| {
-        CliError::Usage(format!(
-            "unknown scene `{scene}`; expected one of {}",
-            preint_sim::SCENE_NAMES.join(", ")
-        ))
-    })?;
-    let noise_model: Option<ImuNoise> = match noise.as_deref() {
+/// Flags of `preint simulate`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    /// Scene: seed-ellipse, static, multi-pose-static, gimbal-lock, spin, aggressive.
+    #[arg(long, default_value = "seed-ellipse")]
+    pub scene: String,
+    /// Sample rate (Hz).
+    #[arg(long, default_value_t = 200.0)]
+    pub rate: f64,
+    /// Duration (s).
+    #[arg(long, default_value_t = 10.0)]
+    pub duration: f64,
+    /// Noise: a Kalibr imu.yaml, or `none` for noise-free data. Default: EuRoC figures.
+    #[arg(long)]
+    pub noise: Option<String>,
+    /// Random seed (same seed, same data on every machine).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output directory (created if missing).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// What `simulate` wrote.
+#[derive(Clone, Debug)]
+pub struct Simulation {
+    /// The flags it ran with.
+    pub args: Args,
+    /// Number of IMU samples written.
+    pub samples: usize,
+    /// The noise simulated (`None`: noise-free, no bias random walk).
+    pub noise: Option<ImuNoise>,
+    /// The files written.
+    pub files: Vec<String>,
+}
+
+/// Simulates the scene and writes the dataset into `--out`.
+pub fn compute(args: &Args) -> Result<Simulation, CliError> {
+    let sc = input::scene(&args.scene)?;
+    let noise_model: Option<ImuNoise> = match args.noise.as_deref() {
         Some("none") => None,
-        Some(path) => Some(read_kalibr_yaml(std::path::Path::new(path))?),
+        Some(path) => Some(read_kalibr_yaml(Path::new(path))?),
         None => Some(ImuNoise::euroc()),
     };
     let cfg = match noise_model {
         Some(n) => preint_sim::SimConfig::with_noise(n),
         None => preint_sim::SimConfig::noise_free(),
     };
-    let data = preint_sim::simulate(sc.as_ref(), *rate, *duration, &cfg, *seed)
-        .map_err(|e| CliError::Failed(e.to_string()))?;
-    std::fs::create_dir_all(out)
-        .map_err(|e| CliError::Failed(format!("{}: {e}", out.display())))?;
-    let yaml_noise = noise_model.unwrap_or(ImuNoise::zero(*rate));
-    let files: Vec<String> = preint_sim::write_dataset(out, &data, &yaml_noise)
-        .map_err(|e| CliError::Failed(e.to_string()))?
+    let data = preint_sim::simulate(sc.as_ref(), args.rate, args.duration, &cfg, args.seed)
+        .map_err(CliError::failed)?;
+    std::fs::create_dir_all(&args.out).map_err(|e| CliError::failed_in(&args.out, e))?;
+    let yaml_noise = noise_model.unwrap_or(ImuNoise::zero(args.rate));
+    let files = preint_sim::write_dataset(&args.out, &data, &yaml_noise)
+        .map_err(CliError::failed)?
         .iter()
         .map(|p| p.display().to_string())
         .collect();
-    let json = json!({"scene": scene, "samples": data.samples.len(), "rate_hz": rate, "duration_s": duration,
-        "seed": seed, "noise": noise_model.map(|n| json!({"gyroscope_noise_density": n.gyro_noise_density,
-            "gyroscope_random_walk": n.gyro_random_walk, "accelerometer_noise_density": n.acc_noise_density,
-            "accelerometer_random_walk": n.acc_random_walk})), "files": files});
-    let human = format!(
-        "simulated `{scene}`: {} samples at {rate} Hz over {duration} s (seed {seed}, noise {}); wrote {}\n",
-        data.samples.len(),
-        if noise_model.is_some() {
+    Ok(Simulation {
+        args: args.clone(),
+        samples: data.samples.len(),
+        noise: noise_model,
+        files,
+    })
+}
+
+/// The JSON form: scene, samples, rate_hz, duration_s, seed, noise densities (or `null`), files.
+pub fn to_json(s: &Simulation) -> Value {
+    let a = &s.args;
+    json!({"scene": a.scene, "samples": s.samples, "rate_hz": a.rate, "duration_s": a.duration,
+        "seed": a.seed, "noise": s.noise.as_ref().map(noise::densities_json), "files": s.files})
+}
+
+/// The human summary: one line.
+pub fn to_text(s: &Simulation) -> String {
+    let a = &s.args;
+    format!(
+        "simulated `{}`: {} samples at {} Hz over {} s (seed {}, noise {}); wrote {}\n",
+        a.scene,
+        s.samples,
+        a.rate,
+        a.duration,
+        a.seed,
+        if s.noise.is_some() {
             "on, bias random walk on"
         } else {
             "off"
         },
-        files.join(", ")
-    );
-    Ok(Output { human, json })
+        s.files.join(", ")
+    )
+}
+
+/// Runs `preint simulate`.
+pub fn run(args: &Args) -> Result<Output, CliError> {
+    let s = compute(args)?;
+    Ok(Output {
+        human: to_text(&s),
+        json: to_json(&s),
+    })
 }

@@ -1,9 +1,15 @@
-//! Helpers shared by the end-to-end tests of the `preint` binary.
+//! Helpers shared by the end-to-end tests of the `preint` binary: running it, temporary
+//! directories, writing input files, reading JSON numbers.
 #![allow(dead_code)]
 
 use serde_json::Value;
+use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+
+/// The EuRoC (ADIS16448) densities: gyro noise [rad/s/√Hz], gyro random walk [rad/s²/√Hz],
+/// accelerometer noise [m/s²/√Hz], accelerometer random walk [m/s³/√Hz].
+pub const EUROC_DENSITIES: [f64; 4] = [1.6968e-4, 1.9393e-5, 2.0e-3, 3.0e-3];
 
 pub fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_preint"))
@@ -13,6 +19,7 @@ pub fn run(args: &[&str]) -> Output {
     bin().args(args).output().expect("binary runs")
 }
 
+/// Runs `preint ARGS --json`, asserts success and parses stdout.
 pub fn json(args: &[&str]) -> Value {
     let mut a = args.to_vec();
     a.push("--json");
@@ -23,6 +30,13 @@ pub fn json(args: &[&str]) -> Value {
         String::from_utf8_lossy(&o.stderr)
     );
     serde_json::from_slice(&o.stdout).expect("one JSON object on stdout")
+}
+
+/// `preint simulate --out DIR ARGS --json`.
+pub fn simulate(dir: &Path, args: &[&str]) -> Value {
+    let mut a = vec!["simulate", "--out", dir.to_str().unwrap()];
+    a.extend_from_slice(args);
+    json(&a)
 }
 
 pub fn tmp(name: &str) -> PathBuf {
@@ -39,6 +53,37 @@ pub fn repo(p: &str) -> String {
         .to_string()
 }
 
+/// Writes `text` to `dir/name` and returns the path.
+pub fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// Writes a EuRoC imu0 CSV file (header line, then `t_ns, w_x, w_y, w_z, a_x, a_y, a_z`).
+pub fn write_imu_csv(dir: &Path, name: &str, rows: &[(i64, [f64; 6])]) -> PathBuf {
+    let mut csv = String::from("#timestamp [ns],w_x,w_y,w_z,a_x,a_y,a_z\n");
+    for (t, v) in rows {
+        let _ = writeln!(
+            csv,
+            "{t},{},{},{},{},{},{}",
+            v[0], v[1], v[2], v[3], v[4], v[5]
+        );
+    }
+    write(dir, name, &csv)
+}
+
+/// Writes a Kalibr imu.yaml with the densities `[gyro noise, gyro random walk, acc noise,
+/// acc random walk]` (units as [`EUROC_DENSITIES`]) and the update rate [Hz].
+pub fn write_noise_yaml(dir: &Path, name: &str, d: [f64; 4], rate_hz: f64) -> PathBuf {
+    let yaml = format!(
+        "gyroscope_noise_density: {:e}\ngyroscope_random_walk: {:e}\n\
+         accelerometer_noise_density: {:e}\naccelerometer_random_walk: {:e}\nupdate_rate: {:?}\n",
+        d[0], d[1], d[2], d[3], rate_hz
+    );
+    write(dir, name, &yaml)
+}
+
 pub fn vec3(v: &Value) -> [f64; 3] {
     let a = v.as_array().unwrap();
     [
@@ -46,4 +91,18 @@ pub fn vec3(v: &Value) -> [f64; 3] {
         a[1].as_f64().unwrap(),
         a[2].as_f64().unwrap(),
     ]
+}
+
+/// A JSON list of numbers.
+pub fn nums(v: &Value) -> Vec<f64> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
+/// A JSON list of rows of numbers.
+pub fn matrix(v: &Value) -> Vec<Vec<f64>> {
+    v.as_array().unwrap().iter().map(nums).collect()
 }

@@ -1,5 +1,6 @@
-//! Parsing helpers for flags: comma-separated vectors (negative numbers allowed in both
-//! `--flag -1,2,3` and `--flag=-1,2,3` forms) and lists of rates.
+//! Value parsers for flags: comma-separated vectors (negative numbers allowed in both
+//! `--flag -1,2,3` and `--flag=-1,2,3` forms) and positive numbers (lists of rates use clap's
+//! `value_delimiter`).
 
 use nalgebra::Vector3;
 
@@ -24,7 +25,7 @@ pub fn vec3(s: &str) -> Result<Vector3<f64>, String> {
     Ok(Vector3::new(v[0], v[1], v[2]))
 }
 
-/// Parses one positive finite number (e.g. a rate in Hz; lists use clap's `value_delimiter`).
+/// Parses one positive finite number (e.g. a rate in Hz).
 pub fn positive(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
         Ok(x) if x.is_finite() && x > 0.0 => Ok(x),

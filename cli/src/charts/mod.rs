@@ -1,6 +1,10 @@
-//! SVG charts with plotters: labelled axes with units, legends, optional log scales.
+//! SVG charts with plotters: labelled axes with units, legends, optional log scales
+//! ([`draw`]), and the figures the commands draw ([`figures`]).
+
+pub mod figures;
 
 use plotters::coord::combinators::IntoLogRange;
+use plotters::coord::ranged1d::ValueFormatter;
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -86,7 +90,64 @@ fn range(vals: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
     }
 }
 
-/// Writes an SVG chart of `series` to `path`.
+/// Draws the mesh, the series and the legend on a chart whose axes are `X` and `Y` (linear or
+/// logarithmic).
+fn plot<'a, X, Y>(
+    mut ctx: ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
+    chart: &Chart,
+    series: &[Series],
+) -> Result<(), String>
+where
+    X: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    ctx.configure_mesh()
+        .x_desc(chart.x_label)
+        .y_desc(chart.y_label)
+        .x_label_formatter(&|v| fmt_tick(*v))
+        .y_label_formatter(&|v| fmt_tick(*v))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    for (i, s) in series.iter().enumerate() {
+        let color = PALETTE[i % PALETTE.len()];
+        let pts: Vec<(f64, f64)> = s
+            .points
+            .iter()
+            .copied()
+            .filter(|p| usable(chart, p))
+            .collect();
+        let style = if s.dashed {
+            color.stroke_width(1)
+        } else {
+            color.stroke_width(2)
+        };
+        if s.line {
+            let anno = ctx
+                .draw_series(LineSeries::new(pts.clone(), style))
+                .map_err(|e| e.to_string())?;
+            anno.label(s.name.clone()).legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+            });
+        }
+        if !s.dashed {
+            let anno = ctx
+                .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
+                .map_err(|e| e.to_string())?;
+            if !s.line {
+                anno.label(s.name.clone())
+                    .legend(move |(x, y)| Circle::new((x + 9, y), 4, color.filled()));
+            }
+        }
+    }
+    ctx.configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(|e| e.to_string())
+}
+
+/// Writes an SVG chart of `series` to `path` (900×560 px).
 pub fn draw(path: &Path, chart: &Chart, series: &[Series]) -> Result<(), String> {
     let all: Vec<(f64, f64)> = series
         .iter()
@@ -97,78 +158,37 @@ pub fn draw(path: &Path, chart: &Chart, series: &[Series]) -> Result<(), String>
     let (y0, y1) = range(all.iter().map(|p| p.1), chart.log_y);
     let root = SVGBackend::new(path, (900, 560)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
-    macro_rules! body {
-        ($ctx:expr) => {{
-            let mut ctx = $ctx;
-            ctx.configure_mesh()
-                .x_desc(chart.x_label)
-                .y_desc(chart.y_label)
-                .x_label_formatter(&|v| fmt_tick(*v))
-                .y_label_formatter(&|v| fmt_tick(*v))
-                .draw()
-                .map_err(|e| e.to_string())?;
-            for (i, s) in series.iter().enumerate() {
-                let color = PALETTE[i % PALETTE.len()];
-                let pts: Vec<(f64, f64)> = s
-                    .points
-                    .iter()
-                    .copied()
-                    .filter(|p| usable(chart, p))
-                    .collect();
-                let style = if s.dashed {
-                    color.stroke_width(1)
-                } else {
-                    color.stroke_width(2)
-                };
-                if s.line {
-                    let anno = ctx
-                        .draw_series(LineSeries::new(pts.clone(), style))
-                        .map_err(|e| e.to_string())?;
-                    anno.label(s.name.clone()).legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-                    });
-                }
-                if !s.dashed {
-                    let anno = ctx
-                        .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
-                        .map_err(|e| e.to_string())?;
-                    if !s.line {
-                        anno.label(s.name.clone())
-                            .legend(move |(x, y)| Circle::new((x + 9, y), 4, color.filled()));
-                    }
-                }
-            }
-            ctx.configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .position(SeriesLabelPosition::UpperRight)
-                .draw()
-                .map_err(|e| e.to_string())?;
-        }};
-    }
     let mut b = ChartBuilder::on(&root);
     b.caption(chart.title, ("sans-serif", 22))
         .margin(12)
         .x_label_area_size(48)
         .y_label_area_size(78);
+    let e = |e: plotters::drawing::DrawingAreaErrorKind<_>| e.to_string();
     match (chart.log_x, chart.log_y) {
-        (true, true) => body!(
+        (true, true) => plot(
             b.build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
-                .map_err(|e| e.to_string())?
+                .map_err(e)?,
+            chart,
+            series,
         ),
-        (true, false) => body!(
+        (true, false) => plot(
             b.build_cartesian_2d((x0..x1).log_scale(), y0..y1)
-                .map_err(|e| e.to_string())?
+                .map_err(e)?,
+            chart,
+            series,
         ),
-        (false, true) => body!(
+        (false, true) => plot(
             b.build_cartesian_2d(x0..x1, (y0..y1).log_scale())
-                .map_err(|e| e.to_string())?
+                .map_err(e)?,
+            chart,
+            series,
         ),
-        (false, false) => body!(
-            b.build_cartesian_2d(x0..x1, y0..y1)
-                .map_err(|e| e.to_string())?
+        (false, false) => plot(
+            b.build_cartesian_2d(x0..x1, y0..y1).map_err(e)?,
+            chart,
+            series,
         ),
-    }
+    }?;
     root.present()
         .map_err(|e| format!("{}: {e}", path.display()))?;
     Ok(())

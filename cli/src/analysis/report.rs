@@ -1,0 +1,206 @@
+//! The numbers of `preint report`, on built-in simulated scenes (no input files).
+//!
+//! 1. Accuracy against cost and convergence order on `seed-ellipse` and `aggressive`
+//!    ([`super::accuracy`], rates [`RATES`], 1 s window).
+//! 2. Monte Carlo NEES per scene and scheme ([`mean_nees`]).
+//! 3. Attitude error of dead reckoning with quaternions, rotation matrices and ZYX Euler angles
+//!    through the `gimbal-lock` scene ([`gimbal_lock`]).
+//! 4. A static single-attitude bias calibration of a simulated recording with known biases
+//!    ([`static_calibration`]).
+//! 5. The Allan deviation of a simulated static hour and its fitted densities ([`allan_hour`]).
+
+use super::accuracy::{self, Row};
+use crate::{CliError, input, scheme};
+use nalgebra::Vector3;
+use preint::{ImuBias, ImuNoise, Level, NavState, PreintParams, Scheme, preintegrate};
+use preint_calib::allan::ImuAllan;
+use preint_calib::bias::StaticCalibration;
+use preint_sim::{Attitude, Rule, SimConfig, rotation_error, t_s};
+
+/// The scenes of the accuracy and NEES sections.
+pub const SCENES: [&str; 2] = ["seed-ellipse", "aggressive"];
+/// The rates \[Hz\] of the accuracy section.
+pub const RATES: [f64; 8] = [25.0, 50.0, 100.0, 200.0, 400.0, 800.0, 1600.0, 3200.0];
+/// Noise realisations per NEES row.
+pub const NEES_RUNS: u64 = 200;
+
+/// A named curve of `(x, y)` points.
+pub type Curve = (&'static str, Vec<(f64, f64)>);
+
+/// Everything the report shows.
+#[derive(Clone, Debug)]
+pub struct ReportData {
+    /// Per scene of [`SCENES`]: every scheme at every rate of [`RATES`].
+    pub accuracy: Vec<(&'static str, Vec<Row>)>,
+    /// (scene, scheme, mean NEES over [`NEES_RUNS`] runs).
+    pub nees: Vec<(&'static str, Scheme, f64)>,
+    /// Attitude error against time per attitude representation: (name, [(t \[s\], error \[rad\])]).
+    pub gimbal_lock: Vec<Curve>,
+    /// The static calibration and its true biases.
+    pub calibration: StaticCheck,
+    /// The Allan analysis of the simulated hour.
+    pub allan: AllanCheck,
+}
+
+/// A bias calibration against the biases it was simulated with.
+#[derive(Clone, Debug)]
+pub struct StaticCheck {
+    /// The simulated (constant) biases.
+    pub truth: ImuBias,
+    /// The estimate.
+    pub cal: StaticCalibration,
+}
+
+/// An Allan analysis against the densities it was simulated with.
+#[derive(Clone, Debug)]
+pub struct AllanCheck {
+    /// The simulated densities.
+    pub simulated: ImuNoise,
+    /// Curves and fits.
+    pub allan: ImuAllan,
+    /// The fitted densities (maximum over the axes).
+    pub fitted: ImuNoise,
+}
+
+/// Computes every section, calling `progress` with the name of each finished one (five calls).
+pub fn compute(progress: &mut dyn FnMut(&str)) -> Result<ReportData, CliError> {
+    let accuracy = SCENES
+        .iter()
+        .map(|&scene| Ok((scene, accuracy::measure(scene, &RATES, 1.0)?)))
+        .collect::<Result<Vec<_>, CliError>>()?;
+    progress("accuracy and cost");
+    let mut nees = Vec::new();
+    for scene in SCENES {
+        for scheme in scheme::ALL {
+            nees.push((scene, scheme, mean_nees(scene, scheme, NEES_RUNS)?));
+        }
+    }
+    progress("Monte Carlo NEES");
+    let gimbal_lock = gimbal_lock()?;
+    progress("gimbal lock");
+    let calibration = static_calibration()?;
+    progress("calibration");
+    let allan = allan_hour()?;
+    progress("Allan deviation");
+    Ok(ReportData {
+        accuracy,
+        nees,
+        gimbal_lock,
+        calibration,
+        allan,
+    })
+}
+
+/// Mean NEES of `runs` noisy preintegrations of `scene` (200 Hz, window [1 s, 2 s], EuRoC white
+/// noise, fixed zero bias) against the noise-free run of the same scheme: the mean of
+/// `eᵀΣ⁻¹e` with `e = [Log(ΔR₀ᵀΔR), Δv − Δv₀, Δp − Δp₀]`; 9 for a consistent covariance.
+pub fn mean_nees(scene: &str, scheme: Scheme, runs: u64) -> Result<f64, CliError> {
+    let sc = input::scene(scene)?;
+    let noise = ImuNoise::euroc();
+    let params = PreintParams::from_noise(&noise)
+        .with_scheme(scheme)
+        .with_level(Level::Covariance);
+    let (t_i, t_j) = (1_000_000_000, 2_000_000_000);
+    let clean = preint_sim::simulate(sc.as_ref(), 200.0, 3.0, &SimConfig::noise_free(), 0)
+        .map_err(CliError::failed)?;
+    let m0 = preintegrate(&params, &ImuBias::zero(), &clean.samples, t_i, t_j)
+        .map_err(CliError::failed)?;
+    let cfg = SimConfig {
+        bias_random_walk: false,
+        ..SimConfig::with_noise(noise)
+    };
+    let mut sum = 0.0;
+    for seed in 0..runs {
+        let noisy = preint_sim::simulate(sc.as_ref(), 200.0, 3.0, &cfg, 1000 + seed)
+            .map_err(CliError::failed)?;
+        let m = preintegrate(&params, &ImuBias::zero(), &noisy.samples, t_i, t_j)
+            .map_err(CliError::failed)?;
+        let e = m.delta_error(&m0);
+        let chol = m
+            .cov
+            .cholesky()
+            .ok_or_else(|| CliError::failed("covariance not positive definite"))?;
+        sum += e.dot(&chol.solve(&e));
+    }
+    Ok(sum / runs as f64)
+}
+
+/// Attitude error against time of 200 Hz midpoint dead reckoning through the `gimbal-lock`
+/// scene (noise-free, 12 s, every 10th sample), with quaternions, rotation matrices (`Exp`)
+/// and ZYX Euler angles. Errors are floored at 1e-16 rad for a log axis; a non-finite error
+/// (the Euler-angle state blown up) is NaN.
+pub fn gimbal_lock() -> Result<Vec<Curve>, CliError> {
+    let sc = input::scene("gimbal-lock")?;
+    let g = Vector3::new(0.0, 0.0, -9.81);
+    let step = 5_000_000i64;
+    let samples: Vec<_> = (0..=2400)
+        .map(|k| sc.state(t_s(k * step)).ideal_sample(k * step, &g))
+        .collect();
+    let s0 = sc.state(0.0);
+    let init = NavState::new(s0.r_wb, s0.p, s0.v);
+    let mut curves = Vec::new();
+    for (name, att) in [
+        ("quaternion", Attitude::Quaternion),
+        ("rotation matrix (Exp)", Attitude::Matrix),
+        ("Euler angles ZYX", Attitude::EulerZyx),
+    ] {
+        let tr =
+            preint_sim::dead_reckon(&samples, &init, &ImuBias::zero(), &g, Rule::Midpoint, att);
+        let pts = tr
+            .iter()
+            .zip(&samples)
+            .step_by(10)
+            .map(|(x, s)| {
+                let e = rotation_error(&sc.state(t_s(s.t_ns)).r_wb, &x.r);
+                let e = if e.is_finite() {
+                    e.max(1e-16)
+                } else {
+                    f64::NAN
+                };
+                (t_s(s.t_ns), e)
+            })
+            .collect();
+        curves.push((name, pts));
+    }
+    Ok(curves)
+}
+
+/// Gyro bias and tilt from 60 s of the `static` scene at 200 Hz (EuRoC white noise, constant
+/// biases b_g = (0.002, −0.0015, 0.001) rad/s, b_a = (0.05, −0.03, 0.02) m/s², seed 42).
+pub fn static_calibration() -> Result<StaticCheck, CliError> {
+    let st = input::scene("static")?;
+    let truth = ImuBias::new(
+        Vector3::new(0.002, -0.0015, 0.001),
+        Vector3::new(0.05, -0.03, 0.02),
+    );
+    let cfg = SimConfig {
+        initial_bias: truth,
+        bias_random_walk: false,
+        ..SimConfig::with_noise(ImuNoise::euroc())
+    };
+    let rec = preint_sim::simulate(st.as_ref(), 200.0, 60.0, &cfg, 42).map_err(CliError::failed)?;
+    let cal =
+        preint_calib::bias::calibrate_static(&rec.samples, &ImuNoise::euroc(), &Default::default())
+            .map_err(CliError::failed)?;
+    Ok(StaticCheck { truth, cal })
+}
+
+/// Allan analysis of a simulated static hour at 100 Hz (EuRoC densities with bias random
+/// walk, seed 7).
+pub fn allan_hour() -> Result<AllanCheck, CliError> {
+    let st = input::scene("static")?;
+    let simulated = ImuNoise {
+        update_rate_hz: 100.0,
+        ..ImuNoise::euroc()
+    };
+    let cfg = SimConfig::with_noise(simulated);
+    let hour =
+        preint_sim::simulate(st.as_ref(), 100.0, 3600.0, &cfg, 7).map_err(CliError::failed)?;
+    let allan = ImuAllan::from_samples(&hour.samples, 10).map_err(CliError::failed)?;
+    let fitted = allan.to_imu_noise();
+    Ok(AllanCheck {
+        simulated,
+        allan,
+        fitted,
+    })
+}

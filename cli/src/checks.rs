@@ -1,0 +1,52 @@
+//! Checks of flag values and of the units of the data, with messages that name the flag or file.
+
+use crate::CliError;
+use preint::ImuSample;
+use std::path::Path;
+
+/// `flag`'s value `v` must be finite and ≥ 0.
+pub fn non_negative(flag: &str, v: f64) -> Result<(), CliError> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(CliError::Usage(format!(
+            "{flag} must be a non-negative number, got {v}"
+        )))
+    }
+}
+
+/// `flag`'s value `v` must be finite and > 0.
+pub fn positive(flag: &str, v: f64) -> Result<(), CliError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(CliError::Usage(format!(
+            "{flag} must be a positive number, got {v}"
+        )))
+    }
+}
+
+/// The samples of `file` look like SI units (accelerometer m/s², gyroscope rad/s; see
+/// [`preint::io::check_si_units`]): an accelerometer in g or a gyroscope in deg/s is refused
+/// with a message naming the file.
+pub fn si_units(samples: &[ImuSample], file: &Path) -> Result<(), CliError> {
+    preint::io::check_si_units(samples, &file.display().to_string())?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flag_values() {
+        assert!(non_negative("--x", 0.0).is_ok());
+        let e = non_negative("--pose-pos-std", -1.0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--pose-pos-std") && e.contains("-1"), "{e}");
+        assert!(non_negative("--x", f64::NAN).is_err());
+        assert!(positive("--gravity", 0.0).is_err());
+        assert!(positive("--gravity", 9.81).is_ok());
+    }
+}

@@ -1,0 +1,66 @@
+//! The command line: the global flags ([`Cli`]) and the subcommands ([`Command`]), each with
+//! its own flags in its module under [`crate::commands`].
+
+use crate::commands::{advise, allan, bench_steps, calibrate, factor, integrate, report};
+use crate::commands::{simulate, speed};
+use clap::{Parser, Subcommand};
+
+const CONVENTIONS: &str = "\
+Conventions: world frame z up, gravity (0, 0, -G) with G = 9.81 m/s² unless --gravity says \
+otherwise; the accelerometer measures specific force (+G on the up axis at rest); rotations are \
+perturbed on the right (R <- R Exp(dphi)); preintegration tangent order [dphi, dv, dp]; bias order \
+[b_g, b_a]; timestamps integer nanoseconds.
+IMU CSV (EuRoC imu0): a header line starting with '#', then rows of
+  timestamp [ns], w_x, w_y, w_z [rad/s], a_x, a_y, a_z [m/s^2]   (body frame, gyro first)
+Noise file (Kalibr imu.yaml): continuous-time densities, not per-sample standard deviations:
+  gyroscope_noise_density [rad/s/sqrt(Hz)], gyroscope_random_walk [rad/s^2/sqrt(Hz)],
+  accelerometer_noise_density [m/s^2/sqrt(Hz)], accelerometer_random_walk [m/s^3/sqrt(Hz)], update_rate [Hz].
+Schemes: euler (1st order), midpoint (2nd order), hermite4 (4th-order Hermite-Magnus, uses the \
+neighbouring samples; printed as hermite4, also accepted as rk4 or high-order).";
+
+/// On-manifold IMU preintegration: simulate, integrate, calibrate, measure noise, and chart
+/// accuracy against cost.
+#[derive(Parser, Debug)]
+#[command(name = "preint", version, about, after_help = CONVENTIONS)]
+pub struct Cli {
+    /// Print one JSON object on stdout instead of the human summary.
+    #[arg(long, global = true)]
+    pub json: bool,
+    /// The subcommand and its flags.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Simulate an IMU on a built-in scene; writes imu.csv (EuRoC imu0), groundtruth.csv (EuRoC
+    /// state_groundtruth_estimate0: p (m), q wxyz body->world, v (m/s), b_g (rad/s), b_a (m/s^2))
+    /// and imu.yaml (Kalibr densities) into --out.
+    Simulate(simulate::Args),
+    /// Preintegrate the samples with timestamps in [from, to] and print ΔR, Δv (m/s), Δp (m),
+    /// Δt (s), the 9x9 covariance of [dphi, dv, dp] and the five bias Jacobians.
+    Integrate(integrate::Args),
+    /// Evaluate the IMU factor at ground-truth states: residual, whitened residual and χ² of the
+    /// window between the ground-truth rows nearest to --from and --to (is this IMU consistent
+    /// with this ground truth?). The window is preintegrated with the ground truth's bias at
+    /// keyframe i; --combined evaluates the 15-dim factor with the biases at i and j too.
+    /// ImuFactor holds the bias constant over the window: on data whose bias drifts within
+    /// the window (any real IMU over long windows), use --combined, whose weight includes the
+    /// bias random walk. The χ² includes the ground truth's own errors unless they are given.
+    Factor(factor::Args),
+    /// Estimate IMU biases with Gauss-Newton, modelling only what the data makes observable.
+    Calibrate(calibrate::Args),
+    /// Overlapping Allan deviation, fitted noise density, random walk and bias instability;
+    /// writes imu.yaml (Kalibr) and a chart into --out when given.
+    Allan(allan::Args),
+    /// Error against ground truth and cost per scheme and rate, with an accuracy-vs-cost chart.
+    BenchSteps(bench_steps::Args),
+    /// Recommend the cheapest scheme and lowest rate whose discretisation error stays below a
+    /// fraction of the noise-induced standard deviation.
+    Advise(advise::Args),
+    /// Throughput of each scheme on this machine (ns per sample), with and without covariance.
+    Speed(speed::Args),
+    /// Everything above on built-in scenes, into one HTML page with charts.
+    Report(report::Args),
+}

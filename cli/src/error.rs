@@ -1,0 +1,38 @@
+//! What a subcommand returns: its [`Output`], or a [`CliError`].
+
+use serde_json::Value;
+
+/// What a subcommand prints: a human summary, or (with `--json`) one JSON object.
+#[derive(Clone, Debug)]
+pub struct Output {
+    /// Human-readable summary (ends with a newline).
+    pub human: String,
+    /// Machine-readable result.
+    pub json: Value,
+}
+
+/// Errors reported on stderr with a non-zero exit code.
+#[derive(Debug, thiserror::Error)]
+pub enum CliError {
+    /// Reading or parsing an input file failed (the message names file and line).
+    #[error(transparent)]
+    Io(#[from] preint::io::IoError),
+    /// A flag value is invalid.
+    #[error("{0}")]
+    Usage(String),
+    /// The computation failed (message says why).
+    #[error("{0}")]
+    Failed(String),
+}
+
+impl CliError {
+    /// A failure with the message of `e`.
+    pub fn failed(e: impl std::fmt::Display) -> Self {
+        Self::Failed(e.to_string())
+    }
+
+    /// A failure with the message of `e`, prefixed with the file it concerns (`file: e`).
+    pub fn failed_in(file: &std::path::Path, e: impl std::fmt::Display) -> Self {
+        Self::Failed(format!("{}: {e}", file.display()))
+    }
+}

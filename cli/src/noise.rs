@@ -1,0 +1,36 @@
+//! Noise densities: read from a Kalibr `imu.yaml`, or the EuRoC figures when none is given.
+
+use crate::CliError;
+use preint::ImuNoise;
+use preint::io::read_kalibr_yaml;
+use serde_json::{Value, json};
+use std::path::Path;
+
+/// What [`source`] prints when no noise file is given.
+pub const DEFAULT_SOURCE: &str = "EuRoC / ADIS16448 defaults (no --noise)";
+
+/// Reads the Kalibr `imu.yaml` at `path`, or returns the EuRoC (ADIS16448) figures
+/// ([`ImuNoise::euroc`]) when there is none.
+pub fn or_default(path: Option<&Path>) -> Result<ImuNoise, CliError> {
+    Ok(match path {
+        Some(p) => read_kalibr_yaml(p)?,
+        None => ImuNoise::euroc(),
+    })
+}
+
+/// Where the densities came from: the file's path, or [`DEFAULT_SOURCE`].
+pub fn source(path: Option<&Path>) -> String {
+    path.map_or(DEFAULT_SOURCE.to_string(), |p| p.display().to_string())
+}
+
+/// The four continuous-time densities under their Kalibr names: gyroscope_noise_density
+/// [rad/s/√Hz], gyroscope_random_walk [rad/s²/√Hz], accelerometer_noise_density [m/s²/√Hz],
+/// accelerometer_random_walk [m/s³/√Hz].
+pub fn densities_json(n: &ImuNoise) -> Value {
+    json!({
+        "gyroscope_noise_density": n.gyro_noise_density,
+        "gyroscope_random_walk": n.gyro_random_walk,
+        "accelerometer_noise_density": n.acc_noise_density,
+        "accelerometer_random_walk": n.acc_random_walk,
+    })
+}
