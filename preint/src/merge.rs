@@ -138,68 +138,15 @@ fn mat_to_jac(m: &M96) -> BiasJacobians {
 /// [`MergeError::BiasMismatch`] / [`MergeError::GravityMismatch`] if `bias_hat` / `gravity`
 /// differ (exact comparison), [`MergeError::LevelMismatch`] if `level` differs.
 pub fn merge(a: &PreintegratedImu, b: &PreintegratedImu) -> Result<PreintegratedImu, MergeError> {
-    if a.t_j_ns != b.t_i_ns {
-        return Err(MergeError::NotConsecutive {
-            a_t_j_ns: a.t_j_ns,
-            b_t_i_ns: b.t_i_ns,
-        });
-    }
-    if a.bias_hat != b.bias_hat {
-        return Err(MergeError::BiasMismatch);
-    }
-    if a.gravity != b.gravity {
-        return Err(MergeError::GravityMismatch);
-    }
-    if a.level != b.level {
-        return Err(MergeError::LevelMismatch {
-            a: a.level,
-            b: b.level,
-        });
-    }
+    check_mergeable(a, b)?;
     let ra = *a.delta_r.matrix();
     let dtb = b.delta_t;
-
-    let mut am = SMatrix::<f64, 9, 9>::identity();
-    am.fixed_view_mut::<3, 3>(0, 0)
-        .copy_from(&b.delta_r.matrix().transpose());
-    am.fixed_view_mut::<3, 3>(3, 0)
-        .copy_from(&(-ra * hat(&b.delta_v)));
-    am.fixed_view_mut::<3, 3>(6, 0)
-        .copy_from(&(-ra * hat(&b.delta_p)));
-    am.fixed_view_mut::<3, 3>(6, 3)
-        .copy_from(&(Matrix3::identity() * dtb));
-    let mut bm = SMatrix::<f64, 9, 9>::identity();
-    bm.fixed_view_mut::<3, 3>(3, 3).copy_from(&ra);
-    bm.fixed_view_mut::<3, 3>(6, 6).copy_from(&ra);
-
+    let (am, bm) = transitions(a, b);
     let (shared, edge_noise) = shared_noise(a, b, &am, &bm);
     let cov: Cov9 = am * a.cov * am.transpose() + bm * b.cov * bm.transpose() + shared;
-    let ja = jac_to_mat(&a.jac);
     let jb = jac_to_mat(&b.jac);
-    let jac = mat_to_jac(&(am * ja + bm * jb));
-
-    let cov15: Cov15 = match a.level {
-        Level::Combined => {
-            let mut fa = Cov15::identity();
-            fa.fixed_view_mut::<9, 9>(0, 0).copy_from(&am);
-            fa.fixed_view_mut::<9, 6>(0, 9).copy_from(&(-bm * jb));
-            let mut gb = Cov15::identity();
-            gb.fixed_view_mut::<9, 9>(0, 0).copy_from(&bm);
-            let mut c = fa * a.cov15 * fa.transpose() + gb * b.cov15 * gb.transpose();
-            let blk = c.fixed_view::<9, 9>(0, 0) + shared;
-            c.fixed_view_mut::<9, 9>(0, 0).copy_from(&blk);
-            c
-        }
-        Level::Covariance => {
-            let mut c = Cov15::zeros();
-            c.fixed_view_mut::<9, 9>(0, 0).copy_from(&cov);
-            let bb = a.cov15.fixed_view::<6, 6>(9, 9) + b.cov15.fixed_view::<6, 6>(9, 9);
-            c.fixed_view_mut::<6, 6>(9, 9).copy_from(&bb);
-            c
-        }
-        Level::Deltas => Cov15::zeros(),
-    };
-
+    let jac = mat_to_jac(&(am * jac_to_mat(&a.jac) + bm * jb));
+    let cov15 = combined_cov(a, b, &am, &bm, &jb, &shared, &cov);
     let summed = a.delta_t + b.delta_t;
     let from_ns = crate::sample::dt_seconds(a.t_i_ns, b.t_j_ns);
     let consistent = a.delta_t == crate::sample::dt_seconds(a.t_i_ns, a.t_j_ns)
@@ -219,6 +166,84 @@ pub fn merge(a: &PreintegratedImu, b: &PreintegratedImu) -> Result<Preintegrated
         level: a.level,
         edge_noise,
     })
+}
+
+/// The errors of [`merge`].
+fn check_mergeable(a: &PreintegratedImu, b: &PreintegratedImu) -> Result<(), MergeError> {
+    if a.t_j_ns != b.t_i_ns {
+        return Err(MergeError::NotConsecutive {
+            a_t_j_ns: a.t_j_ns,
+            b_t_i_ns: b.t_i_ns,
+        });
+    }
+    if a.bias_hat != b.bias_hat {
+        return Err(MergeError::BiasMismatch);
+    }
+    if a.gravity != b.gravity {
+        return Err(MergeError::GravityMismatch);
+    }
+    if a.level != b.level {
+        return Err(MergeError::LevelMismatch {
+            a: a.level,
+            b: b.level,
+        });
+    }
+    Ok(())
+}
+
+/// `A` and `B` of the module docs: the composed error's derivatives with respect to a's and
+/// b's errors.
+fn transitions(a: &PreintegratedImu, b: &PreintegratedImu) -> (M9, M9) {
+    let ra = *a.delta_r.matrix();
+    let mut am = M9::identity();
+    am.fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&b.delta_r.matrix().transpose());
+    am.fixed_view_mut::<3, 3>(3, 0)
+        .copy_from(&(-ra * hat(&b.delta_v)));
+    am.fixed_view_mut::<3, 3>(6, 0)
+        .copy_from(&(-ra * hat(&b.delta_p)));
+    am.fixed_view_mut::<3, 3>(6, 3)
+        .copy_from(&(Matrix3::identity() * b.delta_t));
+    let mut bm = M9::identity();
+    bm.fixed_view_mut::<3, 3>(3, 3).copy_from(&ra);
+    bm.fixed_view_mut::<3, 3>(6, 6).copy_from(&ra);
+    (am, bm)
+}
+
+/// The merged 15×15 error-state covariance (module docs): `F_a Σ15_a F_aᵀ + G_b Σ15_b G_bᵀ`
+/// plus the shared samples' terms for [`Level::Combined`]; `diag(Σ, Σ_bb,a + Σ_bb,b)` for
+/// [`Level::Covariance`].
+#[allow(clippy::too_many_arguments)]
+fn combined_cov(
+    a: &PreintegratedImu,
+    b: &PreintegratedImu,
+    am: &M9,
+    bm: &M9,
+    jb: &M96,
+    shared: &M9,
+    cov: &Cov9,
+) -> Cov15 {
+    match a.level {
+        Level::Combined => {
+            let mut fa = Cov15::identity();
+            fa.fixed_view_mut::<9, 9>(0, 0).copy_from(am);
+            fa.fixed_view_mut::<9, 6>(0, 9).copy_from(&(-bm * jb));
+            let mut gb = Cov15::identity();
+            gb.fixed_view_mut::<9, 9>(0, 0).copy_from(bm);
+            let mut c = fa * a.cov15 * fa.transpose() + gb * b.cov15 * gb.transpose();
+            let blk = c.fixed_view::<9, 9>(0, 0) + shared;
+            c.fixed_view_mut::<9, 9>(0, 0).copy_from(&blk);
+            c
+        }
+        Level::Covariance => {
+            let mut c = Cov15::zeros();
+            c.fixed_view_mut::<9, 9>(0, 0).copy_from(cov);
+            let bb = a.cov15.fixed_view::<6, 6>(9, 9) + b.cov15.fixed_view::<6, 6>(9, 9);
+            c.fixed_view_mut::<6, 6>(9, 9).copy_from(&bb);
+            c
+        }
+        Level::Deltas => Cov15::zeros(),
+    }
 }
 
 type M9 = SMatrix<f64, 9, 9>;

@@ -220,6 +220,62 @@ fn plan(
     t_j_ns: i64,
     max_gap_ns: i64,
 ) -> Result<Plan, PreintError> {
+    let (lo, hi) = bracket(samples, t_i_ns, t_j_ns, max_gap_ns)?;
+    let mj = if samples[hi - 1].t_ns == t_j_ns {
+        hi - 1
+    } else {
+        hi
+    };
+    let (bi, node_i, mut start) = boundary(scheme, samples, t_i_ns, lo);
+    let (bj, node_j, mut end) = boundary(scheme, samples, t_j_ns, mj);
+    let inner = inner_samples(scheme, samples, (t_i_ns, bi), (t_j_ns, bj));
+    let (inner_lo, inner_hi) = (inner.lo, inner.hi);
+    // Stream intervals of the samples next to each edge (their window neighbour may be the
+    // boundary sample, which is not their stream neighbour).
+    for k in [
+        inner.ctx_before,
+        Some(inner_lo),
+        Some(inner_lo + 1),
+        Some(inner_lo + 2),
+    ]
+    .into_iter()
+    .flatten()
+    .filter(|&k| k < inner_hi || Some(k) == inner.ctx_before)
+    {
+        push_src(&mut start, samples, k);
+    }
+    for k in [
+        inner.ctx_after,
+        inner_hi.checked_sub(1),
+        inner_hi.checked_sub(2),
+        inner_hi.checked_sub(3),
+    ]
+    .into_iter()
+    .flatten()
+    .filter(|&k| k >= inner_lo || Some(k) == inner.ctx_after)
+    {
+        push_src(&mut end, samples, k);
+    }
+    start.ctx = inner.ctx_before.map(|k| samples[k]);
+    end.ctx = inner.ctx_after.map(|k| samples[k]);
+    let mut nodes = Vec::with_capacity(inner_hi - inner_lo + 2);
+    nodes.push(node_i);
+    nodes.extend_from_slice(&samples[inner_lo..inner_hi]);
+    nodes.push(node_j);
+    Ok(Plan {
+        nodes,
+        spec: WindowSpec { start, end },
+    })
+}
+
+/// Checks the keyframes against the stream and the stream around the window, and returns
+/// `(lo, hi)`: the first sample at or after `t_i` and the first after `t_j`.
+fn bracket(
+    samples: &[ImuSample],
+    t_i_ns: i64,
+    t_j_ns: i64,
+    max_gap_ns: i64,
+) -> Result<(usize, usize), PreintError> {
     if t_j_ns <= t_i_ns {
         return Err(PreintError::NonPositiveWindow { t_i_ns, t_j_ns });
     }
@@ -255,29 +311,42 @@ fn plan(
             last_ns,
         });
     }
-    let mj = if samples[hi - 1].t_ns == t_j_ns {
-        hi - 1
-    } else {
-        hi
-    };
-    let (before, after) = scheme.stencil_reach();
-    let wide = before + after > 0;
-    let (bi, node_i, mut start) = boundary(scheme, samples, t_i_ns, lo);
-    let (bj, node_j, mut end) = boundary(scheme, samples, t_j_ns, mj);
-    // Stream samples strictly inside, and the context samples (wide stencils).
-    let (mut inner_lo, mut ctx_before) = match bi {
+    Ok((lo, hi))
+}
+
+/// The stream samples strictly inside a window (`lo..hi`) and, for a wide stencil, the context
+/// samples beyond its edges.
+struct Inner {
+    lo: usize,
+    hi: usize,
+    ctx_before: Option<usize>,
+    ctx_after: Option<usize>,
+}
+
+/// [`Inner`] for the boundaries `(t_i, bi)` and `(t_j, bj)` ([`boundary`]'s results). For a
+/// wide stencil, a stream sample closer than 1/8 interval to an interpolated boundary is left
+/// out (its information is in the boundary sample) and the context sample is the next one out.
+fn inner_samples(
+    scheme: Scheme,
+    samples: &[ImuSample],
+    (t_i_ns, bi): (i64, Result<usize, usize>),
+    (t_j_ns, bj): (i64, Result<usize, usize>),
+) -> Inner {
+    let n = samples.len();
+    let (mut lo, mut ctx_before) = match bi {
         Ok(m) => (m + 1, m.checked_sub(1)),
         Err(m) => (m, Some(m - 1)),
     };
-    let (mut inner_hi, mut ctx_after) = match bj {
+    let (mut hi, mut ctx_after) = match bj {
         Ok(m) => (m, Some(m + 1).filter(|&k| k < n)),
         Err(m) => (m, Some(m)),
     };
-    if wide {
+    let (before, after) = scheme.stencil_reach();
+    if before + after > 0 {
         if let Err(m) = bi {
             let step = samples[m].t_ns - samples[m - 1].t_ns;
             if too_close(samples[m].t_ns, t_i_ns, step) {
-                inner_lo = m + 1;
+                lo = m + 1;
             }
             if too_close(samples[m - 1].t_ns, t_i_ns, step) {
                 ctx_before = m.checked_sub(2);
@@ -286,7 +355,7 @@ fn plan(
         if let Err(m) = bj {
             let step = samples[m].t_ns - samples[m - 1].t_ns;
             if too_close(samples[m - 1].t_ns, t_j_ns, step) {
-                inner_hi = m - 1;
+                hi = m - 1;
             }
             if too_close(samples[m].t_ns, t_j_ns, step) {
                 ctx_after = Some(m + 1).filter(|&k| k < n);
@@ -299,43 +368,12 @@ fn plan(
         ctx_before = None;
         ctx_after = None;
     }
-    inner_hi = inner_hi.max(inner_lo);
-    // Stream intervals of the samples next to each edge (their window neighbour may be the
-    // boundary sample, which is not their stream neighbour).
-    for k in [
+    Inner {
+        lo,
+        hi: hi.max(lo),
         ctx_before,
-        Some(inner_lo),
-        Some(inner_lo + 1),
-        Some(inner_lo + 2),
-    ]
-    .into_iter()
-    .flatten()
-    .filter(|&k| k < inner_hi || Some(k) == ctx_before)
-    {
-        push_src(&mut start, samples, k);
-    }
-    for k in [
         ctx_after,
-        inner_hi.checked_sub(1),
-        inner_hi.checked_sub(2),
-        inner_hi.checked_sub(3),
-    ]
-    .into_iter()
-    .flatten()
-    .filter(|&k| k >= inner_lo || Some(k) == ctx_after)
-    {
-        push_src(&mut end, samples, k);
     }
-    start.ctx = ctx_before.map(|k| samples[k]);
-    end.ctx = ctx_after.map(|k| samples[k]);
-    let mut nodes = Vec::with_capacity(inner_hi - inner_lo + 2);
-    nodes.push(node_i);
-    nodes.extend_from_slice(&samples[inner_lo..inner_hi]);
-    nodes.push(node_j);
-    Ok(Plan {
-        nodes,
-        spec: WindowSpec { start, end },
-    })
 }
 
 /// The samples of the keyframe window `[t_i_ns, t_j_ns]` taken from a time-ordered stream:

@@ -128,7 +128,7 @@ pub(crate) fn resolve(
     mut add_noise: impl FnMut(&mut PackedSym9, &Gain96, f64),
 ) -> EdgeNoise {
     let EdgeLayout {
-        ctx_before: cb,
+        ctx_before: before,
         n,
         first,
         last,
@@ -157,11 +157,11 @@ pub(crate) fn resolve(
         };
     for cap in &edges.gains[..edges.len] {
         let g = cap.g;
-        let start = cap.ext < cb + first;
-        let end = cap.ext + last >= cb + n;
-        let side = if cap.ext == cb && spec.start.nw > 0 {
+        let start = cap.ext < before + first;
+        let end = cap.ext + last >= before + n;
+        let side = if cap.ext == before && spec.start.nw > 0 {
             Some(&spec.start)
-        } else if cap.ext == cb + n - 1 && spec.end.nw > 0 {
+        } else if cap.ext == before + n - 1 && spec.end.nw > 0 {
             Some(&spec.end)
         } else {
             None

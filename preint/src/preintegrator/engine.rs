@@ -102,10 +102,10 @@ impl<N: NoiseCov> Retirer<'_, N> {
     /// Retires sample `id` (extended index) with its total gain.
     #[inline(always)]
     fn retire<S: IntervalScheme>(&mut self, p: &mut PackedSym9, id: usize, gain: &SampleGain) {
-        let (cb, n) = (self.ctx_before, self.n);
-        let in_window = id >= cb && id < cb + n;
+        let (before, n) = (self.ctx_before, self.n);
+        let in_window = id >= before && id < before + n;
         let (left, right) = if in_window {
-            let j = id - cb;
+            let j = id - before;
             let total = if self.at_end { n } else { usize::MAX };
             let t = self.ring[id % RING].t_ns;
             let left = if j > 0 {
@@ -123,8 +123,8 @@ impl<N: NoiseCov> Retirer<'_, N> {
             (0.0, 0.0)
         };
         let edge = !in_window
-            || id - cb < edge_count::<S>()
-            || (self.at_end && id - cb + edge_count::<S>() >= n);
+            || id - before < edge_count::<S>()
+            || (self.at_end && id - before + edge_count::<S>() >= n);
         if edge
             && self
                 .edges
@@ -223,20 +223,20 @@ impl<S: IntervalScheme> Core<S> {
     /// Integrates every interval that is ready; with `at_end`, all remaining intervals and
     /// the remaining noise (the window then has exactly `self.n` samples).
     #[inline(always)]
-    fn advance_with<N: NoiseCov, const LIN: bool>(&mut self, noise: &N, at_end: bool) {
+    fn advance_with<N: NoiseCov, const LINEARISE: bool>(&mut self, noise: &N, at_end: bool) {
         let n = self.n;
         while self.done + 1 < n && (at_end || self.ready(self.done)) {
             if at_end {
-                self.interval::<N, LIN, true>(noise, self.done);
+                self.interval::<N, LINEARISE, true>(noise, self.done);
             } else {
-                self.interval::<N, LIN, false>(noise, self.done);
+                self.interval::<N, LINEARISE, false>(noise, self.done);
             }
             self.done += 1;
             if self.done.is_multiple_of(RENORM_EVERY) {
                 self.renormalize();
             }
         }
-        if at_end && LIN && n >= 2 {
+        if at_end && LINEARISE && n >= 2 {
             let last = self.ctx_before + n - 1;
             let r_last = self.d.r;
             let (e, mut r) = self.split(noise, true);
@@ -287,7 +287,7 @@ impl<S: IntervalScheme> Core<S> {
     /// Interval `k` (out of line: it keeps the per-interval code small enough for the
     /// compiler to inline the fixed-size matrix operations).
     #[inline(never)]
-    fn interval<N: NoiseCov, const LIN: bool, const AT_END: bool>(&mut self, noise: &N, k: usize) {
+    fn interval<N: NoiseCov, const LINEARISE: bool, const AT_END: bool>(&mut self, noise: &N, k: usize) {
         let at_end = AT_END;
         let Self {
             fixed,
@@ -303,8 +303,8 @@ impl<S: IntervalScheme> Core<S> {
             edges,
             ..
         } = self;
-        let (s0, st) = stencil::<S>(ring, ctx_after.as_ref(), *ctx_before, *n, k, at_end);
-        if !LIN && <S::Fast as FastDeltas>::ENABLED {
+        let (first_id, st) = stencil::<S>(ring, ctx_after.as_ref(), *ctx_before, *n, k, at_end);
+        if !LINEARISE && <S::Fast as FastDeltas>::ENABLED {
             fast.step(&st);
             return;
         }
@@ -317,16 +317,16 @@ impl<S: IntervalScheme> Core<S> {
             n: *n,
             at_end,
         };
-        if LIN && S::NODES_BEFORE + S::NODES_AFTER > 0 {
-            e.retire_below(s0, |p, id, g| r.retire::<S>(p, id, g));
+        if LINEARISE && S::NODES_BEFORE + S::NODES_AFTER > 0 {
+            e.retire_below(first_id, |p, id, g| r.retire::<S>(p, id, g));
         }
         let step = S::step(d, carry, &st);
-        if !LIN {
+        if !LINEARISE {
             return;
         }
         let lin = S::linearise(&step, &st);
         let pb = origin.pull_back(st.n1().t_ns, &d.v, &d.p);
-        e.interval::<S>(&lin, &pb, s0, st.k, st.len, &fixed.walk, |p, id, g| {
+        e.interval::<S>(&lin, &pb, first_id, st.k, st.len, &fixed.walk, |p, id, g| {
             r.retire::<S>(p, id, g)
         });
         int_cov(fixed, e, d, lin.tr.h);
@@ -424,32 +424,33 @@ impl<S: IntervalScheme> Core<S> {
     }
 }
 
-/// Interval `k`: its stencil's first extended index, and the stencil (node k at `st.k`).
+/// Interval `k` of a window with `before` context samples before it and `n` samples: its
+/// stencil's first extended index, and the stencil (node k at `st.k`).
 #[inline(always)]
 fn stencil<'a, S: IntervalScheme>(
     ring: &'a [Node; RING],
     ctx_after: Option<&'a Node>,
-    cb: usize,
+    before: usize,
     n: usize,
     k: usize,
     at_end: bool,
 ) -> (usize, Stencil<'a>) {
-    let ke = k + cb;
+    let k_ext = k + before;
     let with_ctx = at_end && ctx_after.is_some();
-    let len = cb + n + usize::from(with_ctx);
+    let len = before + n + usize::from(with_ctx);
     let m = len.min(S::STENCIL);
-    let s0 = if at_end {
-        ke.saturating_sub(S::NODES_BEFORE).min(len - m)
+    let first_id = if at_end {
+        k_ext.saturating_sub(S::NODES_BEFORE).min(len - m)
     } else {
-        ke.saturating_sub(S::NODES_BEFORE)
+        k_ext.saturating_sub(S::NODES_BEFORE)
     };
     let at = |i: usize| &ring[i % RING];
-    let mut nodes = [at(s0), at(s0 + 1), at(s0 + 2), at(s0 + 3)];
+    let mut nodes = [at(first_id), at(first_id + 1), at(first_id + 2), at(first_id + 3)];
     if with_ctx {
-        // The context sample after the window, at extended index `cb + n`.
+        // The context sample after the window, at extended index `before + n`.
         let c = ctx_after.expect("with_ctx");
         for (j, x) in nodes.iter_mut().enumerate() {
-            if s0 + j == cb + n {
+            if first_id + j == before + n {
                 *x = c;
             }
         }
@@ -457,10 +458,10 @@ fn stencil<'a, S: IntervalScheme>(
     let st = Stencil {
         nodes,
         len: m,
-        k: ke - s0,
+        k: k_ext - first_id,
         first: k == 0,
     };
-    (s0, st)
+    (first_id, st)
 }
 
 /// Integration noise of an interval of length `h` \[s\]. GTSAM adds it to δp in the
