@@ -16,7 +16,6 @@
 pub mod manifold;
 pub mod se3;
 pub mod so3;
-mod trig;
 
 pub use manifold::Manifold;
 pub use se3::SE3;

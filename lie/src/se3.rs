@@ -60,8 +60,8 @@ pub fn q_coeffs(t2: f64) -> (f64, f64, f64) {
             so3::horner(t2, &QC),
         )
     } else {
-        let t = crate::trig::sqrt(t2);
-        let (s, co) = crate::trig::sin_cos(t);
+        let t = t2.sqrt();
+        let (s, co) = t.sin_cos();
         (
             (t - s) / (t2 * t),
             (t2 + 2.0 * co - 2.0) / (2.0 * t2 * t2),

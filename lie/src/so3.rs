@@ -16,9 +16,8 @@
 //!   `a = (π² − θ²)·qa(θ²)`, so that `a` keeps its relative precision up to π. No sqrt, no
 //!   `sin_cos`, no division: a 1.9-rad Exp or Jr went from ~30 ns (sqrt → sin_cos → division)
 //!   to ~12–15 ns, Jr⁻¹ likewise (criterion, README).
-//! - θ > π: closed form with one `sqrt` and one `sin_cos` (our own fdlibm-kernel version in
-//!   `trig.rs`); there `cos θ < 0`, so `1 − cos θ`, `θ − sin θ` and `1 − (θ/2)cot(θ/2)` do not
-//!   cancel.
+//! - θ > π: closed form with one `sqrt` and one `f64::sin_cos`; there `cos θ < 0`, so
+//!   `1 − cos θ`, `θ − sin θ` and `1 − (θ/2)cot(θ/2)` do not cancel.
 //!
 //! Measured relative errors against 60-digit mpmath values at √(exact f64 θ²) for 473 angles in
 //! [1e-8, 5.5] (`tests/so3.rs`, `coefficients_within_a_few_eps_on_dense_angles`; ε = 2⁻⁵²):
@@ -37,7 +36,6 @@
 //! relative errors (`tests/so3.rs`, 200 000 angles): series 1.4 ε, half angle 2.6 ε, cotangent
 //! 2.2 ε, atan2 2.1 ε, Shepperd 1.7 ε.
 
-use crate::trig;
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 
 /// Skew-symmetric matrix `[v]×` with `[v]× w = v × w` (the hat operator of so(3)).
@@ -355,8 +353,8 @@ fn estrin5(x: f64, c: &[f64; 5]) -> f64 {
 #[inline(never)]
 #[cold]
 fn exp_quat_coeffs_closed(theta2: f64) -> (f64, f64) {
-    let theta = trig::sqrt(theta2);
-    let (s, c) = trig::sin_cos(0.5 * theta);
+    let theta = theta2.sqrt();
+    let (s, c) = (0.5 * theta).sin_cos();
     (c, s / theta)
 }
 
@@ -426,8 +424,8 @@ impl RodriguesCoeffs {
     /// 56 of 2·10⁶ random φ above 1e-15).
     #[inline(never)]
     fn beyond_pi(theta2: f64) -> Self {
-        let theta = trig::sqrt(theta2);
-        let (s, c) = trig::sin_cos(theta);
+        let theta = theta2.sqrt();
+        let (s, c) = theta.sin_cos();
         Self {
             a: s / theta,
             b: (1.0 - c) / theta2,
@@ -456,10 +454,10 @@ pub fn d_coeff(theta2: f64) -> f64 {
 /// [`d_coeff`] for θ > π: `cot(θ/2) < 0`, so `1 − (θ/2)cot(θ/2) > 1` does not cancel.
 #[inline(never)]
 fn d_coeff_beyond_pi(theta2: f64) -> f64 {
-    let theta = trig::sqrt(theta2);
+    let theta = theta2.sqrt();
     let half = 0.5 * theta;
     // (1 + cos θ)/sin θ = cot(θ/2), from one `sin_cos` of θ/2.
-    let (s, c) = trig::sin_cos(half);
+    let (s, c) = half.sin_cos();
     (1.0 - half * c / s) / theta2
 }
 
@@ -655,15 +653,15 @@ impl SO3 {
             // for this range (conditioning as atan2's), without its case selection and table.
             // (1/(2 sin θ) formed once and multiplied, for one division less, cost 0.3 ε and a
             // quarter more round-trip error on drifted matrices.)
-            let two_sn = trig::sqrt(four_s2);
+            let two_sn = four_s2.sqrt();
             let r = two_c / two_sn;
             let theta = PIO2_HI - (r * poly15(r * r - ATAN_MID, &ATAN_POLY) - PIO2_LO);
             (two_s * (theta / two_sn), theta * theta)
         } else if two_c > -1.8 {
             // θ < 2.69: sin θ ≥ 0.43, so two_s carries full relative precision. atan2 is
             // invariant under the common factor 2, and θ/(2 sin θ)·(2 sin θ·n) = θ n.
-            let two_sn = trig::sqrt(four_s2);
-            let theta = trig::atan2_upper(two_sn, two_c);
+            let two_sn = four_s2.sqrt();
+            let theta = two_sn.atan2(two_c);
             (two_s * (theta / two_sn), theta * theta)
         } else {
             // Near π the antisymmetric part vanishes: extract the axis from the diagonal.
@@ -835,7 +833,7 @@ fn log_quaternion(w: f64, v: &Vector3<f64>) -> Vector3<f64> {
         let f = horner(x2, &[1.0, -1.0 / 3.0, 1.0 / 5.0, -1.0 / 7.0]);
         v * (2.0 * f / w)
     } else {
-        let n = trig::sqrt(n2);
-        v * (2.0 * trig::atan2_upper(n, w) / n)
+        let n = n2.sqrt();
+        v * (2.0 * n.atan2(w) / n)
     }
 }
