@@ -52,6 +52,7 @@ pub fn q_block(rho: &Vector3<f64>, theta: &Vector3<f64>) -> Matrix3<f64> {
 
 /// The scalars `(a, b, c)` of [`q_block`] at θ² \[rad²\]: `a = (θ − sin θ)/θ³`,
 /// `b = (θ² + 2cos θ − 2)/(2θ⁴)`, `c = (2θ − 3 sin θ + θ cos θ)/(2θ⁵)`; Taylor series below θ = 2.
+#[doc(hidden)] // a kernel of `q_block`, public for the reference tests in `tests/se3.rs`
 pub fn q_coeffs(t2: f64) -> (f64, f64, f64) {
     if t2 < 4.0 {
         (
