@@ -13,10 +13,12 @@
 //! - Jacobians of an operation are returned next to its value by the `*_jac` variants
 //!   (`log_jac`, `compose_jac`, `act_jac`, …), each w.r.t. right perturbations of its inputs.
 
+pub mod group;
 pub mod manifold;
 pub mod se3;
 pub mod so3;
 
+pub use group::LieGroup;
 pub use manifold::Manifold;
 pub use se3::SE3;
 pub use so3::{SO3, hat, jl, jl_inv, jr, jr_inv, vee};
