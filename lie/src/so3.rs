@@ -14,16 +14,16 @@
 //! - 0.1 ≤ θ ≤ π: polynomials in θ² (Chebyshev interpolants from `lie/tools/fit_poly.py`;
 //!   degree 9, D degree 14), with the zero of `a` at θ = π factored out,
 //!   `a = (π² − θ²)·qa(θ²)`, so that `a` keeps its relative precision up to π. No sqrt, no
-//!   `sin_cos`, no division: a 1.9-rad Exp or Jr went from ~30 ns (sqrt → sin_cos → division)
-//!   to ~12–15 ns, Jr⁻¹ likewise (criterion, README).
+//!   `sin_cos`, no division: no dependent sqrt → sin_cos → division chain as in the closed
+//!   forms.
 //! - θ > π: closed form with one `sqrt` and one `f64::sin_cos`; there `cos θ < 0`, so
 //!   `1 − cos θ`, `θ − sin θ` and `1 − (θ/2)cot(θ/2)` do not cancel.
 //!
 //! Measured relative errors against 60-digit mpmath values at √(exact f64 θ²) for 473 angles in
 //! [1e-8, 5.5] (`tests/so3.rs`, `coefficients_within_a_few_eps_on_dense_angles`; ε = 2⁻⁵²):
 //! series ≤ 0.7 ε; polynomials a ≤ 1.8 ε, b ≤ 1.2 ε, c ≤ 0.9 ε, D ≤ 0.8 ε (20 000 points in
-//! `fit_poly.py`); closed form ≤ 1.9 ε. (D's closed form, used up to π before, cancels up to
-//! ~6 bits near θ = ½: 29 ε measured there.) Above π, `a` computed from θ² is only as precise
+//! `fit_poly.py`); closed form ≤ 1.9 ε. (Below π, D's closed form would cancel up to ~6 bits
+//! near θ = ½: 29 ε measured there.) Above π, `a` computed from θ² is only as precise
 //! as θ = √θ²: its relative error grows as |θ cot θ − 1|·ε/2 near 2π (and within ~1e-5 rad
 //! above π); `a·θ = sin θ` stays within a few ε absolute.
 //! `Log` reads sin θ·n from the antisymmetric part and cos θ from the trace, on five branches:
@@ -35,6 +35,10 @@
 //! by `sin θ` fails, and a slightly drifted R costs it nothing extra. Measured Log(Exp φ)
 //! relative errors (`tests/so3.rs`, 200 000 angles): series 1.4 ε, half angle 2.6 ε, cotangent
 //! 2.2 ε, atan2 2.1 ε, Shepperd 1.7 ε.
+//!
+//! The coefficient kernels (`exp_coeffs`, `jac_coeffs`, `d_coeff`, `exp_quat_coeffs`,
+//! `RodriguesCoeffs`, …) are public for `preint`'s per-sample fast paths but hidden from these
+//! docs: they are not part of the supported API.
 
 mod coeffs;
 mod quat;
@@ -66,26 +70,76 @@ pub fn vee(m: &Matrix3<f64>) -> Vector3<f64> {
     )
 }
 
-/// Right Jacobian of SO(3): `Jr(φ) = I − b[φ]× + c[φ]×²` (Solà eq. 143).
+/// Right Jacobian of SO(3): `Jr(φ) = I − b[φ]× + c[φ]×²` (Solà eq. 143), with
+/// `b = (1 − cos θ)/θ²`, `c = (θ − sin θ)/θ³`: `Exp(φ + δ) ≈ Exp(φ)·Exp(Jr(φ) δ)`.
+///
+/// ```
+/// use nalgebra::Vector3;
+/// use preint_lie::{SO3, jr};
+///
+/// let phi = Vector3::new(0.4, -1.1, 0.8);
+/// let d = Vector3::new(1e-6, -2e-6, 1.5e-6);
+/// let exact = SO3::exp(&(phi + d));
+/// // First order in δ: the error left is O(|δ|²) ≈ 1e-12 …
+/// let linear = SO3::exp(&phi) * SO3::exp(&(jr(&phi) * d));
+/// assert!(exact.minus(&linear).norm() < 1e-11);
+/// // … where ignoring Jr leaves O(|φ||δ|).
+/// let naive = SO3::exp(&phi) * SO3::exp(&d);
+/// assert!(exact.minus(&naive).norm() > 1e-7);
+/// ```
 #[inline]
 pub fn jr(phi: &Vector3<f64>) -> Matrix3<f64> {
     let (b, c) = jac_coeffs(phi.norm_squared());
     i_plus_hat_hat2(phi, -b, c)
 }
 
-/// Inverse right Jacobian: `Jr⁻¹(φ) = I + ½[φ]× + D[φ]×²` (Solà eq. 144), valid for θ < 2π.
+/// Inverse right Jacobian: `Jr⁻¹(φ) = I + ½[φ]× + D[φ]×²` (Solà eq. 144), with
+/// `D = 1/θ² − (1 + cos θ)/(2θ sin θ)`, valid for θ < 2π: `Log(Exp(φ)·Exp(δ)) ≈ φ + Jr⁻¹(φ) δ`.
+///
+/// ```
+/// use nalgebra::{Matrix3, Vector3};
+/// use preint_lie::{SO3, jr, jr_inv};
+///
+/// let phi = Vector3::new(0.4, -1.1, 0.8);
+/// assert!((jr(&phi) * jr_inv(&phi) - Matrix3::identity()).amax() < 1e-15);
+/// let d = Vector3::new(1e-6, -2e-6, 1.5e-6);
+/// let log = (SO3::exp(&phi) * SO3::exp(&d)).log();
+/// assert!((log - (phi + jr_inv(&phi) * d)).norm() < 1e-11);
+/// ```
 #[inline]
 pub fn jr_inv(phi: &Vector3<f64>) -> Matrix3<f64> {
     i_plus_hat_hat2(phi, 0.5, d_coeff(phi.norm_squared()))
 }
 
-/// Left Jacobian: `Jl(φ) = Jr(−φ) = I + b[φ]× + c[φ]×²` (Solà eq. 145).
+/// Left Jacobian: `Jl(φ) = Jr(−φ) = I + b[φ]× + c[φ]×²` (Solà eq. 145):
+/// `Exp(φ + δ) ≈ Exp(Jl(φ) δ)·Exp(φ)`. For SO(3) also `Jl = Jrᵀ = R·Jr`, R = Exp(φ).
+///
+/// ```
+/// use nalgebra::Vector3;
+/// use preint_lie::{SO3, jl, jr};
+///
+/// let phi = Vector3::new(0.4, -1.1, 0.8);
+/// assert!((jl(&phi) - jr(&phi).transpose()).amax() < 1e-15);
+/// assert!((jl(&phi) - SO3::exp(&phi).matrix() * jr(&phi)).amax() < 1e-15);
+/// let d = Vector3::new(1e-6, -2e-6, 1.5e-6);
+/// let linear = SO3::exp(&(jl(&phi) * d)) * SO3::exp(&phi);
+/// assert!(SO3::exp(&(phi + d)).minus(&linear).norm() < 1e-11);
+/// ```
 #[inline]
 pub fn jl(phi: &Vector3<f64>) -> Matrix3<f64> {
     jr(&-phi)
 }
 
-/// Inverse left Jacobian: `Jl⁻¹(φ) = I − ½[φ]× + D[φ]×²` (Solà eq. 146).
+/// Inverse left Jacobian: `Jl⁻¹(φ) = I − ½[φ]× + D[φ]×²` (Solà eq. 146), valid for θ < 2π:
+/// `Log(Exp(δ)·Exp(φ)) ≈ φ + Jl⁻¹(φ) δ`.
+///
+/// ```
+/// use nalgebra::{Matrix3, Vector3};
+/// use preint_lie::{jl, jl_inv};
+///
+/// let phi = Vector3::new(0.4, -1.1, 0.8);
+/// assert!((jl(&phi) * jl_inv(&phi) - Matrix3::identity()).amax() < 1e-15);
+/// ```
 #[inline]
 pub fn jl_inv(phi: &Vector3<f64>) -> Matrix3<f64> {
     jr_inv(&-phi)
@@ -163,9 +217,23 @@ impl SO3 {
         &self.m
     }
 
-    /// Exponential map `Exp(φ)` of a rotation vector φ (rad), Rodrigues' formula (Solà eq. 77).
+    /// Exponential map `Exp(φ)` of a rotation vector φ (rad), Rodrigues' formula (Solà eq. 77):
+    /// the rotation by θ = ‖φ‖ about φ/θ. Any φ is accepted (θ > π wraps around).
     /// Like any rounded rotation matrix, an entry may exceed 1 in magnitude by an ulp or two
     /// (`Exp((0, π/2, 0))[(2, 0)]` is −1 − 2⁻⁵²): clamp before `asin`/`acos`.
+    ///
+    /// ```
+    /// use nalgebra::Vector3;
+    /// use preint_lie::SO3;
+    /// use std::f64::consts::FRAC_PI_2;
+    ///
+    /// // A quarter turn about z takes x to y.
+    /// let r = SO3::exp(&Vector3::new(0.0, 0.0, FRAC_PI_2));
+    /// assert!((r.act(&Vector3::x()) - Vector3::y()).norm() < 1e-15);
+    /// assert!(r.orthonormality_error() < 1e-15);
+    /// // Tiny angles keep their relative precision.
+    /// assert_eq!(SO3::exp(&Vector3::new(1e-300, 0.0, 0.0)).matrix()[(2, 1)], 1e-300);
+    /// ```
     #[inline]
     pub fn exp(phi: &Vector3<f64>) -> Self {
         let (a, b) = exp_coeffs(phi.norm_squared());
@@ -186,8 +254,23 @@ impl SO3 {
         )
     }
 
-    /// Logarithmic map `Log(R)`: the rotation vector φ with ‖φ‖ ∈ [0, π] and `Exp(φ) = R`.
-    /// At exactly θ = π either of the two opposite vectors may be returned.
+    /// Logarithmic map `Log(R)`: the rotation vector φ (rad) with ‖φ‖ ∈ [0, π] and
+    /// `Exp(φ) = R`, computed on the branches of the module docs. At exactly θ = π either of
+    /// the two opposite vectors may be returned.
+    ///
+    /// ```
+    /// use nalgebra::Vector3;
+    /// use preint_lie::SO3;
+    /// use std::f64::consts::PI;
+    ///
+    /// let phi = Vector3::new(0.3, -2.0, 1.5); // θ ≈ 2.52 rad
+    /// assert!((SO3::exp(&phi).log() - phi).norm() < 1e-14 * phi.norm());
+    /// // Angles above π come back as the equivalent rotation with θ ≤ π.
+    /// let wrapped = SO3::exp(&Vector3::new(0.0, 0.0, 1.5 * PI)).log();
+    /// assert!((wrapped - Vector3::new(0.0, 0.0, -0.5 * PI)).norm() < 1e-15);
+    /// // At θ = π: one of ±π·n.
+    /// assert!((SO3::exp(&Vector3::new(PI, 0.0, 0.0)).log().norm() - PI).abs() < 1e-15);
+    /// ```
     #[inline]
     pub fn log(&self) -> Vector3<f64> {
         self.log_theta2().0
@@ -219,8 +302,7 @@ impl SO3 {
             // division, where atan2 needs sqrt → division → polynomial → division. Both parts
             // of R enter, as in atan2, and with about the same conditioning here
             // (|∂θ/∂cos θ| = tan(θ/2), |∂θ/∂sin θ| = 1; atan2's sin θ and |cos θ|). Above π/3 the
-            // polynomial would need many more terms; a quarter-angle variant (one sqrt) that
-            // reached 2.3 rad doubled the round-trip error of drifted matrices there.
+            // polynomial would need many more terms.
             let iv = 1.0 / (2.0 + two_c);
             let u = four_s2 * (iv * iv);
             let at = poly15(u - ATAN_MID, &ATAN_POLY);
@@ -229,8 +311,9 @@ impl SO3 {
             // π/3 < θ < 2π/3: θ = π/2 − atan(cot θ) with |cot θ| < 1/√3, so the same
             // polynomial, A(r²) for r = cos θ/sin θ, gives the angle: atan2's own reduction
             // for this range (conditioning as atan2's), without its case selection and table.
-            // (1/(2 sin θ) formed once and multiplied, for one division less, cost 0.3 ε and a
-            // quarter more round-trip error on drifted matrices.)
+            // Two divisions by 2 sin θ, not one reciprocal and two products: the reciprocal's
+            // rounding would add 0.3 ε and a quarter to the round-trip error of drifted
+            // matrices.
             let two_sn = four_s2.sqrt();
             let r = two_c / two_sn;
             let theta = PIO2_HI - (r * poly15(r * r - ATAN_MID, &ATAN_POLY) - PIO2_LO);
@@ -344,9 +427,9 @@ impl core::ops::Mul<Vector3<f64>> for SO3 {
     }
 }
 
-/// asin(σ)/σ = Σ_k (2k)!/(4^k (k!)² (2k+1)) σ^{2k}, eight terms: for σ < 0.1 the first omitted
-/// term, (6435/557056) σ¹⁶, is < 1.2e-18. (Six terms, used up to 2026-12-02, left
-/// (231/13312) σ¹² ≈ 1.7e-14 relative at σ = 0.1, above the 1e-14 required of Log.)
+/// asin(σ)/σ = Σ_k (2k)!/(4^k (k!)² (2k+1)) σ^{2k} (the arcsine series, DLMF 4.24.1), eight
+/// terms: for σ < 0.1 the first omitted term, (6435/557056) σ¹⁶, is < 1.2e-18. (Six terms
+/// would leave (231/13312) σ¹² ≈ 1.7e-14 relative at σ = 0.1, 78 ε.)
 const ASIN_SERIES: [f64; 8] = [
     1.0,
     1.0 / 6.0,

@@ -60,7 +60,7 @@ fn xi(rho: Vector3<f64>, theta: Vector3<f64>) -> Vector6<f64> {
 /// θ ≤ π their terms sum in magnitude to ≤ (1 + π/2 + 1)‖t‖ ≈ 3.6‖t‖ and
 /// ≤ (1 + 2/π + 1)‖ρ‖ ≈ 2.6‖ρ‖ ≤ 4.2‖t‖ (‖Jl⁻¹‖ ≤ π/2, ‖Jl‖ ≤ 1), each term carrying two or
 /// three roundings: ‖Δt‖ ≲ 20 ε ‖t‖ whatever θ and the scale of t. An absolute bound would
-/// have to grow with ‖t‖ (the old 4e-14 held only because ‖t‖ ≈ 3).
+/// have to grow with ‖t‖.
 fn exp_log_errors(g: &SE3) -> (f64, f64) {
     let back = SE3::exp(&g.log());
     let er = (back.r.matrix() - g.r.matrix()).norm();
@@ -73,7 +73,7 @@ fn exp_log_errors(g: &SE3) -> (f64, f64) {
     (er, et)
 }
 
-/// Rotation part: ‖Exp(Log R) − R‖_F ≤ 4e-15 (the SO(3) requirement is 1e-14; measured
+/// Rotation part: ‖Exp(Log R) − R‖_F ≤ 4e-15 (the SO(3) bound is 1e-14; measured
 /// ≤ 1.8e-15, i.e. a few ε per entry from Log's atan2/Shepperd and Rodrigues' sums).
 const ROT_TOL: f64 = 4e-15;
 /// Translation part: ‖Δt‖ ≤ 20 ε ‖t‖ ≈ 4.4e-15 ‖t‖, the rounding bound of [`exp_log_errors`]

@@ -17,7 +17,7 @@ use std::f64::consts::PI;
 /// (They differ: at θ = 3.14159 the rounding of θ² alone moves sin θ/θ by ~1e-11 relative, so a
 /// reference at θ would test the rounding of the square, not the function.)
 /// Generator: `tests/data/gen_tables.py`. The angles straddle the branch edges θ = 0.1 (series
-/// → polynomial) and π (polynomial → closed form), and the old edges ½ and 1.
+/// → polynomial) and π (polynomial → closed form), and θ = ½ and 1.
 const REF: &[(f64, [f64; 4])] = &[
     (
         1e-08,
@@ -184,8 +184,8 @@ fn rel_eps(got: f64, hi: f64, lo: f64) -> f64 {
 fn coefficients_within_a_few_eps_on_dense_angles() {
     // tests/data/coeff_ref.txt (generator gen_coeff_ref.py beside it): 300 random θ ∈ [1, π],
     // 100 log-uniform θ ∈ [1e-8, 1], 50 random θ ∈ [3.5, 5.5], π − 10⁻ᵏ (k = 1…15), π and the
-    // old branch edges, each with 60-digit mpmath references at √(exact f64 θ²), stored as
-    // hi + lo pairs.
+    // doubles on either side of 0.1, ½ and 1, each with 60-digit mpmath references at
+    // √(exact f64 θ²), stored as hi + lo pairs.
     // Three branches: Taylor series (θ < 0.1), polynomials in θ² (0.1 ≤ θ ≤ π), closed form.
     let mut worst = [[0.0f64; 4]; 3];
     let mut n = [0; 3];
@@ -322,7 +322,8 @@ fn exp_log_round_trip(theta: f64, axis: Vector3<f64>) -> (f64, f64) {
     (e1, e2)
 }
 
-/// The angles the issue names, plus π − 1e-6 (the edge of the Log(Exp φ) = φ requirement).
+/// The hard angles: exactly 0, subnormal-scale, tiny, small, generic, and π from below and
+/// exactly; π − 1e-6 is the edge of the domain where Log(Exp φ) = φ is checked.
 const HARD_ANGLES: [f64; 9] = [
     0.0,
     1e-300,
@@ -366,9 +367,9 @@ fn round_trips_at_the_hard_angles() {
 
 /// Log(Exp φ) at 200 000 angles from 0.02 rad to π − 1e-6, random axes, across every branch
 /// edge of Log: the arcsine series (sin θ < 0.1), the half angle (cos θ ≥ ½, θ ≤ π/3), the
-/// cotangent (|cos θ| < ½), atan2 (cos θ > −0.9, θ < 2.691) and Shepperd's extraction. Relative error, in ε. (The
-/// arcsine series had six terms until 2026-12-02 and was off by up to 1.7e-14 ≈ 78 ε just
-/// below sin θ = 0.1.)
+/// cotangent (|cos θ| < ½), atan2 (cos θ > −0.9, θ < 2.691) and Shepperd's extraction.
+/// Relative error, in ε. (A six-term arcsine series would be off by up to 1.7e-14 ≈ 78 ε just
+/// below sin θ = 0.1; this test catches it.)
 #[test]
 fn log_of_exp_within_a_few_eps_across_every_branch() {
     let mut rng = SplitMix::new(11);
@@ -668,7 +669,7 @@ proptest! {
         prop_assert!((SO3::exp(&r.log()).matrix() - r.matrix()).norm() <= 1e-14);
         // Rodrigues with correctly rounded coefficients: RᵀR − I = (2b − a² − b²θ²)[φ]×², a few
         // ε·θ². Measured over 2·10⁶ random φ in this box: worst 1.33e-15 (6 ε), 1 in 36 000
-        // above 1e-15 (so a bound of 1e-15 failed ~1 run in 100 of these 300 cases).
+        // above 1e-15 (so a bound of 1e-15 would fail ~1 run in 100 of these 300 cases).
         prop_assert!(r.orthonormality_error() < 1.5e-15);
     }
 
