@@ -1,9 +1,10 @@
 //! Re-checks every Jacobian of `lie` with Ridders' method (relative error ≤ 1e-8) at generic
-//! points, at θ = 1e-6 and at θ = π − 1e-3, and checks that the checker catches a wrong one.
+//! points, at θ = 1e-6 and at θ = π − 1e-3, written once for every `LieGroup` and run for
+//! SO(3) and SE(3), and checks that the checker catches a wrong one.
 
-use nalgebra::{DMatrix, Matrix3, Vector3, Vector6};
+use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3, Vector6};
 use preint_calib::{CheckError, CheckOptions, NumDiffOptions, check_jacobian, to_dmatrix};
-use preint_lie::{SE3, SO3, hat, jl, jl_inv, jr, jr_inv, se3};
+use preint_lie::{LieGroup, Manifold, SE3, SO3, hat, jl};
 
 /// Rotation vectors: generic, tiny (θ = 1e-6), and close to π (θ = π − 1e-3).
 fn phis() -> Vec<(Vector3<f64>, &'static str)> {
@@ -13,6 +14,50 @@ fn phis() -> Vec<(Vector3<f64>, &'static str)> {
         (axis * 1e-6, "tiny"),
         (axis * (std::f64::consts::PI - 1e-3), "near pi"),
     ]
+}
+
+/// What the generic checks need besides [`LieGroup`], per group.
+trait Fixture<const N: usize>:
+    LieGroup<Tangent = SVector<f64, N>, Jacobian = SMatrix<f64, N, N>, ActJacobian = SMatrix<f64, 3, N>>
+{
+    const NAME: &'static str;
+    /// The tangents at which everything is checked: [`phis`] as rotation parts (SE(3) with a
+    /// fixed translation part).
+    fn points() -> Vec<(SVector<f64, N>, &'static str)>;
+    /// The other operand of `compose`.
+    fn other() -> Self;
+    /// The point acted on.
+    fn point() -> Vector3<f64>;
+}
+
+impl Fixture<3> for SO3 {
+    const NAME: &'static str = "SO3";
+    fn points() -> Vec<(Vector3<f64>, &'static str)> {
+        phis()
+    }
+    fn other() -> Self {
+        SO3::exp(&Vector3::new(-0.2, 0.9, 0.3))
+    }
+    fn point() -> Vector3<f64> {
+        Vector3::new(1.5, -0.4, 2.0)
+    }
+}
+
+impl Fixture<6> for SE3 {
+    const NAME: &'static str = "SE3";
+    fn points() -> Vec<(Vector6<f64>, &'static str)> {
+        let rho = Vector3::new(0.7, -1.2, 0.4);
+        phis()
+            .into_iter()
+            .map(|(t, tag)| (Vector6::new(rho[0], rho[1], rho[2], t[0], t[1], t[2]), tag))
+            .collect()
+    }
+    fn other() -> Self {
+        SE3::exp(&Vector6::new(0.1, 0.5, -0.9, 0.4, -0.3, 0.2))
+    }
+    fn point() -> Vector3<f64> {
+        Vector3::new(-0.3, 2.2, 1.0)
+    }
 }
 
 /// Ridders base step: the default (1e-2, first step 0.32) except where the function takes `Log`
@@ -30,7 +75,7 @@ fn opts(tag: &str, log_near_cut: bool) -> CheckOptions {
     }
 }
 
-fn check<X: preint_lie::Manifold, Y: preint_lie::Manifold>(
+fn check<X: Manifold, Y: Manifold>(
     what: &str,
     tag: &str,
     f: impl Fn(&X) -> Y,
@@ -51,193 +96,145 @@ fn check<X: preint_lie::Manifold, Y: preint_lie::Manifold>(
     }
 }
 
+/// `exp_jac` (Jr), `log_jac` (Jr⁻¹ of Log) and `inverse_jac` (−Ad).
+fn exp_log_inverse<G: Fixture<N>, const N: usize>() {
+    let g = G::NAME;
+    for (tau, tag) in G::points() {
+        let (_, jexp) = G::exp_jac(&tau);
+        check(
+            &format!("{g} exp"),
+            tag,
+            |p: &SVector<f64, N>| G::exp(p),
+            &tau,
+            &[to_dmatrix(&jexp)],
+        );
+        let x = G::exp(&tau);
+        let (_, jlog) = x.log_jac();
+        check(
+            &format!("{g} log"),
+            tag,
+            |a: &G| a.log(),
+            &x,
+            &[to_dmatrix(&jlog)],
+        );
+        let (_, jinv) = x.inverse_jac();
+        check(
+            &format!("{g} inverse"),
+            tag,
+            |a: &G| a.inverse(),
+            &x,
+            &[to_dmatrix(&jinv)],
+        );
+    }
+}
+
 #[test]
 fn so3_exp_log_inverse() {
-    for (phi, tag) in phis() {
-        let (_, jr_a) = SO3::exp_jr(&phi);
+    exp_log_inverse::<SO3, 3>();
+}
+
+#[test]
+fn se3_exp_log_inverse() {
+    exp_log_inverse::<SE3, 6>();
+}
+
+/// `compose_jac` w.r.t. both arguments, with the checked point on either side, and `act_jac`
+/// w.r.t. the element and the point.
+fn compose_and_act_both_arguments<G: Fixture<N>, const N: usize>() {
+    let g = G::NAME;
+    let (u, p) = (G::other(), G::point());
+    for (tau, tag) in G::points() {
+        let x = G::exp(&tau);
+        for (a, b, order) in [(x, u, "X·U"), (u, x, "U·X")] {
+            let (_, ja, jb) = a.compose_jac(&b);
+            check(
+                &format!("{g} compose {order}"),
+                tag,
+                |x: &(G, G)| x.0.compose(&x.1),
+                &(a, b),
+                &[to_dmatrix(&ja), to_dmatrix(&jb)],
+            );
+        }
+        let (_, jx, jp) = x.act_jac(&p);
         check(
-            "SO3 exp",
+            &format!("{g} act"),
             tag,
-            |p: &Vector3<f64>| SO3::exp(p),
-            &phi,
-            &[to_dmatrix(&jr_a)],
-        );
-        let r = SO3::exp(&phi);
-        let (_, jlog) = r.log_jac();
-        check("SO3 log", tag, |a: &SO3| a.log(), &r, &[to_dmatrix(&jlog)]);
-        let (_, jinv) = r.inverse_jac();
-        check(
-            "SO3 inverse",
-            tag,
-            |a: &SO3| a.inverse(),
-            &r,
-            &[to_dmatrix(&jinv)],
+            |x: &(G, Vector3<f64>)| x.0.act(&x.1),
+            &(x, p),
+            &[to_dmatrix(&jx), to_dmatrix(&jp)],
         );
     }
 }
 
 #[test]
 fn so3_compose_and_act_both_arguments() {
-    let v = Vector3::new(1.5, -0.4, 2.0);
-    for (phi, tag) in phis() {
-        let r = SO3::exp(&phi);
-        let s = SO3::exp(&Vector3::new(-0.2, 0.9, 0.3));
-        let (_, ja, jb) = r.compose_jac(&s);
+    compose_and_act_both_arguments::<SO3, 3>();
+}
+
+#[test]
+fn se3_compose_and_act_both_arguments() {
+    compose_and_act_both_arguments::<SE3, 6>();
+}
+
+/// Jr, Jl, Jr⁻¹ and Jl⁻¹ by their defining properties, and the identities between them.
+fn right_and_left_jacobians_and_inverses<G: Fixture<N>, const N: usize>() {
+    let g = G::NAME;
+    let id = SMatrix::<f64, N, N>::identity();
+    for (tau, tag) in G::points() {
+        let x0 = G::exp(&tau);
+        // Jr: Exp(τ + δ) = Exp(τ)·Exp(Jr δ)  ⇒  d Log(Exp(τ)⁻¹ Exp(τ + δ))/dδ = Jr(τ).
         check(
-            "SO3 compose",
+            &format!("{g} Jr"),
             tag,
-            |x: &(SO3, SO3)| x.0.compose(&x.1),
-            &(r, s),
-            &[to_dmatrix(&ja), to_dmatrix(&jb)],
+            |p: &SVector<f64, N>| x0.inverse().compose(&G::exp(p)).log(),
+            &tau,
+            &[to_dmatrix(&G::jr(&tau))],
         );
-        // Also with the near-π rotation on the right-hand side.
-        let (_, ja, jb) = s.compose_jac(&r);
+        // Jl: Exp(τ + δ) = Exp(Jl δ)·Exp(τ)  ⇒  d Log(Exp(τ + δ) Exp(τ)⁻¹)/dδ = Jl(τ).
         check(
-            "SO3 compose (swapped)",
+            &format!("{g} Jl"),
             tag,
-            |x: &(SO3, SO3)| x.0.compose(&x.1),
-            &(s, r),
-            &[to_dmatrix(&ja), to_dmatrix(&jb)],
+            |p: &SVector<f64, N>| G::exp(p).compose(&x0.inverse()).log(),
+            &tau,
+            &[to_dmatrix(&G::jl(&tau))],
         );
-        let (_, jr_, jv) = r.act_jac(&v);
+        // Jr⁻¹: d Log(Exp(τ)·Exp(δ))/dδ; Jl⁻¹: d Log(Exp(δ)·Exp(τ))/dδ.
+        let zero = SVector::<f64, N>::zeros();
         check(
-            "SO3 act",
+            &format!("{g} Jr_inv"),
             tag,
-            |x: &(SO3, Vector3<f64>)| x.0.act(&x.1),
-            &(r, v),
-            &[to_dmatrix(&jr_), to_dmatrix(&jv)],
+            |d: &SVector<f64, N>| x0.compose(&G::exp(d)).log(),
+            &zero,
+            &[to_dmatrix(&G::jr_inv(&tau))],
         );
+        check(
+            &format!("{g} Jl_inv"),
+            tag,
+            |d: &SVector<f64, N>| G::exp(d).compose(&x0).log(),
+            &zero,
+            &[to_dmatrix(&G::jl_inv(&tau))],
+        );
+        // Identities (not numeric): Jl(τ) = Jr(−τ), Jl(τ) = Ad(Exp τ)·Jr(τ) (R·Jr for SO(3)),
+        // Jr·Jr⁻¹ = Jl·Jl⁻¹ = I.
+        let e1 = (G::jl(&tau) - G::jr(&-tau)).amax();
+        let e2 = (G::jl(&tau) - x0.adjoint() * G::jr(&tau)).amax();
+        let e3 = (G::jr(&tau) * G::jr_inv(&tau) - id).amax();
+        let e4 = (G::jl(&tau) * G::jl_inv(&tau) - id).amax();
+        eprintln!("{g} identities {tag:>8}: {e1:.1e} {e2:.1e} {e3:.1e} {e4:.1e}");
+        assert!(e1 < 1e-15 && e2 < 1e-14, "{g} {tag}: {e1} {e2}");
+        // Jr⁻¹ grows like 1/(π − θ) near π: allow that conditioning.
+        assert!(e3 < 1e-11 && e4 < 1e-11, "{g} {tag}: {e3} {e4}");
     }
 }
 
 #[test]
 fn so3_right_and_left_jacobians_and_inverses() {
-    for (phi, tag) in phis() {
-        let r0 = SO3::exp(&phi);
-        // Jr: Exp(φ + δ) = Exp(φ)·Exp(Jr δ)  ⇒  d Log(Exp(φ)ᵀ Exp(φ + δ))/dδ = Jr(φ).
-        check(
-            "Jr",
-            tag,
-            |p: &Vector3<f64>| r0.inverse().compose(&SO3::exp(p)).log(),
-            &phi,
-            &[to_dmatrix(&jr(&phi))],
-        );
-        // Jl: Exp(φ + δ) = Exp(Jl δ)·Exp(φ)  ⇒  d Log(Exp(φ + δ) Exp(φ)ᵀ)/dδ = Jl(φ).
-        check(
-            "Jl",
-            tag,
-            |p: &Vector3<f64>| SO3::exp(p).compose(&r0.inverse()).log(),
-            &phi,
-            &[to_dmatrix(&jl(&phi))],
-        );
-        // Jr⁻¹: d Log(Exp(φ)·Exp(δ))/dδ; Jl⁻¹: d Log(Exp(δ)·Exp(φ))/dδ.
-        let zero = Vector3::zeros();
-        check(
-            "Jr_inv",
-            tag,
-            |d: &Vector3<f64>| r0.compose(&SO3::exp(d)).log(),
-            &zero,
-            &[to_dmatrix(&jr_inv(&phi))],
-        );
-        check(
-            "Jl_inv",
-            tag,
-            |d: &Vector3<f64>| SO3::exp(d).compose(&r0).log(),
-            &zero,
-            &[to_dmatrix(&jl_inv(&phi))],
-        );
-        // Identities (not numeric): Jl(φ) = Jr(−φ), Jl(φ) = R Jr(φ), Jr Jr⁻¹ = I.
-        let e1 = (jl(&phi) - jr(&-phi)).amax();
-        let e2 = (jl(&phi) - r0.matrix() * jr(&phi)).amax();
-        let e3 = (jr(&phi) * jr_inv(&phi) - Matrix3::identity()).amax();
-        let e4 = (jl(&phi) * jl_inv(&phi) - Matrix3::identity()).amax();
-        assert!(e1 < 1e-15 && e2 < 1e-14, "{tag}: {e1} {e2}");
-        // Jr⁻¹ grows like 1/(π − θ) near π: allow that conditioning.
-        assert!(e3 < 1e-11 && e4 < 1e-11, "{tag}: {e3} {e4}");
-    }
-}
-
-fn xis() -> Vec<(Vector6<f64>, &'static str)> {
-    let rho = Vector3::new(0.7, -1.2, 0.4);
-    phis()
-        .into_iter()
-        .map(|(t, tag)| (Vector6::new(rho[0], rho[1], rho[2], t[0], t[1], t[2]), tag))
-        .collect()
+    right_and_left_jacobians_and_inverses::<SO3, 3>();
 }
 
 #[test]
-fn se3_exp_log_inverse() {
-    for (xi, tag) in xis() {
-        let (_, jexp) = SE3::exp_jac(&xi);
-        check(
-            "SE3 exp",
-            tag,
-            |p: &Vector6<f64>| SE3::exp(p),
-            &xi,
-            &[to_dmatrix(&jexp)],
-        );
-        let t = SE3::exp(&xi);
-        let (_, jlog) = t.log_jac();
-        check("SE3 log", tag, |a: &SE3| a.log(), &t, &[to_dmatrix(&jlog)]);
-        let (_, jinv) = t.inverse_jac();
-        check(
-            "SE3 inverse",
-            tag,
-            |a: &SE3| a.inverse(),
-            &t,
-            &[to_dmatrix(&jinv)],
-        );
-        // se3::jl / jl_inv by their defining property, jr_inv as the inverse of jr.
-        let zero = Vector6::zeros();
-        check(
-            "SE3 Jl",
-            tag,
-            |p: &Vector6<f64>| SE3::exp(p).compose(&t.inverse()).log(),
-            &xi,
-            &[to_dmatrix(&se3::jl(&xi))],
-        );
-        check(
-            "SE3 Jl_inv",
-            tag,
-            |d: &Vector6<f64>| SE3::exp(d).compose(&t).log(),
-            &zero,
-            &[to_dmatrix(&se3::jl_inv(&xi))],
-        );
-        check(
-            "SE3 Jr_inv",
-            tag,
-            |d: &Vector6<f64>| t.compose(&SE3::exp(d)).log(),
-            &zero,
-            &[to_dmatrix(&se3::jr_inv(&xi))],
-        );
-    }
-}
-
-#[test]
-fn se3_compose_and_act_both_arguments() {
-    let p = Vector3::new(-0.3, 2.2, 1.0);
-    for (xi, tag) in xis() {
-        let t = SE3::exp(&xi);
-        let u = SE3::exp(&Vector6::new(0.1, 0.5, -0.9, 0.4, -0.3, 0.2));
-        for (a, b, order) in [(t, u, "T·U"), (u, t, "U·T")] {
-            let (_, ja, jb) = a.compose_jac(&b);
-            check(
-                &format!("SE3 compose {order}"),
-                tag,
-                |x: &(SE3, SE3)| x.0.compose(&x.1),
-                &(a, b),
-                &[to_dmatrix(&ja), to_dmatrix(&jb)],
-            );
-        }
-        let (_, jt, jp) = t.act_jac(&p);
-        check(
-            "SE3 act",
-            tag,
-            |x: &(SE3, Vector3<f64>)| x.0.act(&x.1),
-            &(t, p),
-            &[to_dmatrix(&jt), to_dmatrix(&jp)],
-        );
-    }
+fn se3_right_and_left_jacobians_and_inverses() {
+    right_and_left_jacobians_and_inverses::<SE3, 6>();
 }
 
 /// sophus_lie 0.15's small-angle `left_jacobian` (θ ≤ 1e-3): `I − ½ŵ` instead of `I + ½ŵ`.

@@ -1,5 +1,5 @@
 //! exp, log, Jr, Jr⁻¹ and SE(3) exp/log, each beside sophus_lie 0.15's equivalent.
-//! Run: `cargo bench -p lie --bench lie`.
+//! Run: `cargo bench -p preint-lie --bench lie`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::{Vector3, Vector6};

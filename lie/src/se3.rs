@@ -52,6 +52,7 @@ pub fn q_block(rho: &Vector3<f64>, theta: &Vector3<f64>) -> Matrix3<f64> {
 
 /// The scalars `(a, b, c)` of [`q_block`] at θ² \[rad²\]: `a = (θ − sin θ)/θ³`,
 /// `b = (θ² + 2cos θ − 2)/(2θ⁴)`, `c = (2θ − 3 sin θ + θ cos θ)/(2θ⁵)`; Taylor series below θ = 2.
+#[doc(hidden)] // a kernel of `q_block`, public for the reference tests in `tests/se3.rs`
 pub fn q_coeffs(t2: f64) -> (f64, f64, f64) {
     if t2 < 4.0 {
         (
@@ -60,8 +61,8 @@ pub fn q_coeffs(t2: f64) -> (f64, f64, f64) {
             so3::horner(t2, &QC),
         )
     } else {
-        let t = crate::trig::sqrt(t2);
-        let (s, co) = crate::trig::sin_cos(t);
+        let t = t2.sqrt();
+        let (s, co) = t.sin_cos();
         (
             (t - s) / (t2 * t),
             (t2 + 2.0 * co - 2.0) / (2.0 * t2 * t2),
@@ -121,7 +122,22 @@ impl SE3 {
         m
     }
 
-    /// `Exp(ξ)`, ξ = [ρ, θ]: `(Exp(θ), Jl(θ) ρ)` (Solà eq. 172).
+    /// `Exp(ξ)`, ξ = [ρ, θ] (translation first; θ in rad): `(Exp(θ), Jl(θ) ρ)` (Solà eq. 172),
+    /// the screw motion that turns by θ while it moves along ρ in the rotating frame.
+    ///
+    /// ```
+    /// use nalgebra::{Vector3, Vector6};
+    /// use preint_lie::SE3;
+    /// use std::f64::consts::{FRAC_PI_2, PI};
+    ///
+    /// // θ = 0: a pure translation by ρ.
+    /// let t = SE3::exp(&Vector6::new(1.0, 2.0, 3.0, 0.0, 0.0, 0.0));
+    /// assert_eq!(t.t, Vector3::new(1.0, 2.0, 3.0));
+    /// // A quarter turn about z with ρ = x: t = Jl(θ)ρ = (2/π)(1, 1, 0).
+    /// let t = SE3::exp(&Vector6::new(1.0, 0.0, 0.0, 0.0, 0.0, FRAC_PI_2));
+    /// assert!((t.t - Vector3::new(1.0, 1.0, 0.0) * (2.0 / PI)).norm() < 1e-15);
+    /// assert!((t.act(&Vector3::x()) - (t.t + Vector3::y())).norm() < 1e-15);
+    /// ```
     #[inline]
     pub fn exp(xi: &Vector6<f64>) -> Self {
         let (rho, theta) = split(xi);
@@ -135,7 +151,18 @@ impl SE3 {
         }
     }
 
-    /// `Log(T) = [Jl⁻¹(θ) t, θ]` with θ = Log(R) (Solà eq. 173).
+    /// `Log(T) = [Jl⁻¹(θ) t, θ]` with θ = Log(R) (Solà eq. 173), translation first; ‖θ‖ ≤ π.
+    ///
+    /// ```
+    /// use nalgebra::{Vector3, Vector6};
+    /// use preint_lie::SE3;
+    ///
+    /// let xi = Vector6::new(0.5, -1.0, 2.0, 0.3, -0.2, 2.5);
+    /// let t = SE3::exp(&xi);
+    /// assert!((t.log() - xi).norm() < 1e-14 * xi.norm());
+    /// // The rotation part is SO(3)'s Log, bit for bit.
+    /// assert_eq!(Vector3::from(t.log().fixed_rows::<3>(3)), t.r.log());
+    /// ```
     #[inline]
     pub fn log(&self) -> Vector6<f64> {
         let (theta, theta2) = self.r.log_theta2();
@@ -242,7 +269,18 @@ pub fn jl(xi: &Vector6<f64>) -> Matrix6<f64> {
     upper_block(&j, &q_block(&rho, &theta), &j)
 }
 
-/// Right Jacobian of SE(3): `Jr(ξ) = Jl(−ξ)`.
+/// Right Jacobian of SE(3): `Jr(ξ) = Jl(−ξ)`: `Exp(ξ + δ) ≈ Exp(ξ)·Exp(Jr(ξ) δ)`.
+///
+/// ```
+/// use nalgebra::{Matrix6, Vector6};
+/// use preint_lie::{SE3, se3};
+///
+/// let xi = Vector6::new(0.5, -1.0, 2.0, 0.3, -0.2, 1.5);
+/// assert!((se3::jr(&xi) * se3::jr_inv(&xi) - Matrix6::identity()).amax() < 1e-14);
+/// let d = Vector6::new(1e-6, 2e-6, -1e-6, -2e-6, 1e-6, 1.5e-6);
+/// let linear = SE3::exp(&xi).compose(&SE3::exp(&(se3::jr(&xi) * d)));
+/// assert!(SE3::exp(&(xi + d)).minus(&linear).norm() < 1e-11);
+/// ```
 pub fn jr(xi: &Vector6<f64>) -> Matrix6<f64> {
     jl(&-xi)
 }

@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Prints the polynomial tables of lie/src/so3.rs (`QA_POLY`, `B_POLY`, `C_POLY`, `D_POLY`).
+"""Prints the polynomial tables of lie/src/so3/coeffs.rs (`QA_POLY`, `B_POLY`, `C_POLY`,
+`D_POLY`, `ATAN_POLY`).
 
 On the branch 0.01 <= t <= fl(pi^2), t = theta^2, the SO(3) coefficients are polynomials in
 x = t - POLY_MID:
@@ -8,11 +9,11 @@ x = t - POLY_MID:
                                                    a keeps its relative precision near pi).
 Each table is the degree-9 Chebyshev interpolant (10 nodes, 50-digit mpmath) converted to
 monomials in x and rounded to f64. Chebyshev interpolation is within a few percent of minimax
-here; the printed maxima (in eps = 2^-52, f64 evaluation in the order of so3.rs's `poly`, at
+here; the printed maxima (in eps = 2^-52, f64 evaluation in the order of coeffs.rs's `poly`, at
 20 000 random t plus the ends) are what tests/so3.rs bounds.
 `D_POLY`: D = 1/theta^2 - (1 + cos theta)/(2 theta sin theta), the coefficient of Jr^-1 (and of
 SE(3)'s Log), as a degree-14 polynomial in x the same way (its poles at t = 4 pi^2 are closer,
-so it needs more terms); its printed error is that of Horner (so3.rs's `poly15`, Estrin for
+so it needs more terms); its printed error is that of Horner (coeffs.rs's `poly15`, Estrin for
 c1..c14 and one Horner step, measured 0.82 eps at the same points).
 `ATAN_POLY`: A(u) = atan(sqrt u)/sqrt u on 0 <= u <= 0.34, the kernel of SO(3)'s Log on its
 half-angle branch (u = tan^2(theta/2) <= 1/3, theta <= pi/3), degree 14 in x = u - ATAN_MID,
@@ -76,7 +77,7 @@ def horner(x, cs):
 
 
 def poly(x, c):
-    """so3.rs's `poly`/`poly2`: Estrin for c2..c9, then two Horner steps."""
+    """coeffs.rs's `poly`/`poly2`: Estrin for c2..c9, then two Horner steps."""
     x2 = x * x
     p = lambda i: c[i] + c[i + 1] * x
     tail = (p(2) + p(4) * x2) + (p(6) + p(8) * x2) * (x2 * x2)
@@ -125,7 +126,7 @@ def quarter_atan(u):
 
 
 def poly15(x, c):
-    """so3.rs's `poly15`: Estrin for c1..c14, then one Horner step."""
+    """coeffs.rs's `poly15`: Estrin for c1..c14, then one Horner step."""
     x2 = x * x
     p = lambda i: c[i] + c[i + 1] * x
     x4 = x2 * x2

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Writes coeff_ref.txt: 60-digit mpmath references for the SO(3) coefficients, read by
-tests/so3.rs (`coefficients_within_a_few_ulps_on_dense_angles`).
+tests/so3.rs (`coefficients_within_a_few_eps_on_dense_angles`).
 
 Each line: theta, then for each of a = sin t/t, b = (1 - cos t)/t^2, c = (t - sin t)/t^3,
 D = 1/t^2 - (1 + cos t)/(2 t sin t) the pair (hi, lo) with hi = float(ref) and
