@@ -1,5 +1,5 @@
 //! Allan deviation of 1 h at 200 Hz, six channels (720 000 samples each), 10 τ per decade,
-//! including the N/K/B fits. Target (issue 5): ≤ 1 s.
+//! including the N/K/B fits. Target: ≤ 1 s.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use preint_calib::allan::ImuAllan;

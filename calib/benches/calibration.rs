@@ -1,5 +1,5 @@
 //! Static calibration ([`preint_calib::bias::calibrate_static`]) of 1 h at 200 Hz (720 001 samples of
-//! `sim`'s `static` scene, EuRoC noise densities, a constant gyro bias). Target (issue 5):
+//! `preint-sim`'s `static` scene, EuRoC noise densities, a constant gyro bias). Target:
 //! ≤ 0.5 s. The data are generated once, outside the timed loop.
 //!
 //! What is timed, per iteration of criterion's loop:

@@ -6,7 +6,7 @@
 //! at `h = 0`: the input is perturbed through [`Manifold::retract`] (right perturbation
 //! `X·Exp(h e_j)` for Lie groups) and the output is differenced through [`Manifold::local`]
 //! taken at `f(x)`. The result is a `dim Y × dim X` matrix in the tangent coordinates of the
-//! `lie` conventions (right perturbations on both sides).
+//! [`preint_lie`] conventions (right perturbations on both sides).
 //!
 //! # Step sizes
 //! Ceres uses `h_j = max(relative_step·|x_j|, min_step)`. A tangent coordinate of a Lie group
@@ -129,6 +129,7 @@ pub struct RiddersJacobian {
     pub error: DVector<f64>,
 }
 
+/// Checks the options' domains and the length of `magnitudes` against `dim X = n`.
 fn validate(opts: &NumDiffOptions, n: usize) -> Result<(), NumDiffError> {
     let ok = |v: f64| v.is_finite() && v >= 0.0;
     let pos = |v: f64| v.is_finite() && v > 0.0;
@@ -161,11 +162,12 @@ fn validate(opts: &NumDiffOptions, n: usize) -> Result<(), NumDiffError> {
     Ok(())
 }
 
+/// `|x_j|` for the relative steps (0 without [`NumDiffOptions::magnitudes`]).
 fn magnitude(opts: &NumDiffOptions, j: usize) -> f64 {
     opts.magnitudes.as_ref().map_or(0.0, |m| m[j].abs())
 }
 
-/// `(f(x ⊕ h e_j) ⊖ f(x)) ⊖ …` helper: evaluates `f(x ⊕ h e_j) ⊖ y0`.
+/// Evaluates `f(x ⊕ h e_j) ⊖ y0` into `out` (`delta` is scratch of length dim X).
 fn perturbed<X: Manifold, Y: Manifold>(
     f: &impl Fn(&X) -> Y,
     x: &X,
@@ -222,6 +224,22 @@ fn column<X: Manifold, Y: Manifold>(
 ///
 /// Step per column: `h_j = max(relative_step·|x_j|, min_step)` (see the module docs).
 /// For [`Method::Ridders`] this calls [`ridders`] and drops the error estimate.
+///
+/// ```
+/// use nalgebra::{DMatrix, Vector3};
+/// use preint_calib::numdiff::{Method, NumDiffOptions, jacobian, ridders};
+/// use preint_lie::{SO3, hat};
+///
+/// // f(R) = R·v: with R ← R·Exp(δ), ∂f/∂δ = −R [v]×.
+/// let r = SO3::exp(&Vector3::new(0.3, -0.2, 0.5));
+/// let v = Vector3::new(1.0, 2.0, 3.0);
+/// let f = |r: &SO3| r.act(&v);
+/// let exact = DMatrix::from_column_slice(3, 3, (-r.matrix() * hat(&v)).as_slice());
+/// let central = jacobian(f, &r, Method::Central, &NumDiffOptions::default()).unwrap();
+/// assert!((central - &exact).amax() < 1e-7);
+/// let rid = ridders(f, &r, &NumDiffOptions::default()).unwrap();
+/// assert!((rid.jacobian - exact).amax() < 1e-10);
+/// ```
 pub fn jacobian<X: Manifold, Y: Manifold>(
     f: impl Fn(&X) -> Y,
     x: &X,
@@ -274,56 +292,70 @@ pub fn ridders<X: Manifold, Y: Manifold>(
     let mut jac = DMatrix::zeros(m, n);
     let mut err = DVector::zeros(n);
     let mut delta = vec![0.0; n];
-    let rows = opts.ridders_max_extrapolations;
-    let s = opts.ridders_shrink;
     for j in 0..n {
-        let base = (opts.ridders_relative_initial_step * magnitude(opts, j))
-            .max(opts.ridders_min_initial_step);
-        let mut h = base * s.powi((rows / 2) as i32);
-        let mut prev: Vec<DVector<f64>> = Vec::with_capacity(rows);
-        let mut best = DVector::zeros(m);
-        let mut best_err = f64::MAX;
-        for i in 0..rows {
-            let mut cur: Vec<DVector<f64>> = Vec::with_capacity(i + 1);
-            let mut d0 = DVector::zeros(m);
-            column(&f, x, &y0, j, h, true, &mut delta, &mut d0)?;
-            if i == 0 {
-                best = d0.clone();
-            }
-            cur.push(d0);
-            h /= s;
-            let mut fac = s * s;
-            for k in 1..=i {
-                let cand = (&cur[k - 1] * fac - &prev[k - 1]) / (fac - 1.0);
-                fac *= s * s;
-                let e = (&cand - &cur[k - 1])
-                    .norm()
-                    .max((&cand - &prev[k - 1]).norm());
-                let done = e <= best_err;
-                if done {
-                    best_err = e;
-                    best = cand.clone();
-                }
-                cur.push(cand);
-                if done && best_err < opts.ridders_epsilon {
-                    break;
-                }
-            }
-            if best_err < opts.ridders_epsilon {
-                break;
-            }
-            if i > 0 && (&cur[i] - &prev[i - 1]).norm() >= 2.0 * best_err {
-                break;
-            }
-            prev = cur;
-        }
-        jac.set_column(j, &best);
-        err[j] = best_err;
+        let (col, e) = ridders_column(&f, x, &y0, j, opts, &mut delta)?;
+        jac.set_column(j, &col);
+        err[j] = e;
     }
     Ok(RiddersJacobian {
         jacobian: jac,
         error: err,
     })
+}
+
+/// Column `j` of the Ridders Jacobian and its error estimate (see [`ridders`]).
+fn ridders_column<X: Manifold, Y: Manifold>(
+    f: &impl Fn(&X) -> Y,
+    x: &X,
+    y0: &Y,
+    j: usize,
+    opts: &NumDiffOptions,
+    delta: &mut [f64],
+) -> Result<(DVector<f64>, f64), NumDiffError> {
+    let m = y0.dim();
+    let rows = opts.ridders_max_extrapolations;
+    let s = opts.ridders_shrink;
+    let base = (opts.ridders_relative_initial_step * magnitude(opts, j))
+        .max(opts.ridders_min_initial_step);
+    let mut h = base * s.powi((rows / 2) as i32);
+    let mut prev: Vec<DVector<f64>> = Vec::with_capacity(rows);
+    let mut best = DVector::zeros(m);
+    let mut best_err = f64::MAX;
+    for i in 0..rows {
+        let mut cur: Vec<DVector<f64>> = Vec::with_capacity(i + 1);
+        let mut d0 = DVector::zeros(m);
+        column(f, x, y0, j, h, true, delta, &mut d0)?;
+        if i == 0 {
+            best = d0.clone();
+        }
+        cur.push(d0);
+        h /= s;
+        let mut fac = s * s;
+        for k in 1..=i {
+            let cand = (&cur[k - 1] * fac - &prev[k - 1]) / (fac - 1.0);
+            fac *= s * s;
+            let e = (&cand - &cur[k - 1])
+                .norm()
+                .max((&cand - &prev[k - 1]).norm());
+            let done = e <= best_err;
+            if done {
+                best_err = e;
+                best = cand.clone();
+            }
+            cur.push(cand);
+            if done && best_err < opts.ridders_epsilon {
+                break;
+            }
+        }
+        if best_err < opts.ridders_epsilon {
+            break;
+        }
+        if i > 0 && (&cur[i] - &prev[i - 1]).norm() >= 2.0 * best_err {
+            break;
+        }
+        prev = cur;
+    }
+    Ok((best, best_err))
 }
 
 #[cfg(test)]

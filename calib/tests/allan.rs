@@ -3,7 +3,7 @@
 //! round trip, slope −½ for pure white noise, input validation.
 //!
 //! Data: `preint_sim::simulate` on its static scene (white noise of density N and a bias random walk
-//! of density K on every channel, ARCHITECTURE.md conventions), except for one test that
+//! of density K on every channel, Kalibr conventions), except for one test that
 //! keeps an **independent generator** ([`synth`], three lines written from the convention
 //! "per-sample std N/√Δt, bias step std K√Δt"): every other test would still pass if `sim`
 //! and the Allan fits shared a units error (e.g. both treating the density as a per-sample

@@ -1,7 +1,7 @@
 //! Allan analysis of the real static ADIS16405 hour (tests/data/adis16405: 10 Hz block means
 //! of 100 Hz data, so σ(τ) for τ ≥ 0.1 s equals the raw data's), with the full fit
 //! ([`ImuAllan`]: N, K, B per axis and the Kalibr noise), checked for plausibility against the
-//! curators' figures in tests/data/README.md and /work/shared/data/static_adis16405/README.txt
+//! curators' figures in tests/data/README.md and the data set's own README.txt
 //! (overlapping Allan deviation of the **whole** 10 000 s run at 100 Hz; ours is its first
 //! hour, so agreement is expected to ≈ 10–25 %, not to the sampling error):
 //!
@@ -88,8 +88,9 @@ fn fitted() -> ImuAllan {
 /// - gyro N within 10 % of the README's σ(1 s) per axis (on a white-noise-dominated curve the
 ///   −½ line read at 1 s is σ(1 s)), and fitted (not a bound);
 /// - accelerometer N flagged as a bound (N itself: [`adis16405_lines_stay_below_the_curve`]);
-///   before the slope regions were checked as a whole, a run of smoothed slopes ≈ −½ across
-///   the drop at 0.8–1.6 s gave a "fit" of 6.9e-4 g/√Hz, above the curve at τ = 0.1 s;
+///   a fit that did not check each slope region as a whole would take the run of smoothed
+///   slopes ≈ −½ across the drop at 0.8–1.6 s for white noise (a "fit" of 6.9e-4 g/√Hz, above
+///   the curve at τ = 0.1 s);
 /// - gyro K flagged as a bound (the README's gyro curves still fall or are flat from 100 to
 ///   1000 s), accelerometer K fitted (their curves rise from 10 s on);
 /// - the curve minimum `0.664·B` within 25 % of the README's σ at the tabulated τ nearest to

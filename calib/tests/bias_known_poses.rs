@@ -179,7 +179,7 @@ fn monte_carlo_200_trials_with_noisy_poses_from_sim() {
 /// Why: the README measures this ground truth's own consistency with the IMU at 0.045 m/s
 /// median / 0.067 m/s 95th percentile (1 s windows from ground-truth states); the maximum of 41
 /// values may exceed the 95th percentile, and the end poses are constrained from one side
-/// only. (Before the pose noise was propagated into r_v, the first velocities were off by
+/// only. (Without the pose noise propagated into r_v, the first velocities are off by
 /// 0.29 m/s.)
 ///
 /// **Biases** against the vicon2gt biases averaged over the segment: |Δb_g| ≤ 1e-3 rad/s and

@@ -383,9 +383,6 @@ fn acc_misalignment_chosen_without_gyro_errors() {
 /// the drift and the reason must say so; without a random walk in the data, bias-only wins
 /// either way (the stated noise still has EuRoC's random walk: the marginalised model is then
 /// conservative, not wrong, so no warning).
-///
-/// (Before the marginalisation existed this test asserted the warning for the drifting data
-/// under the default options; that case is now the `include_random_walk: false` one.)
 #[test]
 fn drifting_biases_are_flagged_in_the_reason_unless_marginalised() {
     let sc = MultiPoseStaticScene::default();

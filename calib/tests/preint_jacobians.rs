@@ -1,5 +1,5 @@
 //! Re-check of every analytic Jacobian in `preint` with this crate's Ridders-based checker
-//! ([`preint_calib::check_jacobian`], relative error ≤ 1e-8, the bar), on the manifold:
+//! ([`preint_calib::check_jacobian`], relative error ≤ 1e-8), on the manifold:
 //!
 //! - the five bias Jacobians `∂ΔR/∂b_g, ∂Δv/∂b_g, ∂Δv/∂b_a, ∂Δp/∂b_g, ∂Δp/∂b_a` of
 //!   [`preint::preintegrate`] against **re-integration** of the samples at the perturbed bias
@@ -12,7 +12,7 @@
 //! `π − 10⁻³` (Log and Jr⁻¹ next to their cut); a static window (ΔR ≈ I, the small-angle series);
 //! factor states with `R_i` at `π − 10⁻⁴` and with a residual rotation `r_φ` at `π − 10⁻³`.
 //! Next to the cut the Ridders base step is lowered to 1e-5 (its default first step, 0.32,
-//! would cross it; see the README). `preint::predict` has no Jacobians (it is the factor's
+//! would cross it; see the [`preint_calib::numdiff`] docs). `preint::predict` has no Jacobians (it is the factor's
 //! prediction; its derivative is covered through the factor).
 //!
 //! Data come from `sim` (noise-free, so that the windows are exactly the scenes' motions).

@@ -38,11 +38,10 @@
 //! predicted from the noise densities. The measured per-axis densities
 //! `std(samples)·√Δt` are returned too, to check the densities given.
 
-use super::{
-    BiasError, SegmentStats, attitude_from_up, check_gravity, check_noise, check_samples,
-    roll_pitch_of_up,
-};
-use crate::gauss_newton::{GaussNewton, LeastSquares, StopReason, solve};
+use super::tilt::{attitude_from_roll_pitch, attitude_from_up, roll_pitch_with_cov};
+use super::validate::{check_gravity, check_noise, check_samples};
+use super::{BiasError, SegmentStats};
+use crate::gauss_newton::{GaussNewton, LeastSquares, Solution, StopReason, solve};
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, Vector3};
 use preint::{ImuNoise, ImuSample};
 use preint_lie::{SO3, hat};
@@ -55,6 +54,22 @@ pub struct AccBiasPrior {
     pub mean: Vector3<f64>,
     /// Prior per-axis standard deviation σ_p [m/s²].
     pub std: Vector3<f64>,
+}
+
+impl AccBiasPrior {
+    /// Checks a finite mean and finite standard deviations > 0.
+    fn validate(&self) -> Result<(), BiasError> {
+        if self.mean.iter().all(|v| v.is_finite())
+            && self.std.iter().all(|v| v.is_finite() && *v > 0.0)
+        {
+            Ok(())
+        } else {
+            Err(BiasError::InvalidParameter {
+                name: "acc_bias_prior",
+                reason: "mean must be finite and std finite and > 0".into(),
+            })
+        }
+    }
 }
 
 /// Options of [`calibrate_static`].
@@ -184,6 +199,30 @@ impl LeastSquares for StaticProblem {
 ///
 /// `samples`: at least 10, finite, strictly increasing timestamps; `noise`: Kalibr densities
 /// (white densities > 0). Errors are typed ([`BiasError`]); no panics on bad input.
+///
+/// ```
+/// use nalgebra::Vector3;
+/// use preint::{ImuBias, ImuNoise};
+/// use preint_calib::bias::{StaticOptions, calibrate_static};
+/// use preint_sim::{SimConfig, StaticScene, simulate};
+///
+/// // 20 s at rest, 200 Hz, EuRoC noise, a constant gyro bias.
+/// let noise = ImuNoise::euroc();
+/// let bias = Vector3::new(0.01, -0.02, 0.005);
+/// let cfg = SimConfig {
+///     noise,
+///     initial_bias: ImuBias::new(bias, Vector3::zeros()),
+///     bias_random_walk: false,
+///     ..SimConfig::default()
+/// };
+/// let rec = simulate(&StaticScene::default(), 200.0, 20.0, &cfg, 1).unwrap();
+/// let cal = calibrate_static(&rec.samples, &noise, &StaticOptions::default()).unwrap();
+/// for k in 0..3 {
+///     // σ ≈ σ_g/√T ≈ 3.8e-5 rad/s.
+///     assert!((cal.gyro_bias[k] - bias[k]).abs() < 4.0 * cal.gyro_bias_std[k]);
+/// }
+/// assert!(cal.acc_bias.is_none()); // not separable from tilt at one attitude
+/// ```
 pub fn calibrate_static(
     samples: &[ImuSample],
     noise: &ImuNoise,
@@ -191,26 +230,45 @@ pub fn calibrate_static(
 ) -> Result<StaticCalibration, BiasError> {
     check_samples(samples, 10)?;
     check_noise(noise)?;
-    let gnorm = check_gravity(&opts.gravity)?;
-    if let Some(p) = &opts.acc_bias_prior
-        && !(p.mean.iter().all(|v| v.is_finite())
-            && p.std.iter().all(|v| v.is_finite() && *v > 0.0))
-    {
-        return Err(BiasError::InvalidParameter {
-            name: "acc_bias_prior",
-            reason: "mean must be finite and std finite and > 0".into(),
-        });
+    let gnorm = check_gravity("gravity", &opts.gravity)?;
+    if let Some(p) = &opts.acc_bias_prior {
+        p.validate()?;
     }
     let st = SegmentStats::of(samples);
-    let t = st.averaging_time();
-    let rw = if opts.include_random_walk {
-        t / 12.0
-    } else {
-        0.0
+    let (s_g, s_a) = mean_std_devs(noise, st.averaging_time(), opts.include_random_walk);
+    let up_w = -opts.gravity / gnorm;
+    let x0 = initial_state(&st, opts, &up_w)?;
+    let problem = StaticProblem {
+        w_mean: st.gyro_mean,
+        f_mean: st.acc_mean,
+        s_g: Vector3::repeat(s_g),
+        s_a: Vector3::repeat(s_a),
+        g: opts.gravity,
+        prior: opts.acc_bias_prior,
     };
+    let sol = solve(problem, x0, GaussNewton::default(), opts.max_iters)?;
+    Ok(report(&st, &up_w, sol))
+}
+
+/// Standard deviations `(s_g, s_a)` of the gyro and accelerometer means over the averaging
+/// time `t` \[s\]: `s² = σ²/T + σ_b²·T/12` (module docs), the random-walk term only if
+/// `include_random_walk`.
+fn mean_std_devs(noise: &ImuNoise, t: f64, include_random_walk: bool) -> (f64, f64) {
+    let rw = if include_random_walk { t / 12.0 } else { 0.0 };
     let s_g = (noise.gyro_noise_density.powi(2) / t + noise.gyro_random_walk.powi(2) * rw).sqrt();
     let s_a = (noise.acc_noise_density.powi(2) / t + noise.acc_random_walk.powi(2) * rw).sqrt();
-    let up_w = -opts.gravity / gnorm;
+    (s_g, s_a)
+}
+
+/// The solver's start `([b_g] or [b_g, b_a], R_wb)`: the closed-form solution (`b_g = ω̄`,
+/// attitude from `f̄ − μ_p`) or, without [`StaticOptions::closed_form_start`], `b_g = 0`,
+/// `R_wb = I`; `b_a` starts at the prior mean. Error when `f̄ − μ_p` is zero (no gravity
+/// direction).
+fn initial_state(
+    st: &SegmentStats,
+    opts: &StaticOptions,
+    up_w: &Vector3<f64>,
+) -> Result<(DVector<f64>, SO3), BiasError> {
     let prior = opts.acc_bias_prior;
     let ba0 = prior.map_or(Vector3::zeros(), |p| p.mean);
     let f_dir = st.acc_mean - ba0;
@@ -221,44 +279,34 @@ pub fn calibrate_static(
                 .into(),
         });
     }
-    let r0 = if opts.closed_form_start {
-        attitude_from_up(&f_dir, &up_w)
+    let (r0, w0) = if opts.closed_form_start {
+        (attitude_from_up(&f_dir, up_w), st.gyro_mean)
     } else {
-        SO3::identity()
-    };
-    let w0 = if opts.closed_form_start {
-        st.gyro_mean
-    } else {
-        Vector3::zeros()
+        (SO3::identity(), Vector3::zeros())
     };
     let p0 = match prior {
         Some(p) => DVector::from_column_slice(&[w0.x, w0.y, w0.z, p.mean.x, p.mean.y, p.mean.z]),
         None => DVector::from_column_slice(w0.as_slice()),
     };
-    let problem = StaticProblem {
-        w_mean: st.gyro_mean,
-        f_mean: st.acc_mean,
-        s_g: Vector3::repeat(s_g),
-        s_a: Vector3::repeat(s_a),
-        g: opts.gravity,
-        prior,
-    };
-    let sol = solve(problem, (p0, r0), GaussNewton::default(), opts.max_iters)?;
+    Ok((p0, r0))
+}
+
+/// The estimates and their standard deviations read from the solution (module docs,
+/// "Outputs").
+fn report(
+    st: &SegmentStats,
+    up_w: &Vector3<f64>,
+    sol: Solution<(DVector<f64>, SO3)>,
+) -> StaticCalibration {
     let (p, r) = &sol.estimate;
     let np = p.len();
-    let cov = &sol.covariance;
-    let gyro_bias = Vector3::new(p[0], p[1], p[2]);
-    let gyro_bias_std = Vector3::from_fn(|i, _| cov[(i, i)].max(0.0).sqrt());
-    let up_b = r.inverse().act(&up_w);
-    let (roll, pitch, d_rp_du) = roll_pitch_of_up(&up_b);
-    // ∂u/∂δφ = [u]× for R ← R·Exp(δφ) (u = Rᵀ·up_w).
-    let j_rp = d_rp_du * hat(&up_b);
-    let c_phi: Matrix3<f64> = cov.fixed_view::<3, 3>(np, np).into_owned();
-    let roll_pitch_cov = j_rp * c_phi * j_rp.transpose();
-    let (acc_bias, acc_bias_std, note, unobservable) = if prior.is_some() {
+    let has_prior = np == 6;
+    let (roll, pitch, roll_pitch_cov, up_b) =
+        roll_pitch_with_cov(r, up_w, &sol.marginal_covariance::<3>(np));
+    let (acc_bias, acc_bias_std, note, unobservable) = if has_prior {
         (
             Some(Vector3::new(p[3], p[4], p[5])),
-            Some(Vector3::from_fn(|i, _| cov[(3 + i, 3 + i)].max(0.0).sqrt())),
+            Some(sol.marginal_std::<3>(3)),
             "estimated with the given prior; static data at one attitude cannot separate the \
              accelerometer bias from tilt, so its horizontal components are the prior's"
                 .to_string(),
@@ -276,29 +324,29 @@ pub fn calibrate_static(
         )
     };
     let sqrt_dt = st.dt.sqrt();
-    Ok(StaticCalibration {
-        gyro_bias,
-        gyro_bias_std,
+    StaticCalibration {
+        gyro_bias: Vector3::new(p[0], p[1], p[2]),
+        gyro_bias_std: sol.marginal_std::<3>(0),
         roll,
         pitch,
         roll_pitch_cov,
         roll_std: roll_pitch_cov[(0, 0)].max(0.0).sqrt(),
         pitch_std: roll_pitch_cov[(1, 1)].max(0.0).sqrt(),
         up_body: up_b,
-        attitude: super::attitude_from_roll_pitch(roll, pitch),
+        attitude: attitude_from_roll_pitch(roll, pitch),
         acc_bias,
         acc_bias_std,
         acc_bias_note: note,
         unobservable,
         samples: st.count,
-        duration_s: t,
+        duration_s: st.averaging_time(),
         measured_gyro_density: st.gyro_var.map(|v| v.max(0.0).sqrt() * sqrt_dt),
         measured_acc_density: st.acc_var.map(|v| v.max(0.0).sqrt() * sqrt_dt),
         chi2: 2.0 * sol.cost,
         dof: sol.residual_count.saturating_sub(sol.rank),
         iterations: sol.iterations,
         stop: sol.stop,
-    })
+    }
 }
 
 #[cfg(test)]

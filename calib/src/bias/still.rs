@@ -29,7 +29,9 @@
 //! negligible probability, while any rotation faster than ≈ 1°/s tilts gravity enough to exceed
 //! `4σ_a²/Δt` (EuRoC figures: 8e-4 (m/s²)² ↔ a change of ≈ 0.03 m/s² within the window).
 
-use super::{BiasError, check_samples};
+use super::BiasError;
+use super::stats::mean_period;
+use super::validate::check_samples;
 use preint::{ImuNoise, ImuSample};
 
 /// Options of [`detect_still_intervals`].
@@ -96,7 +98,7 @@ pub fn moving_variances(samples: &[ImuSample], window_s: f64) -> (Vec<f64>, Vec<
     if n < 2 {
         return (vec![f64::NAN; n], vec![f64::NAN; n]);
     }
-    let dt = (samples[n - 1].t_ns - samples[0].t_ns) as f64 * 1e-9 / (n - 1) as f64;
+    let dt = mean_period(samples);
     let h = ((window_s / (2.0 * dt)).round() as usize).max(1);
     let w = 2 * h + 1;
     // Prefix sums of shifted values (sum, sum of squares) per channel.

@@ -1,0 +1,334 @@
+//! Biases, velocities and the gravity direction from segments with known poses (motion
+//! capture or a VIO front end): the inertial-only initialisation of ORB-SLAM3 (Campos et al.,
+//! ICRA 2020; T-RO 2021) and VINS-Mono's gyro-bias estimation (Qin et al., T-RO 2018), with
+//! preintegration factors.
+//!
+//! # Model
+//! Poses `(R̃_k, p̃_k)` (R_wb body → world, p \[m\] in the world) are measured at times
+//! `t_0 < … < t_P−1`; for each consecutive pair the samples are preintegrated
+//! ([`preint::preintegrate`]) at the current bias estimate `b̂`. Unknowns: `b = [b_g, b_a]`
+//! (constant over the segment), the velocities `v_k` \[m/s, world\] at the pose times, and the
+//! gravity direction `g = R_wg·g₀`, `g₀ = (0, 0, −|g|)`, with a 2-DoF tangent ([`gravity`]),
+//! so the problem has no gauge freedom. The residual of each pair is the preintegration
+//! factor's `[r_φ, r_v, r_p]` (Forster et al., T-RO 2017, eqs. 44–45; [`residuals`]), whitened
+//! by its covariance, which includes the noise of the known poses with the correlation between
+//! factors that share a pose ([`pose_noise`]).
+//!
+//! Because the bias correction is first order, the problem is re-linearised: after a solve
+//! the windows are re-integrated at the new bias and the problem solved again, until the bias
+//! moves by less than 1e-6 (or `max_relinearizations`).
+//!
+//! Limits: the biases are constant over the segment (over T seconds a random walk of density
+//! σ_b moves them by ≈ σ_b√T, e.g. 0.013 m/s² in 20 s for EuRoC's σ_ba: keep segments short or
+//! expect that much model error); dense linear algebra, O(P³) per iteration.
+
+pub mod gravity;
+pub mod pose_noise;
+pub mod residuals;
+#[cfg(test)]
+mod test_data;
+
+use super::BiasError;
+use super::validate::{check_gravity, check_non_negative, check_samples};
+use crate::gauss_newton::{GaussNewton, Solution, StopReason, solve};
+use gravity::GravityDir;
+use nalgebra::{DVector, Vector3};
+use pose_noise::{Whitening, residual_covariance};
+use preint::{ImuBias, ImuSample, PreintParams, dt_seconds, preintegrate};
+use preint_lie::SO3;
+use residuals::Problem;
+
+/// A known pose: time \[ns\], attitude R_wb (body → world) and position p \[m, world\].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KnownPose {
+    /// Time \[ns\].
+    pub t_ns: i64,
+    /// Attitude R_wb.
+    pub r: SO3,
+    /// Position \[m\].
+    pub p: Vector3<f64>,
+}
+
+/// Options of [`calibrate_known_poses`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct KnownPoseOptions {
+    /// Preintegration parameters (noise densities, scheme; its `gravity` gives the initial
+    /// gravity vector and its magnitude |g|).
+    pub params: PreintParams,
+    /// Standard deviation σ_R \[rad\] of each known attitude, `R̃ = R·Exp(n_R)`,
+    /// `n_R ~ N(0, σ_R² I)` (default 0: exact attitudes).
+    pub pose_rot_std: f64,
+    /// Standard deviation σ_p \[m\] of each known position per world axis (default 0).
+    pub pose_pos_std: f64,
+    /// Initial bias (default zero).
+    pub initial_bias: ImuBias,
+    /// Maximum number of re-linearisations (default 4).
+    pub max_relinearizations: usize,
+    /// Gauss-Newton iterations per solve (default 50).
+    pub max_iters: u64,
+}
+
+impl KnownPoseOptions {
+    /// Defaults around the given preintegration parameters.
+    pub fn new(params: PreintParams) -> Self {
+        Self {
+            params,
+            pose_rot_std: 0.0,
+            pose_pos_std: 0.0,
+            initial_bias: ImuBias::zero(),
+            max_relinearizations: 4,
+            max_iters: 50,
+        }
+    }
+}
+
+/// Result of [`calibrate_known_poses`]. Standard deviations come from the solver covariance
+/// of the whitened problem (predicted from the noise densities and the pose noise, not
+/// rescaled by the residuals); compare [`KnownPoseCalibration::chi2_per_dof`] with 1.
+#[derive(Clone, Debug)]
+pub struct KnownPoseCalibration {
+    /// Bias estimate \[b_g rad/s, b_a m/s²\].
+    pub bias: ImuBias,
+    /// Standard deviation of b_g \[rad/s\].
+    pub gyro_bias_std: Vector3<f64>,
+    /// Standard deviation of b_a \[m/s²\].
+    pub acc_bias_std: Vector3<f64>,
+    /// Gravity vector in the world frame \[m/s²\] (magnitude fixed to |params.gravity|).
+    pub gravity: Vector3<f64>,
+    /// Standard deviation of each component of `gravity` \[m/s²\] (the component along gravity
+    /// has ≈ 0: only the direction is estimated).
+    pub gravity_std: Vector3<f64>,
+    /// Angle between the estimated gravity and the initial one \[rad\].
+    pub gravity_tilt: f64,
+    /// Velocities at the pose times \[m/s, world\].
+    pub velocities: Vec<Vector3<f64>>,
+    /// Their standard deviations \[m/s\].
+    pub velocity_std: Vec<Vector3<f64>>,
+    /// χ² of the whitened residuals.
+    pub chi2: f64,
+    /// Degrees of freedom: residuals − unknowns = `9(P − 1) − (3P + 8)`.
+    pub dof: usize,
+    /// Total Gauss-Newton iterations.
+    pub iterations: u64,
+    /// Number of solves (re-linearisations + 1).
+    pub solves: usize,
+    /// Why the last solve stopped.
+    pub stop: StopReason,
+}
+
+impl KnownPoseCalibration {
+    /// `χ²/dof` (≈ 1 when the noise densities and pose noise are right; NaN for dof = 0).
+    pub fn chi2_per_dof(&self) -> f64 {
+        if self.dof == 0 {
+            f64::NAN
+        } else {
+            self.chi2 / self.dof as f64
+        }
+    }
+}
+
+/// The state `([b_g, b_a, v_0, …, v_P−1], R_wg)`.
+type State = (DVector<f64>, GravityDir);
+
+/// Estimates `b_g`, `b_a`, the velocities at the pose times and the gravity direction from
+/// IMU samples and known (optionally noisy) poses (module docs).
+///
+/// `poses`: at least 3, strictly increasing times inside the sample span. Errors are typed
+/// ([`BiasError`]); no panics on bad input.
+///
+/// ```
+/// use nalgebra::Vector3;
+/// use preint::{ImuBias, ImuNoise, PreintParams};
+/// use preint_calib::bias::{KnownPose, KnownPoseOptions, calibrate_known_poses};
+/// use preint_sim::{EulerScene, SimConfig, simulate};
+///
+/// // 2 s of an aggressive motion at 200 Hz, exact poses every 0.25 s.
+/// let noise = ImuNoise::euroc();
+/// let (b_g, b_a) = (Vector3::new(0.004, -0.003, 0.006), Vector3::new(0.08, -0.05, 0.12));
+/// let cfg = SimConfig {
+///     noise,
+///     initial_bias: ImuBias::new(b_g, b_a),
+///     bias_random_walk: false,
+///     ..SimConfig::default()
+/// };
+/// let rec = simulate(&EulerScene::aggressive(), 200.0, 2.0, &cfg, 3).unwrap();
+/// let poses: Vec<KnownPose> = rec
+///     .truth
+///     .iter()
+///     .step_by(50)
+///     .map(|s| KnownPose { t_ns: s.t_ns, r: s.rotation(), p: s.p })
+///     .collect();
+/// let opts = KnownPoseOptions::new(PreintParams::from_noise(&noise));
+/// let cal = calibrate_known_poses(&rec.samples, &poses, &opts).unwrap();
+/// for k in 0..3 {
+///     assert!((cal.bias.gyro[k] - b_g[k]).abs() < 4.0 * cal.gyro_bias_std[k]);
+///     assert!((cal.bias.acc[k] - b_a[k]).abs() < 4.0 * cal.acc_bias_std[k]);
+/// }
+/// assert!(cal.gravity_tilt < 0.01);
+/// ```
+pub fn calibrate_known_poses(
+    samples: &[ImuSample],
+    poses: &[KnownPose],
+    opts: &KnownPoseOptions,
+) -> Result<KnownPoseCalibration, BiasError> {
+    check_samples(samples, 2)?;
+    opts.params.validate()?;
+    check_poses(samples, poses)?;
+    check_non_negative("pose_rot_std", opts.pose_rot_std)?;
+    check_non_negative("pose_pos_std", opts.pose_pos_std)?;
+    let gnorm = check_gravity("params.gravity", &opts.params.gravity)?;
+    let g0 = Vector3::new(0.0, 0.0, -gnorm);
+    let mut x = initial_state(poses, opts, &g0);
+    let mut bias_hat = opts.initial_bias;
+    let mut iterations = 0;
+    let mut solves = 0;
+    loop {
+        let sol = solve_linearised(samples, poses, opts, &bias_hat, &g0, x)?;
+        solves += 1;
+        iterations += sol.iterations;
+        let p = &sol.estimate.0;
+        let b = ImuBias::new(
+            Vector3::new(p[0], p[1], p[2]),
+            Vector3::new(p[3], p[4], p[5]),
+        );
+        let moved = (b.gyro - bias_hat.gyro).norm() + (b.acc - bias_hat.acc).norm();
+        x = sol.estimate.clone();
+        bias_hat = b;
+        if moved < 1e-6 || solves > opts.max_relinearizations {
+            return Ok(calibration(
+                sol,
+                b,
+                &g0,
+                &opts.params.gravity,
+                iterations,
+                solves,
+            ));
+        }
+    }
+}
+
+/// At least 3 poses, at strictly increasing times within the samples' span, finite.
+fn check_poses(samples: &[ImuSample], poses: &[KnownPose]) -> Result<(), BiasError> {
+    if poses.len() < 3 {
+        return Err(BiasError::TooFew {
+            what: "poses",
+            found: poses.len(),
+            needed: 3,
+        });
+    }
+    for (i, w) in poses.windows(2).enumerate() {
+        if w[1].t_ns <= w[0].t_ns {
+            return Err(BiasError::InvalidParameter {
+                name: "poses",
+                reason: format!(
+                    "pose {} time {} ns is not after the previous",
+                    i + 1,
+                    w[1].t_ns
+                ),
+            });
+        }
+    }
+    let (t0, t1) = (samples[0].t_ns, samples[samples.len() - 1].t_ns);
+    if poses[0].t_ns < t0 || poses[poses.len() - 1].t_ns > t1 {
+        return Err(BiasError::InvalidParameter {
+            name: "poses",
+            reason: format!("pose times must lie within the samples' span [{t0}, {t1}] ns"),
+        });
+    }
+    if poses
+        .iter()
+        .any(|p| !(p.p.iter().all(|v| v.is_finite()) && p.r.matrix().iter().all(|v| v.is_finite())))
+    {
+        return Err(BiasError::InvalidParameter {
+            name: "poses",
+            reason: "non-finite position or attitude".into(),
+        });
+    }
+    Ok(())
+}
+
+/// The initial state: the initial bias, velocities by central differences of the positions
+/// (one-sided at the ends), gravity along `params.gravity`.
+fn initial_state(poses: &[KnownPose], opts: &KnownPoseOptions, g0: &Vector3<f64>) -> State {
+    let n = poses.len();
+    let mut p0 = DVector::zeros(6 + 3 * n);
+    p0.fixed_rows_mut::<3>(0).copy_from(&opts.initial_bias.gyro);
+    p0.fixed_rows_mut::<3>(3).copy_from(&opts.initial_bias.acc);
+    for k in 0..n {
+        let (a, b) = (k.saturating_sub(1), (k + 1).min(n - 1));
+        let dt = dt_seconds(poses[a].t_ns, poses[b].t_ns);
+        p0.fixed_rows_mut::<3>(6 + 3 * k)
+            .copy_from(&((poses[b].p - poses[a].p) / dt));
+    }
+    (p0, GravityDir::aligned_with(g0, &opts.params.gravity))
+}
+
+/// One solve at the linearisation point `bias_hat`: the windows preintegrated there, weighted
+/// by their covariance with the pose noise, solved from `x`.
+fn solve_linearised(
+    samples: &[ImuSample],
+    poses: &[KnownPose],
+    opts: &KnownPoseOptions,
+    bias_hat: &ImuBias,
+    g0: &Vector3<f64>,
+    x: State,
+) -> Result<Solution<State>, BiasError> {
+    let mut pims = Vec::with_capacity(poses.len() - 1);
+    for w in poses.windows(2) {
+        pims.push(preintegrate(
+            &opts.params,
+            bias_hat,
+            samples,
+            w[0].t_ns,
+            w[1].t_ns,
+        )?);
+    }
+    let (diag, sub) = residual_covariance(&pims, poses, opts.pose_rot_std, opts.pose_pos_std);
+    let white = Whitening::new(&diag, &sub).ok_or_else(|| BiasError::InvalidParameter {
+        name: "params",
+        reason: "the residual covariance (preintegration + pose noise) is not positive \
+                 definite: give non-zero noise densities"
+            .into(),
+    })?;
+    let problem = Problem {
+        poses,
+        pims: &pims,
+        g0: *g0,
+        white: &white,
+    };
+    Ok(solve(problem, x, GaussNewton::default(), opts.max_iters)?)
+}
+
+/// The result of the last solve: estimates and marginal standard deviations.
+fn calibration(
+    sol: Solution<State>,
+    bias: ImuBias,
+    g0: &Vector3<f64>,
+    g_init: &Vector3<f64>,
+    iterations: u64,
+    solves: usize,
+) -> KnownPoseCalibration {
+    let (p, rwg) = &sol.estimate;
+    let np = p.len();
+    let n = (np - 6) / 3;
+    let (gravity, gd) = rwg.gravity(g0);
+    let gcov = gd * sol.marginal_covariance::<2>(np) * gd.transpose();
+    let cosang = (gravity.dot(g_init) / (gravity.norm() * g_init.norm())).clamp(-1.0, 1.0);
+    KnownPoseCalibration {
+        bias,
+        gyro_bias_std: sol.marginal_std::<3>(0),
+        acc_bias_std: sol.marginal_std::<3>(3),
+        gravity,
+        gravity_std: gcov.diagonal().map(|v| v.max(0.0).sqrt()),
+        gravity_tilt: cosang.acos(),
+        velocities: (0..n)
+            .map(|k| Vector3::new(p[6 + 3 * k], p[7 + 3 * k], p[8 + 3 * k]))
+            .collect(),
+        velocity_std: (0..n).map(|k| sol.marginal_std::<3>(6 + 3 * k)).collect(),
+        chi2: 2.0 * sol.cost,
+        dof: sol.residual_count.saturating_sub(sol.rank),
+        iterations,
+        solves,
+        stop: sol.stop,
+    }
+}
