@@ -287,7 +287,11 @@ impl<S: IntervalScheme> Core<S> {
     /// Interval `k` (out of line: it keeps the per-interval code small enough for the
     /// compiler to inline the fixed-size matrix operations).
     #[inline(never)]
-    fn interval<N: NoiseCov, const LINEARISE: bool, const AT_END: bool>(&mut self, noise: &N, k: usize) {
+    fn interval<N: NoiseCov, const LINEARISE: bool, const AT_END: bool>(
+        &mut self,
+        noise: &N,
+        k: usize,
+    ) {
         let at_end = AT_END;
         let Self {
             fixed,
@@ -326,9 +330,15 @@ impl<S: IntervalScheme> Core<S> {
         }
         let lin = S::linearise(&step, &st);
         let pb = origin.pull_back(st.n1().t_ns, &d.v, &d.p);
-        e.interval::<S>(&lin, &pb, first_id, st.k, st.len, &fixed.walk, |p, id, g| {
-            r.retire::<S>(p, id, g)
-        });
+        e.interval::<S>(
+            &lin,
+            &pb,
+            first_id,
+            st.k,
+            st.len,
+            &fixed.walk,
+            |p, id, g| r.retire::<S>(p, id, g),
+        );
         int_cov(fixed, e, d, lin.tr.h);
     }
 
@@ -445,7 +455,12 @@ fn stencil<'a, S: IntervalScheme>(
         k_ext.saturating_sub(S::NODES_BEFORE)
     };
     let at = |i: usize| &ring[i % RING];
-    let mut nodes = [at(first_id), at(first_id + 1), at(first_id + 2), at(first_id + 3)];
+    let mut nodes = [
+        at(first_id),
+        at(first_id + 1),
+        at(first_id + 2),
+        at(first_id + 3),
+    ];
     if with_ctx {
         // The context sample after the window, at extended index `before + n`.
         let c = ctx_after.expect("with_ctx");

@@ -1,9 +1,9 @@
 //! What the slice path carries from one interval to the next, and the preparation of several
 //! intervals at once, one per lane ([`Carry::prepare_wide`]) with every lane's weights.
 
-use super::super::lanes::{F2, Lane};
 #[cfg(target_arch = "x86_64")]
 use super::super::lanes::quad::F4;
+use super::super::lanes::{F2, Lane};
 use super::interval::{L3, Record, add, by3, cross, l3, prepare, slope, sub, v3};
 use crate::propagation::blocks::V3;
 use crate::sample::{ImuBias, ImuSample};
@@ -300,4 +300,3 @@ impl<T: Wide> LaneWeights<T> {
         };
     }
 }
-

@@ -2,10 +2,10 @@
 //! vector operations over [`Lane`], `(E, x, y)` from the nodes ([`prepare`]), the prepared
 //! interval's record and the chain through ΔR ([`State::step`]).
 
-use super::super::lanes::{F2, Lane};
+use super::super::QuatDeltas;
 #[cfg(target_arch = "x86_64")]
 use super::super::lanes::quad::F4;
-use super::super::QuatDeltas;
+use super::super::lanes::{F2, Lane};
 use super::super::quat::Quat;
 use crate::propagation::blocks::V3;
 
@@ -234,4 +234,3 @@ impl State {
         self.qb = (w * e2 + x * e2s.flip(true, false)) + (y * e1.flip(false, true) + z * e1s);
     }
 }
-

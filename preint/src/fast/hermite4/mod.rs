@@ -20,9 +20,9 @@
 mod carry;
 mod interval;
 
+use super::lanes::F2;
 #[cfg(target_arch = "x86_64")]
 use super::lanes::quad::F4;
-use super::lanes::F2;
 use super::{FastDeltas, QuatDeltas};
 use crate::preintegrator::validation::common_case;
 use crate::propagation::blocks::{M3, V3};
@@ -329,4 +329,3 @@ mod tests {
         }
     }
 }
-
