@@ -61,12 +61,16 @@
 //! `∂e_{pos,vel}/∂δφ_i += M [r_{p,v}]×` and `∂e_{pos,vel}/∂δφ_j −= [M r_{p,v}]×`; GTSAM's bias
 //! order is [b_a, b_g]. Tested against GTSAM 4.3 fixtures in `preint/tests/factor_gtsam.rs`.
 
+mod combined;
+mod imu;
+mod residual;
+
+pub use combined::CombinedImuFactor;
+pub use imu::ImuFactor;
+
 use crate::measurement::PreintegratedImu;
-use crate::navstate::{NavState, predict};
 use crate::params::Level;
-use crate::sample::ImuBias;
-use nalgebra::{DMatrix, Matrix3, SMatrix, SVector};
-use preint_lie::{SO3, hat};
+use nalgebra::{DMatrix, SMatrix, SVector};
 use thiserror::Error;
 
 /// Why a factor could not be built.
@@ -302,297 +306,48 @@ fn check_pim(pim: &PreintegratedImu) -> Result<(), FactorError> {
     Ok(())
 }
 
-/// The 9-dim residual and its Jacobians (module docs).
-fn residual9(
-    pim: &PreintegratedImu,
-    xi: &NavState,
-    xj: &NavState,
-    bias_i: &ImuBias,
-) -> (SVector<f64, 9>, ImuFactorJacobians) {
-    let dbg = bias_i.gyro - pim.bias_hat.gyro;
-    let dba = bias_i.acc - pim.bias_hat.acc;
-    let jb = &pim.jac;
-    let (exp_db, jr_db) = SO3::exp_jr(&(jb.d_r_d_bg * dbg));
-    let dr = pim.delta_r.compose(&exp_db);
-    let dv = pim.delta_v + jb.d_v_d_bg * dbg + jb.d_v_d_ba * dba;
-    let dp = pim.delta_p + jb.d_p_d_bg * dbg + jb.d_p_d_ba * dba;
-
-    let dt = pim.delta_t;
-    let g = pim.gravity;
-    let ri_t = xi.r.inverse();
-    let ri_t_rj = ri_t.compose(&xj.r);
-    let e = dr.inverse().compose(&ri_t_rj);
-    let (r_phi, jr_inv) = e.log_jac();
-    let wv = ri_t.act(&(xj.v - xi.v - g * dt));
-    let wp = ri_t.act(&(xj.p - xi.p - xi.v * dt - g * (0.5 * dt * dt)));
-    let r_v = wv - dv;
-    let r_p = wp - dp;
-
-    let mut r = SVector::<f64, 9>::zeros();
-    r.fixed_rows_mut::<3>(0).copy_from(&r_phi);
-    r.fixed_rows_mut::<3>(3).copy_from(&r_v);
-    r.fixed_rows_mut::<3>(6).copy_from(&r_p);
-
-    let ri_tm = *ri_t.matrix();
-    let mut jac = ImuFactorJacobians::zeros();
-    // Rows 0..3: r_φ; 3..6: r_v; 6..9: r_p.
-    jac.phi_i
-        .fixed_view_mut::<3, 3>(0, 0)
-        .copy_from(&(-jr_inv * ri_t_rj.matrix().transpose()));
-    jac.phi_i.fixed_view_mut::<3, 3>(3, 0).copy_from(&hat(&wv));
-    jac.phi_i.fixed_view_mut::<3, 3>(6, 0).copy_from(&hat(&wp));
-    jac.p_i
-        .fixed_view_mut::<3, 3>(6, 0)
-        .copy_from(&(-Matrix3::identity()));
-    jac.v_i.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-ri_tm));
-    jac.v_i
-        .fixed_view_mut::<3, 3>(6, 0)
-        .copy_from(&(-ri_tm * dt));
-    jac.phi_j.fixed_view_mut::<3, 3>(0, 0).copy_from(&jr_inv);
-    jac.p_j
-        .fixed_view_mut::<3, 3>(6, 0)
-        .copy_from(ri_t_rj.matrix());
-    jac.v_j.fixed_view_mut::<3, 3>(3, 0).copy_from(&ri_tm);
-    jac.bg_i
-        .fixed_view_mut::<3, 3>(0, 0)
-        .copy_from(&(-jr_inv * e.matrix().transpose() * jr_db * jb.d_r_d_bg));
-    jac.bg_i
-        .fixed_view_mut::<3, 3>(3, 0)
-        .copy_from(&(-jb.d_v_d_bg));
-    jac.bg_i
-        .fixed_view_mut::<3, 3>(6, 0)
-        .copy_from(&(-jb.d_p_d_bg));
-    jac.ba_i
-        .fixed_view_mut::<3, 3>(3, 0)
-        .copy_from(&(-jb.d_v_d_ba));
-    jac.ba_i
-        .fixed_view_mut::<3, 3>(6, 0)
-        .copy_from(&(-jb.d_p_d_ba));
-    (r, jac)
-}
-
-/// Forster's IMU factor between `(NavState_i, NavState_j, bias_i)` (module docs for the
-/// residual [r_φ, r_v, r_p], perturbations and Jacobians). It reads only a
-/// [`PreintegratedImu`] and weights the residual with its 9×9 covariance `cov` (the residual
-/// is `−[δφ, δv, δp]` to first order, whose covariance is `cov`). The bias is held constant
-/// over the window: on data whose bias drifts noticeably within a window, use
-/// [`CombinedImuFactor`], whose covariance includes the random walk.
+/// A preintegrated measurement with the square-root information of the covariance that
+/// weights an `R`-dimensional residual: what both factors share.
 #[derive(Clone, Debug, PartialEq)]
-pub struct ImuFactor {
+struct Weighted<const R: usize> {
     pim: PreintegratedImu,
-    sqrt_info: SMatrix<f64, 9, 9>,
+    sqrt_info: SMatrix<f64, R, R>,
 }
 
-impl ImuFactor {
-    /// Builds the factor; computes the square-root information of `pim.cov`.
-    ///
-    /// Errors: [`FactorError::LevelTooLow`] for a [`Level::Deltas`] measurement,
-    /// [`FactorError::NonFinite`], [`FactorError::NonPositiveDeltaT`],
-    /// [`FactorError::CovarianceNotPositiveDefinite`] (e.g. a noise-free preintegration).
-    pub fn new(pim: PreintegratedImu) -> Result<Self, FactorError> {
-        if pim.level < Level::Covariance {
+impl<const R: usize> Weighted<R> {
+    /// Checks `pim` (its level at least `needed`, finite fields, positive Δt) and computes the
+    /// square-root information of `cov` (the residual's covariance, named `field` in errors).
+    fn new(
+        pim: PreintegratedImu,
+        needed: Level,
+        field: &'static str,
+        cov: SMatrix<f64, R, R>,
+    ) -> Result<Self, FactorError> {
+        if pim.level < needed {
             return Err(FactorError::LevelTooLow {
-                needed: Level::Covariance,
+                needed,
                 got: pim.level,
             });
         }
         check_pim(&pim)?;
-        let sqrt_info = sqrt_information(&pim.cov)?;
+        if !cov.iter().all(|x| x.is_finite()) {
+            return Err(FactorError::NonFinite { field });
+        }
+        let sqrt_info = sqrt_information(&cov)?;
         Ok(Self { pim, sqrt_info })
     }
 
-    /// The preintegrated measurement this factor reads.
-    pub fn preintegrated(&self) -> &PreintegratedImu {
-        &self.pim
-    }
-
-    /// Square-root information `U` (upper triangular, `cov⁻¹ = UᵀU`), order [δφ, δv, δp].
-    pub fn sqrt_information(&self) -> &SMatrix<f64, 9, 9> {
-        &self.sqrt_info
-    }
-
-    /// Predicted state at j ([`predict`], Forster eq. 33) for the bias `bias_i`.
-    pub fn predict(&self, state_i: &NavState, bias_i: &ImuBias) -> NavState {
-        predict(&self.pim, state_i, bias_i)
-    }
-
-    /// Residual `r = [r_φ [rad], r_v [m/s], r_p [m]]` (Forster eq. 45 with eq. 44 bias
-    /// correction). Non-finite states give non-finite residuals (no panic).
-    pub fn residual(
+    /// `(U r, U J)`.
+    fn whiten(
         &self,
-        state_i: &NavState,
-        state_j: &NavState,
-        bias_i: &ImuBias,
-    ) -> SVector<f64, 9> {
-        residual9(&self.pim, state_i, state_j, bias_i).0
-    }
-
-    /// Residual and its analytic Jacobians (blocks and perturbations in the module docs).
-    pub fn evaluate(
-        &self,
-        state_i: &NavState,
-        state_j: &NavState,
-        bias_i: &ImuBias,
-    ) -> (SVector<f64, 9>, ImuFactorJacobians) {
-        residual9(&self.pim, state_i, state_j, bias_i)
-    }
-
-    /// Whitened residual `U r` and Jacobians `U J` (`U` = [`sqrt_information`](Self::sqrt_information)).
-    pub fn evaluate_whitened(
-        &self,
-        state_i: &NavState,
-        state_j: &NavState,
-        bias_i: &ImuBias,
-    ) -> (SVector<f64, 9>, ImuFactorJacobians) {
-        let (r, j) = residual9(&self.pim, state_i, state_j, bias_i);
+        (r, j): (SVector<f64, R>, FactorJacobians<R>),
+    ) -> (SVector<f64, R>, FactorJacobians<R>) {
         (self.sqrt_info * r, j.left_mul(&self.sqrt_info))
     }
 
-    /// Squared Mahalanobis norm `rᵀ cov⁻¹ r = ‖U r‖²` (dimensionless; χ² with 9 dof).
-    pub fn chi2(&self, state_i: &NavState, state_j: &NavState, bias_i: &ImuBias) -> f64 {
-        (self.sqrt_info * self.residual(state_i, state_j, bias_i)).norm_squared()
-    }
-
-    /// Least-squares cost `½ chi2` (GTSAM's `NonlinearFactor::error`).
-    pub fn cost(&self, state_i: &NavState, state_j: &NavState, bias_i: &ImuBias) -> f64 {
-        0.5 * self.chi2(state_i, state_j, bias_i)
+    /// `‖U r‖²`.
+    fn chi2(&self, r: &SVector<f64, R>) -> f64 {
+        (self.sqrt_info * r).norm_squared()
     }
 }
 
-/// The combined IMU factor between `(NavState_i, NavState_j, b_i, b_j)`: residual
-/// `[r_φ, r_v, r_p, b_g,j − b_g,i, b_a,j − b_a,i]` (15-dim; the first nine as in [`ImuFactor`],
-/// evaluated with `b_i`), weighted by the covariance of that residual,
-/// [`PreintegratedImu::residual_cov15`]: the bias random walk over the window and its
-/// correlation with the deltas, with the sign of the residual (the deltas' rows are
-/// true ⊖ measured, the bias rows `b_j − b_i`; `cov15` itself is the error state's
-/// covariance, measured ⊖ true, and has the opposite delta–bias blocks). GTSAM
-/// `CombinedImuFactor` semantics, as weighted by GTSAM 4.3's `residualCovariance()`.
-///
-/// Jacobians: the first nine rows as in [`ImuFactor`]; the bias rows are `−I` w.r.t. `δb_i`
-/// and `+I` w.r.t. `δb_j` (additive bias perturbations, order [b_g, b_a]).
-#[derive(Clone, Debug, PartialEq)]
-pub struct CombinedImuFactor {
-    pim: PreintegratedImu,
-    sqrt_info: SMatrix<f64, 15, 15>,
-}
-
-impl CombinedImuFactor {
-    /// Builds the factor; computes the square-root information of
-    /// [`pim.residual_cov15()`](PreintegratedImu::residual_cov15).
-    ///
-    /// Errors: [`FactorError::LevelTooLow`] unless `pim.level` is [`Level::Combined`]; else as
-    /// [`ImuFactor::new`]; a zero bias random walk makes `cov15` singular
-    /// ([`FactorError::CovarianceNotPositiveDefinite`] with `dim = 15`).
-    pub fn new(pim: PreintegratedImu) -> Result<Self, FactorError> {
-        if pim.level != Level::Combined {
-            return Err(FactorError::LevelTooLow {
-                needed: Level::Combined,
-                got: pim.level,
-            });
-        }
-        check_pim(&pim)?;
-        if !pim.cov15.iter().all(|x| x.is_finite()) {
-            return Err(FactorError::NonFinite { field: "cov15" });
-        }
-        let sqrt_info = sqrt_information(&pim.residual_cov15())?;
-        Ok(Self { pim, sqrt_info })
-    }
-
-    /// The preintegrated measurement this factor reads.
-    pub fn preintegrated(&self) -> &PreintegratedImu {
-        &self.pim
-    }
-
-    /// Square-root information `U` of the residual covariance `Σ_r =`
-    /// [`residual_cov15`](PreintegratedImu::residual_cov15) (upper triangular, `Σ_r⁻¹ = UᵀU`),
-    /// order [r_φ, r_v, r_p, r_bg, r_ba].
-    pub fn sqrt_information(&self) -> &SMatrix<f64, 15, 15> {
-        &self.sqrt_info
-    }
-
-    /// Residual `[r_φ, r_v, r_p, r_bg, r_ba]` (rad, m/s, m, rad/s, m/s²).
-    pub fn residual(
-        &self,
-        state_i: &NavState,
-        state_j: &NavState,
-        bias_i: &ImuBias,
-        bias_j: &ImuBias,
-    ) -> SVector<f64, 15> {
-        self.evaluate(state_i, state_j, bias_i, bias_j).0
-    }
-
-    /// Residual and analytic Jacobians (the bias-at-j blocks are filled here).
-    pub fn evaluate(
-        &self,
-        state_i: &NavState,
-        state_j: &NavState,
-        bias_i: &ImuBias,
-        bias_j: &ImuBias,
-    ) -> (SVector<f64, 15>, CombinedImuFactorJacobians) {
-        let (r9, j9) = residual9(&self.pim, state_i, state_j, bias_i);
-        let mut r = SVector::<f64, 15>::zeros();
-        r.fixed_rows_mut::<9>(0).copy_from(&r9);
-        r.fixed_rows_mut::<3>(9)
-            .copy_from(&(bias_j.gyro - bias_i.gyro));
-        r.fixed_rows_mut::<3>(12)
-            .copy_from(&(bias_j.acc - bias_i.acc));
-        let ext = |m: &SMatrix<f64, 9, 3>| {
-            let mut o = SMatrix::<f64, 15, 3>::zeros();
-            o.fixed_rows_mut::<9>(0).copy_from(m);
-            o
-        };
-        let id = Matrix3::identity();
-        let mut j = CombinedImuFactorJacobians {
-            phi_i: ext(&j9.phi_i),
-            p_i: ext(&j9.p_i),
-            v_i: ext(&j9.v_i),
-            phi_j: ext(&j9.phi_j),
-            p_j: ext(&j9.p_j),
-            v_j: ext(&j9.v_j),
-            bg_i: ext(&j9.bg_i),
-            ba_i: ext(&j9.ba_i),
-            bg_j: SMatrix::zeros(),
-            ba_j: SMatrix::zeros(),
-        };
-        j.bg_i.fixed_view_mut::<3, 3>(9, 0).copy_from(&(-id));
-        j.ba_i.fixed_view_mut::<3, 3>(12, 0).copy_from(&(-id));
-        j.bg_j.fixed_view_mut::<3, 3>(9, 0).copy_from(&id);
-        j.ba_j.fixed_view_mut::<3, 3>(12, 0).copy_from(&id);
-        (r, j)
-    }
-
-    /// Whitened residual `U r` and Jacobians `U J`.
-    pub fn evaluate_whitened(
-        &self,
-        state_i: &NavState,
-        state_j: &NavState,
-        bias_i: &ImuBias,
-        bias_j: &ImuBias,
-    ) -> (SVector<f64, 15>, CombinedImuFactorJacobians) {
-        let (r, j) = self.evaluate(state_i, state_j, bias_i, bias_j);
-        (self.sqrt_info * r, j.left_mul(&self.sqrt_info))
-    }
-
-    /// `rᵀ Σ_r⁻¹ r` with `Σ_r` = [`residual_cov15`](PreintegratedImu::residual_cov15) (χ² with
-    /// 15 dof).
-    pub fn chi2(
-        &self,
-        state_i: &NavState,
-        state_j: &NavState,
-        bias_i: &ImuBias,
-        bias_j: &ImuBias,
-    ) -> f64 {
-        (self.sqrt_info * self.residual(state_i, state_j, bias_i, bias_j)).norm_squared()
-    }
-
-    /// `½ chi2`.
-    pub fn cost(
-        &self,
-        state_i: &NavState,
-        state_j: &NavState,
-        bias_i: &ImuBias,
-        bias_j: &ImuBias,
-    ) -> f64 {
-        0.5 * self.chi2(state_i, state_j, bias_i, bias_j)
-    }
-}

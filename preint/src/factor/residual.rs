@@ -1,0 +1,78 @@
+//! Forster's 9-dim residual and its analytic Jacobians (formulas in the parent module's docs).
+
+use super::ImuFactorJacobians;
+use crate::measurement::PreintegratedImu;
+use crate::navstate::NavState;
+use crate::sample::ImuBias;
+use nalgebra::{Matrix3, SVector};
+use preint_lie::{SO3, hat};
+
+/// The 9-dim residual and its Jacobians (module docs).
+pub(super) fn residual9(
+    pim: &PreintegratedImu,
+    xi: &NavState,
+    xj: &NavState,
+    bias_i: &ImuBias,
+) -> (SVector<f64, 9>, ImuFactorJacobians) {
+    let dbg = bias_i.gyro - pim.bias_hat.gyro;
+    let dba = bias_i.acc - pim.bias_hat.acc;
+    let jb = &pim.jac;
+    let (exp_db, jr_db) = SO3::exp_jr(&(jb.d_r_d_bg * dbg));
+    let dr = pim.delta_r.compose(&exp_db);
+    let dv = pim.delta_v + jb.d_v_d_bg * dbg + jb.d_v_d_ba * dba;
+    let dp = pim.delta_p + jb.d_p_d_bg * dbg + jb.d_p_d_ba * dba;
+
+    let dt = pim.delta_t;
+    let g = pim.gravity;
+    let ri_t = xi.r.inverse();
+    let ri_t_rj = ri_t.compose(&xj.r);
+    let e = dr.inverse().compose(&ri_t_rj);
+    let (r_phi, jr_inv) = e.log_jac();
+    let wv = ri_t.act(&(xj.v - xi.v - g * dt));
+    let wp = ri_t.act(&(xj.p - xi.p - xi.v * dt - g * (0.5 * dt * dt)));
+    let r_v = wv - dv;
+    let r_p = wp - dp;
+
+    let mut r = SVector::<f64, 9>::zeros();
+    r.fixed_rows_mut::<3>(0).copy_from(&r_phi);
+    r.fixed_rows_mut::<3>(3).copy_from(&r_v);
+    r.fixed_rows_mut::<3>(6).copy_from(&r_p);
+
+    let ri_tm = *ri_t.matrix();
+    let mut jac = ImuFactorJacobians::zeros();
+    // Rows 0..3: r_φ; 3..6: r_v; 6..9: r_p.
+    jac.phi_i
+        .fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&(-jr_inv * ri_t_rj.matrix().transpose()));
+    jac.phi_i.fixed_view_mut::<3, 3>(3, 0).copy_from(&hat(&wv));
+    jac.phi_i.fixed_view_mut::<3, 3>(6, 0).copy_from(&hat(&wp));
+    jac.p_i
+        .fixed_view_mut::<3, 3>(6, 0)
+        .copy_from(&(-Matrix3::identity()));
+    jac.v_i.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-ri_tm));
+    jac.v_i
+        .fixed_view_mut::<3, 3>(6, 0)
+        .copy_from(&(-ri_tm * dt));
+    jac.phi_j.fixed_view_mut::<3, 3>(0, 0).copy_from(&jr_inv);
+    jac.p_j
+        .fixed_view_mut::<3, 3>(6, 0)
+        .copy_from(ri_t_rj.matrix());
+    jac.v_j.fixed_view_mut::<3, 3>(3, 0).copy_from(&ri_tm);
+    jac.bg_i
+        .fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&(-jr_inv * e.matrix().transpose() * jr_db * jb.d_r_d_bg));
+    jac.bg_i
+        .fixed_view_mut::<3, 3>(3, 0)
+        .copy_from(&(-jb.d_v_d_bg));
+    jac.bg_i
+        .fixed_view_mut::<3, 3>(6, 0)
+        .copy_from(&(-jb.d_p_d_bg));
+    jac.ba_i
+        .fixed_view_mut::<3, 3>(3, 0)
+        .copy_from(&(-jb.d_v_d_ba));
+    jac.ba_i
+        .fixed_view_mut::<3, 3>(6, 0)
+        .copy_from(&(-jb.d_p_d_ba));
+    (r, jac)
+}
+
