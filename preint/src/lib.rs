@@ -4,6 +4,8 @@
 //! default; the accelerometer measures specific force; rotation perturbations on the right;
 //! preintegrated tangent order **[δφ, δv, δp]**, bias order **[b_g, b_a]**; integer-ns times.
 
+#![deny(missing_docs)]
+
 pub mod factor;
 pub mod io;
 pub mod measurement;

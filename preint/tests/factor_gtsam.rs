@@ -1,5 +1,5 @@
 //! Agreement of `ImuFactor` with GTSAM 4.3 (`ImuFactor` residual and Jacobians, reproduced by
-//! `shared/oracle/gtsam_preint.py` from `PreintegratedImuMeasurementsManifold::predict`).
+//! `tests/fixtures/gtsam/gtsam_preint.py` from `PreintegratedImuMeasurementsManifold::predict`).
 //!
 //! The `PreintegratedImu` is built from each fixture's own ΔR, Δv, Δp, bias Jacobians and
 //! covariance (GTSAM's Forster-chart covariance, reordered from [φ, p, v] to [φ, v, p]), so
@@ -16,7 +16,7 @@
 //!
 //! Fixtures: `tests/fixtures/gtsam/*.gtsam.json` with their `*.params.json` (states, bias).
 //! The `factor_*` ones are ComponentWise variants; regenerate with
-//! `/work/.venv-oracle/bin/python /work/shared/oracle/gtsam_preint.py X.csv factor_X.params.json --out factor_X.gtsam.json`
+//! `python gtsam_preint.py X.csv factor_X.params.json --out factor_X.gtsam.json`
 //! from `tests/fixtures/gtsam/` (see `factor_README.md` there).
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};

@@ -1,5 +1,4 @@
-//! Dead reckoning: full navigation state (R, v, p) integrated from IMU samples (the seed notes'
-//! section 4), with two time rules and three attitude representations.
+//! Dead reckoning: full navigation state (R, v, p) integrated from IMU samples, with two time rules and three attitude representations.
 //!
 //! Bias-corrected inputs: `ω_k = ω_m,k − b_g`, world acceleration `a_k = R_k (a_m,k − b_a) + g`
 //! (`g` = world gravity, default `(0, 0, −9.81)`). Interval `k` is `[t_k, t_k+1]`,

@@ -1,4 +1,4 @@
-//! IMU measurement synthesis (seed eq. 16–17) with white noise and bias random walk, and the
+//! IMU measurement synthesis with white noise and bias random walk, and the
 //! dataset writer (EuRoC + Kalibr).
 //!
 //! Model, for sample `k` at `t_k` with the scene state (`R_wb`, `a_w`, `ω_b`):
@@ -192,7 +192,7 @@ pub fn period_ns(rate_hz: f64) -> Result<i64, SimError> {
 }
 
 /// Synthesises IMU samples of `scene` at `rate_hz` over `[0, duration_s]` (see the module
-/// docs for the model, seed eq. 16–17, and the random generator).
+/// docs for the model and the random generator).
 ///
 /// Timestamps are integer: `t_k = k·round(1e9/rate_hz)` ns for `k = 0 … ⌊duration_ns/period⌋`
 /// (so `⌊duration/period⌋ + 1` samples; the effective rate is `1e9/period_ns`). The noise

@@ -1,9 +1,9 @@
-//! # sim — the seed notes' IMU simulator, ground truth and dead-reckoning integrators
+//! # preint-sim — an IMU simulator, exact ground truth and dead-reckoning integrators
 //!
 //! Conventions (`docs/ARCHITECTURE.md`): world frame z up, gravity `g = (0, 0, −9.81)` m/s² by
 //! default; `R_wb` rotates body→world; the accelerometer measures specific force
 //! `a_m = S_a R_wbᵀ (a_w − g) + b_a + n_a` (reads +9.81 on the up axis at rest), the gyro
-//! `ω_m = S_g ω_b + b_g + n_g` (seed eq. 16–17); bias order [b_g, b_a]; integer-ns timestamps,
+//! `ω_m = S_g ω_b + b_g + n_g` (the usual MEMS model, e.g. Furgale et al., IROS 2013); bias order [b_g, b_a]; integer-ns timestamps,
 //! scene time `t_s = ns·1e-9` from a scene start at 0 ns.
 //!
 //! - [`scene`]: the [`Scene`] trait, [`SceneState`], [`scene_by_name`], [`SCENE_NAMES`] and
@@ -16,6 +16,8 @@
 //!   (EuRoC `imu.csv`, `groundtruth.csv`, Kalibr `imu.yaml`).
 //! - [`deadreckon`]: [`dead_reckon`] with Euler / midpoint rules and quaternion / matrix-Exp /
 //!   ZYX-Euler-angle attitude; [`euler_zyx_angles`], the raw Euler-angle states.
+
+#![deny(missing_docs)]
 
 pub mod deadreckon;
 pub mod deltas;

@@ -13,7 +13,7 @@
 //! heading, GPS-vs-body mounting) is removed as the circular mean of the residuals.
 //!
 //! Asserted: median |residual| ≤ 3° (measured: 0.61° for both schemes on these 120 s). The
-//! dataset's curators (`shared/data/kitti_gtsam/README.txt`) got 1.5° median (95 %: 6.6°) with
+//! dataset's curators (`tests/data/README.md`, KITTI) got 1.5° median (95 %: 6.6°) with
 //! a plain integral of omegaZ over the full 470 s drive; the residual also contains the car's
 //! side-slip and GPS direction noise (≈ 0.1 m over ≥ 2 m → up to ≈ 3°), so 3° is the allowance
 //! for the reference, not the integration's accuracy. Power of

@@ -20,8 +20,8 @@
 //!    ≤ 1e-12): its `u = ΔR a` is exact at the nodes, and the error of the finite-difference
 //!    `ȧ` (samples 1 rad apart) is the same rotating vector at every node, so `ΔR_k ȧ_k` is off
 //!    by one constant in frame i, which cancels in the end corrections `h²/12 (u̇_k − u̇_k+1)`
-//!    (the window path gives the edge nodes centred stencils too). The previous rk4
-//!    (Gauss–Legendre Magnus with Simpson's rule on cubics) was off by 0.076 m/s here. All
+//!    (the window path gives the edge nodes centred stencils too); a Gauss–Legendre Magnus
+//!    scheme with Simpson's rule on cubics is off by 0.076 m/s here. All
 //!    errors vs `preint_sim::exact_deltas` go to `target/evidence/fast_spin_10hz.json`.
 //! 3. `ten_million_samples_one_window` — constant ω = (0.3, −0.2, 0.5) rad/s and specific force,
 //!    1 kHz, 10⁷ samples (2.8 h) in one window, `keep_samples = false`. Reference: the closed

@@ -1,10 +1,12 @@
-//! `seed-ellipse`: the course simulator's motion.
+//! `seed-ellipse`: a slow horizontal ellipse with a fast vertical oscillation.
 
 use crate::scene::{Scene, SceneState, state_from_euler};
 use nalgebra::Vector3;
 use std::f64::consts::PI;
 
-/// `seed-ellipse`: the seed course simulator's trajectory, with exact times.
+/// `seed-ellipse`: a horizontal ellipse (semi-axes 15 m and 20 m, 20 s per lap) with a 1 m
+/// vertical oscillation ten times faster, yawing once per lap and rocking in roll and pitch
+/// (exact derivatives).
 ///
 /// With `K = π/10` rad/s and `K1 = 10`:
 /// - position \[m\]: `p = (15 cos Kt + 5, 20 sin Kt + 5, sin(K1 K t) + 5)`,
@@ -15,8 +17,6 @@ use std::f64::consts::PI;
 /// - `ω_b = W(roll, pitch)·(roll̇, pitcḣ, yaẇ)` with the Euler-rate→body-rate matrix `W`
 ///   ([`crate::scene::euler_rate_to_body_rate`]), `ω̇_b = W Θ̈ + Ẇ Θ̇`
 ///   ([`crate::scene::euler_zyx_body_rates`]).
-///
-/// (The course code keeps time in a 32-bit float; here time is exact integer nanoseconds.)
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SeedEllipseScene;
 
