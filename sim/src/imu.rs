@@ -235,9 +235,9 @@ pub fn simulate(
             bias.acc += w_ba * sba;
         }
         let st = scene.state(t_s(t_ns));
-        let specific_force_b = st.r_wb.inverse() * (st.a - config.gravity);
-        let acc = config.acc_scale * specific_force_b + bias.acc + n_a * sa;
-        let gyro = config.gyro_scale * st.omega_b + bias.gyro + n_g * sg;
+        let ideal = st.ideal_sample(t_ns, &config.gravity);
+        let acc = config.acc_scale * ideal.acc + bias.acc + n_a * sa;
+        let gyro = config.gyro_scale * ideal.gyro + bias.gyro + n_g * sg;
         samples.push(ImuSample { t_ns, gyro, acc });
         truth.push(GroundTruthState {
             t_ns,

@@ -47,8 +47,7 @@ fn fit_min_rate(scene: &str) -> i64 {
 }
 
 fn ideal(scene: &dyn Scene, t_ns: i64, g: &Vector3<f64>) -> ImuSample {
-    let s = scene.state(t_s(t_ns));
-    ImuSample::new(t_ns, s.omega_b, s.r_wb.inverse().act(&(s.a - g)))
+    scene.state(t_s(t_ns)).ideal_sample(t_ns, g)
 }
 
 /// `[rot, vel, pos]` errors of `scheme` at `rate` on `[T_I, T_J]`.

@@ -56,8 +56,7 @@ fn ideal(scene: &dyn Scene, g: &Vector3<f64>) -> Vec<ImuSample> {
     (0..N_SAMPLES)
         .map(|k| {
             let t_ns = T_I + k * PERIOD;
-            let s = scene.state(t_s(t_ns));
-            ImuSample::new(t_ns, s.omega_b, s.r_wb.inverse().act(&(s.a - g)))
+            scene.state(t_s(t_ns)).ideal_sample(t_ns, g)
         })
         .collect()
 }

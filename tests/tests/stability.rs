@@ -75,8 +75,7 @@ fn g() -> Vector3<f64> {
 }
 
 fn ideal(scene: &dyn Scene, t_ns: i64) -> ImuSample {
-    let s = scene.state(t_s(t_ns));
-    ImuSample::new(t_ns, s.omega_b, s.r_wb.inverse().act(&(s.a - g())))
+    scene.state(t_s(t_ns)).ideal_sample(t_ns, &g())
 }
 
 fn grid(scene: &dyn Scene, from_ns: i64, period: i64, n: i64) -> Vec<ImuSample> {
