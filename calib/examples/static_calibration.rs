@@ -20,13 +20,17 @@ fn main() {
         ..SimConfig::with_noise(noise)
     };
     let sim = simulate(&StaticScene::default(), 200.0, 600.0, &cfg, 11).expect("simulation");
-    let cal = calibrate_static(&sim.samples, &noise, &StaticOptions::default()).expect("static data");
+    let cal =
+        calibrate_static(&sim.samples, &noise, &StaticOptions::default()).expect("static data");
     // The estimate refers to mid-recording (the random walk moves the bias meanwhile).
     let mid = &sim.truth[sim.truth.len() / 2];
     println!("gyro bias [rad/s]:");
     for k in 0..3 {
         let (est, sd, truth) = (cal.gyro_bias[k], cal.gyro_bias_std[k], mid.bias.gyro[k]);
-        println!("  {est:+.6} ± {sd:.1e} (truth {truth:+.6}, {:+.1} σ)", (est - truth) / sd);
+        println!(
+            "  {est:+.6} ± {sd:.1e} (truth {truth:+.6}, {:+.1} σ)",
+            (est - truth) / sd
+        );
         assert!((est - truth).abs() < 4.0 * sd);
     }
     println!(

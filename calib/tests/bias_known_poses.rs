@@ -50,7 +50,7 @@ impl Zs {
 /// constant biases b_g = (4, −3, 6)e-3 rad/s, b_a = (0.08, −0.05, 0.12) m/s²: the model's
 /// assumption), poses every 0.5 s (21) from the ground truth perturbed by the stated pose
 /// noise `R̃ = R·Exp(n_R)`, σ_R = 0.1°, `p̃ = p + n_p`, σ_p = 5 mm (the EuRoC test's figures).
-/// Scheme rk4, so that discretisation error (midpoint: χ²/dof 1.10 without pose noise on this
+/// Scheme hermite4, so that discretisation error (midpoint: χ²/dof 1.10 without pose noise on this
 /// scene) does not mix in.
 ///
 /// Asserted, per quantity (b_g and b_a per axis, the horizontal gravity components — truth 0,

@@ -9,13 +9,17 @@ use preint_sim::{SimConfig, scene_by_name, simulate};
 
 fn main() {
     let scene = scene_by_name("aggressive").expect("built-in scene");
-    let sim = simulate(scene.as_ref(), 200.0, 1.0, &SimConfig::noise_free(), 1).expect("simulation");
+    let sim =
+        simulate(scene.as_ref(), 200.0, 1.0, &SimConfig::noise_free(), 1).expect("simulation");
     let params = PreintParams::default().with_scheme(Scheme::Midpoint);
     let mut pi = Preintegrator::new(params.clone(), ImuBias::zero()).expect("parameters");
     pi.integrate_slice(&sim.samples).expect("valid samples");
 
     for dbg in [0.002, 0.05] {
-        let bias = ImuBias::new(Vector3::new(dbg, -dbg, 0.5 * dbg), Vector3::new(0.05, 0.0, -0.05));
+        let bias = ImuBias::new(
+            Vector3::new(dbg, -dbg, 0.5 * dbg),
+            Vector3::new(0.05, 0.0, -0.05),
+        );
         let update = pi.measurement_for_bias(&bias).expect("update");
         // Reference: integrate again with the new bias.
         let mut exact = Preintegrator::new(params.clone(), bias).expect("parameters");

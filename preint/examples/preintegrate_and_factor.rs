@@ -43,7 +43,10 @@ fn main() {
     println!("whitened residual = {:.3?}", rw.as_slice());
     println!("χ² = {chi2:.2} with 9 degrees of freedom (99 % quantile 21.67)");
     assert!((rw.norm_squared() - chi2).abs() < 1e-9 * chi2);
-    assert!(chi2 < 21.67 * 3.0, "far from the noise the covariance describes");
+    assert!(
+        chi2 < 21.67 * 3.0,
+        "far from the noise the covariance describes"
+    );
 }
 
 #[cfg(test)]

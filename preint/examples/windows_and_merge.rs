@@ -10,8 +10,14 @@ use preint_sim::{SimConfig, scene_by_name, simulate};
 fn main() {
     let scene = scene_by_name("seed-ellipse").expect("built-in scene");
     let noise = preint::ImuNoise::euroc();
-    let sim = simulate(scene.as_ref(), 200.0, 12.0, &SimConfig::with_noise(noise), 3)
-        .expect("simulation");
+    let sim = simulate(
+        scene.as_ref(),
+        200.0,
+        12.0,
+        &SimConfig::with_noise(noise),
+        3,
+    )
+    .expect("simulation");
     let params = PreintParams::from_noise(&noise).with_scheme(Scheme::Hermite4);
     let bias = ImuBias::zero();
     let second = 1_000_000_000;
@@ -22,8 +28,14 @@ fn main() {
     let whole = preintegrate(&params, &bias, &sim.samples, t0, t0 + 10 * second).expect("window");
     let mut merged = preintegrate(&params, &bias, &sim.samples, t0, t0 + second).expect("window");
     for k in 1..10 {
-        let w = preintegrate(&params, &bias, &sim.samples, t0 + k * second, t0 + (k + 1) * second)
-            .expect("window");
+        let w = preintegrate(
+            &params,
+            &bias,
+            &sim.samples,
+            t0 + k * second,
+            t0 + (k + 1) * second,
+        )
+        .expect("window");
         merged = merge(&merged, &w).expect("consecutive windows");
     }
     let rel = |a: f64, b: f64| (a - b).abs() / b.abs().max(1e-300);
@@ -32,7 +44,9 @@ fn main() {
     let dcov = (merged.cov - whole.cov).amax() / whole.cov.amax();
     let djac = (merged.jac.d_p_d_bg - whole.jac.d_p_d_bg).amax() / whole.jac.d_p_d_bg.amax();
     println!("10 merged windows against the 10 s window:");
-    println!("  ΔR {dr:.1e}, Δv {dv:.1e} m/s, covariance {dcov:.1e} (relative), ∂Δp/∂b_g {djac:.1e}");
+    println!(
+        "  ΔR {dr:.1e}, Δv {dv:.1e} m/s, covariance {dcov:.1e} (relative), ∂Δp/∂b_g {djac:.1e}"
+    );
     println!(
         "  Δt {} s, σ_p of the whole window {:.3e} m",
         merged.delta_t,

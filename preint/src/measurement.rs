@@ -64,7 +64,7 @@ impl Default for BiasJacobians {
     }
 }
 
-/// Most noise sources an [`EdgeNoise`] holds: at most 5 per window edge (rk4's cubic
+/// Most noise sources an [`EdgeNoise`] holds: at most 5 per window edge (hermite4's cubic
 /// boundary stencil of 4 stream samples plus one neighbour; 2 for Euler and midpoint).
 pub const MAX_EDGE_SOURCES: usize = 10;
 
@@ -108,7 +108,7 @@ impl Default for EdgeSource {
 /// `n = [n_g, n_a]` of covariance `diag(Σ_g, Σ_a)·white_scale(c)` with `c = cell_rule.cell_s(left,
 /// right)`; the window's error is, to first order, `Σ_samples gain·n`. Consecutive windows
 /// share the samples around their common keyframe (the sample at the keyframe, or the samples
-/// an interpolated boundary sample is made of, and for rk4 the stencil neighbours), so their
+/// an interpolated boundary sample is made of, and for hermite4 the stencil neighbours), so their
 /// errors are correlated by `Σ_shared gain_a Q gain_bᵀ`. Empty for [`Level::Deltas`] and for
 /// hand-made measurements (then a merge treats the windows as independent).
 #[derive(Clone, Debug, PartialEq)]

@@ -24,7 +24,7 @@
 //! # Shared samples
 //!
 //! Consecutive windows of one stream share the samples around their common keyframe `t_k`:
-//! the sample at `t_k`, or the samples an interpolated boundary sample is made of, and for rk4
+//! the sample at `t_k`, or the samples an interpolated boundary sample is made of, and for hermite4
 //! the stencil neighbours ([`crate::window`]). Each window records those samples with their
 //! gains `G` on its error ([`crate::measurement::EdgeNoise`]); for a sample `s` in both,
 //! the white part of the merged covariance gains
@@ -61,7 +61,7 @@
 //! sample, merging equals integrating the whole window at once to round-off — deltas,
 //! covariances and Jacobians — for every scheme when the windows come from
 //! [`crate::window::preintegrate`], and for Euler and midpoint also when the samples were
-//! pushed into preintegrators directly (direct rk4 windows use one-sided edge stencils, so
+//! pushed into preintegrators directly (direct hermite4 windows use one-sided edge stencils, so
 //! their composition differs from the whole window by the O(h⁴) integration error; the merge
 //! is still the exact covariance of that composition). For a split between samples the
 //! composition equals the whole stream with the boundary sample inserted

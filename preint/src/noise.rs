@@ -23,7 +23,7 @@ pub enum CellRule {
     /// The sample is held over the interval that follows it (`euler`, GTSAM): `c = right`; a
     /// sample with no successor (never held by Euler) gets `c = left`.
     Held,
-    /// The sample is the node of a quadrature rule (`midpoint`, `rk4`): `c = ½(left + right)`,
+    /// The sample is the node of a quadrature rule (`midpoint`, `hermite4`): `c = ½(left + right)`,
     /// the mean length of its adjacent intervals; at an end of the stream the one interval
     /// there. A uniform stream gives `c = Δt` for every sample.
     Centered,

@@ -6,7 +6,7 @@
 //! A keyframe time `t` between samples `t_m−1 < t < t_m` gets a boundary sample interpolated
 //! from the stream, which ends one window and starts the next:
 //! - Euler and midpoint: linear between the two bracketing samples;
-//! - rk4: cubic Lagrange through four surrounding stream samples (two on each side, one-sided
+//! - hermite4: cubic Lagrange through four surrounding stream samples (two on each side, one-sided
 //!   at the stream ends), so the window edge keeps 4th order.
 //!
 //! A keyframe time equal to a sample's time uses that sample.
@@ -17,7 +17,7 @@
 //! `[a, b]`, `[b, c]` (`ΔR_ac = ΔR_ab ΔR_bc`, `Δv_ac = Δv_ab + ΔR_ab Δv_bc`,
 //! `Δp_ac = Δp_ab + Δv_ab Δt_bc + ΔR_ab Δp_bc`) equals, to round-off, the integration of `[a, c]`
 //! over the stream *with that boundary sample inserted*, for every scheme; durations add
-//! exactly (integer ns). For rk4 this needs two more rules, both functions of the stream and
+//! exactly (integer ns). For hermite4 this needs two more rules, both functions of the stream and
 //! `t` only, so that both windows apply them identically:
 //! - *Context samples.* The stencils of a window's edge intervals extend past the window to
 //!   the nearest stream sample on the other side (see [`crate::scheme::hermite`]): the last
@@ -31,7 +31,7 @@
 //!   "whole stream with `b` inserted" then means: `b` inserted and such a sample removed.
 //!
 //! Without these rules (one-sided stencils at every window edge, as for samples pushed into
-//! preintegrators directly) rk4 windows compose only to the scheme's O(h⁴) error: measured
+//! preintegrators directly) hermite4 windows compose only to the scheme's O(h⁴) error: measured
 //! 8.4e-12 on the test scene at 200 Hz, against 5.6e-16 with them
 //! (`preint/tests/windows.rs`, which also checks the composition for every scheme and for
 //! keyframes mid-interval, 1 µs from a sample and on a sample, to 1e-13).
@@ -47,7 +47,7 @@
 //! `preint/tests/linearisation.rs`). Treating the boundary sample instead as an independent
 //! source with a cell of its own (the model before this one) misstates the variances; measured
 //! there (200 Hz, variance traces): midpoint +0.7 % (rotation, velocity) and +2.0 % (position)
-//! for keyframes 1 µs before a sample, rk4 up to +2.1 %, Euler −0.9 % (position) for
+//! for keyframes 1 µs before a sample, hermite4 up to +2.1 %, Euler −0.9 % (position) for
 //! keyframes mid-interval. The stream samples
 //! around a keyframe are shared by the two windows that meet there; each window records their
 //! gains ([`crate::measurement::EdgeNoise`]), so [`merge`](crate::merge()) adds their
@@ -159,7 +159,7 @@ fn push_src(side: &mut Side, samples: &[ImuSample], k: usize) {
     side.n_src += 1;
 }
 
-/// `|t_s − t|·8 < step`: a stream sample too close to an interpolated boundary (rk4).
+/// `|t_s − t|·8 < step`: a stream sample too close to an interpolated boundary (hermite4).
 fn too_close(t_s: i64, t: i64, step: i64) -> bool {
     (t_s as i128 - t as i128).abs() * 8 < step as i128
 }
@@ -379,10 +379,10 @@ fn inner_samples(
 /// The samples of the keyframe window `[t_i_ns, t_j_ns]` taken from a time-ordered stream:
 /// boundary samples at exactly `t_i` and `t_j` (stream samples if they fall there, else
 /// interpolated as the module doc says for `scheme`) and the stream samples strictly between
-/// (for rk4 without those closer than 1/8 interval to an interpolated boundary).
+/// (for hermite4 without those closer than 1/8 interval to an interpolated boundary).
 /// Validates the stream around the window (indices in errors refer to `samples`).
 ///
-/// These are the samples [`preintegrate`] integrates; it also passes the rk4 context samples
+/// These are the samples [`preintegrate`] integrates; it also passes the hermite4 context samples
 /// and the boundary samples' noise decomposition, which this list does not show.
 pub fn window_samples(
     scheme: Scheme,

@@ -1,5 +1,5 @@
 //! `integrate_slice` with `Level::Deltas` runs every scheme straight from the slice
-//! (`Core::run_deltas`, `Core::run_deltas_rk4`). It must be indistinguishable from pushing the
+//! (the `fast` module of `preint`). It must be indistinguishable from pushing the
 //! samples one by one:
 //! the same deltas bit for bit (across ΔR's re-orthonormalisation every 1024 intervals), the
 //! same stored samples, the same error at the same index for a bad sample, and the same

@@ -17,7 +17,8 @@
 //! gains ≥ h/2). Errors of the covariance are of the same relative order (≈ 2× the column
 //! error, ≤ 3e-10), so agreement is asserted at [`TOL`] = 1e-9, per 3×3 block relative to the
 //! geometric mean of the two diagonal blocks (measured: ≤ 3e-11 in every case below). A wrong
-//! model is far off: the previous boundary model by ≥ 7e-3 (midpoint, rk4, last test), a
+//! model is far off: a boundary sample taken as a noise source of its own is off by ≥ 7e-3
+//! (midpoint, hermite4, last test), a
 //! merge without the shared samples by ≥ 1e-3.
 
 use nalgebra::{Matrix3, SMatrix, Vector3};

@@ -2,7 +2,7 @@
 //! to round-off, covariances and bias Jacobians to 1e-10 relative): Euler with an independent
 //! Forster-Euler integration written here and with the crate's preintegrator; every scheme
 //! with windows cut by `preintegrate` (the samples both windows share supply the cross
-//! covariance; without it midpoint and rk4 are off by ≈ 3e-3–5e-3). Levels are respected.
+//! covariance; without it midpoint and hermite4 are off by ≈ 3e-3–5e-3). Levels are respected.
 //! `tests/linearisation.rs` checks merges between samples against numeric differentiation.
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
@@ -310,7 +310,7 @@ fn merge_rejects_inconsistent_windows() {
 }
 
 /// Every scheme, windows cut by `preintegrate` at a stream sample of a jittered stream: the
-/// shared samples' covariance (midpoint: the sample at the split; rk4: also its stencil
+/// shared samples' covariance (midpoint: the sample at the split; hermite4: also its stencil
 /// neighbours) makes the merge equal the whole window, deltas to round-off and covariances,
 /// combined covariance and bias Jacobians to 1e-10. Also for Euler and midpoint windows
 /// whose samples were pushed into preintegrators directly (each window then sees one

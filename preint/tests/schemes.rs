@@ -143,7 +143,7 @@ fn noisy(
             ba += rng.correlated(&lba);
         }
     }
-    // The last sample's bias is b_N (Euler never uses it; midpoint/rk4 use it in the last
+    // The last sample's bias is b_N (Euler never uses it; midpoint/hermite4 use it in the last
     // interval, a one-step difference the model neglects).
     (out, bg, ba)
 }
@@ -343,7 +343,7 @@ fn delta_error_reads_back_a_known_perturbation() {
     assert_eq!(m0.delta_error(&m0), nalgebra::SVector::<f64, 9>::zeros());
 }
 
-/// rk4's rules are exact for cubics (module doc of `preint::scheme::hermite`), which two
+/// hermite4's rules are exact for cubics (module doc of `preint::scheme::hermite4`), which two
 /// polynomial motions check against closed forms written out here, on a uniform 100 Hz grid
 /// through `preint::preintegrate` (window [0.1 s, 0.9 s] inside [0, 1 s], so every node has
 /// a centred stencil):
@@ -403,9 +403,9 @@ fn rk4_is_exact_for_cubic_rates_and_forces() {
         let ep = (ma.delta_p - p_exact).norm();
         eprintln!("{scheme:?}: rotation {er:.2e} rad, velocity {ev:.2e} m/s, position {ep:.2e} m");
         if scheme == Scheme::Hermite4 {
-            assert!(er < 1e-14, "rk4 rotation error {er}");
-            assert!(ev < 1e-13, "rk4 velocity error {ev}");
-            assert!(ep < 1e-9, "rk4 position error {ep}");
+            assert!(er < 1e-14, "hermite4 rotation error {er}");
+            assert!(ev < 1e-13, "hermite4 velocity error {ev}");
+            assert!(ep < 1e-9, "hermite4 position error {ep}");
         } else {
             assert!(
                 er > 1e-8 && ev > 1e-7,

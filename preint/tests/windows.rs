@@ -29,7 +29,7 @@ fn rel(a: &V3, b: &V3) -> f64 {
     (a - b).norm() / b.norm()
 }
 
-/// The stream with the boundary sample at `b` (as the windows build it) inserted; for rk4,
+/// The stream with the boundary sample at `b` (as the windows build it) inserted; for hermite4,
 /// stream samples closer to `b` than 1/8 of the interval around it removed (documented rule).
 /// A `b` on a sample leaves the stream as it is.
 fn with_boundary(scheme: Scheme, stream: &[ImuSample], b: i64) -> Vec<ImuSample> {
@@ -104,7 +104,7 @@ fn consecutive_windows_compose_to_the_whole() {
     }
 }
 
-/// rk4 with one-sided stencils at every window edge (samples pushed into preintegrators
+/// hermite4 with one-sided stencils at every window edge (samples pushed into preintegrators
 /// directly) composes only to the scheme's O(h⁴) error; the context samples of the window
 /// path remove that. Measured here so the module doc's figure is checked.
 #[test]
@@ -127,7 +127,9 @@ fn rk4_one_sided_edges_compose_only_to_the_integration_error() {
         rel(&v, &ac.delta_v),
         rel(&pp, &ac.delta_p),
     );
-    eprintln!("rk4 one-sided edges: composed vs whole: rot {er:.1e} rad, v {ev:.1e}, p {ep:.1e}");
+    eprintln!(
+        "hermite4 one-sided edges: composed vs whole: rot {er:.1e} rad, v {ev:.1e}, p {ep:.1e}"
+    );
     assert!(er.max(ev).max(ep) > 1e-12 && er.max(ev).max(ep) < 1e-8);
     let w = |t0: i64, t1: i64| preintegrate(&p, &ImuBias::zero(), &stream, t0, t1).unwrap();
     let (t0, t1, t2) = (stream[2].t_ns, stream[150].t_ns, stream[300].t_ns);
@@ -139,7 +141,7 @@ fn rk4_one_sided_edges_compose_only_to_the_integration_error() {
         .norm()
         .max(rel(&v, &ac.delta_v))
         .max(rel(&pp, &ac.delta_p));
-    eprintln!("rk4 window path (context samples): composed vs whole: {e:.1e}");
+    eprintln!("hermite4 window path (context samples): composed vs whole: {e:.1e}");
     assert!(e < 1e-13);
 }
 
@@ -156,7 +158,7 @@ fn window_boundaries_use_samples_at_keyframe_times_and_interpolate_otherwise() {
     assert_eq!(w.last().unwrap().t_ns, 47_500_000);
     assert_eq!(w[1..w.len() - 1], s[3..=9]);
     assert!((w[0].gyro - lerp(&s, 12_000_000).gyro).norm() < 1e-15);
-    // rk4: cubic boundary sample, 4th-order accurate on the smooth signal.
+    // hermite4: cubic boundary sample, 4th-order accurate on the smooth signal.
     let w = window_samples(Scheme::Hermite4, &s, 12_000_000, 47_500_000, i64::MAX).unwrap();
     let truth = scene.sample(12_000_000);
     assert!(
@@ -165,7 +167,7 @@ fn window_boundaries_use_samples_at_keyframe_times_and_interpolate_otherwise() {
         (w[0].gyro - truth.gyro).norm()
     );
     assert!((lerp(&s, 12_000_000).gyro - truth.gyro).norm() > 1e-5);
-    // rk4 drops a stream sample closer than 1/8 interval to the boundary.
+    // hermite4 drops a stream sample closer than 1/8 interval to the boundary.
     let w = window_samples(Scheme::Hermite4, &s, 14_500_000, 47_500_000, i64::MAX).unwrap();
     assert_eq!(w[1].t_ns, 20_000_000);
 }

@@ -1,7 +1,7 @@
 //! Convergence order and accuracy of the three schemes on noise-free analytic motion.
 //!
 //! Setup. Scenes `seed-ellipse` and `aggressive` (`sim`, analytic states). Window
-//! `[1 s, 2 s]` (starting at 1 s so the rk4 boundary stencils have stream neighbours); rates
+//! `[1 s, 2 s]` (starting at 1 s so the hermite4 boundary stencils have stream neighbours); rates
 //! 25·2^k Hz up to 3200 Hz. Samples are the ideal IMU readings computed here from the scene's
 //! analytic state (`ω_m = ω_b`, `a_m = R_wbᵀ(a − g)`, g = (0, 0, −9.81)) on a grid that extends
 //! 3 samples beyond each end of the window; `preint::preintegrate` cuts the window. Errors
@@ -10,15 +10,15 @@
 //! computed by the code under test.
 //!
 //! Asserted: the least-squares log-log slope of error vs step `h = 1/rate` over the asymptotic
-//! range is in [0.9, 1.1] for Euler, [1.85, 2.15] for midpoint and ≥ 3.7 for rk4, for each of
+//! range is in [0.9, 1.1] for Euler, [1.85, 2.15] for midpoint and ≥ 3.7 for hermite4, for each of
 //! the three errors and both scenes. The asymptotic range is the rates at which
 //! - the step resolves the motion: `rate ≥ 100 Hz` on `aggressive` (components up to 3.1 Hz,
 //!   body rates ≈ 4 rad/s: at 25–50 Hz a step turns the body by up to 0.16 rad and the leading
-//!   error term does not dominate yet; measured slopes there are 0.85 for Euler, 4.5 for rk4),
+//!   error term does not dominate yet; measured slopes there are 0.85 for Euler, 4.5 for hermite4),
 //!   every rate on `seed-ellipse` (≤ 0.5 Hz content, ≤ 0.35 rad/s);
 //! - the error is above the round-off floor: ≥ 1e-13 rad for the rotation (ΔR is of size 1 and
 //!   ≤ 3 200 steps of ≈ 1e-16 accumulate to ≈ 1e-15–1e-14), ≥ 1e-11 m/s and m for Δv, Δp
-//!   (sizes up to ≈ 10, so ≈ 10× higher floor, reached by rk4 at 1600–3200 Hz).
+//!   (sizes up to ≈ 10, so ≈ 10× higher floor, reached by hermite4 at 1600–3200 Hz).
 //!
 //! At least three rates must remain in every fit (asserted), so a slope is never a two-point
 //! artefact. The widths of the intervals (±0.1, ±0.15) absorb the sub-leading terms that
@@ -76,7 +76,7 @@ fn convergence_orders_and_accuracy_at_200_hz() {
     let schemes = [
         (Scheme::Euler, "euler", 0.9, 1.1),
         (Scheme::Midpoint, "midpoint", 1.85, 2.15),
-        (Scheme::Hermite4, "rk4", 3.7, f64::INFINITY),
+        (Scheme::Hermite4, "hermite4", 3.7, f64::INFINITY),
     ];
     let what = ["rot_rad", "vel_mps", "pos_m"];
     let mut at200 = serde_json::Map::new();

@@ -56,7 +56,7 @@ const PERIOD: i64 = 5_000_000;
 const SCHEMES: [(Scheme, &str); 3] = [
     (Scheme::Euler, "euler"),
     (Scheme::Midpoint, "midpoint"),
-    (Scheme::Hermite4, "rk4"),
+    (Scheme::Hermite4, "hermite4"),
 ];
 
 fn realisations() -> usize {
@@ -187,7 +187,7 @@ fn rows_of(scene_name: &'static str, window_s: i64, n_real: usize, seed: u64) ->
         let f = CombinedImuFactor::new(run_merged(&p15[s], &clean)).unwrap();
         let name = match s {
             1 => "midpoint, 10 merged 1 s windows",
-            _ => "rk4, 10 merged 1 s windows",
+            _ => "hermite4, 10 merged 1 s windows",
         };
         idx_merged.push((s, row(name, 15, f.chi2(&xi, &xj, &b, &b))));
     }

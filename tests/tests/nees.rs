@@ -97,7 +97,7 @@ fn mean_nees_is_chi2_consistent() {
         for (scheme, sname) in [
             (Scheme::Euler, "euler"),
             (Scheme::Midpoint, "midpoint"),
-            (Scheme::Hermite4, "rk4"),
+            (Scheme::Hermite4, "hermite4"),
         ] {
             let p9 = PreintParams::from_noise(&noise)
                 .with_scheme(scheme)

@@ -7,7 +7,7 @@
 //! t_i**, the state at `t_j` is predicted from the **ground-truth state at t_i**
 //! (`preint::predict`, gravity (0, 0, −9.81)) and compared with the ground truth at `t_j`.
 //!
-//! Asserted, for `midpoint` and `rk4` (Euler is printed only):
+//! Asserted, for `midpoint` and `hermite4` (Euler is printed only):
 //! - median rotation error `|Log(R_predᵀ R_gt)|` ≤ 0.12°, velocity `|v_pred − v_gt|` ≤ 0.05 m/s,
 //!   position `|p_pred − p_gt|` ≤ 0.03 m. The data's curators measured 0.10°, 0.045 m/s and
 //!   0.024 m with the midpoint rule on this pair (README): the ground truth, not the IMU model,

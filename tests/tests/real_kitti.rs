@@ -6,7 +6,7 @@
 //! z up, 100 Hz) become `ImuSample`s with exact integer-ns stamps parsed from the decimal text.
 //! The initial roll/pitch come from the mean specific force of the first second (levelling);
 //! then each GPS interval `[t_k, t_k+1]` is preintegrated (`preint::preintegrate`, midpoint and
-//! rk4, zero bias, `Level::Deltas`) and `R ← R·ΔR`. The GPS heading of an interval is
+//! hermite4, zero bias, `Level::Deltas`) and `R ← R·ΔR`. The GPS heading of an interval is
 //! `atan2(ΔY, ΔX)` of the local-level displacement, used only when the speed exceeds 2 m/s
 //! (below that, GPS noise dominates the direction). It is compared with the circular mean of
 //! the integrated yaw `atan2(R₁₀, R₀₀)` at both ends; the constant offset (unknown initial

@@ -16,7 +16,7 @@
 //!    1e-12 rad for every scheme because the rate is constant (the exact Exp of a constant ω is
 //!    what every scheme computes; this checks the large-angle Exp branch). For a pure spin at
 //!    rest `ΔR(t)·a(t) = R_iᵀ(−g)` is constant, so Euler and midpoint (which integrate the
-//!    rotated samples piecewise linearly) are exact to round-off. So is rk4 (all asserted
+//!    rotated samples piecewise linearly) are exact to round-off. So is hermite4 (all asserted
 //!    ≤ 1e-12): its `u = ΔR a` is exact at the nodes, and the error of the finite-difference
 //!    `ȧ` (samples 1 rad apart) is the same rotating vector at every node, so `ΔR_k ȧ_k` is off
 //!    by one constant in frame i, which cancels in the end corrections `h²/12 (u̇_k − u̇_k+1)`
@@ -43,8 +43,8 @@
 //!    is not enough there); `measurement_for_bias` (automatic: re-integrates above 0.01 rad/s)
 //!    stays below 0.5σ for every ‖δb_g‖ (0.1σ just below its 0.01 rad/s threshold, 0 above) and
 //!    reports `reintegrated` exactly when ‖δb_g‖ > 0.01. Because "re-integration vs
-//!    re-integration" is partly self-referential, rk4 is also checked against the scene's
-//!    exact deltas (`preint_sim::exact_deltas`; rk4's own discretisation error is ≈ 1e-3σ here):
+//!    re-integration" is partly self-referential, hermite4 is also checked against the scene's
+//!    exact deltas (`preint_sim::exact_deltas`; hermite4's own discretisation error is ≈ 1e-3σ here):
 //!    automatic < 0.5σ at every ‖δb_g‖, first-order > 1σ at 0.1 rad/s.
 //!    Record: `target/evidence/bias_jump.json`.
 //! 5. `factor_log_exp_near_zero_and_pi` — an `ImuFactor` whose keyframes are ≈ π apart
@@ -129,7 +129,7 @@ fn gimbal_lock_breaks_euler_angles_only() {
     let (ctrl_max, _) = max_dead_reckon_error(ag.as_ref(), &ag_samples, Attitude::EulerZyx);
     println!(
         "gimbal-lock 200 Hz 6 s, midpoint rule: Euler angles max {e_max:.3e} end {e_end:.3e} rad; \
-         quaternion {q_max:.3e}; matrix {m_max:.3e}; preint (midpoint/rk4, 0.5 s windows) \
+         quaternion {q_max:.3e}; matrix {m_max:.3e}; preint (midpoint/hermite4, 0.5 s windows) \
          {pre_max:.3e}; control (aggressive, Euler angles) {ctrl_max:.3e}"
     );
     let best = q_max.max(m_max);
@@ -335,7 +335,7 @@ fn bias_jump_first_order_vs_reintegration() {
                 "first_order_sigma": e1, "automatic_sigma": e_auto, "reintegrated": upd.reintegrated}));
             assert_eq!(upd.reintegrated, mag > threshold, "{scheme:?} at {mag}");
             if scheme == Scheme::Hermite4 {
-                // Independent reference: the scene's exact deltas (rk4's discretisation error
+                // Independent reference: the scene's exact deltas (hermite4's discretisation error
                 // at 200 Hz is ≈ 1e-3σ, see convergence.rs).
                 let exact = exact_deltas(ag.as_ref(), 1_000_000_000, 2_000_000_000, g());
                 let vs_scene = mahalanobis(&exact, mu, &cov);
@@ -350,12 +350,12 @@ fn bias_jump_first_order_vs_reintegration() {
                 );
                 assert!(
                     vs_scene < 0.5,
-                    "rk4 automatic vs exact deltas: {vs_scene}σ at {mag}"
+                    "hermite4 automatic vs exact deltas: {vs_scene}σ at {mag}"
                 );
                 if k == 12 {
                     assert!(
                         first_vs_scene > 1.0,
-                        "rk4 first-order vs exact: {first_vs_scene}σ"
+                        "hermite4 first-order vs exact: {first_vs_scene}σ"
                     );
                 }
             }

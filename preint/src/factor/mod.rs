@@ -350,4 +350,3 @@ impl<const R: usize> Weighted<R> {
         (self.sqrt_info * r).norm_squared()
     }
 }
-

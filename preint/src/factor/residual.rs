@@ -75,4 +75,3 @@ pub(super) fn residual9(
         .copy_from(&(-jb.d_p_d_ba));
     (r, jac)
 }
-
