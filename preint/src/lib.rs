@@ -35,3 +35,16 @@ pub use navstate::{NavState, predict};
 pub use params::{Level, PreintParams, Scheme};
 pub use preintegrator::{BiasUpdate, Preintegrator};
 pub use window::preintegrate;
+
+pub use factor::{CombinedImuFactorJacobians, FactorJacobians, ImuFactorJacobians};
+pub use navstate::NavTangent;
+/// The linear algebra of every public type (vectors, matrices).
+pub use nalgebra;
+/// SO(3) and SE(3): the `ΔR` of a measurement is a [`SO3`].
+pub use preint_lie as lie;
+pub use preint_lie::SO3;
+
+/// The README's code blocks, compiled and run as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../../README.md")]
+pub struct ReadmeDoctests;

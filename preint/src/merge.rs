@@ -134,6 +134,21 @@ fn mat_to_jac(m: &M96) -> BiasJacobians {
 /// The result's `edge_noise` holds a's start-side and b's end-side samples (with their gains
 /// on the merged error), so merged windows merge exactly again.
 ///
+/// ```
+/// use preint::nalgebra::Vector3;
+/// use preint::{ImuBias, ImuSample, PreintParams, merge, preintegrate};
+/// let s: Vec<ImuSample> = (0..401i64)
+///     .map(|k| ImuSample::new(k * 5_000_000, Vector3::new(0.1, 0.0, 0.3), Vector3::new(0.2, 0.0, 9.81)))
+///     .collect();
+/// let (p, b) = (PreintParams::default(), ImuBias::zero());
+/// let a = preintegrate(&p, &b, &s, 0, 1_000_000_000).unwrap();
+/// let c = preintegrate(&p, &b, &s, 1_000_000_000, 2_000_000_000).unwrap();
+/// let whole = preintegrate(&p, &b, &s, 0, 2_000_000_000).unwrap();
+/// let m = merge(&a, &c).unwrap();
+/// assert!((m.delta_p - whole.delta_p).norm() < 1e-12);
+/// assert!((m.cov - whole.cov).amax() < 1e-12 * whole.cov.amax());
+/// ```
+///
 /// Errors: [`MergeError::NotConsecutive`] if `a.t_j_ns != b.t_i_ns`,
 /// [`MergeError::BiasMismatch`] / [`MergeError::GravityMismatch`] if `bias_hat` / `gravity`
 /// differ (exact comparison), [`MergeError::LevelMismatch`] if `level` differs.

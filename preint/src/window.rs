@@ -404,6 +404,19 @@ pub fn window_samples(
 /// [`PreintError::DecreasingTimestamp`], [`PreintError::GapTooLarge`]; and
 /// [`PreintError::NonPositiveWindow`], [`PreintError::KeyframeOutsideSamples`],
 /// [`PreintError::InvalidParameter`].
+///
+/// ```
+/// use preint::nalgebra::Vector3;
+/// use preint::{ImuBias, ImuSample, PreintParams, Scheme, preintegrate};
+/// let s: Vec<ImuSample> = (0..201i64)
+///     .map(|k| ImuSample::new(k * 5_000_000, Vector3::new(0.0, 0.0, 0.2), Vector3::new(0.0, 0.0, 9.81)))
+///     .collect();
+/// let p = PreintParams::default().with_scheme(Scheme::Hermite4);
+/// // Keyframes between samples: the boundary samples are interpolated.
+/// let m = preintegrate(&p, &ImuBias::zero(), &s, 12_345_678, 512_345_678).unwrap();
+/// assert_eq!((m.t_i_ns, m.t_j_ns, m.delta_t), (12_345_678, 512_345_678, 0.5));
+/// assert!((m.delta_r.log().z - 0.1).abs() < 1e-12);
+/// ```
 pub fn preintegrate(
     params: &PreintParams,
     bias: &ImuBias,

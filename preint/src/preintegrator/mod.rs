@@ -291,6 +291,21 @@ impl Preintegrator {
     /// returned whatever the size of δb, with `reintegrated: false` (callers that need the
     /// accuracy of re-integration above the thresholds must keep the samples; the size of the
     /// first-order error is documented at [`crate::params::DEFAULT_REINTEGRATE_GYRO`]).
+    ///
+    /// ```
+    /// use preint::nalgebra::Vector3;
+    /// use preint::{ImuBias, ImuSample, PreintParams, Preintegrator};
+    /// let mut pi = Preintegrator::new(PreintParams::default(), ImuBias::zero()).unwrap();
+    /// for k in 0..201i64 {
+    ///     let t = k as f64 * 5e-3;
+    ///     let w = Vector3::new(t.sin(), 0.5, 0.2);
+    ///     pi.integrate(&ImuSample::new(k * 5_000_000, w, Vector3::new(0.3, 0.0, 9.81))).unwrap();
+    /// }
+    /// let small = ImuBias::new(Vector3::new(1e-3, 0.0, 0.0), Vector3::zeros());
+    /// assert!(!pi.measurement_for_bias(&small).unwrap().reintegrated); // first order
+    /// let large = ImuBias::new(Vector3::new(0.05, 0.0, 0.0), Vector3::zeros());
+    /// assert!(pi.measurement_for_bias(&large).unwrap().reintegrated); // from the samples
+    /// ```
     pub fn measurement_for_bias(&self, bias: &ImuBias) -> Result<BiasUpdate, PreintError> {
         let dbg = (bias.gyro - self.bias_hat.gyro).norm();
         let dba = (bias.acc - self.bias_hat.acc).norm();
