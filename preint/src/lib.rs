@@ -37,9 +37,9 @@ pub use preintegrator::{BiasUpdate, Preintegrator};
 pub use window::preintegrate;
 
 pub use factor::{CombinedImuFactorJacobians, FactorJacobians, ImuFactorJacobians};
-pub use navstate::NavTangent;
 /// The linear algebra of every public type (vectors, matrices).
 pub use nalgebra;
+pub use navstate::NavTangent;
 /// SO(3) and SE(3): the `ΔR` of a measurement is a [`SO3`].
 pub use preint_lie as lie;
 pub use preint_lie::SO3;

@@ -154,6 +154,37 @@ impl Gauss {
     }
 }
 
+/// `clean` with white noise of per-sample standard deviations `(σ_g, σ_a)` [rad/s, m/s²] and,
+/// with `walk = Some((σ_bg, σ_ba))` (per-step standard deviations), a bias random walk from
+/// zero, `b_k = b_{k−1} + w_k` for k ≥ 1, added to every sample; returns the samples and the
+/// walk's value at the last one (`[b_g, b_a]`). Draws, per sample: the walk step (gyro, then
+/// accelerometer; always drawn when `walk` is given), then the gyro noise, then the
+/// accelerometer noise.
+pub fn noisy_stream(
+    clean: &[preint::ImuSample],
+    rng: &mut Gauss,
+    (sg, sa): (f64, f64),
+    walk: Option<(f64, f64)>,
+) -> (Vec<preint::ImuSample>, preint::ImuBias) {
+    let (mut bg, mut ba) = (nalgebra::Vector3::zeros(), nalgebra::Vector3::zeros());
+    let samples = clean
+        .iter()
+        .enumerate()
+        .map(|(k, s)| {
+            if let Some((sbg, sba)) = walk {
+                let (wg, wa) = (rng.normal3(sbg), rng.normal3(sba));
+                if k > 0 {
+                    bg += wg;
+                    ba += wa;
+                }
+            }
+            let gyro = s.gyro + bg + rng.normal3(sg);
+            preint::ImuSample::new(s.t_ns, gyro, s.acc + ba + rng.normal3(sa))
+        })
+        .collect();
+    (samples, preint::ImuBias::new(bg, ba))
+}
+
 /// χ² quantiles used by the suite (tabulated values, e.g. scipy.stats.chi2.ppf).
 pub mod chi2 {
     /// χ²₉ 0.99 quantile.

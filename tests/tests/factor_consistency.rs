@@ -43,7 +43,7 @@
 //! Size: N = 2 000 realisations per row (≈ 25 s in the test profile on 2 cores);
 //! `PREINT_FULL=1` runs N = 20 000. Output: `target/evidence/factor_consistency.json`.
 
-use evidence::{Gauss, full_run, mean, write_json};
+use evidence::{Gauss, full_run, mean, noisy_stream, write_json};
 use nalgebra::Vector3;
 use preint::{
     CombinedImuFactor, ImuBias, ImuFactor, ImuNoise, ImuSample, Level, NavState, PreintParams,
@@ -194,33 +194,14 @@ fn rows_of(scene_name: &'static str, window_s: i64, n_real: usize, seed: u64) ->
 
     for r in 0..n_real {
         let mut rng = Gauss::new((seed << 40) | (r as u64));
-        let noisy: Vec<ImuSample> = clean
-            .iter()
-            .map(|s| ImuSample::new(s.t_ns, s.gyro + rng.normal3(sg), s.acc + rng.normal3(sa)))
-            .collect();
+        let (noisy, _) = noisy_stream(&clean, &mut rng, (sg, sa), None);
         for (s, &i) in idx9.iter().enumerate() {
             let f = ImuFactor::new(run(&p9[s], &noisy)).unwrap();
             rows[i].chi2.push(f.chi2(&xi, &xj, &b));
         }
         let mut rng = Gauss::new((seed << 40) | (1 << 39) | (r as u64));
-        let (mut bg, mut ba) = (Vector3::zeros(), Vector3::zeros());
-        let noisy: Vec<ImuSample> = clean
-            .iter()
-            .enumerate()
-            .map(|(k, s)| {
-                let (wg, wa) = (rng.normal3(sbg), rng.normal3(sba));
-                if k > 0 {
-                    bg += wg;
-                    ba += wa;
-                }
-                ImuSample::new(
-                    s.t_ns,
-                    s.gyro + bg + rng.normal3(sg),
-                    s.acc + ba + rng.normal3(sa),
-                )
-            })
-            .collect();
-        let bj = ImuBias::new(b.gyro + bg, b.acc + ba);
+        let (noisy, walk) = noisy_stream(&clean, &mut rng, (sg, sa), Some((sbg, sba)));
+        let bj = ImuBias::new(b.gyro + walk.gyro, b.acc + walk.acc);
         for (s, &i) in idx15.iter().enumerate() {
             let f = CombinedImuFactor::new(run(&p15[s], &noisy)).unwrap();
             rows[i].chi2.push(f.chi2(&xi, &xj, &b, &bj));

@@ -30,7 +30,7 @@
 //!
 //! Output: per scheme and scene mean NEES (9 and 15) in `target/evidence/nees.json`.
 
-use evidence::{Gauss, full_run, mean, write_json};
+use evidence::{Gauss, full_run, mean, noisy_stream, write_json};
 use nalgebra::{SMatrix, SVector, Vector3};
 use preint::{
     ImuBias, ImuNoise, ImuSample, Level, PreintParams, PreintegratedImu, Preintegrator, Scheme,
@@ -110,35 +110,15 @@ fn mean_nees_is_chi2_consistent() {
             for r in 0..n_real {
                 // White noise only.
                 let mut rng = Gauss::new(((si as u64) << 32) | r as u64);
-                let noisy: Vec<ImuSample> = clean
-                    .iter()
-                    .map(|s| {
-                        ImuSample::new(s.t_ns, s.gyro + rng.normal3(sg), s.acc + rng.normal3(sa))
-                    })
-                    .collect();
+                let (noisy, _) = noisy_stream(&clean, &mut rng, (sg, sa), None);
                 let m = run(&p9, &noisy);
                 let e = m.delta_error(&m0);
                 ephi.push(e.fixed_rows::<3>(0).norm());
                 n9.push(nees(&e, &m.cov));
                 // White noise plus bias random walk.
                 let mut rng = Gauss::new(((si as u64) << 32) | (1 << 31) | r as u64);
-                let (mut bg, mut ba) = (Vector3::zeros(), Vector3::zeros());
-                let noisy: Vec<ImuSample> = clean
-                    .iter()
-                    .enumerate()
-                    .map(|(k, s)| {
-                        let (wg, wa) = (rng.normal3(sbg), rng.normal3(sba));
-                        if k > 0 {
-                            bg += wg;
-                            ba += wa;
-                        }
-                        ImuSample::new(
-                            s.t_ns,
-                            s.gyro + bg + rng.normal3(sg),
-                            s.acc + ba + rng.normal3(sa),
-                        )
-                    })
-                    .collect();
+                let (noisy, walk) = noisy_stream(&clean, &mut rng, (sg, sa), Some((sbg, sba)));
+                let (bg, ba) = (walk.gyro, walk.acc);
                 let m = run(&p15, &noisy);
                 let mut e15 = SVector::<f64, 15>::zeros();
                 e15.fixed_rows_mut::<9>(0).copy_from(&m.delta_error(&m0_15));

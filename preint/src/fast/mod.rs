@@ -27,60 +27,61 @@ use crate::sample::{ImuBias, ImuSample};
 use crate::scheme::{Node, RENORM_EVERY, Stencil};
 use quat::Quat;
 
+/// What the slice path reads: the samples, the bias estimate, the timestamp of the last sample
+/// before them \[ns\] and the largest gap \[ns\].
+pub(crate) struct SliceInput<'a> {
+    pub samples: &'a [ImuSample],
+    pub bias: &'a ImuBias,
+    pub last_t_ns: i64,
+    pub gap_limit: u64,
+}
+
 /// A scheme's deltas alone, faster than its plain step.
 pub(crate) trait FastDeltas: Copy + Default + std::fmt::Debug {
     /// False for [`Plain`]: the scheme has no fast path.
     const ENABLED: bool;
-    /// Window samples after which [`FastDeltas::run_slice`] can take over (the steady state:
-    /// every interval but the last `SLICE_FROM − 1`… integrated, see the engine).
+    /// Window samples after which [`FastDeltas::run_slice`] can take over (the steady state of
+    /// the engine, with every interval but the last one or two integrated).
     const SLICE_FROM: usize;
     /// Starts a window at its first node.
     fn start(&mut self, first: &Node);
     /// One interval, from its stencil (the one-by-one path).
     fn step(&mut self, st: &Stencil);
     /// In the steady state (`last`: the two newest window nodes; every interval before them
-    /// integrated): integrates the leading samples of `samples` that pass the common-case
-    /// test, counting intervals in `done`, and returns how many it took.
-    fn run_slice(
-        &mut self,
-        last: &[Node; 2],
-        samples: &[ImuSample],
-        bias: &ImuBias,
-        last_t_ns: i64,
-        gap_limit: u64,
-        done: &mut usize,
-    ) -> usize;
+    /// integrated): integrates the leading samples of `input` that pass the common-case test,
+    /// counting intervals in `done`, and returns how many it took.
+    fn run_slice(&mut self, last: &[Node; 2], input: &SliceInput, done: &mut usize) -> usize;
+    /// The running deltas.
+    fn quat(&mut self) -> &mut QuatDeltas;
+
     /// Re-orthonormalises ΔR.
-    fn renormalize(&mut self);
+    fn renormalize(&mut self) {
+        self.quat().q.renormalize();
+    }
+
     /// `(ΔR, Δv [m/s], Δp [m])`.
-    fn deltas(&self) -> (M3, V3, V3);
+    fn deltas(&self) -> (M3, V3, V3) {
+        let mut copy = *self;
+        copy.quat().deltas()
+    }
 }
 
 /// No fast path: the scheme's plain step runs at every level. The built-in schemes all have
 /// one; a new scheme starts with this (the engine's tests run one).
 #[derive(Clone, Copy, Debug, Default)]
 #[cfg_attr(not(test), allow(dead_code))]
-pub(crate) struct Plain;
+pub(crate) struct Plain(QuatDeltas);
 
 impl FastDeltas for Plain {
     const ENABLED: bool = false;
     const SLICE_FROM: usize = usize::MAX;
     fn start(&mut self, _: &Node) {}
     fn step(&mut self, _: &Stencil) {}
-    fn run_slice(
-        &mut self,
-        _: &[Node; 2],
-        _: &[ImuSample],
-        _: &ImuBias,
-        _: i64,
-        _: u64,
-        _: &mut usize,
-    ) -> usize {
+    fn run_slice(&mut self, _: &[Node; 2], _: &SliceInput, _: &mut usize) -> usize {
         0
     }
-    fn renormalize(&mut self) {}
-    fn deltas(&self) -> (M3, V3, V3) {
-        (M3::identity(), V3::zeros(), V3::zeros())
+    fn quat(&mut self) -> &mut QuatDeltas {
+        &mut self.0
     }
 }
 
@@ -119,23 +120,21 @@ impl QuatDeltas {
     }
 }
 
-/// The loop of the slice paths: takes the leading samples of `samples` that pass the
+/// The loop of the slice paths: takes the leading samples of `input` that pass the
 /// common-case test, hands each one to `step` (which integrates the interval it completes),
 /// counts the interval and returns how many samples it took. (`step` builds the sample's node
 /// itself, where it needs it: built before the step, it stays live across it and costs
 /// registers.)
 #[inline(always)]
 pub(crate) fn slice_loop(
-    samples: &[ImuSample],
-    mut last_t_ns: i64,
-    gap_limit: u64,
+    input: &SliceInput,
     d: &mut QuatDeltas,
     done: &mut usize,
     mut step: impl FnMut(&mut QuatDeltas, &ImuSample),
 ) -> usize {
-    let mut used = 0;
-    for s in samples {
-        if !common_case(s, last_t_ns, gap_limit) {
+    let (mut last_t_ns, mut used) = (input.last_t_ns, 0);
+    for s in input.samples {
+        if !common_case(s, last_t_ns, input.gap_limit) {
             break;
         }
         last_t_ns = s.t_ns;

@@ -2,9 +2,8 @@
 //! [`crate::scheme::midpoint`]): the same rules with ΔR as a quaternion, one by one and
 //! straight from a slice (bit for bit the same).
 
-use super::{FastDeltas, QuatDeltas, slice_loop};
-use crate::propagation::blocks::{M3, V3};
-use crate::sample::{ImuBias, ImuSample};
+use super::{FastDeltas, QuatDeltas, SliceInput, slice_loop};
+use crate::propagation::blocks::V3;
 use crate::scheme::{Node, Stencil, span_s};
 
 /// Euler: `Δp += Δv h + ½ ΔR_k a_k h²`, `Δv += ΔR_k a_k h`, `ΔR ← ΔR_k Exp(ω_k h)`.
@@ -31,60 +30,33 @@ fn midpoint(d: &mut QuatDeltas, u_last: &mut V3, n0: &Node, n1: &Node, h: f64) {
     *u_last = u1;
 }
 
-/// The Euler scheme's deltas alone.
+/// The deltas alone of a scheme with the stencil `{k, k+1}`: Euler (`MID = false`) or midpoint
+/// (`MID = true`, which carries `ΔR_k a_k`).
 #[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct EulerDeltas {
-    d: QuatDeltas,
-}
-
-/// The midpoint scheme's deltas alone, with `ΔR_k a_k`.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct MidpointDeltas {
+pub(crate) struct TwoPointDeltas<const MID: bool> {
     d: QuatDeltas,
     u_last: V3,
 }
 
-impl FastDeltas for EulerDeltas {
-    const ENABLED: bool = true;
-    const SLICE_FROM: usize = 2;
+/// Euler's deltas alone.
+pub(crate) type EulerDeltas = TwoPointDeltas<false>;
+/// The midpoint scheme's deltas alone.
+pub(crate) type MidpointDeltas = TwoPointDeltas<true>;
 
-    fn start(&mut self, _: &Node) {}
-
+impl<const MID: bool> TwoPointDeltas<MID> {
+    /// The interval between nodes `n0` and `n1`.
     #[inline(always)]
-    fn step(&mut self, st: &Stencil) {
-        euler(&mut self.d, st.n0(), st.h());
-    }
-
-    #[inline(never)]
-    fn run_slice(
-        &mut self,
-        last: &[Node; 2],
-        samples: &[ImuSample],
-        bias: &ImuBias,
-        last_t_ns: i64,
-        gap_limit: u64,
-        done: &mut usize,
-    ) -> usize {
-        let [mut n0, mut n1] = *last;
-        let mut d = self.d;
-        let used = slice_loop(samples, last_t_ns, gap_limit, &mut d, done, |d, s| {
-            euler(d, &n0, span_s(n0.t_ns, n1.t_ns));
-            (n0, n1) = (n1, Node::corrected(s, bias));
-        });
-        self.d = d;
-        used
-    }
-
-    fn renormalize(&mut self) {
-        self.d.q.renormalize();
-    }
-
-    fn deltas(&self) -> (M3, V3, V3) {
-        self.d.deltas()
+    fn interval(d: &mut QuatDeltas, u_last: &mut V3, n0: &Node, n1: &Node) {
+        let h = span_s(n0.t_ns, n1.t_ns);
+        if MID {
+            midpoint(d, u_last, n0, n1, h);
+        } else {
+            euler(d, n0, h);
+        }
     }
 }
 
-impl FastDeltas for MidpointDeltas {
+impl<const MID: bool> FastDeltas for TwoPointDeltas<MID> {
     const ENABLED: bool = true;
     const SLICE_FROM: usize = 2;
 
@@ -95,34 +67,22 @@ impl FastDeltas for MidpointDeltas {
 
     #[inline(always)]
     fn step(&mut self, st: &Stencil) {
-        midpoint(&mut self.d, &mut self.u_last, st.n0(), st.n1(), st.h());
+        Self::interval(&mut self.d, &mut self.u_last, st.n0(), st.n1());
     }
 
     #[inline(never)]
-    fn run_slice(
-        &mut self,
-        last: &[Node; 2],
-        samples: &[ImuSample],
-        bias: &ImuBias,
-        last_t_ns: i64,
-        gap_limit: u64,
-        done: &mut usize,
-    ) -> usize {
+    fn run_slice(&mut self, last: &[Node; 2], input: &SliceInput, done: &mut usize) -> usize {
         let [mut n0, mut n1] = *last;
         let (mut d, mut u_last) = (self.d, self.u_last);
-        let used = slice_loop(samples, last_t_ns, gap_limit, &mut d, done, |d, s| {
-            midpoint(d, &mut u_last, &n0, &n1, span_s(n0.t_ns, n1.t_ns));
-            (n0, n1) = (n1, Node::corrected(s, bias));
+        let used = slice_loop(input, &mut d, done, |d, s| {
+            Self::interval(d, &mut u_last, &n0, &n1);
+            (n0, n1) = (n1, Node::corrected(s, input.bias));
         });
         (self.d, self.u_last) = (d, u_last);
         used
     }
 
-    fn renormalize(&mut self) {
-        self.d.q.renormalize();
-    }
-
-    fn deltas(&self) -> (M3, V3, V3) {
-        self.d.deltas()
+    fn quat(&mut self) -> &mut QuatDeltas {
+        &mut self.d
     }
 }

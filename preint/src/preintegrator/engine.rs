@@ -10,7 +10,7 @@
 
 use super::edges::{EdgeGains, EdgeLayout, WindowSpec, resolve};
 use super::output::Chart;
-use crate::fast::FastDeltas;
+use crate::fast::{FastDeltas, SliceInput};
 use crate::measurement::{EdgeNoise, PreintegratedImu};
 use crate::noise::{walk_scale, white_scale};
 use crate::params::{CovShape, Level};
@@ -87,6 +87,29 @@ struct Retirer<'a, N> {
     ctx_before: usize,
     n: usize,
     at_end: bool,
+}
+
+impl<'a, N> Retirer<'a, N> {
+    /// For a window with `(ctx_before, n, at_end)`: context samples before it, samples, and
+    /// whether it is complete.
+    #[inline(always)]
+    fn new(
+        ring: &'a [Node; RING],
+        ctx_after: Option<&'a Node>,
+        edges: &'a mut EdgeGains,
+        noise: &'a N,
+        (ctx_before, n, at_end): (usize, usize, bool),
+    ) -> Self {
+        Self {
+            ring,
+            ctx_after,
+            edges,
+            noise,
+            ctx_before,
+            n,
+            at_end,
+        }
+    }
 }
 
 impl<N: NoiseCov> Retirer<'_, N> {
@@ -272,16 +295,11 @@ impl<S: IntervalScheme> Core<S> {
             n,
             ..
         } = self;
-        let r = Retirer {
-            ring,
-            ctx_after: ctx_after.as_ref(),
-            edges,
-            noise,
-            ctx_before: *ctx_before,
-            n: *n,
-            at_end,
-        };
-        (e, r)
+        let window = (*ctx_before, *n, at_end);
+        (
+            e,
+            Retirer::new(ring, ctx_after.as_ref(), edges, noise, window),
+        )
     }
 
     /// Interval `k` (out of line: it keeps the per-interval code small enough for the
@@ -312,15 +330,13 @@ impl<S: IntervalScheme> Core<S> {
             fast.step(&st);
             return;
         }
-        let mut r = Retirer {
+        let mut r = Retirer::new(
             ring,
-            ctx_after: ctx_after.as_ref(),
+            ctx_after.as_ref(),
             edges,
             noise,
-            ctx_before: *ctx_before,
-            n: *n,
-            at_end,
-        };
+            (*ctx_before, *n, at_end),
+        );
         if LINEARISE && S::NODES_BEFORE + S::NODES_AFTER > 0 {
             e.retire_below(first_id, |p, id, g| r.retire::<S>(p, id, g));
         }
@@ -361,9 +377,13 @@ impl<S: IntervalScheme> Core<S> {
         }
         let last = [*self.node(n - 2), *self.node(n - 1)];
         let bias = self.fixed.bias_hat;
-        let used = self
-            .fast
-            .run_slice(&last, samples, &bias, last_t_ns, gap_limit, &mut self.done);
+        let input = SliceInput {
+            samples,
+            bias: &bias,
+            last_t_ns,
+            gap_limit,
+        };
+        let used = self.fast.run_slice(&last, &input, &mut self.done);
         // The ring as pushing the samples one by one would have left it.
         self.n += used;
         let keep = used.min(RING);

@@ -23,10 +23,9 @@ mod interval;
 use super::lanes::F2;
 #[cfg(target_arch = "x86_64")]
 use super::lanes::quad::F4;
-use super::{FastDeltas, QuatDeltas};
+use super::{FastDeltas, QuatDeltas, SliceInput, slice_loop};
 use crate::preintegrator::validation::common_case;
-use crate::propagation::blocks::{M3, V3};
-use crate::sample::{ImuBias, ImuSample};
+use crate::propagation::blocks::V3;
 use crate::scheme::hermite4::{Hermite4, Rule, Weights};
 use crate::scheme::{Node, RENORM_EVERY, Stencil};
 use carry::{Carry, LaneWeights, SteadyWeights};
@@ -78,10 +77,6 @@ pub(crate) struct HermiteDeltas {
     quads: LaneWeights<F4>,
 }
 
-/// The slice path's arguments: the samples, the bias estimate, the last timestamp before
-/// them \[ns\] and the largest gap \[ns\].
-type SliceArgs<'a> = (&'a [ImuSample], &'a ImuBias, i64, u64);
-
 impl FastDeltas for HermiteDeltas {
     const ENABLED: bool = true;
     const SLICE_FROM: usize = 3;
@@ -109,48 +104,35 @@ impl FastDeltas for HermiteDeltas {
     /// next interval needs of nodes k and k+1 is carried ([`Carry`]). A slice shorter than a
     /// block is taken one interval at a time.
     #[inline(never)]
-    fn run_slice(
-        &mut self,
-        last: &[Node; 2],
-        samples: &[ImuSample],
-        bias: &ImuBias,
-        last_t_ns: i64,
-        gap_limit: u64,
-        done: &mut usize,
-    ) -> usize {
+    fn run_slice(&mut self, last: &[Node; 2], input: &SliceInput, done: &mut usize) -> usize {
         let mut d = self.d;
         let mut carry = Carry::new(&last[0], &last[1], self.dw_last, self.s_last);
-        let used = if samples.len() < BLOCK {
+        let used = if input.samples.len() < BLOCK {
             let w = &mut self.steady;
-            super::slice_loop(samples, last_t_ns, gap_limit, &mut d, done, |d, s| {
-                let r = carry.prepare_one(s, bias, w);
+            slice_loop(input, &mut d, done, |d, s| {
+                let r = carry.prepare_one(s, input.bias, w);
                 let mut st = State::load(d);
                 st.step(&r);
                 st.store(d);
             })
         } else {
-            let args = (samples, bias, last_t_ns, gap_limit);
             #[cfg(target_arch = "x86_64")]
             if super::lanes::avx2() {
                 // SAFETY: this processor has AVX2.
-                unsafe { self.blocks_avx2(&mut carry, &mut d, done, args) }
+                unsafe { self.blocks_avx2(&mut carry, &mut d, done, input) }
             } else {
-                self.blocks::<false>(&mut carry, &mut d, done, args)
+                self.blocks::<false>(&mut carry, &mut d, done, input)
             }
             #[cfg(not(target_arch = "x86_64"))]
-            self.blocks::<false>(&mut carry, &mut d, done, args)
+            self.blocks::<false>(&mut carry, &mut d, done, input)
         };
         (self.dw_last, self.s_last) = carry.finish();
         self.d = d;
         used
     }
 
-    fn renormalize(&mut self) {
-        self.d.q.renormalize();
-    }
-
-    fn deltas(&self) -> (M3, V3, V3) {
-        self.d.deltas()
+    fn quat(&mut self) -> &mut QuatDeltas {
+        &mut self.d
     }
 }
 
@@ -164,10 +146,11 @@ impl HermiteDeltas {
         carry: &mut Carry,
         d: &mut QuatDeltas,
         done: &mut usize,
-        (samples, bias, last_t_ns, gap_limit): SliceArgs,
+        input: &SliceInput,
     ) -> usize {
+        let (samples, bias, gap_limit) = (input.samples, input.bias, input.gap_limit);
         let mut buf = [Record::default(); BLOCK];
-        let (mut used, mut last) = (0, last_t_ns);
+        let (mut used, mut last) = (0, input.last_t_ns);
         loop {
             let rest = &samples[used..];
             let mut m = 0;
@@ -219,9 +202,9 @@ impl HermiteDeltas {
         carry: &mut Carry,
         d: &mut QuatDeltas,
         done: &mut usize,
-        args: SliceArgs,
+        input: &SliceInput,
     ) -> usize {
-        self.blocks::<true>(carry, d, done, args)
+        self.blocks::<true>(carry, d, done, input)
     }
 }
 
