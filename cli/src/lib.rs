@@ -38,6 +38,7 @@ pub mod html;
 pub mod input;
 pub mod noise;
 pub mod parse;
+pub mod preint_args;
 pub mod progress;
 pub mod scheme;
 

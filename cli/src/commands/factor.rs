@@ -19,13 +19,12 @@
 
 use crate::analysis::consistency::{Evaluation, TruthNoise, chi2_quantiles, evaluate};
 use crate::format::list;
-use crate::scheme::{self, SchemeParser};
-use crate::{CliError, Output, checks, input, noise};
-use nalgebra::Vector3;
+use crate::preint_args::PreintArgs;
+use crate::scheme::{self};
+use crate::{CliError, Output, checks, input};
 use preint::io::{GroundTruthState, read_euroc_groundtruth};
 use preint::{
-    CombinedImuFactor, ImuBias, ImuFactor, Level, NavState, PreintParams, PreintegratedImu,
-    preintegrate,
+    CombinedImuFactor, ImuBias, ImuFactor, Level, NavState, PreintegratedImu, preintegrate,
 };
 use serde_json::{Value, json};
 use std::fmt::Write as _;
@@ -47,16 +46,9 @@ pub struct Args {
     /// Keyframe j: the ground-truth row nearest to this time (ns).
     #[arg(long, allow_hyphen_values = true)]
     pub to: i64,
-    /// Integration scheme: euler, midpoint or hermite4 (printed as hermite4; rk4 and
-    /// high-order are accepted for it).
-    #[arg(long, value_parser = SchemeParser, default_value = "midpoint")]
-    pub scheme: scheme::Scheme,
-    /// Kalibr imu.yaml with the noise densities (default: EuRoC figures).
-    #[arg(long)]
-    pub noise: Option<PathBuf>,
-    /// Gravity magnitude G (m/s^2); gravity is (0, 0, -G).
-    #[arg(long, default_value_t = 9.81)]
-    pub gravity: f64,
+    /// Scheme, noise densities and gravity.
+    #[command(flatten)]
+    pub preint: PreintArgs,
     /// Evaluate CombinedImuFactor (15-dim residual with the bias change b_j - b_i, weighted
     /// by the covariance with the bias random walk) instead of ImuFactor (9-dim).
     #[arg(long)]
@@ -120,8 +112,12 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
     checks::non_negative("--pose-rot-std", tn.rot_rad)?;
     checks::non_negative("--pose-pos-std", tn.pos_m)?;
     checks::non_negative("--vel-std", tn.vel_m_s)?;
-    checks::non_negative("--gravity", args.gravity)?;
-    let noise = noise::or_default(args.noise.as_deref())?;
+    let level = if args.combined {
+        Level::Combined
+    } else {
+        Level::Covariance
+    };
+    let (_, params) = args.preint.params(level)?;
     let samples = input::read_imu(&args.imu, !args.no_unit_check)?;
     let gt = read_euroc_groundtruth(&args.poses)?;
     let (gi, gj) = (
@@ -139,16 +135,7 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
             gj.t_ns
         )));
     }
-    let level = if args.combined {
-        Level::Combined
-    } else {
-        Level::Covariance
-    };
-    let scheme = args.scheme.into();
-    let params = PreintParams::from_noise(&noise)
-        .with_scheme(scheme)
-        .with_level(level)
-        .with_gravity(Vector3::new(0.0, 0.0, -args.gravity));
+    let scheme = params.scheme;
     let pim = preintegrate(&params, &gi.bias, &samples, gi.t_ns, gj.t_ns)
         .map_err(|e| CliError::failed_in(&args.imu, e))?;
     let failed = |e: preint::FactorError| CliError::failed_in(&args.imu, e);

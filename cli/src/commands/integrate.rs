@@ -2,10 +2,11 @@
 //! covariances and the bias Jacobians.
 
 use crate::format::{list, rows, text_matrix};
-use crate::scheme::{self, SchemeParser};
-use crate::{CliError, Output, checks, input, noise};
+use crate::preint_args::PreintArgs;
+use crate::scheme::{self};
+use crate::{CliError, Output, input, noise};
 use nalgebra::Vector3;
-use preint::{ImuBias, ImuNoise, Level, PreintParams, PreintegratedImu, preintegrate};
+use preint::{ImuBias, ImuNoise, Level, PreintegratedImu, preintegrate};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -16,16 +17,9 @@ pub struct Args {
     /// IMU CSV file (EuRoC imu0 format).
     #[arg(long)]
     pub imu: PathBuf,
-    /// Integration scheme: euler, midpoint or hermite4 (printed as hermite4; rk4 and
-    /// high-order are accepted for it).
-    #[arg(long, value_parser = SchemeParser, default_value = "midpoint")]
-    pub scheme: scheme::Scheme,
-    /// Kalibr imu.yaml with the noise densities (default: EuRoC figures).
-    #[arg(long)]
-    pub noise: Option<PathBuf>,
-    /// Gravity magnitude G (m/s^2); gravity is (0, 0, -G).
-    #[arg(long, default_value_t = 9.81)]
-    pub gravity: f64,
+    /// Scheme, noise densities and gravity.
+    #[command(flatten)]
+    pub preint: PreintArgs,
     /// Gyro bias estimate b_g (rad/s) as x,y,z (negative values allowed: --bias-gyro=-0.01,0,0).
     #[arg(long, allow_hyphen_values = true, value_parser = crate::parse::vec3)]
     pub bias_gyro: Option<Vector3<f64>>,
@@ -64,8 +58,7 @@ pub struct Integration {
 
 /// Reads the file and preintegrates `[--from, --to]` at [`Level::Combined`].
 pub fn compute(args: &Args) -> Result<Integration, CliError> {
-    checks::non_negative("--gravity", args.gravity)?;
-    let noise = noise::or_default(args.noise.as_deref())?;
+    let (noise, params) = args.preint.params(Level::Combined)?;
     let samples = input::read_imu(&args.imu, !args.no_unit_check)?;
     let t_i = args.from.unwrap_or(samples[0].t_ns);
     let t_j = args.to.unwrap_or(samples[samples.len() - 1].t_ns);
@@ -73,11 +66,7 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
         args.bias_gyro.unwrap_or_default(),
         args.bias_acc.unwrap_or_default(),
     );
-    let scheme = args.scheme.into();
-    let params = PreintParams::from_noise(&noise)
-        .with_scheme(scheme)
-        .with_level(Level::Combined)
-        .with_gravity(Vector3::new(0.0, 0.0, -args.gravity));
+    let scheme = params.scheme;
     let pim = preintegrate(&params, &bias, &samples, t_i, t_j)
         .map_err(|e| CliError::failed_in(&args.imu, e))?;
     Ok(Integration {
@@ -85,7 +74,7 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
         scheme,
         samples: input::count_in(&samples, t_i, t_j),
         noise,
-        noise_source: noise::source(args.noise.as_deref()),
+        noise_source: args.preint.noise_source(),
         bias,
         pim,
     })

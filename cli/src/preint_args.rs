@@ -1,0 +1,41 @@
+//! The flags every preintegrating subcommand shares: scheme, noise densities, gravity.
+
+use crate::scheme::{Scheme, SchemeParser};
+use crate::{CliError, checks, noise};
+use nalgebra::Vector3;
+use preint::{ImuNoise, Level, PreintParams};
+use std::path::PathBuf;
+
+/// Scheme, noise file and gravity of a preintegration.
+#[derive(clap::Args, Clone, Debug)]
+pub struct PreintArgs {
+    /// Integration scheme: euler, midpoint or hermite4 (printed as hermite4; rk4 and
+    /// high-order are accepted for it).
+    #[arg(long, value_parser = SchemeParser, default_value = "midpoint")]
+    pub scheme: Scheme,
+    /// Kalibr imu.yaml with the noise densities (default: EuRoC figures).
+    #[arg(long)]
+    pub noise: Option<PathBuf>,
+    /// Gravity magnitude G (m/s^2); gravity is (0, 0, -G).
+    #[arg(long, default_value_t = 9.81)]
+    pub gravity: f64,
+}
+
+impl PreintArgs {
+    /// The noise densities (from the file, or the EuRoC figures) and the preintegration
+    /// parameters at `level`, after checking `--gravity`.
+    pub fn params(&self, level: Level) -> Result<(ImuNoise, PreintParams), CliError> {
+        checks::non_negative("--gravity", self.gravity)?;
+        let noise = noise::or_default(self.noise.as_deref())?;
+        let params = PreintParams::from_noise(&noise)
+            .with_scheme(self.scheme.into())
+            .with_level(level)
+            .with_gravity(Vector3::new(0.0, 0.0, -self.gravity));
+        Ok((noise, params))
+    }
+
+    /// Where the noise densities came from (the file, or the defaults).
+    pub fn noise_source(&self) -> String {
+        noise::source(self.noise.as_deref())
+    }
+}
