@@ -3,8 +3,9 @@
 # and level, counted by valgrind's callgrind on 10⁵ samples of the synthetic 200 Hz stream
 # (preint/benches/instructions.rs). Counts do not depend on the machine's load.
 #
-#   tools/instructions.sh            # all nine figures
-#   tools/instructions.sh midpoint   # one scheme
+#   tools/instructions.sh                 # all nine figures
+#   tools/instructions.sh midpoint        # one scheme
+#   PUSH=1 tools/instructions.sh          # one sample at a time through `integrate`
 set -euo pipefail
 cd "$(dirname "$0")/.."
 command -v valgrind >/dev/null || { echo "needs valgrind (apt-get install valgrind)" >&2; exit 2; }
@@ -12,14 +13,20 @@ cargo bench -p preint --bench instructions --no-run 2>/dev/null
 bin=$(ls -t target/release/deps/instructions-* | grep -v '\.d$' | head -n 1)
 n=100000
 schemes=${1:-euler midpoint hermite4}
+mode=slice
+toggle='*Preintegrator*integrate_slice*'
+if [ "${PUSH:-0}" = 1 ]; then
+  mode=push
+  toggle='*push_all*'
+fi
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-printf '%-9s %10s %12s %10s\n' scheme deltas covariance combined
+printf '%-9s %10s %12s %10s   (%s)\n' scheme deltas covariance combined "$mode"
 for s in $schemes; do
   row=()
   for level in deltas covariance combined; do
     valgrind --tool=callgrind --callgrind-out-file="$tmp/out" \
-      --toggle-collect='*Preintegrator*integrate_slice*' "$bin" "$s" "$level" "$n" \
+      --toggle-collect="$toggle" "$bin" "$s" "$level" "$n" "$mode" \
       >/dev/null 2>"$tmp/log"
     ir=$(grep -E '^summary:|^totals:' "$tmp/out" | tail -n 1 | awk '{print $2}')
     row+=("$((ir / n))")

@@ -2,10 +2,11 @@
 //! callgrind: `integrate_slice` over the stream of `preint speed` and the criterion bench
 //! (`preint::sample::synthetic_stream`, 200 Hz, EuRoC densities, `keep_samples` off).
 //!
-//! `cargo bench -p preint --bench instructions -- SCHEME LEVEL N` runs it once (SCHEME:
-//! euler | midpoint | hermite4, LEVEL: deltas | covariance | combined); it prints nothing but a
-//! checksum, so that the work is not optimised away. Without arguments (as `cargo bench` runs
-//! every bench) it does nothing.
+//! `cargo bench -p preint --bench instructions -- SCHEME LEVEL N [push]` runs it once (SCHEME:
+//! euler | midpoint | hermite4, LEVEL: deltas | covariance | combined; `push`: one sample at a
+//! time through `integrate` instead of one slice); it prints nothing but a checksum, so that
+//! the work is not optimised away. Without arguments (as `cargo bench` runs every bench) it
+//! does nothing.
 
 use preint::sample::synthetic_stream;
 use preint::{ImuBias, ImuNoise, Level, PreintParams, Preintegrator, Scheme};
@@ -38,7 +39,20 @@ fn main() {
         .with_level(level);
     prm.keep_samples = false;
     let mut pi = Preintegrator::new(prm, ImuBias::zero()).unwrap();
-    pi.integrate_slice(black_box(&s)).unwrap();
+    if args.get(3).is_some_and(|a| a == "push") {
+        push_all(&mut pi, &s);
+    } else {
+        pi.integrate_slice(black_box(&s)).unwrap();
+    }
     let m = black_box(pi.finish().unwrap());
     println!("{}", m.delta_p.x + m.cov[(8, 8)]);
+}
+
+/// Every sample through `integrate`, one at a time (what `tools/instructions.sh` counts with
+/// `PUSH=1`).
+#[inline(never)]
+fn push_all(pi: &mut Preintegrator, s: &[preint::ImuSample]) {
+    for x in s {
+        pi.integrate(black_box(x)).unwrap();
+    }
 }
