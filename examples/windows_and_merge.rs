@@ -2,7 +2,7 @@
 //! the 10 s window to round-off (deltas, covariance and bias Jacobians), because the windows
 //! share their boundary samples and record the gains of their edge samples.
 //!
-//! `cargo run --release -p preint --example windows_and_merge`
+//! `cargo run --release --example windows_and_merge`
 
 use preint::{ImuBias, PreintParams, Scheme, merge, preintegrate};
 use preint_sim::{SimConfig, scene_by_name, simulate};

@@ -2,7 +2,7 @@
 //! it: white-noise density at τ = 1 s on a slope −½ run, random walk at τ = 3 s on a slope +½
 //! run (IEEE Std 952).
 //!
-//! `cargo run --release -p preint-calib --example allan`
+//! `cargo run --release --example allan`
 
 use preint::ImuNoise;
 use preint_calib::allan::ImuAllan;

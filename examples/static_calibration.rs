@@ -1,7 +1,7 @@
 //! Gyro bias and roll/pitch from a static recording (one attitude): the accelerometer bias
 //! cannot be told apart from a tilt there, so it is reported as unobservable.
 //!
-//! `cargo run --release -p preint-calib --example static_calibration`
+//! `cargo run --release --example static_calibration`
 
 use nalgebra::Vector3;
 use preint::{ImuBias, ImuNoise};

@@ -1,7 +1,7 @@
 //! Preintegrate a window of a simulated recording and evaluate the IMU factor at the true
 //! states: the residual, its whitened form and χ².
 //!
-//! `cargo run --release -p preint --example preintegrate_and_factor`
+//! `cargo run --release --example preintegrate_and_factor`
 
 use preint::{ImuBias, ImuFactor, NavState, PreintParams, Scheme, preintegrate};
 use preint_sim::{SimConfig, scene_by_name, simulate, t_s};

@@ -1,7 +1,7 @@
 //! A new bias estimate after preintegration: the first-order correction (Forster et al. 2017,
 //! eq. 44) for small changes, re-integration of the stored samples above the thresholds.
 //!
-//! `cargo run --release -p preint --example bias_update`
+//! `cargo run --release --example bias_update`
 
 use nalgebra::Vector3;
 use preint::{ImuBias, PreintParams, Preintegrator, Scheme};
