@@ -20,7 +20,7 @@
 //! exactly (integer ns). For hermite4 this needs two more rules, both functions of the stream and
 //! `t` only, so that both windows apply them identically:
 //! - *Context samples.* The stencils of a window's edge intervals extend past the window to
-//!   the nearest stream sample on the other side (see [`crate::scheme::hermite`]): the last
+//!   the nearest stream sample on the other side (see [`crate::scheme::hermite4`]): the last
 //!   interval of `[a, b]` uses `{…, t_m−1, b, t_m}` and the first interval of `[b, c]` uses
 //!   `{t_m−1, b, t_m, …}`, exactly the stencils of the whole stream with `b` inserted. Only at
 //!   the stream ends are the stencils one-sided.

@@ -9,7 +9,7 @@ use crate::sample::ImuBias;
 use nalgebra::{Matrix3, SMatrix, SVector};
 
 /// The combined IMU factor between `(NavState_i, NavState_j, b_i, b_j)`: residual
-/// `[r_φ, r_v, r_p, b_g,j − b_g,i, b_a,j − b_a,i]` (15-dim; the first nine as in [`ImuFactor`],
+/// `[r_φ, r_v, r_p, b_g,j − b_g,i, b_a,j − b_a,i]` (15-dim; the first nine as in [`ImuFactor`](super::ImuFactor),
 /// evaluated with `b_i`), weighted by the covariance of that residual,
 /// [`PreintegratedImu::residual_cov15`]: the bias random walk over the window and its
 /// correlation with the deltas, with the sign of the residual (the deltas' rows are
@@ -17,7 +17,7 @@ use nalgebra::{Matrix3, SMatrix, SVector};
 /// covariance, measured ⊖ true, and has the opposite delta–bias blocks). GTSAM
 /// `CombinedImuFactor` semantics, as weighted by GTSAM 4.3's `residualCovariance()`.
 ///
-/// Jacobians: the first nine rows as in [`ImuFactor`]; the bias rows are `−I` w.r.t. `δb_i`
+/// Jacobians: the first nine rows as in [`ImuFactor`](super::ImuFactor); the bias rows are `−I` w.r.t. `δb_i`
 /// and `+I` w.r.t. `δb_j` (additive bias perturbations, order [b_g, b_a]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct CombinedImuFactor(Weighted<15>);

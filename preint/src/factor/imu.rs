@@ -13,7 +13,7 @@ use nalgebra::{SMatrix, SVector};
 /// [`PreintegratedImu`] and weights the residual with its 9×9 covariance `cov` (the residual
 /// is `−[δφ, δv, δp]` to first order, whose covariance is `cov`). The bias is held constant
 /// over the window: on data whose bias drifts noticeably within a window, use
-/// [`CombinedImuFactor`], whose covariance includes the random walk.
+/// [`CombinedImuFactor`](super::CombinedImuFactor), whose covariance includes the random walk.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImuFactor(Weighted<9>);
 

@@ -1,4 +1,4 @@
-//! IMU factors: the Forster residual between two [`NavState`]s with analytic Jacobians, its
+//! IMU factors: the Forster residual between two [`NavState`](crate::NavState)s with analytic Jacobians, its
 //! whitened form, and the combined (15-dim) variant with the bias random walk.
 //!
 //! # Residual (Forster et al. 2017, T-RO, eq. 45)
@@ -17,7 +17,7 @@
 //!
 //! # Perturbations (one per Jacobian block)
 //!
-//! Each block `∂r/∂δx` is the derivative at `δx = 0` of `r(x ⊕ δx)`, with ([`NavState`]):
+//! Each block `∂r/∂δx` is the derivative at `δx = 0` of `r(x ⊕ δx)`, with ([`NavState`](crate::NavState)):
 //!
 //! | block | perturbation |
 //! |---|---|
@@ -54,7 +54,7 @@
 //! # Relation to GTSAM (`ImuFactor`, `ImuFactorErrorMode::ComponentWise`)
 //!
 //! GTSAM's error is `e = [Log(R_jᵀ R̂_j), R_jᵀ(p̂_j − p_j), R_jᵀ(v̂_j − v_j)]` in the order
-//! [rot, pos, vel] with `(R̂_j, p̂_j, v̂_j)` = [`predict`]. Hence, with `M = R_jᵀ R_i`,
+//! [rot, pos, vel] with `(R̂_j, p̂_j, v̂_j)` = [`predict`](crate::predict). Hence, with `M = R_jᵀ R_i`,
 //! `e_rot = −r_φ`, `e_pos = −M r_p`, `e_vel = −M r_v`, i.e.
 //! `r = −diag(I, Mᵀ, Mᵀ) e` after reordering. Jacobians map as
 //! `∂e/∂x = −diag(I, M, M)·∂r/∂x` except for the rotations, which also move `M`:
@@ -237,12 +237,12 @@ impl<const R: usize> FactorJacobians<R> {
         m
     }
 
-    /// `∂r/∂δx_i` for the [`NavState`] tangent at i, columns **[δφ_i, δp_i, δv_i]**.
+    /// `∂r/∂δx_i` for the [`NavState`](crate::NavState) tangent at i, columns **[δφ_i, δp_i, δv_i]**.
     pub fn state_i(&self) -> SMatrix<f64, R, 9> {
         Self::cat3(&self.phi_i, &self.p_i, &self.v_i)
     }
 
-    /// `∂r/∂δx_j` for the [`NavState`] tangent at j, columns **[δφ_j, δp_j, δv_j]**.
+    /// `∂r/∂δx_j` for the [`NavState`](crate::NavState) tangent at j, columns **[δφ_j, δp_j, δv_j]**.
     pub fn state_j(&self) -> SMatrix<f64, R, 9> {
         Self::cat3(&self.phi_j, &self.p_j, &self.v_j)
     }

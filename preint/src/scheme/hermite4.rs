@@ -38,7 +38,7 @@
 //! `δu̇_m = ΔR_m (−[a_m]× δω_m + [ω_m]× δa_m + Σ_j d^m_j δa_j) − [u̇_m]×ψ_m`, and
 //! `δp_k+1 = δp_k + h/2 (δv_k + δv_k+1) + h²/12 (δu_k − δu_k+1)`. The ψ_k terms give the
 //! transition with `U1 = Δv_k+1 − Δv_k`, `U2 = Δp_k+1 − Δp_k − Δv_k h`; the stencil samples'
-//! gains are the gain basis of [`super::linearisation`] with node terms:
+//! gains are the gain basis of the `scheme::linearisation` module with node terms:
 //! `F_k = −h²/12 F[ω_k+1]×`, `E_k = [u_k]×ΔR_k·(−h²/12, −h³/24)`, `W_k = ΔR_k[ω_k]×·(h²/12,
 //! h³/24)`, and `F_k+1 = h²/12 F[ω_k]×`, `E_k+1 = [u_k+1]×ΔR_k+1·(h²/12, h³/24)`,
 //! `W_k+1 = ΔR_k+1[ω_k+1]×·(−h²/12, −h³/24)`.

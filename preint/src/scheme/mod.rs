@@ -1,14 +1,14 @@
 //! Integration schemes: what one interval `[t_k, t_k+1]` does to the deltas, and its
 //! linearisation in the one shape every scheme shares.
 //!
-//! Every scheme works on bias-corrected samples `ω = ω_m − b̂_g`, `a = a_m − b̂_a` ([`Node`]) and
+//! Every scheme works on bias-corrected samples `ω = ω_m − b̂_g`, `a = a_m − b̂_a` (`Node`) and
 //! updates `ΔR_k+1 = ΔR_k Exp(Ω_k)`, `Δv`, `Δp` in frame i (gravity excluded, Forster et al.
-//! 2017, eq. 33). A scheme is one file implementing [`IntervalScheme`]:
+//! 2017, eq. 33). A scheme is one file implementing `IntervalScheme` (crate-internal):
 //!
 //! - its stencil (which samples interval k reads) and its noise cell rule;
-//! - [`IntervalScheme::step`]: the deltas over one interval;
-//! - [`IntervalScheme::linearise`]: the transition of the rotated error and the gain of each
-//!   stencil sample ([`Linearisation`]), from which the scheme-agnostic `propagation` module
+//! - `IntervalScheme::step`: the deltas over one interval;
+//! - `IntervalScheme::linearise`: the transition of the rotated error and the gain of each
+//!   stencil sample (`Linearisation`), from which the scheme-agnostic `propagation` module
 //!   builds the covariance, the bias Jacobians and the combined covariance;
 //! - optionally a faster implementation of its deltas alone (`Fast`, in the `fast` module).
 //!
