@@ -1,7 +1,7 @@
 //! Window edges: what the window path knows about the stream beyond each edge, the gains of
 //! the samples near the edges (collected instead of added, so that a merge can correlate two
 //! windows), and their resolution into stream samples when the measurement is read
-//! ([`crate::window`] and [`crate::merge`] describe the model).
+//! ([`crate::window`] and [`crate::merge()`] describe the model).
 
 use crate::measurement::{EdgeNoise, EdgeSource};
 use crate::noise::{CellRule, white_scale};

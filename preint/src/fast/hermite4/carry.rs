@@ -10,7 +10,7 @@ use crate::sample::{ImuBias, ImuSample};
 use crate::scheme::Node;
 use crate::scheme::hermite4::{Rule, slopes};
 
-/// The steady state's weights ([`Weights`] for the centred stencil `{k, k+1, k+2}` of node
+/// The steady state's weights ([`Weights`](crate::scheme::hermite4::Weights) for the centred stencil `{k, k+1, k+2}` of node
 /// k+1), keyed by the two intervals \[ns\]: what the slice path needs per sample.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct SteadyWeights {
@@ -73,7 +73,7 @@ impl Carry {
     }
 
     /// Interval k, completed by the new sample k+2 (`s`, corrected with `bias`): the weights
-    /// and arithmetic of the one-by-one path ([`super::step`] with the stencil
+    /// and arithmetic of the one-by-one path ([`FastDeltas::step`](crate::fast::FastDeltas::step) with the stencil
     /// `{k−1, k, k+1, k+2}`).
     #[inline(always)]
     pub(crate) fn prepare_one(
@@ -176,7 +176,7 @@ impl Carry {
 
     /// [`Carry::prepare_wide`] in [`F4`] lanes, compiled for AVX2.
     ///
-    /// Only for processors with AVX2 ([`super::lanes::avx2`]): the caller checks.
+    /// Only for processors with AVX2 ([`crate::fast::lanes::avx2`]): the caller checks.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     pub(crate) fn prepare_quads(

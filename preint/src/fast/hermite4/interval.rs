@@ -82,7 +82,7 @@ pub(super) fn v3(l: &L3<f64>) -> V3 {
     V3::new(l[0], l[1], l[2])
 }
 
-/// `s = ω × a + ȧ` of a node (frame of the node), rounded as [`Carry`] rounds it.
+/// `s = ω × a + ȧ` of a node (frame of the node), rounded as [`Carry`](super::carry::Carry) rounds it.
 #[inline(always)]
 pub(crate) fn s_of(w: &V3, a: &V3, da: &V3) -> V3 {
     v3(&add(&cross(&l3(w), &l3(a)), &l3(da)))

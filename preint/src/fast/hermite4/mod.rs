@@ -15,7 +15,7 @@
 //! at a time (one per [`F4`] lane, with AVX2) or two (one per [`F2`] lane)
 //! ([`Carry::prepare_wide`]: every operation is then a packed one, where LLVM's own pairing of
 //! 3-vectors leaves a third of them scalar and adds shuffles), then accumulates the block. The
-//! one-by-one path ([`step`]) runs the same code in `f64`, so they all agree bit for bit.
+//! one-by-one path ([`HermiteDeltas::step`](FastDeltas::step)) runs the same code in `f64`, so they all agree bit for bit.
 
 mod carry;
 mod interval;
