@@ -381,7 +381,7 @@ fn cholesky_path_when_well_conditioned_eigen_path_when_deficient() {
 
 /// A Jacobian with the wrong sign makes every LM step go uphill: every step is rejected, μ
 /// grows until the step is ≈ 0. That is **not** convergence: the solver must report
-/// `DampingExhausted` (it used to report `StepNorm`, i.e. converged).
+/// `DampingExhausted` (not `StepNorm`, which would claim convergence).
 #[test]
 fn rejected_steps_with_huge_damping_are_not_convergence() {
     struct Wrong;
