@@ -204,3 +204,52 @@ pub fn allan_hour() -> Result<AllanCheck, CliError> {
         fitted,
     })
 }
+
+/// Indices of the Pareto-optimal points when minimising both coordinates (cost, error), in
+/// order of increasing cost.
+pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
+    let mut idx: Vec<usize> = (0..points.len())
+        .filter(|&i| points[i].0.is_finite() && points[i].1.is_finite())
+        .collect();
+    idx.sort_by(|&a, &b| {
+        points[a]
+            .0
+            .total_cmp(&points[b].0)
+            .then(points[a].1.total_cmp(&points[b].1))
+    });
+    let mut best = f64::INFINITY;
+    let mut front = Vec::new();
+    for i in idx {
+        if points[i].1 < best {
+            best = points[i].1;
+            front.push(i);
+        }
+    }
+    front
+}
+
+/// A rate \[Hz\] as printed: at most three decimals, without trailing zeros (a decimated rate
+/// such as 400/16 is computed as 24.999… Hz).
+pub fn hz(rate: f64) -> String {
+    format!("{}", (rate * 1e3).round() / 1e3)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pareto_front_keeps_only_undominated_points() {
+        let pts = [
+            (1.0, 10.0),
+            (2.0, 5.0),
+            (3.0, 7.0),
+            (4.0, 1.0),
+            (5.0, 1.0),
+            (0.5, f64::NAN),
+        ];
+        assert_eq!(pareto_front(&pts), vec![0, 1, 3]);
+        assert_eq!(hz(400.0 / 16.0 * (1.0 - 1e-16)), "25");
+        assert_eq!(hz(12.5), "12.5");
+    }
+}
