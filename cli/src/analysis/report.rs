@@ -10,6 +10,12 @@
 //! 5. The Allan deviation of a simulated static hour and its fitted densities ([`allan_hour`]).
 //! 6. `advise` on simulated noisy recordings of [`ADVISE_SCENES`] ([`advise_scene`]).
 //! 7. Throughput per scheme and level ([`super::speed::throughput`]).
+//!
+//! [`conclusions()`] turns these numbers into the statements at the top of the page.
+
+mod conclusions;
+
+pub use conclusions::conclusions;
 
 use super::accuracy::{self, Row};
 use super::advise::{self, Candidate};

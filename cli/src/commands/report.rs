@@ -1,6 +1,7 @@
 //! `preint report`: built-in scenes, no input files, one self-contained HTML page.
 //!
-//! Sections: accuracy against cost with the Pareto front
+//! Sections, after a conclusions box computed from the figures
+//! ([`crate::analysis::report::conclusions`]): accuracy against cost with the Pareto front
 //! (`seed-ellipse`, `aggressive`), error against rate with the fitted convergence orders, what
 //! `preint advise` recommends on simulated noisy recordings, the cost per sample of each scheme
 //! and level, Monte Carlo NEES per scheme, the gimbal-lock failure of Euler-angle dead
@@ -29,11 +30,13 @@ pub struct Args {
     pub out: PathBuf,
 }
 
-/// The report's numbers and the files written.
+/// The report's numbers, its conclusions and the files written.
 #[derive(Clone, Debug)]
 pub struct Report {
     /// The numbers.
     pub data: ReportData,
+    /// The conclusions drawn from them (plain text, code between backticks).
+    pub conclusions: Vec<String>,
     /// The SVG charts, then `index.html`.
     pub files: Vec<String>,
 }
@@ -53,8 +56,13 @@ pub fn compute(args: &Args) -> Result<Report, CliError> {
     if let Some(pb) = &pb {
         pb.finish_and_clear();
     }
-    let files = write_page(&data, out)?;
-    Ok(Report { data, files })
+    let conclusions = report::conclusions(&data);
+    let files = write_page(&data, &conclusions, out)?;
+    Ok(Report {
+        data,
+        conclusions,
+        files,
+    })
 }
 
 fn e3(x: f64) -> String {
@@ -66,7 +74,11 @@ fn failed(e: String) -> CliError {
 }
 
 /// Writes the charts and `index.html` into `out`; returns their paths (the page last).
-pub fn write_page(data: &ReportData, out: &Path) -> Result<Vec<String>, CliError> {
+pub fn write_page(
+    data: &ReportData,
+    conclusions: &[String],
+    out: &Path,
+) -> Result<Vec<String>, CliError> {
     let mut page = Page::new("preint report: which IMU integration scheme, at which rate");
     page.p(
         "Every figure below is computed on this machine by `preint report` from built-in \
@@ -75,7 +87,7 @@ pub fn write_page(data: &ReportData, out: &Path) -> Result<Vec<String>, CliError
             samples). Conventions: z-up world, g = (0, 0, −9.81) m/s², right perturbations, \
             tangent order [δφ, δv, δp], bias order [b_g, b_a].",
     );
-    page.toc();
+    page.conclusions(conclusions).toc();
     let mut files = accuracy_section(&mut page, data, out)?;
     files.extend(convergence_section(&mut page, data, out)?);
     files.push(advice_section(&mut page, &data.advice, out)?);
@@ -403,7 +415,7 @@ fn allan_section(page: &mut Page, a: &AllanCheck, out: &Path) -> Result<Vec<Stri
     Ok(files)
 }
 
-/// The JSON form: the files and a summary (200 Hz errors per scene, NEES, the
+/// The JSON form: the files, the conclusions and a summary (200 Hz errors per scene, NEES, the
 /// calibration, `advise`'s recommendations, ns per sample).
 pub fn to_json(r: &Report) -> Value {
     let mut summary = serde_json::Map::new();
@@ -454,16 +466,22 @@ pub fn to_json(r: &Report) -> Value {
         })
         .collect();
     summary.insert("ns_per_sample".into(), json!(speed));
-    json!({"files": r.files, "summary": summary})
+    json!({"files": r.files, "conclusions": r.conclusions, "summary": summary})
 }
 
-/// The human summary: where the page is.
+/// The human summary: where the page is, and the conclusions.
 pub fn to_text(r: &Report) -> String {
     let index = r.files.last().map_or("", String::as_str);
-    format!(
-        "wrote {index} (charts beside it: {})\n",
+    let mut h = format!(
+        "wrote {index} (charts beside it: {})\nconclusions:\n",
         r.files.len().saturating_sub(1)
-    )
+    );
+    for c in &r.conclusions {
+        h.push_str("- ");
+        h.push_str(c);
+        h.push('\n');
+    }
+    h
 }
 
 /// Runs `preint report`.
