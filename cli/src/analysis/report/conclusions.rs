@@ -1,8 +1,8 @@
 //! The conclusions at the top of the report, each computed from the report's numbers.
 
 use super::{
-    ADVISE_RECORDING, ADVISE_WINDOW_FRACTION, Curve, NEES_RUNS, ReportData, front_runs, hz,
-    nees_band_half,
+    ADVISE_RECORDING, ADVISE_WINDOW_FRACTION, Curve, FrontRun, NEES_RUNS, ReportData, front_runs,
+    hz, nees_band_half,
 };
 use crate::analysis::accuracy::{Row, order};
 use crate::analysis::speed::Throughput;
@@ -18,29 +18,63 @@ fn rate_range(a: f64, b: f64) -> String {
     }
 }
 
+/// `scheme (rates)` of a run of the front.
+fn run_label(run: &FrontRun) -> String {
+    let (first, last) = (&run.rows[0], &run.rows[run.rows.len() - 1]);
+    format!(
+        "{} ({})",
+        scheme::label(run.scheme),
+        rate_range(first.rate, last.rate)
+    )
+}
+
 /// Which scheme is cheapest for which position-error budget on `scene`, from the runs of the
-/// Pareto front ([`front_runs`]); schemes absent from the front, or on it only at their
-/// cheapest point, are named.
+/// Pareto front ([`front_runs`]): first the scheme that is cheapest for every budget below
+/// some error, then the budgets above it; schemes on the front only at their cheapest point,
+/// or never, are named.
 fn budget_statement(scene: &str, rows: &[Row]) -> String {
     let runs = front_runs(rows);
-    let mut parts = Vec::new();
-    let mut prev = f64::NAN;
-    for (j, run) in runs.iter().enumerate() {
-        let (first, last) = (&run.rows[0], &run.rows[run.rows.len() - 1]);
-        let what = format!(
-            "{} ({})",
-            scheme::label(run.scheme),
-            rate_range(first.rate, last.rate)
-        );
-        let lo = run.min_err();
-        parts.push(match (j == 0, j + 1 == runs.len()) {
-            (true, true) => format!("any budget: {what}"),
-            (true, false) => format!("≥ {lo:.1e} m: {what}"),
-            (false, false) => format!("{lo:.1e} to {prev:.1e} m: {what}"),
-            (false, true) => format!("below {prev:.1e} m: {what}, down to {lo:.1e} m"),
-        });
-        prev = lo;
-    }
+    let Some((last, above)) = runs.split_last() else {
+        return format!("On `{scene}` no error was measured.");
+    };
+    let lead = match above.last() {
+        None => format!(
+            "the cheapest for every position-error budget is {}",
+            run_label(last)
+        ),
+        Some(prev) => format!(
+            "for any position-error budget below {:.1e} m the cheapest is {}, down to {:.1e} m",
+            prev.min_err(),
+            run_label(last),
+            last.min_err()
+        ),
+    };
+    let parts: Vec<String> = above
+        .iter()
+        .enumerate()
+        .map(|(j, run)| match j {
+            0 => format!("≥ {:.1e} m {}", run.min_err(), run_label(run)),
+            _ => format!(
+                "{:.1e} to {:.1e} m {}",
+                run.min_err(),
+                above[j - 1].min_err(),
+                run_label(run)
+            ),
+        })
+        .collect();
+    let above = if parts.is_empty() {
+        String::new()
+    } else {
+        format!("; for larger budgets: {}", parts.join("; "))
+    };
+    format!(
+        "On `{scene}` (1 s window, noise-free), {lead}{above}.{}",
+        front_notes(rows, &runs)
+    )
+}
+
+/// The schemes on the front only at their cheapest point, or never.
+fn front_notes(rows: &[Row], runs: &[FrontRun]) -> String {
     let mut notes = Vec::new();
     for s in scheme::ALL {
         let on: Vec<&Row> = runs
@@ -63,16 +97,11 @@ fn budget_statement(scene: &str, rows: &[Row]) -> String {
             _ => {}
         }
     }
-    let notes = if notes.is_empty() {
+    if notes.is_empty() {
         String::new()
     } else {
         format!(" {}.", capitalise(&notes.join("; ")))
-    };
-    format!(
-        "On `{scene}` (noise-free, 1 s window) the cheapest scheme for a position-error budget of \
-         {}.{notes}",
-        parts.join("; ")
-    )
+    }
 }
 
 fn capitalise(s: &str) -> String {
@@ -271,10 +300,12 @@ mod tests {
     fn budgets_between_the_runs_of_the_front() {
         let rows = rows();
         let s = budget_statement("x", &rows);
-        assert!(s.contains("≥ 1.0e-1 m: euler (25 Hz)"), "{s}");
-        assert!(s.contains("2.5e-3 to 1.0e-1 m: midpoint (25–50 Hz)"), "{s}");
         assert!(
-            s.contains("below 2.5e-3 m: hermite4 (25–50 Hz), down to 6.0e-6 m"),
+            s.contains(
+                "for any position-error budget below 2.5e-3 m the cheapest is hermite4 (25–50 \
+                 Hz), down to 6.0e-6 m; for larger budgets: ≥ 1.0e-1 m euler (25 Hz); 2.5e-3 \
+                 to 1.0e-1 m midpoint (25–50 Hz)."
+            ),
             "{s}"
         );
         assert!(
