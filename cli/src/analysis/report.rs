@@ -8,8 +8,19 @@
 //! 4. A static single-attitude bias calibration of a simulated recording with known biases
 //!    ([`static_calibration`]).
 //! 5. The Allan deviation of a simulated static hour and its fitted densities ([`allan_hour`]).
+//! 6. `advise` on simulated noisy recordings of [`ADVISE_SCENES`] ([`advise_scene`]).
+//! 7. Throughput per scheme and level ([`super::speed::throughput`]).
+//!
+//! [`conclusions()`] turns these numbers into the statements at the top of the page.
+
+mod conclusions;
+
+pub use conclusions::conclusions;
 
 use super::accuracy::{self, Row};
+use super::advise::{self, Candidate};
+use super::denoise::denoise;
+use super::speed::{self, Throughput};
 use crate::{CliError, input, scheme};
 use nalgebra::Vector3;
 use preint::{ImuBias, ImuNoise, Level, NavState, PreintParams, Scheme, preintegrate};
@@ -23,6 +34,15 @@ pub const SCENES: [&str; 2] = ["seed-ellipse", "aggressive"];
 pub const RATES: [f64; 8] = [25.0, 50.0, 100.0, 200.0, 400.0, 800.0, 1600.0, 3200.0];
 /// Noise realisations per NEES row.
 pub const NEES_RUNS: u64 = 200;
+
+/// The scenes `advise` runs on.
+pub const ADVISE_SCENES: [&str; 2] = ["seed-ellipse", "aggressive"];
+/// Rate \[Hz\] and length \[s\] of the recordings `advise` runs on.
+pub const ADVISE_RECORDING: (f64, f64) = (400.0, 30.0);
+/// `advise`'s window \[s\] and threshold (fraction of the noise σ): its defaults.
+pub const ADVISE_WINDOW_FRACTION: (f64, f64) = (1.0, 0.1);
+/// Samples per speed measurement and runs (the median is reported).
+pub const SPEED_SAMPLES_RUNS: (usize, usize) = (20_000, 5);
 
 /// A named curve of `(x, y)` points.
 pub type Curve = (&'static str, Vec<(f64, f64)>);
@@ -40,6 +60,30 @@ pub struct ReportData {
     pub calibration: StaticCheck,
     /// The Allan analysis of the simulated hour.
     pub allan: AllanCheck,
+    /// `advise` per scene of [`ADVISE_SCENES`].
+    pub advice: Vec<AdviceCheck>,
+    /// Median ns/sample per scheme and level ([`SPEED_SAMPLES_RUNS`]).
+    pub speed: Vec<Throughput>,
+}
+
+/// `advise` on a simulated noisy recording of a built-in scene.
+#[derive(Clone, Debug)]
+pub struct AdviceCheck {
+    /// The scene.
+    pub scene: &'static str,
+    /// Low-pass cutoffs \[Hz\] found for (gyro, accelerometer).
+    pub cutoffs: [Option<f64>; 2],
+    /// Every (scheme, rate) evaluated.
+    pub candidates: Vec<Candidate>,
+    /// Index of the recommended candidate, if any is acceptable.
+    pub recommended: Option<usize>,
+}
+
+impl AdviceCheck {
+    /// The recommended candidate, if any.
+    pub fn recommendation(&self) -> Option<&Candidate> {
+        self.recommended.map(|i| &self.candidates[i])
+    }
 }
 
 /// A bias calibration against the biases it was simulated with.
@@ -62,7 +106,11 @@ pub struct AllanCheck {
     pub fitted: ImuNoise,
 }
 
-/// Computes every section, calling `progress` with the name of each finished one (five calls).
+/// Number of `progress` calls of [`compute`].
+pub const STEPS: u64 = 7;
+
+/// Computes every section, calling `progress` with the name of each finished one ([`STEPS`]
+/// calls).
 pub fn compute(progress: &mut dyn FnMut(&str)) -> Result<ReportData, CliError> {
     let accuracy = SCENES
         .iter()
@@ -82,12 +130,21 @@ pub fn compute(progress: &mut dyn FnMut(&str)) -> Result<ReportData, CliError> {
     progress("calibration");
     let allan = allan_hour()?;
     progress("Allan deviation");
+    let advice = ADVISE_SCENES
+        .iter()
+        .map(|&s| advise_scene(s))
+        .collect::<Result<Vec<_>, _>>()?;
+    progress("advise");
+    let speed = speed::throughput(SPEED_SAMPLES_RUNS.0, SPEED_SAMPLES_RUNS.1)?;
+    progress("speed");
     Ok(ReportData {
         accuracy,
         nees,
         gimbal_lock,
         calibration,
         allan,
+        advice,
+        speed,
     })
 }
 
@@ -203,4 +260,160 @@ pub fn allan_hour() -> Result<AllanCheck, CliError> {
         allan,
         fitted,
     })
+}
+
+/// `advise` ([`super::advise`], after [`super::denoise`]) on a noisy recording of `scene`
+/// ([`ADVISE_RECORDING`], EuRoC densities with bias random walk, seed 1), with the default
+/// window and threshold ([`ADVISE_WINDOW_FRACTION`]).
+pub fn advise_scene(scene: &'static str) -> Result<AdviceCheck, CliError> {
+    let sc = input::scene(scene)?;
+    let (rate, duration) = ADVISE_RECORDING;
+    let noise = ImuNoise {
+        update_rate_hz: rate,
+        ..ImuNoise::euroc()
+    };
+    let rec = preint_sim::simulate(
+        sc.as_ref(),
+        rate,
+        duration,
+        &SimConfig::with_noise(noise),
+        1,
+    )
+    .map_err(CliError::failed)?;
+    let (signal, cutoffs) = denoise(
+        &rec.samples,
+        noise.gyro_noise_density,
+        noise.acc_noise_density,
+    );
+    let (window, fraction) = ADVISE_WINDOW_FRACTION;
+    let candidates = advise::evaluate(&signal, &noise, 9.81, window, fraction)?;
+    let recommended = advise::recommend(&candidates)
+        .and_then(|r| candidates.iter().position(|c| std::ptr::eq(c, r)));
+    Ok(AdviceCheck {
+        scene,
+        cutoffs,
+        candidates,
+        recommended,
+    })
+}
+
+/// Indices of the Pareto-optimal points when minimising both coordinates (cost, error), in
+/// order of increasing cost.
+pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
+    let mut idx: Vec<usize> = (0..points.len())
+        .filter(|&i| points[i].0.is_finite() && points[i].1.is_finite())
+        .collect();
+    idx.sort_by(|&a, &b| {
+        points[a]
+            .0
+            .total_cmp(&points[b].0)
+            .then(points[a].1.total_cmp(&points[b].1))
+    });
+    let mut best = f64::INFINITY;
+    let mut front = Vec::new();
+    for i in idx {
+        if points[i].1 < best {
+            best = points[i].1;
+            front.push(i);
+        }
+    }
+    front
+}
+
+/// A run of consecutive points of one scheme on the Pareto front of position error against
+/// cost: for every error budget from its smallest error up to the previous run's smallest
+/// error, this scheme (at one of these rates) is the cheapest.
+#[derive(Clone, Debug)]
+pub struct FrontRun {
+    /// The scheme.
+    pub scheme: Scheme,
+    /// Its front points, in order of increasing cost (decreasing error).
+    pub rows: Vec<Row>,
+}
+
+impl FrontRun {
+    /// The smallest position error \[m\] of the run.
+    pub fn min_err(&self) -> f64 {
+        self.rows.last().map_or(f64::NAN, |r| r.err[2])
+    }
+}
+
+/// The Pareto front of position error against cost (per second of data) of `rows`, split into
+/// runs of one scheme, in order of increasing cost.
+pub fn front_runs(rows: &[Row]) -> Vec<FrontRun> {
+    let pts: Vec<(f64, f64)> = rows.iter().map(|r| (r.cost_per_s(), r.err[2])).collect();
+    let mut runs: Vec<FrontRun> = Vec::new();
+    for i in pareto_front(&pts) {
+        let r = rows[i].clone();
+        match runs.last_mut() {
+            Some(run) if run.scheme == r.scheme => run.rows.push(r),
+            _ => runs.push(FrontRun {
+                scheme: r.scheme,
+                rows: vec![r],
+            }),
+        }
+    }
+    runs
+}
+
+/// Half width of the 3σ band of a mean NEES over `runs` runs: the NEES of a consistent 9×9
+/// covariance is χ²₉ (variance 18).
+pub fn nees_band_half(runs: u64) -> f64 {
+    3.0 * (18.0 / runs as f64).sqrt()
+}
+
+/// A rate \[Hz\] as printed: at most three decimals, without trailing zeros (a decimated rate
+/// such as 400/16 is computed as 24.999… Hz).
+pub fn hz(rate: f64) -> String {
+    format!("{}", (rate * 1e3).round() / 1e3)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pareto_front_keeps_only_undominated_points() {
+        let pts = [
+            (1.0, 10.0),
+            (2.0, 5.0),
+            (3.0, 7.0),
+            (4.0, 1.0),
+            (5.0, 1.0),
+            (0.5, f64::NAN),
+        ];
+        assert_eq!(pareto_front(&pts), vec![0, 1, 3]);
+    }
+
+    fn row(scheme: Scheme, rate: f64, ns: f64, pos: f64) -> Row {
+        Row {
+            scheme,
+            rate,
+            ns_per_sample: ns,
+            err: [0.0, 0.0, pos],
+        }
+    }
+
+    /// Euler's cheapest point, then midpoint at two rates, then hermite4.
+    pub(super) fn rows() -> Vec<Row> {
+        vec![
+            row(Scheme::Euler, 25.0, 10.0, 1e-1),
+            row(Scheme::Euler, 50.0, 10.0, 5e-2),
+            row(Scheme::Midpoint, 25.0, 12.0, 1e-2),
+            row(Scheme::Midpoint, 50.0, 12.0, 2.5e-3),
+            row(Scheme::Hermite4, 25.0, 40.0, 1e-4),
+            row(Scheme::Hermite4, 50.0, 40.0, 6e-6),
+        ]
+    }
+
+    #[test]
+    fn front_runs_split_the_front_by_scheme() {
+        let runs = front_runs(&rows());
+        let schemes: Vec<Scheme> = runs.iter().map(|r| r.scheme).collect();
+        assert_eq!(schemes, [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4]);
+        assert_eq!(runs[1].rows.len(), 2);
+        assert_eq!(runs[1].min_err(), 2.5e-3);
+        assert_eq!(hz(400.0 / 16.0 * (1.0 - 1e-16)), "25");
+        assert_eq!(hz(12.5), "12.5");
+    }
 }

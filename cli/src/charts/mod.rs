@@ -1,231 +1,257 @@
-//! SVG charts with plotters: labelled axes with units, legends, optional log scales
-//! ([`draw`]), and the figures the commands draw ([`figures`]).
+//! SVG charts: one or more panels side by side, each with labelled axes (linear or
+//! logarithmic), and one legend below the panels, outside the plotted data ([`render`],
+//! [`draw`]); the figures the commands draw ([`figures`]).
+//!
+//! The SVG has a `viewBox` and `width="100%"` with a `max-width` of its natural width, so it
+//! scales down with the window instead of overflowing it. Each scheme has one colour
+//! ([`scheme_color`]) in every chart, and the HTML report styles scheme names with the same
+//! colours.
 
 pub mod figures;
+mod svg;
 
-use plotters::coord::combinators::IntoLogRange;
-use plotters::coord::ranged1d::ValueFormatter;
-use plotters::prelude::*;
+use preint::Scheme;
 use std::path::Path;
+
+/// An RGB colour.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Color(pub u8, pub u8, pub u8);
+
+impl Color {
+    /// `#rrggbb`.
+    pub fn hex(self) -> String {
+        format!("#{:02x}{:02x}{:02x}", self.0, self.1, self.2)
+    }
+}
+
+/// The colour of each scheme, in the order of [`crate::scheme::ALL`] (euler, midpoint,
+/// hermite4): vermilion, blue, bluish green (Okabe–Ito, distinguishable with the common colour
+/// vision deficiencies).
+pub const SCHEME_COLORS: [Color; 3] = [Color(213, 94, 0), Color(0, 114, 178), Color(0, 158, 115)];
+
+/// Colours of curves that are not schemes (sensor axes, attitude representations): orange, sky
+/// blue, reddish purple, near-black; none of them is a scheme's colour.
+pub const OTHER_COLORS: [Color; 4] = [
+    Color(230, 159, 0),
+    Color(86, 180, 233),
+    Color(204, 121, 167),
+    Color(40, 40, 40),
+];
+
+/// The neutral colour of reference lines (Pareto front, thresholds, style keys).
+pub const NEUTRAL: Color = Color(110, 110, 110);
+
+/// The colour of a scheme in every chart and table.
+pub fn scheme_color(s: Scheme) -> Color {
+    match s {
+        Scheme::Euler => SCHEME_COLORS[0],
+        Scheme::Midpoint => SCHEME_COLORS[1],
+        Scheme::Hermite4 => SCHEME_COLORS[2],
+    }
+}
+
+/// How a series' line is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stroke {
+    /// A continuous line.
+    Solid,
+    /// Dashes (reference and fitted lines).
+    Dashed,
+    /// Dots.
+    Dotted,
+    /// No line (markers only).
+    None,
+}
+
+/// The marker drawn at each point of a series.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Marker {
+    /// No marker.
+    None,
+    /// A filled circle.
+    Circle,
+    /// A filled square.
+    Square,
+    /// A filled diamond.
+    Diamond,
+    /// A hollow ring around the point (highlights points of other series).
+    Ring,
+}
 
 /// One named series of (x, y) points.
 #[derive(Clone, Debug)]
 pub struct Series {
-    /// Legend label.
+    /// Legend label; an empty name keeps the series out of the legend.
     pub name: String,
-    /// Points; non-finite or (on log axes) non-positive points are skipped.
+    /// Points; a non-finite or (on a log axis) non-positive point breaks the line.
     pub points: Vec<(f64, f64)>,
-    /// Draw a line through the points (else markers only).
-    pub line: bool,
-    /// Dashed thin line (for fitted/reference lines).
-    pub dashed: bool,
+    /// Colour of the line and the markers.
+    pub color: Color,
+    /// Line style.
+    pub stroke: Stroke,
+    /// Line width \[px\].
+    pub width: f64,
+    /// Marker at each point.
+    pub marker: Marker,
+    /// Drawn before every series that is not (under them).
+    pub behind: bool,
+    /// Hover text per point (empty, or one per point).
+    pub tips: Vec<String>,
 }
 
 impl Series {
-    /// A line series with markers.
-    pub fn line(name: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
+    /// A solid line with a circle at each point.
+    pub fn line(name: impl Into<String>, points: Vec<(f64, f64)>, color: Color) -> Self {
         Self {
             name: name.into(),
             points,
-            line: true,
-            dashed: false,
+            color,
+            stroke: Stroke::Solid,
+            width: 2.0,
+            marker: Marker::Circle,
+            behind: false,
+            tips: Vec::new(),
         }
     }
-    /// A thin reference line without markers.
-    pub fn reference(name: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
+
+    /// A thin solid line without markers (dense curves).
+    pub fn curve(name: impl Into<String>, points: Vec<(f64, f64)>, color: Color) -> Self {
         Self {
-            dashed: true,
-            ..Self::line(name, points)
+            width: 1.6,
+            marker: Marker::None,
+            ..Self::line(name, points, color)
+        }
+    }
+
+    /// A thin dashed line without markers (fitted and reference lines).
+    pub fn reference(name: impl Into<String>, points: Vec<(f64, f64)>, color: Color) -> Self {
+        Self {
+            stroke: Stroke::Dashed,
+            width: 1.3,
+            marker: Marker::None,
+            ..Self::line(name, points, color)
+        }
+    }
+
+    /// Markers only, no line.
+    pub fn markers(
+        name: impl Into<String>,
+        points: Vec<(f64, f64)>,
+        color: Color,
+        marker: Marker,
+    ) -> Self {
+        Self {
+            stroke: Stroke::None,
+            marker,
+            ..Self::line(name, points, color)
+        }
+    }
+
+    /// A legend entry only (no points): explains a line style or a marker used by other series.
+    pub fn key(name: impl Into<String>, color: Color, stroke: Stroke, marker: Marker) -> Self {
+        Self {
+            stroke,
+            marker,
+            width: 1.6,
+            ..Self::line(name, Vec::new(), color)
+        }
+    }
+
+    /// The same series with another line style.
+    pub fn with_stroke(mut self, stroke: Stroke) -> Self {
+        self.stroke = stroke;
+        self
+    }
+
+    /// The same series with another marker.
+    pub fn with_marker(mut self, marker: Marker) -> Self {
+        self.marker = marker;
+        self
+    }
+
+    /// The same series with another line width.
+    pub fn with_width(mut self, width: f64) -> Self {
+        self.width = width;
+        self
+    }
+
+    /// The same series drawn under the others.
+    pub fn drawn_behind(mut self) -> Self {
+        self.behind = true;
+        self
+    }
+
+    /// The same series with a hover text per point.
+    pub fn with_tips(mut self, tips: Vec<String>) -> Self {
+        self.tips = tips;
+        self
+    }
+}
+
+/// One axis.
+#[derive(Clone, Debug)]
+pub struct Axis {
+    /// Label with unit.
+    pub label: String,
+    /// Logarithmic.
+    pub log: bool,
+}
+
+impl Axis {
+    /// A logarithmic axis.
+    pub fn log(label: impl Into<String>) -> Self {
+        Self {
+            label: label.into(),
+            log: true,
+        }
+    }
+
+    /// A linear axis.
+    pub fn linear(label: impl Into<String>) -> Self {
+        Self {
+            label: label.into(),
+            log: false,
         }
     }
 }
 
-/// Chart layout.
-pub struct Chart<'a> {
+/// One plot area with its axes and series.
+#[derive(Clone, Debug)]
+pub struct Panel {
+    /// Title above the plot area (empty: none).
+    pub title: String,
+    /// Horizontal axis.
+    pub x: Axis,
+    /// Vertical axis.
+    pub y: Axis,
+    /// Series, drawn in order (those marked `behind` first).
+    pub series: Vec<Series>,
+}
+
+/// A chart: a title, panels side by side, and one legend below them listing every named
+/// series once (series of the same name in several panels share an entry).
+#[derive(Clone, Debug)]
+pub struct Figure {
     /// Title.
-    pub title: &'a str,
-    /// X-axis label with unit.
-    pub x_label: &'a str,
-    /// Y-axis label with unit.
-    pub y_label: &'a str,
-    /// Logarithmic x axis.
-    pub log_x: bool,
-    /// Logarithmic y axis.
-    pub log_y: bool,
+    pub title: String,
+    /// Panels, left to right.
+    pub panels: Vec<Panel>,
 }
 
-const PALETTE: [RGBColor; 8] = [
-    RGBColor(31, 119, 180),
-    RGBColor(255, 127, 14),
-    RGBColor(44, 160, 44),
-    RGBColor(214, 39, 40),
-    RGBColor(148, 103, 189),
-    RGBColor(140, 86, 75),
-    RGBColor(227, 119, 194),
-    RGBColor(127, 127, 127),
-];
-
-fn usable(c: &Chart, p: &(f64, f64)) -> bool {
-    p.0.is_finite() && p.1.is_finite() && (!c.log_x || p.0 > 0.0) && (!c.log_y || p.1 > 0.0)
+/// The SVG text of `fig`; `id` (unique within an HTML page) prefixes the SVG's internal ids.
+pub fn render(fig: &Figure, id: &str) -> String {
+    svg::render(fig, id)
 }
 
-fn range(vals: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for v in vals {
-        lo = lo.min(v);
-        hi = hi.max(v);
-    }
-    if !lo.is_finite() {
-        return (1.0, 10.0);
-    }
-    if log {
-        let (l, h) = (
-            lo.log10().floor(),
-            hi.log10().ceil().max(lo.log10().floor() + 1.0),
-        );
-        (10f64.powf(l), 10f64.powf(h))
-    } else {
-        let pad = ((hi - lo) * 0.05).max(1e-12);
-        (lo - pad, hi + pad)
-    }
-}
-
-/// Draws the mesh, the series and the legend on a chart whose axes are `X` and `Y` (linear or
-/// logarithmic).
-fn plot<'a, X, Y>(
-    mut ctx: ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
-    chart: &Chart,
-    series: &[Series],
-) -> Result<(), String>
-where
-    X: Ranged<ValueType = f64> + ValueFormatter<f64>,
-    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
-{
-    ctx.configure_mesh()
-        .x_desc(chart.x_label)
-        .y_desc(chart.y_label)
-        .x_label_formatter(&|v| fmt_tick(*v))
-        .y_label_formatter(&|v| fmt_tick(*v))
-        .draw()
-        .map_err(|e| e.to_string())?;
-    for (i, s) in series.iter().enumerate() {
-        let color = PALETTE[i % PALETTE.len()];
-        let pts: Vec<(f64, f64)> = s
-            .points
-            .iter()
-            .copied()
-            .filter(|p| usable(chart, p))
-            .collect();
-        let style = if s.dashed {
-            color.stroke_width(1)
-        } else {
-            color.stroke_width(2)
-        };
-        if s.line {
-            let anno = ctx
-                .draw_series(LineSeries::new(pts.clone(), style))
-                .map_err(|e| e.to_string())?;
-            anno.label(s.name.clone()).legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-            });
-        }
-        if !s.dashed {
-            let anno = ctx
-                .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
-                .map_err(|e| e.to_string())?;
-            if !s.line {
-                anno.label(s.name.clone())
-                    .legend(move |(x, y)| Circle::new((x + 9, y), 4, color.filled()));
-            }
-        }
-    }
-    ctx.configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(|e| e.to_string())
-}
-
-/// Writes an SVG chart of `series` to `path` (900×560 px).
-pub fn draw(path: &Path, chart: &Chart, series: &[Series]) -> Result<(), String> {
-    let all: Vec<(f64, f64)> = series
-        .iter()
-        .flat_map(|s| s.points.iter().copied())
-        .filter(|p| usable(chart, p))
+/// Writes `fig` as an SVG file (its internal ids prefixed with the file's stem, so that several
+/// charts can be embedded in one page).
+pub fn draw(path: &Path, fig: &Figure) -> Result<(), String> {
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("chart");
+    let id: String = stem
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
         .collect();
-    let (x0, x1) = range(all.iter().map(|p| p.0), chart.log_x);
-    let (y0, y1) = range(all.iter().map(|p| p.1), chart.log_y);
-    let root = SVGBackend::new(path, (900, 560)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| e.to_string())?;
-    let mut b = ChartBuilder::on(&root);
-    b.caption(chart.title, ("sans-serif", 22))
-        .margin(12)
-        .x_label_area_size(48)
-        .y_label_area_size(78);
-    let e = |e: plotters::drawing::DrawingAreaErrorKind<_>| e.to_string();
-    match (chart.log_x, chart.log_y) {
-        (true, true) => plot(
-            b.build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
-                .map_err(e)?,
-            chart,
-            series,
-        ),
-        (true, false) => plot(
-            b.build_cartesian_2d((x0..x1).log_scale(), y0..y1)
-                .map_err(e)?,
-            chart,
-            series,
-        ),
-        (false, true) => plot(
-            b.build_cartesian_2d(x0..x1, (y0..y1).log_scale())
-                .map_err(e)?,
-            chart,
-            series,
-        ),
-        (false, false) => plot(
-            b.build_cartesian_2d(x0..x1, y0..y1).map_err(e)?,
-            chart,
-            series,
-        ),
-    }?;
-    root.present()
-        .map_err(|e| format!("{}: {e}", path.display()))?;
-    Ok(())
-}
-
-fn fmt_tick(v: f64) -> String {
-    let a = v.abs();
-    if a == 0.0 {
-        "0".into()
-    } else if !(1e-3..1e4).contains(&a) {
-        format!("{v:.0e}")
-    } else {
-        let s = format!("{v:.4}");
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    }
-}
-
-/// Indices of the Pareto-optimal points when minimising both coordinates (cost, error).
-pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
-    let mut idx: Vec<usize> = (0..points.len())
-        .filter(|&i| points[i].0.is_finite() && points[i].1.is_finite())
-        .collect();
-    idx.sort_by(|&a, &b| {
-        points[a]
-            .0
-            .total_cmp(&points[b].0)
-            .then(points[a].1.total_cmp(&points[b].1))
-    });
-    let mut best = f64::INFINITY;
-    let mut front = Vec::new();
-    for i in idx {
-        if points[i].1 < best {
-            best = points[i].1;
-            front.push(i);
-        }
-    }
-    front
+    std::fs::write(path, render(fig, &id)).map_err(|e| format!("{}: {e}", path.display()))
 }
 
 #[cfg(test)]
@@ -233,41 +259,31 @@ mod tests {
     use super::*;
 
     #[test]
-    fn pareto_front_keeps_only_undominated_points() {
-        let pts = [
-            (1.0, 10.0),
-            (2.0, 5.0),
-            (3.0, 7.0),
-            (4.0, 1.0),
-            (5.0, 1.0),
-            (0.5, f64::NAN),
-        ];
-        assert_eq!(pareto_front(&pts), vec![0, 1, 3]);
-    }
-
-    #[test]
-    fn draws_a_valid_svg() {
+    fn draws_a_scalable_svg_with_a_legend_below_the_plot() {
         let dir = std::env::temp_dir().join(format!("preint-chart-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let p = dir.join("c.svg");
-        let c = Chart {
-            title: "t",
-            x_label: "x [s]",
-            y_label: "y [m]",
-            log_x: true,
-            log_y: true,
+        let fig = Figure {
+            title: "t & u".into(),
+            panels: vec![Panel {
+                title: String::new(),
+                x: Axis::log("x [s]"),
+                y: Axis::log("y [m]"),
+                series: vec![
+                    Series::line("a", vec![(1.0, 1.0), (10.0, 0.1)], SCHEME_COLORS[0]),
+                    Series::reference("b", vec![(2.0, 0.5), (3.0, 0.4)], NEUTRAL).drawn_behind(),
+                ],
+            }],
         };
-        draw(
-            &p,
-            &c,
-            &[
-                Series::line("a", vec![(1.0, 1.0), (10.0, 0.1)]),
-                Series::reference("b", vec![(2.0, 0.5), (3.0, 0.4)]),
-            ],
-        )
-        .unwrap();
+        draw(&p, &fig).unwrap();
         let svg = std::fs::read_to_string(&p).unwrap();
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
-        assert!(svg.contains("x [s]") && svg.contains("y [m]"));
+        assert!(svg.contains("viewBox=\"0 0 960 ") && svg.contains("width=\"100%\""));
+        assert!(svg.contains("x [s]") && svg.contains("y [m]") && svg.contains("t &amp; u"));
+        assert!(svg.contains("stroke-dasharray") && svg.contains("clip-path=\"url(#c-p0)\""));
+        // The reference line is drawn first, and both series are in the legend.
+        let (a, b) = (svg.find("#d55e00").unwrap(), svg.find("#6e6e6e").unwrap());
+        assert!(b < a);
+        assert!(svg.contains(">a</text>") && svg.contains(">b</text>"));
     }
 }

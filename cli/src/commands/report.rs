@@ -1,14 +1,22 @@
 //! `preint report`: built-in scenes, no input files, one self-contained HTML page.
 //!
-//! Sections: accuracy against cost and convergence order (`seed-ellipse`, `aggressive`), Monte
-//! Carlo NEES per scheme, the gimbal-lock failure of Euler-angle dead reckoning, a bias
-//! calibration from a simulated static recording, and an Allan deviation with fitted lines
-//! (the numbers: [`crate::analysis::report`]). The SVG charts are written beside `index.html`
-//! and also embedded in it.
+//! Sections, after a conclusions box computed from the figures
+//! ([`crate::analysis::report::conclusions`]): accuracy against cost with the Pareto front
+//! (`seed-ellipse`, `aggressive`), error against rate with the fitted convergence orders, what
+//! `preint advise` recommends on simulated noisy recordings, the cost per sample of each scheme
+//! and level, Monte Carlo NEES per scheme, the gimbal-lock failure of Euler-angle dead
+//! reckoning, a bias calibration from a simulated static recording, and the Allan deviation of
+//! both sensors with the fitted densities (the numbers: [`crate::analysis::report`]). The SVG
+//! charts are written beside `index.html` and also embedded in it.
 
-use crate::analysis::accuracy::order;
-use crate::analysis::report::{self, AllanCheck, NEES_RUNS, ReportData, StaticCheck};
+use crate::analysis::accuracy::{Row, order};
+use crate::analysis::advise::Candidate;
+use crate::analysis::report::{
+    self, ADVISE_RECORDING, ADVISE_WINDOW_FRACTION, AdviceCheck, AllanCheck, NEES_RUNS, ReportData,
+    SPEED_SAMPLES_RUNS, StaticCheck, front_runs, hz, nees_band_half,
+};
 use crate::charts::figures;
+use crate::format::IMU_AXES;
 use crate::html::Page;
 use crate::{CliError, Output, progress, scheme};
 use serde_json::{Value, json};
@@ -22,11 +30,13 @@ pub struct Args {
     pub out: PathBuf,
 }
 
-/// The report's numbers and the files written.
+/// The report's numbers, its conclusions and the files written.
 #[derive(Clone, Debug)]
 pub struct Report {
     /// The numbers.
     pub data: ReportData,
+    /// The conclusions drawn from them (plain text, code between backticks).
+    pub conclusions: Vec<String>,
     /// The SVG charts, then `index.html`.
     pub files: Vec<String>,
 }
@@ -36,7 +46,7 @@ pub struct Report {
 pub fn compute(args: &Args) -> Result<Report, CliError> {
     let out = &args.out;
     std::fs::create_dir_all(out).map_err(|e| CliError::failed_in(out, e))?;
-    let pb = progress::bar(5, "report");
+    let pb = progress::bar(report::STEPS, "report");
     let data = report::compute(&mut |msg| {
         if let Some(pb) = &pb {
             pb.set_message(msg.to_string());
@@ -46,45 +56,111 @@ pub fn compute(args: &Args) -> Result<Report, CliError> {
     if let Some(pb) = &pb {
         pb.finish_and_clear();
     }
-    let files = write_page(&data, out)?;
-    Ok(Report { data, files })
+    let conclusions = report::conclusions(&data);
+    let files = write_page(&data, &conclusions, out)?;
+    Ok(Report {
+        data,
+        conclusions,
+        files,
+    })
 }
 
 fn e3(x: f64) -> String {
     format!("{x:.3e}")
 }
 
+fn failed(e: String) -> CliError {
+    CliError::Failed(e)
+}
+
 /// Writes the charts and `index.html` into `out`; returns their paths (the page last).
-pub fn write_page(data: &ReportData, out: &Path) -> Result<Vec<String>, CliError> {
-    let mut page =
-        Page::new("preint report: accuracy, cost, consistency and calibration on simulated scenes");
-    page.p("Every figure below is computed on this machine by `preint report` from built-in simulated scenes \
-            (no input files). Conventions: z-up world, g = (0, 0, −9.81) m/s², right perturbations, \
-            tangent order [δφ, δv, δp], bias order [b_g, b_a].");
+pub fn write_page(
+    data: &ReportData,
+    conclusions: &[String],
+    out: &Path,
+) -> Result<Vec<String>, CliError> {
+    let mut page = Page::new("preint report: which IMU integration scheme, at which rate");
+    page.p(
+        "Every figure below is computed on this machine by `preint report` from built-in \
+            simulated scenes (no input files); costs are this machine's timings. Schemes: `euler` \
+            (1st order), `midpoint` (2nd order), `hermite4` (4th order, uses the neighbouring \
+            samples). Conventions: z-up world, g = (0, 0, −9.81) m/s², right perturbations, \
+            tangent order [δφ, δv, δp], bias order [b_g, b_a].",
+    );
+    page.conclusions(conclusions).toc();
     let mut files = accuracy_section(&mut page, data, out)?;
+    files.extend(convergence_section(&mut page, data, out)?);
+    files.push(advice_section(&mut page, &data.advice, out)?);
+    speed_section(&mut page, data);
     nees_section(&mut page, data);
     files.push(gimbal_lock_section(&mut page, data, out)?);
     calibration_section(&mut page, &data.calibration);
-    files.push(allan_section(&mut page, &data.allan, out)?);
+    files.extend(allan_section(&mut page, &data.allan, out)?);
     let index = out.join("index.html");
-    page.write(&index).map_err(CliError::Failed)?;
+    page.write(&index).map_err(failed)?;
     files.push(index.display().to_string());
     Ok(files)
 }
 
-/// Section 1: per scene, the two charts and the 200 Hz table. Returns the chart paths.
+/// Accuracy against cost: per scene, the chart and the Pareto front as a table. Returns the
+/// chart paths.
 fn accuracy_section(
     page: &mut Page,
     data: &ReportData,
     out: &Path,
 ) -> Result<Vec<String>, CliError> {
-    page.h2("Accuracy against cost, and convergence order");
+    page.h2("Accuracy against cost: the cheapest scheme for an error budget");
+    page.p(
+        "Noise-free samples of each scene at 25–3200 Hz, preintegrated over the window \
+            [1 s, 2 s] and compared with the scene's exact deltas. Cost = measured ns per sample \
+            (with covariance and bias Jacobians) × rate, i.e. the time to integrate one second of \
+            IMU data. A point is on the Pareto front when no other scheme and rate is both \
+            cheaper and more accurate: for a given error budget, the cheapest choice is the first \
+            front point below it.",
+    );
     let mut files = Vec::new();
     for (scene, rows) in &data.accuracy {
-        let p1 = figures::accuracy_vs_cost(rows, scene, out)?;
-        let p2 = figures::convergence(rows, scene, out)?;
-        page.svg(&p1, &format!("{scene}: position error of a 1 s window against the cost of integrating one second of IMU data (with covariance and bias Jacobians), per scheme and rate; the dashed line is the Pareto front.")).map_err(CliError::Failed)?;
-        page.svg(&p2, &format!("{scene}: rotation and position error against rate; the legend gives each fitted log-log slope (the convergence order).")).map_err(CliError::Failed)?;
+        let path = figures::accuracy_vs_cost(rows, scene, out)?;
+        page.svg(&path, &format!("`{scene}`: position error of the 1 s window against the cost of integrating one second of IMU data, one line per scheme (a point per rate, 25 Hz at the left). The thin grey dashed line, drawn under the scheme lines, and the grey rings mark the Pareto front; hover over a point for its rate.")).map_err(failed)?;
+        let table: Vec<Vec<String>> = front_runs(rows)
+            .iter()
+            .flat_map(|run| &run.rows)
+            .map(|r: &Row| {
+                vec![
+                    scheme::label(r.scheme).into(),
+                    hz(r.rate),
+                    format!("{:.2}", r.cost_per_s() * 1e-3),
+                    e3(r.err[2]),
+                ]
+            })
+            .collect();
+        page.p(&format!("Pareto front on `{scene}`, cheapest first:"));
+        page.table(
+            &[
+                "scheme",
+                "rate [Hz]",
+                "cost [µs per s of data]",
+                "position error [m]",
+            ],
+            &table,
+        );
+        files.push(path.display().to_string());
+    }
+    Ok(files)
+}
+
+/// Error against rate: per scene, the two-panel chart and the 200 Hz table. Returns the chart
+/// paths.
+fn convergence_section(
+    page: &mut Page,
+    data: &ReportData,
+    out: &Path,
+) -> Result<Vec<String>, CliError> {
+    page.h2("Error against rate: convergence order");
+    let mut files = Vec::new();
+    for (scene, rows) in &data.accuracy {
+        let path = figures::convergence(rows, scene, out)?;
+        page.svg(&path, &format!("`{scene}`: rotation and position error against rate; the legend gives each scheme's fitted log-log slope (its convergence order), over the points above the round-off floor (1e-13).")).map_err(failed)?;
         let table: Vec<Vec<String>> = rows
             .iter()
             .filter(|r| r.rate == 200.0)
@@ -100,7 +176,7 @@ fn accuracy_section(
             })
             .collect();
         page.p(&format!(
-            "{scene} at 200 Hz, 1 s window, noise-free, against the exact deltas:"
+            "`{scene}` at 200 Hz, 1 s window, noise-free, against the exact deltas:"
         ));
         page.table(
             &[
@@ -113,12 +189,130 @@ fn accuracy_section(
             ],
             &table,
         );
-        files.extend([p1.display().to_string(), p2.display().to_string()]);
+        files.push(path.display().to_string());
     }
     Ok(files)
 }
 
-/// Section 2: the NEES table.
+/// The worst ratio of discretisation error to noise σ over rotation, velocity and position.
+fn worst_ratio(c: &Candidate) -> f64 {
+    (0..3)
+        .map(|k| c.disc_err[k] / c.noise_sigma[k])
+        .fold(0.0, f64::max)
+}
+
+/// What `advise` recommends on each scene: the chart, the recommendation and, per scheme, its
+/// lowest acceptable rate. Returns the chart's path.
+fn advice_section(page: &mut Page, advice: &[AdviceCheck], out: &Path) -> Result<String, CliError> {
+    let ((rate, duration), (window, fraction)) = (ADVISE_RECORDING, ADVISE_WINDOW_FRACTION);
+    page.h2("What `preint advise` recommends for a noisy recording");
+    page.p(&format!("`preint advise` on a simulated {duration} s recording of each scene at {rate} Hz with \
+        EuRoC noise (bias random walk on): the white noise is removed by a zero-phase low-pass, \
+        each scheme's discretisation error over {window} s windows is measured at the recording's \
+        rate and at decimated rates against `hermite4` at the full rate, and compared with the \
+        noise-induced σ of the preintegrated deltas. Acceptable: all three errors (rotation, \
+        velocity, position) below {fraction}·σ. Recommended: the cheapest acceptable (scheme, rate); \
+        costs within 15 % of the cheapest count as equal and the simplest scheme among them wins."));
+    let path = out.join("advise.svg");
+    let scenes: Vec<(&str, &[Candidate], Option<usize>)> = advice
+        .iter()
+        .map(|a| (a.scene, a.candidates.as_slice(), a.recommended))
+        .collect();
+    figures::advice(&scenes, fraction, &path)?;
+    page.svg(&path, &format!("Worst ratio of discretisation error to noise σ (over rotation, velocity and position) against rate; below the grey dashed line ({fraction}·σ) a (scheme, rate) is acceptable; the black ring marks the recommendation.")).map_err(failed)?;
+    let mut rows = Vec::new();
+    for a in advice {
+        let rec = a.recommendation();
+        for s in scheme::ALL {
+            let ok = a
+                .candidates
+                .iter()
+                .filter(|c| c.scheme == s && c.acceptable)
+                .min_by(|x, y| x.rate_hz.total_cmp(&y.rate_hz));
+            rows.push(match ok {
+                Some(c) => vec![
+                    format!("`{}`", a.scene),
+                    scheme::label(s).into(),
+                    hz(c.rate_hz),
+                    format!("{:.3}", worst_ratio(c)),
+                    format!("{:.1}", c.cost_ns_per_s * 1e-3),
+                    if rec.is_some_and(|r| std::ptr::eq(r, c)) {
+                        "recommended"
+                    } else {
+                        ""
+                    }
+                    .into(),
+                ],
+                None => vec![
+                    format!("`{}`", a.scene),
+                    scheme::label(s).into(),
+                    format!("none up to {} Hz", hz(rate)),
+                    "".into(),
+                    "".into(),
+                    "".into(),
+                ],
+            });
+        }
+    }
+    page.p("Per scheme, its lowest acceptable rate:");
+    page.table(
+        &[
+            "scene",
+            "scheme",
+            "rate [Hz]",
+            "worst error / σ",
+            "cost [µs per s of data]",
+            "",
+        ],
+        &rows,
+    );
+    let cut = |c: Option<f64>| c.map_or("none".into(), |c| format!("{c:.2} Hz"));
+    let cuts: Vec<String> = advice
+        .iter()
+        .map(|a| {
+            format!(
+                "`{}` gyro {}, accelerometer {}",
+                a.scene,
+                cut(a.cutoffs[0]),
+                cut(a.cutoffs[1])
+            )
+        })
+        .collect();
+    page.p(&format!("Low-pass cutoffs found: {}.", cuts.join("; ")));
+    Ok(path.display().to_string())
+}
+
+/// The speed table: median ns per sample per scheme and level.
+fn speed_section(page: &mut Page, data: &ReportData) {
+    let (samples, runs) = SPEED_SAMPLES_RUNS;
+    page.h2("Speed: cost per sample");
+    page.p(&format!("Median of {runs} runs of `Preintegrator::integrate_slice` over a synthetic smooth \
+        200 Hz stream of {samples} samples, nothing stored, on this machine (`preint speed` measures the \
+        same with more samples and runs). Multiply by the rate for the cost per second of data."));
+    let rows: Vec<Vec<String>> = data
+        .speed
+        .iter()
+        .map(|t| {
+            vec![
+                scheme::label(t.scheme).into(),
+                format!("{:.1}", t.deltas),
+                format!("{:.1}", t.covariance),
+                format!("{:.1}", t.combined),
+            ]
+        })
+        .collect();
+    page.table(
+        &[
+            "scheme",
+            "deltas only [ns]",
+            "+ 9×9 covariance and bias Jacobians [ns]",
+            "+ 15×15 covariance [ns]",
+        ],
+        &rows,
+    );
+}
+
+/// The NEES table.
 fn nees_section(page: &mut Page, data: &ReportData) {
     page.h2("Covariance consistency (Monte Carlo NEES)");
     let rows: Vec<Vec<String>> = data
@@ -126,21 +320,21 @@ fn nees_section(page: &mut Page, data: &ReportData) {
         .iter()
         .map(|(scene, s, n)| {
             vec![
-                scene.to_string(),
+                format!("`{scene}`"),
                 scheme::label(*s).into(),
                 format!("{n:.3}"),
             ]
         })
         .collect();
     let runs = NEES_RUNS;
-    let half = 3.0 * (18.0f64 / runs as f64).sqrt();
+    let half = nees_band_half(runs);
     page.p(&format!("{runs} noise realisations per row (EuRoC densities, 200 Hz, 1 s window); mean of eᵀΣ⁻¹e with \
         e = [Log(ΔR₀ᵀΔR), Δv − Δv₀, Δp − Δp₀] against the noise-free run. A consistent 9×9 covariance gives 9; \
         with {runs} runs the 3σ band is [{:.2}, {:.2}]. (The test suite, `cargo test -p evidence --test nees`, runs 2 000 per row; `PREINT_FULL=1` runs 20 000.)", 9.0 - half, 9.0 + half));
     page.table(&["scene", "scheme", "mean NEES"], &rows);
 }
 
-/// Section 3: the gimbal-lock chart. Returns its path.
+/// The gimbal-lock chart. Returns its path.
 fn gimbal_lock_section(page: &mut Page, data: &ReportData, out: &Path) -> Result<String, CliError> {
     page.h2("Where methods fail: Euler angles at gimbal lock");
     let path = out.join("gimbal_lock.svg");
@@ -149,11 +343,11 @@ fn gimbal_lock_section(page: &mut Page, data: &ReportData, out: &Path) -> Result
         "gimbal-lock scene, 200 Hz midpoint dead reckoning",
         &path,
     )?;
-    page.svg(&path, "Attitude error against time; the scene passes exactly through pitch ±90° at t = 2, 6, 10 s. At the first pass the Euler-angle integration's error jumps by orders of magnitude and stays there: the body-rate→Euler-rate matrix has 1/cos(pitch) terms, so steps near ±90° move roll and yaw by large, grid-dependent amounts, and the error no longer shrinks with the rate as the scheme's order says (a run that starts at the lock is off by O(1) rad at every rate). Quaternion and SO(3) integration stay at their discretisation error.").map_err(CliError::Failed)?;
+    page.svg(&path, "Attitude error against time; the scene passes exactly through pitch ±90° at t = 2, 6, 10 s. At the first pass the Euler-angle integration's error jumps by orders of magnitude and stays there: the body-rate→Euler-rate matrix has 1/cos(pitch) terms, so steps near ±90° move roll and yaw by large, grid-dependent amounts, and the error no longer shrinks with the rate as the scheme's order says (a run that starts at the lock is off by O(1) rad at every rate). Quaternion and SO(3) integration stay at their discretisation error.").map_err(failed)?;
     Ok(path.display().to_string())
 }
 
-/// Section 4: the static calibration against the true biases.
+/// The static calibration against the true biases.
 fn calibration_section(page: &mut Page, c: &StaticCheck) {
     page.h2("Bias calibration from a simulated static recording");
     let (truth, cal) = (&c.truth, &c.cal);
@@ -173,46 +367,56 @@ fn calibration_section(page: &mut Page, c: &StaticCheck) {
         .collect();
     page.p("60 s at 200 Hz, one attitude, EuRoC noise, constant biases. Gauss-Newton estimate of the gyro bias [rad/s] with its standard deviation; the accelerometer bias is reported unobservable at one attitude (it cannot be separated from tilt):");
     page.table(&["axis", "true b_g", "estimate", "σ", "error / σ"], &rows);
-    page.p(&format!("acc_bias: {}", cal.acc_bias_note));
+    page.p(&format!("`acc_bias`: {}", cal.acc_bias_note));
 }
 
-/// Section 5: the Allan chart of the gyro and the fitted densities. Returns the chart's path.
-fn allan_section(page: &mut Page, a: &AllanCheck, out: &Path) -> Result<String, CliError> {
+/// The Allan charts of both sensors and the fitted densities per axis. Returns the charts'
+/// paths.
+fn allan_section(page: &mut Page, a: &AllanCheck, out: &Path) -> Result<Vec<String>, CliError> {
     page.h2("Allan deviation of a simulated static hour");
-    let path = out.join("allan_gyro.svg");
-    figures::allan(&a.allan, 0, &path)?;
-    page.svg(&path, "Overlapping Allan deviation of the three gyro axes, with the fitted white-noise (slope −½, read at τ = 1 s) and random-walk (slope +½, read at τ = 3 s) lines.").map_err(CliError::Failed)?;
-    let (sim, fit) = (&a.simulated, &a.fitted);
-    let row = |name: &str, s: f64, f: f64| vec![name.to_string(), e3(s), e3(f)];
-    page.table(
-        &["quantity", "simulated", "fitted (max over axes)"],
-        &[
-            row(
-                "gyroscope_noise_density [rad/s/√Hz]",
-                sim.gyro_noise_density,
-                fit.gyro_noise_density,
-            ),
-            row(
-                "gyroscope_random_walk [rad/s²/√Hz]",
-                sim.gyro_random_walk,
-                fit.gyro_random_walk,
-            ),
-            row(
-                "accelerometer_noise_density [m/s²/√Hz]",
-                sim.acc_noise_density,
-                fit.acc_noise_density,
-            ),
-            row(
-                "accelerometer_random_walk [m/s³/√Hz]",
-                sim.acc_random_walk,
-                fit.acc_random_walk,
-            ),
-        ],
+    let sim = &a.simulated;
+    page.p(&format!("One hour at rest at {} Hz with EuRoC densities and bias random walk. The fitted white-noise \
+        line (slope −½) read at τ = 1 s gives the noise density N, the random-walk line (slope +½) read at \
+        τ = 3 s gives K; the Kalibr `imu.yaml` that `preint allan` writes takes the maximum over the axes.", sim.update_rate_hz));
+    let mut files = Vec::new();
+    for (sensor, name, unit) in [(0, "gyro", "rad/s"), (1, "acc", "m/s²")] {
+        let path = out.join(format!("allan_{name}.svg"));
+        figures::allan(&a.allan, sensor, &path)?;
+        let what = if sensor == 0 {
+            "gyroscope"
+        } else {
+            "accelerometer"
+        };
+        page.svg(&path, &format!("Overlapping Allan deviation of the three {what} axes [{unit}], with the fitted white-noise (dashed) and random-walk (dotted) lines in each axis' colour; the diamonds mark N at τ = 1 s and the squares K at τ = 3 s.")).map_err(failed)?;
+        files.push(path.display().to_string());
+    }
+    let (sn, sk) = (
+        [sim.gyro_noise_density, sim.acc_noise_density],
+        [sim.gyro_random_walk, sim.acc_random_walk],
     );
-    Ok(path.display().to_string())
+    let rows: Vec<Vec<String>> = (0..6)
+        .map(|c| {
+            let f = &a.allan.fits[c];
+            let bound = |b: bool| if b { "≤ " } else { "" };
+            vec![
+                format!("`{}`", IMU_AXES[c]),
+                format!("{}{}", bound(f.white_density_is_bound), e3(f.white_density)),
+                e3(sn[c / 3]),
+                format!("{}{}", bound(f.random_walk_is_bound), e3(f.random_walk)),
+                e3(sk[c / 3]),
+            ]
+        })
+        .collect();
+    page.p("Fitted and simulated densities per axis (gyro: N in rad/s/√Hz, K in rad/s²/√Hz; accelerometer: N in m/s²/√Hz, K in m/s³/√Hz; ≤: an upper bound, no region of that slope in the data):");
+    page.table(
+        &["axis", "N fitted", "N simulated", "K fitted", "K simulated"],
+        &rows,
+    );
+    Ok(files)
 }
 
-/// The JSON form: the files and a summary (200 Hz errors per scene, NEES, the calibration).
+/// The JSON form: the files, the conclusions and a summary (200 Hz errors per scene, NEES, the
+/// calibration, `advise`'s recommendations, ns per sample).
 pub fn to_json(r: &Report) -> Value {
     let mut summary = serde_json::Map::new();
     for (scene, rows) in &r.data.accuracy {
@@ -240,16 +444,44 @@ pub fn to_json(r: &Report) -> Value {
                "gyro_bias_std": [cal.gyro_bias_std.x, cal.gyro_bias_std.y, cal.gyro_bias_std.z],
                "truth": [truth.gyro.x, truth.gyro.y, truth.gyro.z]}),
     );
-    json!({"files": r.files, "summary": summary})
+    let advise: serde_json::Map<String, Value> = r
+        .data
+        .advice
+        .iter()
+        .map(|a| {
+            let c = a.recommendation();
+            let v = json!({"recommended_scheme": c.map(|c| scheme::label(c.scheme)),
+                           "recommended_rate": c.map(|c| c.rate_hz)});
+            (a.scene.to_string(), v)
+        })
+        .collect();
+    summary.insert("advise".into(), Value::Object(advise));
+    let speed: Vec<Value> = r
+        .data
+        .speed
+        .iter()
+        .map(|t| {
+            json!({"scheme": scheme::label(t.scheme), "deltas": t.deltas,
+                   "covariance": t.covariance, "combined": t.combined})
+        })
+        .collect();
+    summary.insert("ns_per_sample".into(), json!(speed));
+    json!({"files": r.files, "conclusions": r.conclusions, "summary": summary})
 }
 
-/// The human summary: where the page is.
+/// The human summary: where the page is, and the conclusions.
 pub fn to_text(r: &Report) -> String {
     let index = r.files.last().map_or("", String::as_str);
-    format!(
-        "wrote {index} (charts beside it: {})\n",
+    let mut h = format!(
+        "wrote {index} (charts beside it: {})\nconclusions:\n",
         r.files.len().saturating_sub(1)
-    )
+    );
+    for c in &r.conclusions {
+        h.push_str("- ");
+        h.push_str(c);
+        h.push('\n');
+    }
+    h
 }
 
 /// Runs `preint report`.
