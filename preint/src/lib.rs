@@ -1,8 +1,24 @@
 //! # preint — on-manifold IMU preintegration
 //!
-//! Conventions (see `docs/ARCHITECTURE.md`): world frame z up, gravity `g = (0, 0, −9.81)` by
-//! default; the accelerometer measures specific force; rotation perturbations on the right;
-//! preintegrated tangent order **[δφ, δv, δp]**, bias order **[b_g, b_a]**; integer-ns times.
+//! The gyroscope and accelerometer samples between two keyframes become one relative-motion
+//! measurement (ΔR, Δv, Δp) with its covariance and bias Jacobians ([`PreintegratedImu`]), and
+//! the IMU factors a back end optimises ([`ImuFactor`], [`CombinedImuFactor`]); Forster,
+//! Carlone, Dellaert, Scaramuzza, T-RO 2017.
+//!
+//! - Parameters and inputs: [`PreintParams`] (noise densities, [`Scheme`], [`Level`]),
+//!   [`ImuSample`], [`ImuBias`], [`ImuNoise`].
+//! - Preintegration: [`preintegrate`] (a keyframe window of a stream, boundary samples
+//!   interpolated) or a [`Preintegrator`] fed sample by sample; [`merge`] of consecutive
+//!   windows; [`Preintegrator::measurement_for_bias`] for a new bias estimate.
+//! - The measurement: [`PreintegratedImu`] (its `cov`, `cov15`, `residual_cov15()` and bias
+//!   Jacobians), [`predict`] and [`NavState`].
+//! - Factors: [`ImuFactor`], [`CombinedImuFactor`] (residual, analytic Jacobians, whitening).
+//! - Schemes: [`scheme`] (the mathematics of each); I/O of EuRoC CSV and Kalibr yaml: [`io`].
+//!
+//! Conventions: world frame z up, gravity `g = (0, 0, −9.81)` m/s² by default; the
+//! accelerometer measures specific force; rotations are perturbed on the right
+//! (`R ← R Exp(δφ)`); preintegrated tangent order **[δφ, δv, δp]**, bias order
+//! **[b_g, b_a]**; timestamps integer nanoseconds; noise as continuous-time densities.
 
 #![deny(missing_docs)]
 

@@ -1,6 +1,6 @@
 //! # preint-sim — an IMU simulator, exact ground truth and dead-reckoning integrators
 //!
-//! Conventions (`docs/ARCHITECTURE.md`): world frame z up, gravity `g = (0, 0, −9.81)` m/s² by
+//! Conventions: world frame z up, gravity `g = (0, 0, −9.81)` m/s² by
 //! default; `R_wb` rotates body→world; the accelerometer measures specific force
 //! `a_m = S_a R_wbᵀ (a_w − g) + b_a + n_a` (reads +9.81 on the up axis at rest), the gyro
 //! `ω_m = S_g ω_b + b_g + n_g` (the usual MEMS model, e.g. Furgale et al., IROS 2013); bias order [b_g, b_a]; integer-ns timestamps,
