@@ -8,7 +8,7 @@
 //! - Parameters and inputs: [`PreintParams`] (noise densities, [`Scheme`], [`Level`]),
 //!   [`ImuSample`], [`ImuBias`], [`ImuNoise`].
 //! - Preintegration: [`preintegrate`] (a keyframe window of a stream, boundary samples
-//!   interpolated) or a [`Preintegrator`] fed sample by sample; [`merge`] of consecutive
+//!   interpolated) or a [`Preintegrator`] fed sample by sample; [`merge()`] of consecutive
 //!   windows; [`Preintegrator::measurement_for_bias`] for a new bias estimate.
 //! - The measurement: [`PreintegratedImu`] (its `cov`, `cov15`, `residual_cov15()` and bias
 //!   Jacobians), [`predict`] and [`NavState`].
