@@ -40,7 +40,10 @@ fn main() {
             f.random_walk
         );
     }
-    println!("\nimu.yaml (the largest axis):\n{}", allan.kalibr_yaml());
+    println!(
+        "\nimu.yaml (the largest axis):\n{}",
+        preint_io::kalibr_yaml_string(&allan.to_imu_noise())
+    );
     let rel = |a: f64, b: f64| (a / b - 1.0).abs();
     assert!(rel(fit.gyro_noise_density, noise.gyro_noise_density) < 0.1);
     assert!(rel(fit.acc_noise_density, noise.acc_noise_density) < 0.1);

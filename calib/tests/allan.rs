@@ -10,12 +10,12 @@
 //! std); this one would not.
 
 use nalgebra::Vector3;
-use preint::io::parse_kalibr_yaml;
 use preint::{ImuNoise, ImuSample};
 use preint_calib::allan::{
     AllanError, BIAS_INSTABILITY_FACTOR, ImuAllan, allan_deviation, fit_noise,
     log_spaced_cluster_sizes,
 };
+use preint_io::parse_kalibr_yaml;
 use preint_lie::SO3;
 use preint_sim::{SimConfig, StaticScene, simulate};
 use rand::rngs::StdRng;
@@ -208,7 +208,7 @@ fn reported_fit_errors_match_the_spread_over_seeds() {
 
 /// Per-axis densities differ (channels taken from three `sim` runs, since `sim`'s noise is
 /// isotropic per sensor): the Kalibr noise takes the maximum over the axes, and the yaml text
-/// parses back (`preint::io::parse_kalibr_yaml`) to exactly those values.
+/// parses back (`preint_io::parse_kalibr_yaml`) to exactly those values.
 #[test]
 fn imu_samples_to_kalibr_noise_uses_max_over_axes_and_round_trips() {
     let dens = [(1e-4, 1e-3), (2e-4, 3e-3), (1.5e-4, 2e-3)];
@@ -259,7 +259,7 @@ fn imu_samples_to_kalibr_noise_uses_max_over_axes_and_round_trips() {
         "{noise:?}"
     );
     assert!((noise.update_rate_hz - 200.0).abs() < 1e-6);
-    let yaml = a.kalibr_yaml();
+    let yaml = preint_io::kalibr_yaml_string(&a.to_imu_noise());
     let back = parse_kalibr_yaml(&yaml, "allan yaml").unwrap();
     assert_eq!(back, noise, "{yaml}");
 

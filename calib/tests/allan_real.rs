@@ -135,7 +135,7 @@ fn adis16405_full_fit_is_plausible() {
         assert!((rf - 1.0).abs() <= 0.25, "channel {c}: floor ratio {rf}");
     }
     let noise = a.to_imu_noise();
-    println!("{}", a.kalibr_yaml());
+    println!("{}", preint_io::kalibr_yaml_string(&a.to_imu_noise()));
     let max = |r: std::ops::Range<usize>| {
         a.fits[r]
             .iter()

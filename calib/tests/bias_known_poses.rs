@@ -3,9 +3,9 @@
 //! estimates) and typed errors.
 
 use nalgebra::Vector3;
-use preint::io::{read_euroc_groundtruth, read_euroc_imu};
 use preint::{ImuBias, ImuNoise, PreintParams, Scheme};
 use preint_calib::bias::{BiasError, KnownPose, KnownPoseOptions, calibrate_known_poses};
+use preint_io::{read_euroc_groundtruth, read_euroc_imu};
 use preint_lie::SO3;
 use preint_sim::{EulerScene, SimConfig, rng_from_seed, simulate};
 use rand::RngExt;
@@ -218,7 +218,7 @@ fn euroc_v1_01_biases_velocities_gravity() {
     let n = sel.len() as f64;
     let gt_bg = sel.iter().map(|s| s.bias.gyro).sum::<Vector3<f64>>() / n;
     let gt_ba = sel.iter().map(|s| s.bias.acc).sum::<Vector3<f64>>() / n;
-    let range = |f: &dyn Fn(&preint::io::GroundTruthState) -> f64| {
+    let range = |f: &dyn Fn(&preint_io::GroundTruthState) -> f64| {
         let v: Vec<f64> = all.iter().map(|s| f(s)).collect();
         v.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
             - v.iter().cloned().fold(f64::INFINITY, f64::min)

@@ -27,10 +27,10 @@ pub fn positive(flag: &str, v: f64) -> Result<(), CliError> {
 }
 
 /// The samples of `file` look like SI units (accelerometer m/s², gyroscope rad/s; see
-/// [`preint::io::check_si_units`]): an accelerometer in g or a gyroscope in deg/s is refused
+/// [`preint_io::check_si_units`]): an accelerometer in g or a gyroscope in deg/s is refused
 /// with a message naming the file.
 pub fn si_units(samples: &[ImuSample], file: &Path) -> Result<(), CliError> {
-    preint::io::check_si_units(samples, &file.display().to_string())?;
+    preint_io::check_si_units(samples, &file.display().to_string())?;
     Ok(())
 }
 

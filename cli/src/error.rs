@@ -16,7 +16,7 @@ pub struct Output {
 pub enum CliError {
     /// Reading or parsing an input file failed (the message names file and line).
     #[error(transparent)]
-    Io(#[from] preint::io::IoError),
+    Io(#[from] preint_io::IoError),
     /// A flag value is invalid.
     #[error("{0}")]
     Usage(String),

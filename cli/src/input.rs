@@ -1,19 +1,8 @@
 //! Reading and selecting the inputs: IMU files, ground-truth rows, built-in scenes.
 
-use crate::{CliError, checks};
+use crate::CliError;
 use preint::ImuSample;
-use preint::io::{GroundTruthState, read_euroc_imu};
-use std::path::Path;
-
-/// Reads a EuRoC `imu0` CSV file and, when `unit_check`, checks that it looks like SI units
-/// ([`checks::si_units`]).
-pub fn read_imu(file: &Path, unit_check: bool) -> Result<Vec<ImuSample>, CliError> {
-    let samples = read_euroc_imu(file)?;
-    if unit_check {
-        checks::si_units(&samples, file)?;
-    }
-    Ok(samples)
-}
+use preint_io::GroundTruthState;
 
 /// Number of samples with timestamps in `[t_i, t_j]` (ns).
 pub fn count_in(samples: &[ImuSample], t_i: i64, t_j: i64) -> usize {

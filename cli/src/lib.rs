@@ -35,6 +35,7 @@ pub mod commands;
 pub mod error;
 pub mod format;
 pub mod html;
+pub mod imu_args;
 pub mod input;
 pub mod noise;
 pub mod parse;

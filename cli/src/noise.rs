@@ -2,7 +2,7 @@
 
 use crate::CliError;
 use preint::ImuNoise;
-use preint::io::read_kalibr_yaml;
+use preint_io::read_kalibr_yaml;
 use serde_json::{Value, json};
 use std::path::Path;
 

@@ -9,7 +9,7 @@ mod common;
 
 use common::{json, run, tmp, vec3, write, write_imu_csv};
 use nalgebra::Vector3;
-use preint::io::read_euroc_groundtruth;
+use preint_io::read_euroc_groundtruth;
 use std::path::Path;
 
 /// Mean true bias (gyro, acc) over the ground-truth rows with `from ≤ t ≤ to`.

@@ -13,7 +13,8 @@
 //! - The measurement: [`PreintegratedImu`] (its `cov`, `cov15`, `residual_cov15()` and bias
 //!   Jacobians), [`predict`] and [`NavState`].
 //! - Factors: [`ImuFactor`], [`CombinedImuFactor`] (residual, analytic Jacobians, whitening).
-//! - Schemes: [`scheme`] (the mathematics of each); I/O of EuRoC CSV and Kalibr yaml: [`io`].
+//! - Schemes: [`scheme`] (the mathematics of each). Reading and writing files is the
+//!   `preint-io` crate's job; this crate does no I/O.
 //!
 //! Conventions: world frame z up, gravity `g = (0, 0, −9.81)` m/s² by default; the
 //! accelerometer measures specific force; rotations are perturbed on the right
@@ -23,7 +24,6 @@
 #![deny(missing_docs)]
 
 pub mod factor;
-pub mod io;
 pub mod measurement;
 pub mod merge;
 pub mod navstate;

@@ -21,11 +21,11 @@
 //! would miss GTSAM's χ² (so the test tells the two signs apart).
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
-use preint::io::read_euroc_imu;
 use preint::{
     CombinedImuFactor, ImuBias, ImuNoise, Level, NavState, PreintParams, PreintegratedImu, Scheme,
     factor::sqrt_information, preintegrate,
 };
+use preint_io::read_euroc_imu;
 use preint_lie::SO3;
 use serde_json::Value;
 use std::path::PathBuf;

@@ -7,8 +7,8 @@
 //! (Forster chart); it is reordered to our [φ, v, p].
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
-use preint::io::parse_euroc_imu;
 use preint::{ImuBias, Level, PreintParams, Preintegrator, Scheme};
+use preint_io::parse_euroc_imu;
 use serde_json::Value;
 use std::path::PathBuf;
 

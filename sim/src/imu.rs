@@ -25,8 +25,8 @@
 
 use crate::scene::{Scene, t_s};
 use nalgebra::{Matrix3, Vector3};
-use preint::io::{GroundTruthState, IoError};
 use preint::{ImuBias, ImuNoise, ImuSample};
+use preint_io::{GroundTruthState, IoError};
 use rand::SeedableRng;
 use rand::rngs::ChaCha12Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -253,7 +253,7 @@ pub fn simulate(
 /// Writes a simulated dataset into directory `dir` (created if missing):
 /// `imu.csv` (EuRoC `imu0/data.csv` format), `groundtruth.csv` (EuRoC
 /// `state_groundtruth_estimate0/data.csv`: p, q w,x,y,z body→world, v, b_g, b_a) and
-/// `imu.yaml` (Kalibr densities `noise`). All through `preint::io` (lossless floats).
+/// `imu.yaml` (Kalibr densities `noise`). All through `preint_io` (lossless floats).
 /// Returns the three paths in that order.
 pub fn write_dataset(
     dir: &Path,
@@ -267,8 +267,8 @@ pub fn write_dataset(
     let imu = dir.join("imu.csv");
     let gt = dir.join("groundtruth.csv");
     let yaml = dir.join("imu.yaml");
-    preint::io::write_euroc_imu(&imu, &output.samples)?;
-    preint::io::write_euroc_groundtruth(&gt, &output.truth)?;
-    preint::io::write_kalibr_yaml(&yaml, noise)?;
+    preint_io::write_euroc_imu(&imu, &output.samples)?;
+    preint_io::write_euroc_groundtruth(&gt, &output.truth)?;
+    preint_io::write_kalibr_yaml(&yaml, noise)?;
     Ok(vec![imu, gt, yaml])
 }

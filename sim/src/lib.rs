@@ -31,7 +31,7 @@ pub use imu::{
     SimConfig, SimError, SimOutput, period_ns, rng_from_seed, scale_misalignment, simulate,
     write_dataset,
 };
-pub use preint::io::GroundTruthState;
+pub use preint_io::GroundTruthState;
 pub use scene::{SCENE_NAMES, Scene, SceneState, scene_by_name, t_s};
 pub use scenes::{
     EulerScene, GimbalLockScene, MultiPoseStaticScene, SeedEllipseScene, SpinScene, StaticScene,

@@ -17,9 +17,9 @@ fn euroc_and_kalibr_round_trip_is_bit_exact() {
         .map(|p| p.file_name().unwrap().to_str().unwrap().to_owned())
         .collect();
     assert_eq!(names, ["imu.csv", "groundtruth.csv", "imu.yaml"]);
-    let samples = preint::io::read_euroc_imu(&files[0]).unwrap();
-    let truth = preint::io::read_euroc_groundtruth(&files[1]).unwrap();
-    let noise_back = preint::io::read_kalibr_yaml(&files[2]).unwrap();
+    let samples = preint_io::read_euroc_imu(&files[0]).unwrap();
+    let truth = preint_io::read_euroc_groundtruth(&files[1]).unwrap();
+    let noise_back = preint_io::read_kalibr_yaml(&files[2]).unwrap();
     std::fs::remove_dir_all(&dir).ok();
     assert_eq!(samples, out.samples);
     assert_eq!(noise_back, noise);
@@ -37,7 +37,7 @@ fn euroc_and_kalibr_round_trip_is_bit_exact() {
 fn ground_truth_quaternion_is_body_to_world_wxyz() {
     let scene = preint_sim::StaticScene::default();
     let out = simulate(&scene, 10.0, 0.1, &SimConfig::noise_free(), 0).unwrap();
-    let text = preint::io::euroc_groundtruth_string(&out.truth);
+    let text = preint_io::euroc_groundtruth_string(&out.truth);
     let row: Vec<f64> = text
         .lines()
         .nth(1)

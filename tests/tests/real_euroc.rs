@@ -36,8 +36,8 @@
 
 use evidence::{chi2, data_dir, median, quantile, rot_angle, write_json};
 use nalgebra::{SMatrix, SVector};
-use preint::io::{read_euroc_groundtruth, read_euroc_imu};
 use preint::{ImuNoise, Level, NavState, PreintParams, Scheme, predict, preintegrate};
+use preint_io::{read_euroc_groundtruth, read_euroc_imu};
 
 /// Curators' median errors of the ground truth (tests/data/README.md).
 const GT_MEDIAN_ROT_DEG: f64 = 0.10;

@@ -59,11 +59,11 @@
 
 use evidence::{loglog_slope, rot_angle, write_json};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
-use preint::io::{parse_euroc_groundtruth, parse_euroc_imu};
 use preint::{
     ImuBias, ImuFactor, ImuNoise, ImuSample, Level, NavState, PreintError, PreintParams,
     Preintegrator, Scheme, preintegrate,
 };
+use preint_io::{parse_euroc_groundtruth, parse_euroc_imu};
 use preint_lie::{SO3, hat};
 use preint_sim::{Attitude, Rule, Scene, dead_reckon, exact_deltas, scene_by_name, t_s};
 use proptest::prelude::*;

@@ -164,9 +164,4 @@ impl ImuAllan {
             update_rate_hz: 1.0 / self.dt,
         }
     }
-
-    /// Kalibr `imu.yaml` text of [`ImuAllan::to_imu_noise`] (via `preint::io`).
-    pub fn kalibr_yaml(&self) -> String {
-        preint::io::kalibr_yaml_string(&self.to_imu_noise())
-    }
 }

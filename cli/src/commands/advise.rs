@@ -4,7 +4,8 @@
 
 use crate::analysis::advise::{Candidate, evaluate, recommend};
 use crate::analysis::denoise::denoise;
-use crate::{CliError, Output, checks, input, noise, scheme};
+use crate::imu_args::ImuArgs;
+use crate::{CliError, Output, checks, noise, scheme};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -12,9 +13,9 @@ use std::path::PathBuf;
 /// Flags of `preint advise`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
-    /// IMU CSV file (EuRoC imu0 format).
-    #[arg(long)]
-    pub imu: PathBuf,
+    /// The recording and how to read it.
+    #[command(flatten)]
+    pub input: ImuArgs,
     /// Kalibr imu.yaml with the noise densities.
     #[arg(long)]
     pub noise: PathBuf,
@@ -52,7 +53,7 @@ impl Advice {
 pub fn compute(args: &Args) -> Result<Advice, CliError> {
     checks::positive("--fraction", args.fraction)?;
     let noise = noise::or_default(Some(&args.noise))?;
-    let samples = input::read_imu(&args.imu, true)?;
+    let (samples, _) = args.input.read_all()?;
     let (signal, cutoffs) = denoise(&samples, noise.gyro_noise_density, noise.acc_noise_density);
     let candidates = evaluate(&signal, &noise, 9.81, args.window, args.fraction)?;
     let recommended =
@@ -94,7 +95,7 @@ pub fn to_text(a: &Advice) -> String {
     let _ = writeln!(
         h,
         "{}: {} samples; window {window} s; threshold {fraction}·σ",
-        a.args.imu.display(),
+        a.args.input.imu.display(),
         a.samples
     );
     let fmt_cut = |c: Option<f64>| {

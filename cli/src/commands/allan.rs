@@ -5,9 +5,10 @@
 
 use crate::charts::figures;
 use crate::format::IMU_AXES;
+use crate::imu_args::ImuArgs;
 use crate::{CliError, Output};
-use preint::io::{read_euroc_imu, write_kalibr_yaml};
 use preint_calib::allan::ImuAllan;
+use preint_io::write_kalibr_yaml;
 use serde_json::{Value, json};
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -15,9 +16,9 @@ use std::path::PathBuf;
 /// Flags of `preint allan`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
-    /// IMU CSV file (EuRoC imu0 format), recorded at rest.
-    #[arg(long)]
-    pub imu: PathBuf,
+    /// The recording (at rest) and how to read it.
+    #[command(flatten)]
+    pub input: ImuArgs,
     /// Output directory for allan.svg and imu.yaml.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -38,8 +39,9 @@ pub struct AllanRun {
 
 /// Computes the Allan deviations and, with `--out`, writes the two charts and `imu.yaml`.
 pub fn compute(args: &Args) -> Result<AllanRun, CliError> {
-    let samples = read_euroc_imu(&args.imu)?;
-    let a = ImuAllan::from_samples(&samples, 10).map_err(|e| CliError::failed_in(&args.imu, e))?;
+    let (samples, _) = args.input.read_all()?;
+    let a = ImuAllan::from_samples(&samples, 10)
+        .map_err(|e| CliError::failed_in(&args.input.imu, e))?;
     let mut files = Vec::new();
     if let Some(dir) = &args.out {
         std::fs::create_dir_all(dir).map_err(|e| CliError::failed_in(dir, e))?;
@@ -53,7 +55,7 @@ pub fn compute(args: &Args) -> Result<AllanRun, CliError> {
         files.push(y.display().to_string());
     }
     Ok(AllanRun {
-        imu: args.imu.display().to_string(),
+        imu: args.input.label(),
         samples: samples.len(),
         allan: a,
         files,

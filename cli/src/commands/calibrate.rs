@@ -11,24 +11,25 @@
 //!   bias is not separable from tilt and is reported as unobservable (`acc_bias: null`).
 
 use crate::format::{list, opt_list};
+use crate::imu_args::ImuArgs;
 use crate::{CliError, Output, checks, noise};
 use nalgebra::Vector3;
-use preint::io::{read_euroc_groundtruth, read_euroc_imu};
 use preint::{ImuNoise, ImuSample, PreintParams, Scheme};
 use preint_calib::bias::{
     KnownPose, KnownPoseCalibration, KnownPoseOptions, MultiPoseCalibration, MultiPoseOptions,
     StaticCalibration, StaticOptions, StillInterval, StillOptions, calibrate_known_poses,
     calibrate_multi_pose, calibrate_static, detect_still_intervals,
 };
+use preint_io::read_euroc_groundtruth;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 
 /// Flags of `preint calibrate`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
-    /// IMU CSV file (EuRoC imu0 format).
-    #[arg(long)]
-    pub imu: PathBuf,
+    /// The recording and how to read it.
+    #[command(flatten)]
+    pub input: ImuArgs,
     /// Known poses (EuRoC ground-truth format) for the known-pose problem.
     #[arg(long)]
     pub poses: Option<PathBuf>,
@@ -96,16 +97,15 @@ fn distinct_attitudes(samples: &[ImuSample], ivs: &[StillInterval]) -> usize {
 
 /// Reads the samples in `[--from, --to]` and checks their units.
 fn read_samples(args: &Args) -> Result<Vec<ImuSample>, CliError> {
-    let mut samples = read_euroc_imu(&args.imu)?;
+    let (mut samples, _) = args.input.read_all()?;
     let (lo, hi) = (args.from.unwrap_or(i64::MIN), args.to.unwrap_or(i64::MAX));
     samples.retain(|s| s.t_ns >= lo && s.t_ns <= hi);
     if samples.len() < 2 {
         return Err(CliError::Failed(format!(
             "{}: fewer than two samples with timestamps in [{lo}, {hi}] ns",
-            args.imu.display()
+            args.input.imu.display()
         )));
     }
-    checks::si_units(&samples, &args.imu)?;
     Ok(samples)
 }
 
@@ -142,7 +142,7 @@ fn known_poses(
         pose_pos_std: args.pose_pos_std,
         ..KnownPoseOptions::new(params)
     };
-    let c = calibrate_known_poses(samples, &kp, &opts).map_err(fail_in(&args.imu))?;
+    let c = calibrate_known_poses(samples, &kp, &opts).map_err(fail_in(&args.input.imu))?;
     Ok(Calibration::KnownPoses {
         source: pfile.display().to_string(),
         poses: kp.len(),
@@ -161,7 +161,7 @@ pub fn compute(args: &Args) -> Result<Calibration, CliError> {
     if let Some(pfile) = &args.poses {
         return known_poses(args, pfile, &samples, &noise);
     }
-    let fail = fail_in(&args.imu);
+    let fail = fail_in(&args.input.imu);
     let g = Vector3::new(0.0, 0.0, -args.gravity);
     let n = samples.len();
     let rate = (n - 1) as f64 / ((samples[n - 1].t_ns - samples[0].t_ns) as f64 * 1e-9);

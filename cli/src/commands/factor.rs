@@ -19,13 +19,14 @@
 
 use crate::analysis::consistency::{Evaluation, TruthNoise, chi2_quantiles, evaluate};
 use crate::format::list;
+use crate::imu_args::ImuArgs;
 use crate::preint_args::PreintArgs;
 use crate::scheme::{self};
 use crate::{CliError, Output, checks, input};
-use preint::io::{GroundTruthState, read_euroc_groundtruth};
 use preint::{
     CombinedImuFactor, ImuBias, ImuFactor, Level, NavState, PreintegratedImu, preintegrate,
 };
+use preint_io::{GroundTruthState, read_euroc_groundtruth};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -33,9 +34,9 @@ use std::path::PathBuf;
 /// Flags of `preint factor`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
-    /// IMU CSV file (EuRoC imu0 format).
-    #[arg(long)]
-    pub imu: PathBuf,
+    /// The recording and how to read it.
+    #[command(flatten)]
+    pub input: ImuArgs,
     /// Ground truth (EuRoC state_groundtruth_estimate0 format: p (m), q wxyz body->world,
     /// v (m/s), b_g (rad/s), b_a (m/s^2)), world frame z up.
     #[arg(long)]
@@ -62,9 +63,6 @@ pub struct Args {
     /// Standard deviation of the ground truth's velocities (m/s), added to the weight.
     #[arg(long, default_value_t = 0.0)]
     pub vel_std: f64,
-    /// Skip the check that the data looks like SI units (m/s^2, rad/s).
-    #[arg(long)]
-    pub no_unit_check: bool,
 }
 
 const BLOCKS: [&str; 5] = ["rotation", "velocity", "position", "gyro_bias", "acc_bias"];
@@ -118,7 +116,7 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
         Level::Covariance
     };
     let (_, params) = args.preint.params(level)?;
-    let samples = input::read_imu(&args.imu, !args.no_unit_check)?;
+    let (samples, _) = args.input.read_all()?;
     let gt = read_euroc_groundtruth(&args.poses)?;
     let (gi, gj) = (
         *input::nearest_row(&gt, args.from),
@@ -137,8 +135,8 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
     }
     let scheme = params.scheme;
     let pim = preintegrate(&params, &gi.bias, &samples, gi.t_ns, gj.t_ns)
-        .map_err(|e| CliError::failed_in(&args.imu, e))?;
-    let failed = |e: preint::FactorError| CliError::failed_in(&args.imu, e);
+        .map_err(|e| CliError::failed_in(&args.input.imu, e))?;
+    let failed = |e: preint::FactorError| CliError::failed_in(&args.input.imu, e);
     let (xi, xj) = (nav(&gi), nav(&gj));
     let ev = if args.combined {
         let f = CombinedImuFactor::new(pim.clone()).map_err(failed)?;
@@ -150,7 +148,7 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
         evaluate(r, j.state_i(), j.state_j(), pim.cov, tn)?
     };
     Ok(FactorRun {
-        imu: args.imu.display().to_string(),
+        imu: args.input.label(),
         scheme,
         combined: args.combined,
         gi,

@@ -2,21 +2,22 @@
 //! covariances and the bias Jacobians.
 
 use crate::format::{list, rows, text_matrix};
+use crate::imu_args::{ImuArgs, source_json};
 use crate::preint_args::PreintArgs;
 use crate::scheme::{self};
 use crate::{CliError, Output, input, noise};
 use nalgebra::Vector3;
 use preint::{ImuBias, ImuNoise, Level, PreintegratedImu, preintegrate};
+use preint_io::SourceInfo;
 use serde_json::{Value, json};
 use std::fmt::Write as _;
-use std::path::PathBuf;
 
 /// Flags of `preint integrate`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
-    /// IMU CSV file (EuRoC imu0 format).
-    #[arg(long)]
-    pub imu: PathBuf,
+    /// The recording and how to read it.
+    #[command(flatten)]
+    pub input: ImuArgs,
     /// Scheme, noise densities and gravity.
     #[command(flatten)]
     pub preint: PreintArgs,
@@ -32,9 +33,6 @@ pub struct Args {
     /// Last keyframe time in ns (default: last sample).
     #[arg(long, allow_hyphen_values = true)]
     pub to: Option<i64>,
-    /// Skip the check that the data looks like SI units (m/s^2, rad/s).
-    #[arg(long)]
-    pub no_unit_check: bool,
 }
 
 /// A preintegrated window.
@@ -42,6 +40,8 @@ pub struct Args {
 pub struct Integration {
     /// The IMU file, as printed.
     pub imu: String,
+    /// How it was read.
+    pub source: SourceInfo,
     /// The scheme used.
     pub scheme: preint::Scheme,
     /// Number of samples with timestamps in the window.
@@ -59,7 +59,7 @@ pub struct Integration {
 /// Reads the file and preintegrates `[--from, --to]` at [`Level::Combined`].
 pub fn compute(args: &Args) -> Result<Integration, CliError> {
     let (noise, params) = args.preint.params(Level::Combined)?;
-    let samples = input::read_imu(&args.imu, !args.no_unit_check)?;
+    let (samples, source) = args.input.read_all()?;
     let t_i = args.from.unwrap_or(samples[0].t_ns);
     let t_j = args.to.unwrap_or(samples[samples.len() - 1].t_ns);
     let bias = ImuBias::new(
@@ -68,9 +68,10 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
     );
     let scheme = params.scheme;
     let pim = preintegrate(&params, &bias, &samples, t_i, t_j)
-        .map_err(|e| CliError::failed_in(&args.imu, e))?;
+        .map_err(|e| CliError::failed_in(&args.input.imu, e))?;
     Ok(Integration {
-        imu: args.imu.display().to_string(),
+        imu: args.input.label(),
+        source,
         scheme,
         samples: input::count_in(&samples, t_i, t_j),
         noise,
@@ -113,6 +114,8 @@ pub fn to_json(r: &Integration) -> Value {
         "continuous-time densities: rad/s/sqrt(Hz), rad/s^2/sqrt(Hz), m/s^2/sqrt(Hz), m/s^3/sqrt(Hz)"
     );
     json!({
+        "imu": r.imu,
+        "input": source_json(&r.source),
         "scheme": scheme::label(r.scheme),
         "samples": r.samples,
         "t_i_ns": m.t_i_ns,
@@ -147,8 +150,9 @@ pub fn to_text(r: &Integration) -> String {
     let mut h = String::new();
     let _ = writeln!(
         h,
-        "{}: {} samples, scheme {}, Δt = {:.9} s",
+        "{} (read as {}): {} samples, scheme {}, Δt = {:.9} s",
         r.imu,
+        r.source.describe(),
         r.samples,
         scheme::label(r.scheme),
         m.delta_t

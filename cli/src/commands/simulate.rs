@@ -3,7 +3,7 @@
 
 use crate::{CliError, Output, input, noise};
 use preint::ImuNoise;
-use preint::io::read_kalibr_yaml;
+use preint_io::read_kalibr_yaml;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 

@@ -2,8 +2,8 @@
 #![allow(clippy::excessive_precision)] // literals copied verbatim from the EuRoC file
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
-use preint::io::*;
 use preint::{ImuBias, ImuNoise, ImuSample};
+use preint_io::*;
 use proptest::prelude::*;
 
 const HEADER: &str = "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]\n";
@@ -11,7 +11,7 @@ const HEADER: &str = "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_
 fn parse_err(text: &str) -> (u64, String) {
     match parse_euroc_imu(text, "imu.csv") {
         Err(IoError::Parse {
-            line,
+            at: Location::Line(line),
             msg,
             source_name,
         }) => {
@@ -42,7 +42,7 @@ fn malformed_rows_name_line_and_problem() {
     let (line, msg) = parse_err(&format!("{HEADER}{ok}2000,0,0,0,0,9.81\n"));
     assert_eq!(line, 3);
     assert!(
-        msg.contains("expected 7 columns") && msg.contains("found 6"),
+        msg.contains("expected 7 columns (comma-separated") && msg.contains("found 6"),
         "{msg}"
     );
 
@@ -68,7 +68,10 @@ fn malformed_rows_name_line_and_problem() {
 
     let (line, msg) = parse_err(&format!("{HEADER}1403715273.262,0,0,0,0,0,9.81\n"));
     assert_eq!(line, 2);
-    assert!(msg.contains("integer nanoseconds"), "{msg}");
+    assert!(
+        msg.contains("fraction of a nanosecond") && msg.contains("--time-unit"),
+        "{msg}"
+    );
 
     assert!(matches!(
         parse_euroc_imu(HEADER, "e.csv"),
