@@ -1,7 +1,7 @@
 //! The command line: the global flags ([`Cli`]) and the subcommands ([`Command`]), each with
 //! its own flags in its module under [`crate::commands`].
 
-use crate::commands::{advise, allan, bench_steps, calibrate, factor, integrate, report};
+use crate::commands::{advise, allan, bench_steps, calibrate, convert, factor, integrate, report};
 use crate::commands::{simulate, speed};
 use clap::{Parser, Subcommand};
 
@@ -61,6 +61,9 @@ pub enum Command {
     Advise(advise::Args),
     /// Throughput of each scheme on this machine (ns per sample), with and without covariance.
     Speed(speed::Args),
+    /// Write any readable recording (text in any layout and units, bag, MCAP) as EuRoC CSV
+    /// (t ns, w rad/s, a m/s^2).
+    Convert(convert::Args),
     /// Everything above on built-in scenes, into one HTML page with charts.
     Report(report::Args),
 }

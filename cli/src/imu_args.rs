@@ -5,10 +5,10 @@ use crate::{CliError, checks};
 use preint::ImuSample;
 use preint_io::layout::{Column, parse_columns};
 use preint_io::{
-    AccelUnit, Delimiter, Format, GyroUnit, ImuReader, ReadOptions, SourceInfo, TimeUnit,
+    AccelUnit, Delimiter, Format, GyroUnit, ImuReader, ReadOptions, SourceInfo, Stamp, TimeUnit,
 };
 use serde_json::{Value, json};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The recording and how to read it. Whatever is not given is detected from the extension
 /// and the first lines; what was decided is printed with the result.
@@ -16,8 +16,14 @@ use std::path::PathBuf;
 pub struct ImuArgs {
     /// IMU recording: EuRoC/TUM-VI CSV, UZH-FPV imu.txt, KITTI text, any delimited text (see
     /// --columns and the unit flags), ROS bag or MCAP (see --topic).
-    #[arg(long)]
-    pub imu: PathBuf,
+    #[arg(long, required_unless_present_all = ["gyro", "accel"], conflicts_with_all = ["gyro", "accel"])]
+    pub imu: Option<PathBuf>,
+    /// A split recording's gyroscope file (rows t, wx, wy, wz), with --accel.
+    #[arg(long, requires = "accel")]
+    pub gyro: Option<PathBuf>,
+    /// A split recording's accelerometer file (rows t, ax, ay, az), with --gyro.
+    #[arg(long, requires = "gyro")]
+    pub accel: Option<PathBuf>,
     /// Format of --imu: euroc, tum-vi, uzh-fpv, kitti, delimited, bag, mcap, db3 (default:
     /// detected from the extension and the header).
     #[arg(long)]
@@ -39,9 +45,19 @@ pub struct ImuArgs {
     /// Unit of the accelerometer: m/s2 or g (1 g = 9.80665 m/s^2).
     #[arg(long)]
     pub accel_unit: Option<AccelUnit>,
-    /// The sensor_msgs/Imu topic of a bag or MCAP file.
-    #[arg(long)]
+    /// The sensor_msgs/Imu topic of a bag or MCAP file (default: its only one).
+    #[arg(long, conflicts_with_all = ["gyro_topic", "accel_topic"])]
     pub topic: Option<String>,
+    /// A split recording in a bag or MCAP file: the topic whose angular velocity is used.
+    #[arg(long, requires = "accel_topic")]
+    pub gyro_topic: Option<String>,
+    /// The topic whose linear acceleration is used, with --gyro-topic.
+    #[arg(long, requires = "gyro_topic")]
+    pub accel_topic: Option<String>,
+    /// Time stamps of bag or MCAP messages: header (header.stamp, when the sensor sampled) or
+    /// record (when the recorder received the message).
+    #[arg(long, default_value = "header")]
+    pub stamp: Stamp,
     /// Skip the checks that the data looks like m/s^2, rad/s and the stated time unit.
     #[arg(long)]
     pub no_unit_check: bool,
@@ -63,18 +79,36 @@ impl ImuArgs {
             gyro_unit: self.gyro_unit,
             accel_unit: self.accel_unit,
             topic: self.topic.clone(),
+            gyro_topic: self.gyro_topic.clone(),
+            accel_topic: self.accel_topic.clone(),
+            stamp: self.stamp,
             ..ReadOptions::default()
         }
     }
 
-    /// The recording's path, as printed.
+    /// The recording's file (the gyroscope file of a split recording), for messages.
+    pub fn path(&self) -> &Path {
+        match (&self.imu, &self.gyro) {
+            (Some(p), _) | (None, Some(p)) => p,
+            (None, None) => Path::new("(no --imu)"),
+        }
+    }
+
+    /// The recording's path(s), as printed.
     pub fn label(&self) -> String {
-        self.imu.display().to_string()
+        match (&self.imu, &self.gyro, &self.accel) {
+            (None, Some(g), Some(a)) => format!("{} + {}", g.display(), a.display()),
+            _ => self.path().display().to_string(),
+        }
     }
 
     /// A streaming reader of the recording.
     pub fn open(&self) -> Result<ImuReader, CliError> {
-        Ok(ImuReader::open(&self.imu, &self.options())?)
+        let opts = self.options();
+        Ok(match (&self.imu, &self.gyro, &self.accel) {
+            (None, Some(g), Some(a)) => preint_io::split::open_split(g, a, &opts)?,
+            _ => ImuReader::open(self.path(), &opts)?,
+        })
     }
 
     /// Every sample of the recording, with the unit checks unless `--no-unit-check`; and how
@@ -84,7 +118,7 @@ impl ImuArgs {
         let info = reader.info().clone();
         let samples = reader.read_all()?;
         if !self.no_unit_check {
-            checks::si_units(&samples, &self.imu)?;
+            checks::si_units(&samples, self.path())?;
         }
         Ok((samples, info))
     }

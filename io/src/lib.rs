@@ -29,7 +29,8 @@
 
 #![deny(missing_docs)]
 
-mod containers;
+pub mod channel;
+pub mod containers;
 pub mod detect;
 pub mod error;
 pub mod euroc;
@@ -40,9 +41,11 @@ pub mod lines;
 pub mod number;
 pub mod plausibility;
 pub mod reader;
+pub mod split;
 mod text;
 pub mod units;
 
+pub use channel::{ChannelSample, ChannelStream, Sensor};
 pub use detect::Format;
 pub use error::{IoError, Location};
 pub use euroc::{euroc_imu_string, parse_euroc_imu, read_euroc_imu, write_euroc_imu};
@@ -53,5 +56,5 @@ pub use groundtruth::{
 pub use kalibr::{kalibr_yaml_string, parse_kalibr_yaml, read_kalibr_yaml, write_kalibr_yaml};
 pub use layout::{Column, Delimiter, TextLayout};
 pub use plausibility::check_si_units;
-pub use reader::{ImuReader, Located, Progress, ReadOptions, SourceInfo};
+pub use reader::{ImuReader, Located, Progress, ReadOptions, SourceInfo, Stamp};
 pub use units::{AccelUnit, GyroUnit, TimeUnit, Units};

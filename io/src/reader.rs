@@ -44,6 +44,13 @@ pub struct ReadOptions {
     pub accel_unit: Option<AccelUnit>,
     /// The `sensor_msgs/Imu` topic of a bag or MCAP file (`--topic`).
     pub topic: Option<String>,
+    /// A split recording in a container: the topic whose angular velocity is used
+    /// (`--gyro-topic`), with [`ReadOptions::accel_topic`].
+    pub gyro_topic: Option<String>,
+    /// The topic whose linear acceleration is used (`--accel-topic`).
+    pub accel_topic: Option<String>,
+    /// Which time stamps a container's samples carry (`--stamp`).
+    pub stamp: Stamp,
     /// Bound of [`ImuReader::read_all`].
     pub max_samples: usize,
 }
@@ -58,6 +65,9 @@ impl Default for ReadOptions {
             gyro_unit: None,
             accel_unit: None,
             topic: None,
+            gyro_topic: None,
+            accel_topic: None,
+            stamp: Stamp::Header,
             max_samples: DEFAULT_MAX_SAMPLES,
         }
     }
@@ -70,6 +80,38 @@ impl ReadOptions {
             format: Some(Format::Euroc),
             ..Self::default()
         }
+    }
+}
+
+/// The time stamp of a message in a container.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Stamp {
+    /// `header.stamp` of the `sensor_msgs/Imu` message: when the sensor sampled (default).
+    #[default]
+    Header,
+    /// The time the recorder received the message (bag record time, MCAP log time).
+    Record,
+}
+
+impl std::str::FromStr for Stamp {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "header" => Ok(Stamp::Header),
+            "record" | "log" | "receive" => Ok(Stamp::Record),
+            other => Err(format!(
+                "unknown stamp `{other}`; expected header or record"
+            )),
+        }
+    }
+}
+
+impl std::fmt::Display for Stamp {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Stamp::Header => "header",
+            Stamp::Record => "record",
+        })
     }
 }
 
@@ -269,6 +311,19 @@ impl ImuReader {
             });
         }
         Ok(out)
+    }
+
+    /// The samples as the source gives them, without the ordering check (for audits that
+    /// report duplicate and out-of-order samples instead of stopping at them); malformed rows
+    /// are still errors. Also returns how the source is read and its progress counter.
+    pub fn into_unvalidated(
+        self,
+    ) -> (
+        Box<dyn Iterator<Item = Result<Located, IoError>> + Send>,
+        SourceInfo,
+        Progress,
+    ) {
+        (self.samples, self.info, self.progress)
     }
 
     /// The error for more samples than `max_samples`.

@@ -95,7 +95,7 @@ pub fn to_text(a: &Advice) -> String {
     let _ = writeln!(
         h,
         "{}: {} samples; window {window} s; threshold {fraction}·σ",
-        a.args.input.imu.display(),
+        a.args.input.path().display(),
         a.samples
     );
     let fmt_cut = |c: Option<f64>| {

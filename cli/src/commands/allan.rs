@@ -41,7 +41,7 @@ pub struct AllanRun {
 pub fn compute(args: &Args) -> Result<AllanRun, CliError> {
     let (samples, _) = args.input.read_all()?;
     let a = ImuAllan::from_samples(&samples, 10)
-        .map_err(|e| CliError::failed_in(&args.input.imu, e))?;
+        .map_err(|e| CliError::failed_in(args.input.path(), e))?;
     let mut files = Vec::new();
     if let Some(dir) = &args.out {
         std::fs::create_dir_all(dir).map_err(|e| CliError::failed_in(dir, e))?;

@@ -103,7 +103,7 @@ fn read_samples(args: &Args) -> Result<Vec<ImuSample>, CliError> {
     if samples.len() < 2 {
         return Err(CliError::Failed(format!(
             "{}: fewer than two samples with timestamps in [{lo}, {hi}] ns",
-            args.input.imu.display()
+            args.input.path().display()
         )));
     }
     Ok(samples)
@@ -142,7 +142,7 @@ fn known_poses(
         pose_pos_std: args.pose_pos_std,
         ..KnownPoseOptions::new(params)
     };
-    let c = calibrate_known_poses(samples, &kp, &opts).map_err(fail_in(&args.input.imu))?;
+    let c = calibrate_known_poses(samples, &kp, &opts).map_err(fail_in(args.input.path()))?;
     Ok(Calibration::KnownPoses {
         source: pfile.display().to_string(),
         poses: kp.len(),
@@ -161,7 +161,7 @@ pub fn compute(args: &Args) -> Result<Calibration, CliError> {
     if let Some(pfile) = &args.poses {
         return known_poses(args, pfile, &samples, &noise);
     }
-    let fail = fail_in(&args.input.imu);
+    let fail = fail_in(args.input.path());
     let g = Vector3::new(0.0, 0.0, -args.gravity);
     let n = samples.len();
     let rate = (n - 1) as f64 / ((samples[n - 1].t_ns - samples[0].t_ns) as f64 * 1e-9);

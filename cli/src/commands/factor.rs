@@ -135,8 +135,8 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
     }
     let scheme = params.scheme;
     let pim = preintegrate(&params, &gi.bias, &samples, gi.t_ns, gj.t_ns)
-        .map_err(|e| CliError::failed_in(&args.input.imu, e))?;
-    let failed = |e: preint::FactorError| CliError::failed_in(&args.input.imu, e);
+        .map_err(|e| CliError::failed_in(args.input.path(), e))?;
+    let failed = |e: preint::FactorError| CliError::failed_in(args.input.path(), e);
     let (xi, xj) = (nav(&gi), nav(&gj));
     let ev = if args.combined {
         let f = CombinedImuFactor::new(pim.clone()).map_err(failed)?;

@@ -68,7 +68,7 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
     );
     let scheme = params.scheme;
     let pim = preintegrate(&params, &bias, &samples, t_i, t_j)
-        .map_err(|e| CliError::failed_in(&args.input.imu, e))?;
+        .map_err(|e| CliError::failed_in(args.input.path(), e))?;
     Ok(Integration {
         imu: args.input.label(),
         source,

@@ -9,6 +9,7 @@ pub mod advise;
 pub mod allan;
 pub mod bench_steps;
 pub mod calibrate;
+pub mod convert;
 pub mod factor;
 pub mod integrate;
 pub mod report;
@@ -26,6 +27,7 @@ pub fn run(command: &Command) -> Result<Output, CliError> {
         Command::BenchSteps(a) => bench_steps::run(a),
         Command::Advise(a) => advise::run(a),
         Command::Speed(a) => speed::run(a),
+        Command::Convert(a) => convert::run(a),
         Command::Report(a) => report::run(a),
     }
 }

@@ -1,0 +1,83 @@
+//! `preint convert`: any readable recording to EuRoC CSV (`t [ns], w [rad/s], a [m/s²]`),
+//! streaming, in bounded memory.
+
+use crate::imu_args::{ImuArgs, source_json};
+use crate::progress::ReadingBar;
+use crate::{CliError, Output};
+use preint_io::SourceInfo;
+use preint_io::euroc::write_euroc_stream;
+use serde_json::{Value, json};
+use std::path::PathBuf;
+
+/// Flags of `preint convert`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    /// The recording and how to read it.
+    #[command(flatten)]
+    pub input: ImuArgs,
+    /// The EuRoC CSV file to write.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// What was converted.
+#[derive(Clone, Debug)]
+pub struct Conversion {
+    /// The input, as printed.
+    pub imu: String,
+    /// How it was read.
+    pub source: SourceInfo,
+    /// The file written.
+    pub out: String,
+    /// Number of samples written.
+    pub samples: u64,
+}
+
+/// Reads the recording sample by sample and writes each as a EuRoC row.
+pub fn compute(args: &Args) -> Result<Conversion, CliError> {
+    let reader = args.input.open()?;
+    let source = reader.info().clone();
+    let _bar = ReadingBar::start(reader.progress(), "convert");
+    let out_name = args.out.display().to_string();
+    let file = std::fs::File::create(&args.out).map_err(|e| CliError::failed_in(&args.out, e))?;
+    let mut out = std::io::BufWriter::with_capacity(1 << 20, file);
+    let samples = write_euroc_stream(&mut out, reader, &out_name)?;
+    if samples == 0 {
+        return Err(CliError::Failed(format!(
+            "{}: no samples",
+            args.input.label()
+        )));
+    }
+    Ok(Conversion {
+        imu: args.input.label(),
+        source,
+        out: out_name,
+        samples,
+    })
+}
+
+/// The JSON form.
+pub fn to_json(c: &Conversion) -> Value {
+    json!({"imu": c.imu, "input": source_json(&c.source), "out": c.out, "samples": c.samples,
+           "out_format": "euroc: timestamp [ns], w_x, w_y, w_z [rad/s], a_x, a_y, a_z [m/s^2]"})
+}
+
+/// The human summary.
+pub fn to_text(c: &Conversion) -> String {
+    format!(
+        "{} (read as {}) → {}: {} samples, EuRoC CSV (ns, rad/s, m/s²)\n",
+        c.imu,
+        c.source.describe(),
+        c.out,
+        c.samples
+    )
+}
+
+/// Runs `preint convert`.
+pub fn run(args: &Args) -> Result<Output, CliError> {
+    let c = compute(args)?;
+    Ok(Output {
+        human: to_text(&c),
+        json: to_json(&c),
+    })
+}
