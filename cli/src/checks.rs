@@ -26,11 +26,12 @@ pub fn positive(flag: &str, v: f64) -> Result<(), CliError> {
     }
 }
 
-/// The samples of `file` look like SI units (accelerometer m/s², gyroscope rad/s; see
-/// [`preint_io::check_si_units`]): an accelerometer in g or a gyroscope in deg/s is refused
-/// with a message naming the file.
+/// The samples of `file` look like the units they were read as (time unit, accelerometer
+/// m/s², gyroscope rad/s, moving and still; see [`preint_io::plausibility`]): data in g,
+/// deg/s or another time unit is refused with a message naming the file and the flag that
+/// fixes it.
 pub fn si_units(samples: &[ImuSample], file: &Path) -> Result<(), CliError> {
-    preint_io::check_si_units(samples, &file.display().to_string())?;
+    preint_io::plausibility::check_units(samples, &file.display().to_string())?;
     Ok(())
 }
 

@@ -20,6 +20,9 @@ fn integrate_euler_matches_the_gtsam_fixture() {
         "integrate",
         "--imu",
         &repo("tests/fixtures/gtsam/example.csv"),
+        // GTSAM's example turns about a horizontal axis with a steady accelerometer (not a
+        // physical motion): the unit checks rightly refuse it.
+        "--no-unit-check",
         "--scheme",
         "euler",
         "--bias-gyro=0.001,-0.002,0.0005",
@@ -77,10 +80,21 @@ fn bad_input_names_file_line_and_problem() {
 
     // Accelerometer in g instead of m/s².
     let in_g = [0.0, 0.0, 0.0, 0.0, 0.0, 1.0];
-    write_imu_csv(&d, "imu.csv", &[(1000, in_g), (2000, in_g), (3000, in_g)]);
+    let rows: Vec<(i64, [f64; 6])> = (0..3).map(|k| (k * 5_000_000, in_g)).collect();
+    write_imu_csv(&d, "imu.csv", &rows);
     let o = run(&["integrate", "--imu", f.to_str().unwrap()]);
     assert!(!o.status.success());
-    assert!(String::from_utf8_lossy(&o.stderr).contains("9.80665"));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--accel-unit g"));
+    // Timestamps 1 µs apart: not an IMU rate in ns (µs read as ns).
+    let at_rest = [0.0, 0.0, 0.0, 0.0, 0.0, 9.81];
+    let rows: Vec<(i64, [f64; 6])> = (0..3).map(|k| (k * 1000, at_rest)).collect();
+    write_imu_csv(&d, "imu.csv", &rows);
+    let err = String::from_utf8_lossy(&run(&["integrate", "--imu", f.to_str().unwrap()]).stderr)
+        .to_string();
+    assert!(
+        err.contains("median sample interval is 1000 ns") && err.contains("--time-unit"),
+        "{err}"
+    );
 
     let o = run(&["integrate", "--imu", "/nonexistent/imu.csv"]);
     assert!(
@@ -285,6 +299,9 @@ fn integrate_covariance15_and_residual_covariance15_match_gtsam() {
         "integrate",
         "--imu",
         &repo("tests/fixtures/gtsam/example.csv"),
+        // GTSAM's example turns about a horizontal axis with a steady accelerometer (not a
+        // physical motion): the unit checks rightly refuse it.
+        "--no-unit-check",
         "--scheme",
         "euler",
         "--noise",
@@ -355,7 +372,7 @@ fn scheme_names_and_aliases() {
     let imu = repo("tests/fixtures/gtsam/example.csv");
     let outs: Vec<Value> = ["hermite4", "rk4", "high-order"]
         .iter()
-        .map(|s| json(&["integrate", "--imu", &imu, "--scheme", s]))
+        .map(|s| json(&["integrate", "--imu", &imu, "--no-unit-check", "--scheme", s]))
         .collect();
     for o in &outs {
         assert_eq!(o["scheme"], "hermite4");
@@ -363,11 +380,18 @@ fn scheme_names_and_aliases() {
     }
     for s in ["euler", "midpoint"] {
         assert_eq!(
-            json(&["integrate", "--imu", &imu, "--scheme", s])["scheme"],
+            json(&["integrate", "--imu", &imu, "--no-unit-check", "--scheme", s])["scheme"],
             s
         );
     }
-    let o = run(&["integrate", "--imu", &imu, "--scheme", "rk4"]);
+    let o = run(&[
+        "integrate",
+        "--imu",
+        &imu,
+        "--no-unit-check",
+        "--scheme",
+        "rk4",
+    ]);
     assert!(String::from_utf8_lossy(&o.stdout).contains("scheme hermite4"));
     for sub in ["integrate", "factor"] {
         let h = String::from_utf8_lossy(&run(&[sub, "-h"]).stdout).to_string();

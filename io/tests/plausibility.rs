@@ -1,0 +1,96 @@
+//! The unit checks on real recordings: each passes as recorded, and each is refused (with the
+//! flag that fixes it) when its gyro is in deg/s, its accelerometer in g or its time unit
+//! wrong.
+
+use preint::ImuSample;
+use preint_io::plausibility::{check_units, gyro_scale_fit, median_interval_ns};
+use preint_io::{GyroUnit, ImuReader, ReadOptions};
+use std::path::PathBuf;
+
+fn repo(rel: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(rel)
+}
+
+fn read(rel: &str, opts: &ReadOptions) -> Vec<ImuSample> {
+    ImuReader::open(&repo(rel), opts)
+        .unwrap()
+        .read_all()
+        .unwrap()
+}
+
+fn scaled(samples: &[ImuSample], gyro: f64, acc: f64) -> Vec<ImuSample> {
+    samples
+        .iter()
+        .map(|s| ImuSample::new(s.t_ns, s.gyro * gyro, s.acc * acc))
+        .collect()
+}
+
+const EUROC: &str = "tests/data/euroc/V1_01_easy_imu0.csv";
+const KITTI: &str = "tests/data/kitti/KittiEquivBiasedImu_first120s.txt";
+const ADIS: &str = "tests/data/adis16405/adis16405_run1_first3600s_10Hz_blockmean.csv";
+const DEG: f64 = 180.0 / std::f64::consts::PI;
+
+fn err(samples: &[ImuSample]) -> String {
+    check_units(samples, "rec").unwrap_err().to_string()
+}
+
+#[test]
+fn recordings_pass_as_recorded() {
+    for rel in [EUROC, KITTI, ADIS] {
+        let s = read(rel, &ReadOptions::default());
+        assert!(
+            check_units(&s, rel).is_ok(),
+            "{rel}: {:?}",
+            check_units(&s, rel)
+        );
+    }
+}
+
+#[test]
+fn deg_per_s_is_refused_still_and_moving() {
+    // EuRoC V1_01 starts on the ground: its gyro bias across the vertical is 0.075 rad/s
+    // (mostly about body z, horizontal there), under the 0.1 rad/s bound; in deg/s it reads 4.3.
+    let e = err(&scaled(&read(EUROC, &ReadOptions::default()), DEG, 1.0));
+    assert!(
+        e.contains("across the vertical") && e.contains("--gyro-unit deg/s"),
+        "{e}"
+    );
+    // The ADIS hour is static; its header says deg/s. Declared rad/s, its bias reads 0.6.
+    let opts = ReadOptions {
+        gyro_unit: Some(GyroUnit::RadPerS),
+        ..Default::default()
+    };
+    let e = err(&read(ADIS, &opts));
+    assert!(e.contains("--gyro-unit deg/s"), "{e}");
+    // KITTI: a car that stops, so the still check fires first; the tilt check alone also
+    // tells: the gyro as read misses the turning of gravity by far more than the same gyro
+    // scaled by π/180.
+    let kitti_deg = scaled(&read(KITTI, &ReadOptions::default()), DEG, 1.0);
+    assert!(err(&kitti_deg).contains("--gyro-unit deg/s"));
+    let dt = median_interval_ns(&kitti_deg) * 1e-9;
+    let fit = gyro_scale_fit(&kitti_deg, dt).unwrap();
+    let msg = fit.verdict().expect("deg/s found by the tilt check");
+    assert!(msg.contains("looks like deg/s"), "{msg}");
+    let fit = gyro_scale_fit(&read(KITTI, &ReadOptions::default()), dt).unwrap();
+    assert!(fit.verdict().is_none(), "{fit:?}");
+    assert!(fit.median_error[1] < 10f64.to_radians(), "{fit:?}");
+}
+
+#[test]
+fn g_and_time_units_are_refused() {
+    let euroc = read(EUROC, &ReadOptions::default());
+    let e = err(&scaled(&euroc, 1.0, 1.0 / 9.80665));
+    assert!(e.contains("--accel-unit g"), "{e}");
+    // Microseconds read as nanoseconds: 5 µs "intervals".
+    let us: Vec<ImuSample> = euroc
+        .iter()
+        .map(|s| ImuSample::new(s.t_ns / 1000, s.gyro, s.acc))
+        .collect();
+    let e = err(&us);
+    assert!(
+        e.contains("median sample interval is 5000 ns") && e.contains("--time-unit"),
+        "{e}"
+    );
+}
