@@ -35,6 +35,27 @@ pub fn si_units(samples: &[ImuSample], file: &Path) -> Result<(), CliError> {
     Ok(())
 }
 
+/// No interval between consecutive samples of `file` exceeds `max_gap_ns`; the error names
+/// the two samples (indices and times) around the first gap.
+pub fn no_gaps(samples: &[ImuSample], file: &Path, max_gap_ns: i64) -> Result<(), CliError> {
+    match samples
+        .windows(2)
+        .position(|w| w[1].t_ns - w[0].t_ns > max_gap_ns)
+    {
+        None => Ok(()),
+        Some(k) => Err(CliError::Failed(format!(
+            "{}: gap of {:.6} s between samples {k} (t = {} ns) and {} (t = {} ns), above {} s; \
+             choose a continuous part with --from/--to",
+            file.display(),
+            (samples[k + 1].t_ns - samples[k].t_ns) as f64 * 1e-9,
+            samples[k].t_ns,
+            k + 1,
+            samples[k + 1].t_ns,
+            max_gap_ns as f64 * 1e-9
+        ))),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -205,3 +205,85 @@ fn calibrate_bad_input_is_a_usage_error() {
         "{err}"
     );
 }
+
+/// Rows of an EuRoC IMU file as `write_imu_csv` takes them.
+fn rows(path: &Path) -> Vec<(i64, [f64; 6])> {
+    preint_io::read_euroc_imu(path)
+        .unwrap()
+        .iter()
+        .map(|s| {
+            let (g, a) = (s.gyro, s.acc);
+            (s.t_ns, [g.x, g.y, g.z, a.x, a.y, a.z])
+        })
+        .collect()
+}
+
+/// 20 s at rest followed by 20 s of motion: without poses, the static problem runs on the
+/// still part only (its gyro bias agrees with the truth there), not on every sample.
+#[test]
+fn static_calibration_uses_only_the_still_part() {
+    let still = simulate("static", "20", "21", "cal-mixed-still");
+    let moving = simulate("seed-ellipse", "20", "22", "cal-mixed-moving");
+    let mut all = rows(&still.join("imu.csv"));
+    let end = all.last().unwrap().0;
+    all.extend(
+        rows(&moving.join("imu.csv"))
+            .iter()
+            .map(|&(t, v)| (t + end + 5_000_000, v)),
+    );
+    let f = write_imu_csv(&still, "mixed.csv", &all);
+    let out = json(&["calibrate", "--imu", f.to_str().unwrap()]);
+    assert_eq!(out["model"], "static-single-attitude", "{out}");
+    let [t0, t1] = [0, 1].map(|k| out["interval_ns"][k].as_i64().unwrap());
+    assert!(
+        t0 >= 0 && t1 <= end && t1 - t0 > 18_000_000_000,
+        "{t0}..{t1}"
+    );
+    let mid = (t0 + t1) / 2;
+    let (bg, _) = mean_true_bias(
+        &still.join("groundtruth.csv"),
+        mid - 2_500_000,
+        mid + 2_500_000,
+    );
+    within(
+        vec3(&out["gyro_bias"]),
+        vec3(&out["gyro_bias_std"]),
+        &bg,
+        4.0,
+        "gyro bias",
+    );
+    let recorded = out["recording_s"].as_f64().unwrap();
+    assert!((recorded - 40.0).abs() < 0.1, "{recorded}");
+}
+
+/// A moving recording has no still interval: a static method cannot answer, so `calibrate`
+/// without poses refuses (exit 2) and says why, on the flying EuRoC MAV.
+#[test]
+fn moving_recording_without_poses_is_refused() {
+    let imu = common::repo("tests/data/euroc/V1_01_easy_imu0.csv");
+    let noise = common::repo("tests/data/euroc/imu.yaml");
+    let o = run(&["calibrate", "--imu", &imu, "--noise", &noise]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.code() == Some(2) && err.contains("no still interval") && err.contains("--poses"),
+        "{err}"
+    );
+}
+
+/// A gap of 1 s is refused, naming the samples around it.
+#[test]
+fn gaps_are_refused() {
+    let d = simulate("static", "5", "23", "cal-gap");
+    let kept: Vec<_> = rows(&d.join("imu.csv"))
+        .into_iter()
+        .filter(|&(t, _)| !(2_000_000_000..3_000_000_000).contains(&t))
+        .collect();
+    let f = write_imu_csv(&d, "gap.csv", &kept);
+    let o = run(&["calibrate", "--imu", f.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.code() == Some(2)
+            && err.contains("gap.csv: gap of 1.005000 s between samples 399 (t = 1995000000 ns)"),
+        "{err}"
+    );
+}

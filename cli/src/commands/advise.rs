@@ -54,6 +54,11 @@ pub fn compute(args: &Args) -> Result<Advice, CliError> {
     checks::positive("--fraction", args.fraction)?;
     let noise = noise::or_default(Some(&args.noise))?;
     let (samples, _) = args.input.read_all()?;
+    checks::no_gaps(
+        &samples,
+        args.input.path(),
+        preint::params::DEFAULT_MAX_GAP_NS,
+    )?;
     let (signal, cutoffs) = denoise(&samples, noise.gyro_noise_density, noise.acc_noise_density);
     let candidates = evaluate(&signal, &noise, 9.81, args.window, args.fraction)?;
     let recommended =

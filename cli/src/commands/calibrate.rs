@@ -7,8 +7,13 @@
 //! - otherwise, still intervals are detected; with at least three of them at distinct
 //!   attitudes (> 20° apart) the multi-position problem (Tedaldi et al. 2014) estimates both
 //!   biases, the attitudes and, if BIC supports it, scale factors;
-//! - otherwise the single-attitude static problem: gyro bias and roll/pitch; the accelerometer
-//!   bias is not separable from tilt and is reported as unobservable (`acc_bias: null`).
+//! - otherwise the single-attitude static problem on the longest still interval: gyro bias and
+//!   roll/pitch; the accelerometer bias is not separable from tilt and is reported as
+//!   unobservable (`acc_bias: null`). Without a still interval there is nothing a static
+//!   method can answer: the command refuses (exit 2) and says what would work.
+//!
+//! The samples must be continuous: a gap longer than [`MAX_GAP_S`] (and ten sample intervals)
+//! is refused, naming where it is.
 
 use crate::format::{list, opt_list};
 use crate::imu_args::ImuArgs;
@@ -70,8 +75,15 @@ pub enum Calibration {
     },
     /// Still intervals at ≥ 3 distinct attitudes: both biases, scale factors if BIC says so.
     MultiPose(Box<MultiPoseCalibration>),
-    /// One attitude: gyro bias, roll and pitch.
-    Static(Box<StaticCalibration>),
+    /// One attitude: gyro bias, roll and pitch, on the longest still interval.
+    Static {
+        /// The estimates.
+        c: Box<StaticCalibration>,
+        /// The still interval used.
+        used: StillInterval,
+        /// Total still time found \[s\] and duration of the recording \[s\].
+        still_s: (f64, f64),
+    },
 }
 
 /// A solver error, prefixed with the IMU file it came from.
@@ -95,7 +107,11 @@ fn distinct_attitudes(samples: &[ImuSample], ivs: &[StillInterval]) -> usize {
     dirs.len()
 }
 
-/// Reads the samples in `[--from, --to]` and checks their units.
+/// Longest accepted interval between consecutive samples \[s\] (that of preintegration,
+/// [`preint::params::DEFAULT_MAX_GAP_NS`]).
+pub const MAX_GAP_S: f64 = preint::params::DEFAULT_MAX_GAP_NS as f64 * 1e-9;
+
+/// Reads the samples in `[--from, --to]` and checks their units and that they have no gap.
 fn read_samples(args: &Args) -> Result<Vec<ImuSample>, CliError> {
     let (mut samples, _) = args.input.read_all()?;
     let (lo, hi) = (args.from.unwrap_or(i64::MIN), args.to.unwrap_or(i64::MAX));
@@ -106,6 +122,11 @@ fn read_samples(args: &Args) -> Result<Vec<ImuSample>, CliError> {
             args.input.path().display()
         )));
     }
+    checks::no_gaps(
+        &samples,
+        args.input.path(),
+        preint::params::DEFAULT_MAX_GAP_NS,
+    )?;
     Ok(samples)
 }
 
@@ -175,12 +196,27 @@ pub fn compute(args: &Args) -> Result<Calibration, CliError> {
         let c = calibrate_multi_pose(&samples, &noise, &opts).map_err(&fail)?;
         return Ok(Calibration::MultiPose(Box::new(c)));
     }
+    let Some(used) = still.iter().max_by_key(|iv| iv.len()).copied() else {
+        return Err(CliError::Failed(format!(
+            "{}: no still interval (≥ {} s with gyro and accelerometer variances within 4× the \
+             noise densities' white noise): a static calibration needs the sensor at rest. Give \
+             --poses for a moving recording, or check --noise",
+            args.input.label(),
+            StillOptions::from_noise(&noise, rate).min_duration_s
+        )));
+    };
     let opts = StaticOptions {
         gravity: g,
         ..Default::default()
     };
-    let c = calibrate_static(&samples, &noise, &opts).map_err(&fail)?;
-    Ok(Calibration::Static(Box::new(c)))
+    let c = calibrate_static(&samples[used.start..used.end], &noise, &opts).map_err(&fail)?;
+    let total_s = (samples[n - 1].t_ns - samples[0].t_ns) as f64 * 1e-9;
+    let still_s = still.iter().map(|iv| iv.duration_s()).sum();
+    Ok(Calibration::Static {
+        c: Box::new(c),
+        used,
+        still_s: (still_s, total_s),
+    })
 }
 
 /// The JSON form: `model` names the problem; estimates with standard deviations, χ², units.
@@ -198,8 +234,9 @@ pub fn to_json(cal: &Calibration) -> Value {
             "units": {"gyro_bias": "rad/s", "acc_bias": "m/s^2", "gravity": "m/s^2"},
         }),
         Calibration::MultiPose(c) => multi_pose_json(c),
-        Calibration::Static(c) => json!({
+        Calibration::Static { c, used, still_s } => json!({
             "model": "static-single-attitude",
+            "interval_ns": [used.t_start_ns, used.t_end_ns], "still_s": still_s.0, "recording_s": still_s.1,
             "gyro_bias": list(&c.gyro_bias), "gyro_bias_std": list(&c.gyro_bias_std),
             "acc_bias": opt_list(c.acc_bias), "acc_bias_std": opt_list(c.acc_bias_std), "acc_bias_note": c.acc_bias_note,
             "roll": c.roll, "pitch": c.pitch, "roll_std": c.roll_std, "pitch_std": c.pitch_std,
@@ -272,10 +309,15 @@ pub fn to_text(cal: &Calibration) -> String {
             gyro_line(&c.gyro_bias, &c.gyro_bias_std),
             acc_line(&c.acc_bias, &c.acc_bias_std)
         ),
-        Calibration::Static(c) => format!(
-            "static calibration (one attitude, {:.1} s):\n{}  roll {:.4}° ± {:.1e}°, pitch {:.4}° \
-             ± {:.1e}°\n  b_a: not estimated ({})\n",
+        Calibration::Static { c, used, still_s } => format!(
+            "static calibration (one attitude) on the longest still interval, {:.1} s from {} to \
+             {} ns ({:.1} s still of {:.1} s recorded):\n{}  roll {:.4}° ± {:.1e}°, pitch \
+             {:.4}° ± {:.1e}°\n  b_a: not estimated ({})\n",
             c.duration_s,
+            used.t_start_ns,
+            used.t_end_ns,
+            still_s.0,
+            still_s.1,
             gyro_line(&c.gyro_bias, &c.gyro_bias_std),
             c.roll.to_degrees(),
             c.roll_std.to_degrees(),
