@@ -413,3 +413,17 @@ fn scheme_names_and_aliases() {
         "{err}"
     );
 }
+
+/// A bias estimate of extreme magnitude gives an error (exit 2), not NaN (`null` in JSON).
+#[test]
+fn extreme_bias_is_an_error_not_nan() {
+    let imu = repo("tests/data/euroc/V1_01_easy_imu0.csv");
+    for bias in ["--bias-gyro=1e300,0,0", "--bias-acc=0,1e300,0"] {
+        let o = run(&["integrate", "--imu", &imu, bias, "--json"]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            o.status.code() == Some(2) && err.contains("non-finite deltas") && o.stdout.is_empty(),
+            "{bias}: {err}"
+        );
+    }
+}

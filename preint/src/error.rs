@@ -83,6 +83,16 @@ pub enum PreintError {
         /// Number of samples integrated (and not stored).
         count: usize,
     },
+    /// The measurement came out non-finite from finite inputs: some input is of an extreme
+    /// magnitude (a bias estimate or reading of 1e300, a sample interval of centuries).
+    #[error(
+        "the preintegration gave non-finite {what}: an input is of extreme magnitude (bias \
+         estimate, readings or sample interval)"
+    )]
+    NonFiniteResult {
+        /// `"deltas"`, `"covariance"` or `"bias Jacobians"`.
+        what: &'static str,
+    },
     /// A parameter is invalid (non-finite, negative variance, non-positive threshold…).
     #[error("invalid parameter {name}: {reason}")]
     InvalidParameter {

@@ -51,6 +51,21 @@ pub struct BiasJacobians {
     pub d_p_d_ba: Matrix3<f64>,
 }
 
+impl BiasJacobians {
+    /// True if every entry is finite.
+    pub fn is_finite(&self) -> bool {
+        [
+            &self.d_r_d_bg,
+            &self.d_v_d_bg,
+            &self.d_v_d_ba,
+            &self.d_p_d_bg,
+            &self.d_p_d_ba,
+        ]
+        .iter()
+        .all(|m| m.iter().all(|x| x.is_finite()))
+    }
+}
+
 impl Default for BiasJacobians {
     fn default() -> Self {
         let z = Matrix3::zeros();

@@ -116,6 +116,26 @@ fn too_few_samples_and_bad_params() {
 /// The window path (`preintegrate`, `check_samples`) names the offending *stream* sample (its
 /// index in the slice given and its time) for duplicate and decreasing timestamps, gaps and
 /// non-finite values, for every scheme.
+/// Finite inputs of extreme magnitude (a bias estimate of 1e300 rad/s or m/s²) give a typed
+/// error from `finish`, not NaN deltas, for every scheme.
+#[test]
+fn extreme_inputs_give_an_error_not_nan() {
+    for &scheme in Scheme::ALL {
+        for (gyro, acc) in [(1e300, 0.0), (0.0, 1e300)] {
+            let bias = ImuBias::new(Vector3::new(gyro, 0.0, 0.0), Vector3::new(0.0, acc, 0.0));
+            let params = PreintParams::default().with_scheme(scheme);
+            let mut p = Preintegrator::new(params, bias).unwrap();
+            p.integrate_slice(&(0..20).map(|k| s(k * 5_000_000)).collect::<Vec<_>>())
+                .unwrap();
+            assert!(
+                matches!(p.finish(), Err(PreintError::NonFiniteResult { .. })),
+                "{scheme:?} gyro {gyro} acc {acc}: {:?}",
+                p.finish().map(|m| m.delta_v)
+            );
+        }
+    }
+}
+
 #[test]
 fn window_path_errors_name_the_stream_sample() {
     let stream: Vec<_> = (0..40).map(|k| s(1_000_000_000 + k * 5_000_000)).collect();

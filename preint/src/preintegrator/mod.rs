@@ -278,7 +278,21 @@ impl Preintegrator {
         if count < 2 {
             return Err(PreintError::TooFewSamples { count });
         }
-        Ok(self.engine.measurement())
+        let m = self.engine.measurement();
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        let deltas = finite(m.delta_r.matrix().as_slice())
+            && finite(m.delta_v.as_slice())
+            && finite(m.delta_p.as_slice());
+        let what = if !deltas {
+            "deltas"
+        } else if !finite(m.cov15.as_slice()) {
+            "covariance"
+        } else if !m.jac.is_finite() {
+            "bias Jacobians"
+        } else {
+            return Ok(m);
+        };
+        Err(PreintError::NonFiniteResult { what })
     }
 
     /// The measurement for a new bias estimate `bias`: if `‖δb_g‖ ≤ reintegrate_gyro_threshold`
