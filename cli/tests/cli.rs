@@ -422,7 +422,7 @@ fn extreme_bias_is_an_error_not_nan() {
         let o = run(&["integrate", "--imu", &imu, bias, "--json"]);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(
-            o.status.code() == Some(2) && err.contains("non-finite deltas") && o.stdout.is_empty(),
+            o.status.code() == Some(2) && err.contains("gave non-finite") && o.stdout.is_empty(),
             "{bias}: {err}"
         );
     }
