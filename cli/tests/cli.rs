@@ -427,3 +427,39 @@ fn extreme_bias_is_an_error_not_nan() {
         );
     }
 }
+
+/// Sizes that would exhaust memory are refused before allocating (exit 2, saying which limit).
+#[test]
+fn sizes_that_would_exhaust_memory_are_refused() {
+    let d = tmp("huge");
+    let out = d.to_str().unwrap();
+    for (args, want) in [
+        (
+            vec!["simulate", "--rate", "1e9", "--out", out],
+            "more than the simulator's limit",
+        ),
+        (
+            vec![
+                "simulate",
+                "--rate",
+                "1",
+                "--duration",
+                "9.2e9",
+                "--out",
+                out,
+            ],
+            "9200000001 samples",
+        ),
+        (
+            vec!["speed", "--samples", "1000000000000"],
+            "--samples must be from 10 to",
+        ),
+    ] {
+        let o = run(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            o.status.code() == Some(2) && err.contains(want),
+            "{args:?}: {err}"
+        );
+    }
+}

@@ -58,20 +58,18 @@ pub fn check_units(samples: &[ImuSample], source_name: &str) -> Result<(), IoErr
     }
     check_si_units(samples, source_name)?;
     let dt = dt_ns * 1e-9;
-    if let Some(w) = still_gyro_norm(samples, dt) {
-        if w > MAX_STILL_GYRO_RAD_S {
-            return Err(units(format!(
-                "while the accelerometer is steady (no turn about a horizontal axis), the gyro \
-                 reads {w:.3} across the vertical (median), above {MAX_STILL_GYRO_RAD_S} rad/s \
-                 for a MEMS bias: is it in deg/s (--gyro-unit deg/s)? If this gyro's bias \
-                 really is that large, pass --no-unit-check"
-            )));
-        }
+    if let Some(w) = still_gyro_norm(samples, dt)
+        && w > MAX_STILL_GYRO_RAD_S
+    {
+        return Err(units(format!(
+            "while the accelerometer is steady (no turn about a horizontal axis), the gyro \
+             reads {w:.3} across the vertical (median), above {MAX_STILL_GYRO_RAD_S} rad/s \
+             for a MEMS bias: is it in deg/s (--gyro-unit deg/s)? If this gyro's bias \
+             really is that large, pass --no-unit-check"
+        )));
     }
-    if let Some(fit) = gyro_scale_fit(samples, dt) {
-        if let Some(msg) = fit.verdict() {
-            return Err(units(msg));
-        }
+    if let Some(msg) = gyro_scale_fit(samples, dt).and_then(|fit| fit.verdict()) {
+        return Err(units(msg));
     }
     Ok(())
 }

@@ -47,6 +47,22 @@ pub enum SimError {
         /// The rejected duration \[s\].
         duration_s: f64,
     },
+    /// Rate × duration asks for more samples than [`MAX_SIM_SAMPLES`] (checked before
+    /// allocating).
+    #[error(
+        "{rate_hz} Hz for {duration_s} s is {samples} samples, more than the simulator's limit of \
+         {max} (≈ 190 bytes each in memory); lower --rate or --duration"
+    )]
+    TooLarge {
+        /// The rate \[Hz\].
+        rate_hz: f64,
+        /// The duration \[s\].
+        duration_s: f64,
+        /// The samples asked for.
+        samples: u64,
+        /// [`MAX_SIM_SAMPLES`].
+        max: usize,
+    },
     /// A configuration value is not finite or is negative.
     #[error("invalid simulator configuration: {0}")]
     Config(String),
@@ -191,12 +207,17 @@ pub fn period_ns(rate_hz: f64) -> Result<i64, SimError> {
     Ok(p as i64)
 }
 
+/// Most samples [`simulate`] produces in one call: 20 million (≈ 3.8 GB of samples and ground
+/// truth; 28 h at 200 Hz).
+pub const MAX_SIM_SAMPLES: usize = 20_000_000;
+
 /// Synthesises IMU samples of `scene` at `rate_hz` over `[0, duration_s]` (see the module
 /// docs for the model and the random generator).
 ///
 /// Timestamps are integer: `t_k = k·round(1e9/rate_hz)` ns for `k = 0 … ⌊duration_ns/period⌋`
 /// (so `⌊duration/period⌋ + 1` samples; the effective rate is `1e9/period_ns`). The noise
-/// uses `Δt = period_ns·1e-9` s. Returns a typed error for a bad rate, duration or config.
+/// uses `Δt = period_ns·1e-9` s. Returns a typed error for a bad rate, duration or config, or
+/// for more than [`MAX_SIM_SAMPLES`] samples (before allocating).
 pub fn simulate(
     scene: &dyn Scene,
     rate_hz: f64,
@@ -210,7 +231,16 @@ pub fn simulate(
     }
     config.validate()?;
     let duration_ns = (duration_s * 1e9).round() as i64;
-    let n = (duration_ns / period) as usize + 1;
+    let samples = (duration_ns / period) as u64 + 1;
+    if samples > MAX_SIM_SAMPLES as u64 {
+        return Err(SimError::TooLarge {
+            rate_hz,
+            duration_s,
+            samples,
+            max: MAX_SIM_SAMPLES,
+        });
+    }
+    let n = samples as usize;
     let dt = period as f64 * 1e-9;
     let nz = &config.noise;
     let (sg, sa) = (nz.gyro_sample_std(dt), nz.acc_sample_std(dt));

@@ -28,8 +28,8 @@ pub mod scenes;
 pub use deadreckon::{Attitude, Rule, dead_reckon, euler_zyx_angles, euler_zyx_of, rotation_error};
 pub use deltas::exact_deltas;
 pub use imu::{
-    SimConfig, SimError, SimOutput, period_ns, rng_from_seed, scale_misalignment, simulate,
-    write_dataset,
+    MAX_SIM_SAMPLES, SimConfig, SimError, SimOutput, period_ns, rng_from_seed, scale_misalignment,
+    simulate, write_dataset,
 };
 pub use preint_io::GroundTruthState;
 pub use scene::{SCENE_NAMES, Scene, SceneState, scene_by_name, t_s};
