@@ -45,7 +45,7 @@
 //! cubic weights), and the window covariance is the exact first-order covariance with respect
 //! to the stream samples (tested against numeric differentiation in
 //! `preint/tests/linearisation.rs`). Treating the boundary sample instead as an independent
-//! source with a cell of its own (the model before this one) misstates the variances; measured
+//! source with a cell of its own (a common simplification) misstates the variances; measured
 //! there (200 Hz, variance traces): midpoint +0.7 % (rotation, velocity) and +2.0 % (position)
 //! for keyframes 1 µs before a sample, hermite4 up to +2.1 %, Euler −0.9 % (position) for
 //! keyframes mid-interval. The stream samples
@@ -220,7 +220,12 @@ fn plan(
     t_j_ns: i64,
     max_gap_ns: i64,
 ) -> Result<Plan, PreintError> {
-    let (lo, hi) = bracket(samples, t_i_ns, t_j_ns, max_gap_ns)?;
+    let (lo, hi) = bracket(samples, t_i_ns, t_j_ns)?;
+    // Gaps only matter where the window takes values or noise cells from: the interval before
+    // the earliest stencil sample at t_i and the one after the latest at t_j.
+    let (before, after) = scheme.stencil_reach();
+    let used = lo.saturating_sub(1 + before)..(hi + 2 + after).min(samples.len());
+    check_gaps(samples, used, max_gap_ns)?;
     let mj = if samples[hi - 1].t_ns == t_j_ns {
         hi - 1
     } else {
@@ -268,14 +273,10 @@ fn plan(
     })
 }
 
-/// Checks the keyframes against the stream and the stream around the window, and returns
-/// `(lo, hi)`: the first sample at or after `t_i` and the first after `t_j`.
-fn bracket(
-    samples: &[ImuSample],
-    t_i_ns: i64,
-    t_j_ns: i64,
-    max_gap_ns: i64,
-) -> Result<(usize, usize), PreintError> {
+/// Checks the keyframes against the stream and the stream's values and order around the
+/// window (three samples beyond each edge), and returns `(lo, hi)`: the first sample at or
+/// after `t_i` and the first after `t_j`.
+fn bracket(samples: &[ImuSample], t_i_ns: i64, t_j_ns: i64) -> Result<(usize, usize), PreintError> {
     if t_j_ns <= t_i_ns {
         return Err(PreintError::NonPositiveWindow { t_i_ns, t_j_ns });
     }
@@ -295,7 +296,7 @@ fn bracket(
     let n = samples.len();
     let lo = samples.partition_point(|s| s.t_ns < t_i_ns);
     let hi = samples.partition_point(|s| s.t_ns <= t_j_ns);
-    check_samples(samples, lo.saturating_sub(3)..(hi + 3).min(n), max_gap_ns)?;
+    check_samples(samples, lo.saturating_sub(3)..(hi + 3).min(n), i64::MAX)?;
     let bracketed = lo < n
         && hi >= 1
         && lo <= hi
@@ -312,6 +313,26 @@ fn bracket(
         });
     }
     Ok((lo, hi))
+}
+
+/// No interval ending at a sample of `range` exceeds `max_gap_ns`.
+fn check_gaps(
+    samples: &[ImuSample],
+    range: std::ops::Range<usize>,
+    max_gap_ns: i64,
+) -> Result<(), PreintError> {
+    for index in range.filter(|&k| k > 0) {
+        let gap_ns = samples[index].t_ns.saturating_sub(samples[index - 1].t_ns);
+        if gap_ns > max_gap_ns {
+            return Err(PreintError::GapTooLarge {
+                index,
+                t_ns: samples[index].t_ns,
+                gap_ns,
+                max_gap_ns,
+            });
+        }
+    }
+    Ok(())
 }
 
 /// The stream samples strictly inside a window (`lo..hi`) and, for a wide stencil, the context
@@ -398,10 +419,12 @@ pub fn window_samples(
 /// bias estimate `bias` (see the module docs for the boundary treatment and the noise model).
 /// The result has `t_i_ns`, `t_j_ns` and `delta_t = (t_j − t_i)·1e-9 s` exactly.
 ///
-/// Errors (indices and times name the offending stream sample): the stream is checked around
-/// the window (from three samples before `t_i` to three after `t_j`) by [`check_samples`]:
+/// Errors (indices and times name the offending stream sample): the stream's values and order
+/// are checked around the window (from three samples before `t_i` to three after `t_j`):
 /// [`PreintError::NonFinite`], [`PreintError::DuplicateTimestamp`],
-/// [`PreintError::DecreasingTimestamp`], [`PreintError::GapTooLarge`]; and
+/// [`PreintError::DecreasingTimestamp`]; [`PreintError::GapTooLarge`] for a gap inside the
+/// window or in the interval just outside the samples its edges use (a gap further out, e.g. a
+/// few samples before `t_i`, does not fail the window); and
 /// [`PreintError::NonPositiveWindow`], [`PreintError::KeyframeOutsideSamples`],
 /// [`PreintError::InvalidParameter`].
 ///

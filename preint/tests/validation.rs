@@ -113,9 +113,6 @@ fn too_few_samples_and_bad_params() {
     assert!(Preintegrator::new(PreintParams::default(), bad_bias).is_err());
 }
 
-/// The window path (`preintegrate`, `check_samples`) names the offending *stream* sample (its
-/// index in the slice given and its time) for duplicate and decreasing timestamps, gaps and
-/// non-finite values, for every scheme.
 /// Finite inputs of extreme magnitude (a bias estimate of 1e300 rad/s or m/s²) give a typed
 /// error from `finish`, not NaN deltas, for every scheme.
 #[test]
@@ -136,6 +133,9 @@ fn extreme_inputs_give_an_error_not_nan() {
     }
 }
 
+/// The window path (`preintegrate`, `check_samples`) names the offending *stream* sample (its
+/// index in the slice given and its time) for duplicate and decreasing timestamps, gaps and
+/// non-finite values, for every scheme.
 #[test]
 fn window_path_errors_name_the_stream_sample() {
     let stream: Vec<_> = (0..40).map(|k| s(1_000_000_000 + k * 5_000_000)).collect();
@@ -240,5 +240,47 @@ proptest! {
         for x in &samples { let _ = p.integrate(x); }
         let _ = p.finish();
         let _ = preint::preintegrate(&prm, &ImuBias::zero(), &samples, t_i, t_j);
+    }
+}
+
+/// A gap a few samples before `t_i` (beyond the samples the window's first interval and its
+/// noise cells use) does not fail the window, and the window equals the one cut from the
+/// stream that starts after the gap; a gap inside the samples the edge uses does fail.
+#[test]
+fn a_gap_before_the_window_fails_only_within_the_edge_stencil() {
+    // 5 ms stream with a 30 ms gap between samples 9 and 10 (index 10 is the first after it).
+    let sample = |k: i64| {
+        let t = k as f64 * 0.005;
+        ImuSample::new(
+            1_000_000_000 + k * 5_000_000 + if k >= 10 { 25_000_000 } else { 0 },
+            Vector3::new(0.3 * t.sin(), 0.2, 0.1 * t),
+            Vector3::new(0.5 * t.cos(), 0.1, 9.81),
+        )
+    };
+    let stream: Vec<ImuSample> = (0..60).map(sample).collect();
+    let prm = |scheme| PreintParams {
+        max_gap_ns: 20_000_000,
+        ..PreintParams::default().with_scheme(scheme)
+    };
+    for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4] {
+        // t_i 2.5 ms after sample 12: the first sample in the window is the third after the gap.
+        let (t_i, t_j) = (stream[12].t_ns + 2_500_000, stream[40].t_ns + 1_000_000);
+        let whole = preint::preintegrate(&prm(scheme), &ImuBias::zero(), &stream, t_i, t_j)
+            .unwrap_or_else(|e| panic!("{scheme:?}: {e}"));
+        let after_gap =
+            preint::preintegrate(&prm(scheme), &ImuBias::zero(), &stream[10..], t_i, t_j).unwrap();
+        assert_eq!(whole.delta_v, after_gap.delta_v, "{scheme:?}");
+        assert_eq!(whole.delta_p, after_gap.delta_p, "{scheme:?}");
+        assert_eq!(whole.cov15, after_gap.cov15, "{scheme:?}");
+        // t_i between samples 10 and 11: the edge interpolates from sample 10, whose noise
+        // cell reaches back across the gap.
+        let t_i = stream[10].t_ns + 2_500_000;
+        assert!(
+            matches!(
+                preint::preintegrate(&prm(scheme), &ImuBias::zero(), &stream, t_i, t_j),
+                Err(PreintError::GapTooLarge { index: 10, .. })
+            ),
+            "{scheme:?}"
+        );
     }
 }
