@@ -42,6 +42,7 @@ pub mod parse;
 pub mod preint_args;
 pub mod progress;
 pub mod scheme;
+pub mod stream;
 
 pub use cli::{Cli, Command};
 pub use commands::run;

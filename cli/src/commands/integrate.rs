@@ -1,13 +1,17 @@
-//! `preint integrate`: preintegrate a window of a EuRoC IMU file and print the deltas, their
+//! `preint integrate`: preintegrate a window of an IMU recording and print the deltas, their
 //! covariances and the bias Jacobians.
 
 use crate::format::{list, rows, text_matrix};
 use crate::imu_args::{ImuArgs, source_json};
 use crate::preint_args::PreintArgs;
+use crate::progress::ReadingBar;
 use crate::scheme::{self};
-use crate::{CliError, Output, input, noise};
+use crate::{CliError, Output, input, noise, stream};
 use nalgebra::Vector3;
-use preint::{ImuBias, ImuNoise, Level, PreintegratedImu, preintegrate};
+use preint::{
+    ImuBias, ImuNoise, Level, PreintError, PreintParams, PreintegratedImu, Preintegrator,
+    preintegrate,
+};
 use preint_io::SourceInfo;
 use serde_json::{Value, json};
 use std::fmt::Write as _;
@@ -56,29 +60,68 @@ pub struct Integration {
     pub pim: PreintegratedImu,
 }
 
-/// Reads the file and preintegrates `[--from, --to]` at [`Level::Combined`].
+/// Reads the file once and preintegrates `[--from, --to]` at [`Level::Combined`]: the whole
+/// recording through a [`Preintegrator`] that stores no samples, a window from the part of the
+/// stream it needs (reading stops after `--to`). Memory is bounded by the window, not the file.
 pub fn compute(args: &Args) -> Result<Integration, CliError> {
     let (noise, params) = args.preint.params(Level::Combined)?;
-    let (samples, source) = args.input.read_all()?;
-    let t_i = args.from.unwrap_or(samples[0].t_ns);
-    let t_j = args.to.unwrap_or(samples[samples.len() - 1].t_ns);
     let bias = ImuBias::new(
         args.bias_gyro.unwrap_or_default(),
         args.bias_acc.unwrap_or_default(),
     );
+    let stream = stream::open_checked_until(&args.input, args.to)?;
+    let source = stream.info().clone();
+    let _bar = ReadingBar::start(stream.progress(), "integrate");
     let scheme = params.scheme;
-    let pim = preintegrate(&params, &bias, &samples, t_i, t_j)
-        .map_err(|e| CliError::failed_in(args.input.path(), e))?;
+    let fail = |e| CliError::failed_in(args.input.path(), e);
+    let (pim, samples) = if args.from.is_none() && args.to.is_none() {
+        whole_recording(stream, params, &bias, fail)?
+    } else {
+        let w = stream::cut_window(stream, args.from, args.to)?;
+        let pim = preintegrate(&params, &bias, &w.samples, w.t_i_ns, w.t_j_ns)
+            .map_err(|e| fail(w.in_stream(e)))?;
+        (pim, input::count_in(&w.samples, w.t_i_ns, w.t_j_ns))
+    };
     Ok(Integration {
         imu: args.input.label(),
         source,
         scheme,
-        samples: input::count_in(&samples, t_i, t_j),
+        samples,
         noise,
         noise_source: args.preint.noise_source(),
         bias,
         pim,
     })
+}
+
+/// Samples pushed into the preintegrator at a time.
+const CHUNK: usize = 4096;
+
+/// Preintegrates every sample of `stream` (the window from its first to its last sample) in
+/// chunks, without storing them; returns the measurement and the number of samples.
+fn whole_recording(
+    stream: stream::CheckedSamples,
+    params: PreintParams,
+    bias: &ImuBias,
+    fail: impl Fn(PreintError) -> CliError,
+) -> Result<(PreintegratedImu, usize), CliError> {
+    let params = PreintParams {
+        keep_samples: false,
+        ..params
+    };
+    let mut pi = Preintegrator::new(params, *bias).map_err(&fail)?;
+    let (mut chunk, mut count) = (Vec::with_capacity(CHUNK), 0usize);
+    for s in stream {
+        chunk.push(s?);
+        if chunk.len() == CHUNK {
+            pi.integrate_slice(&chunk).map_err(&fail)?;
+            count += chunk.len();
+            chunk.clear();
+        }
+    }
+    pi.integrate_slice(&chunk).map_err(&fail)?;
+    count += chunk.len();
+    Ok((pi.finish().map_err(&fail)?, count))
 }
 
 /// What each printed covariance describes, and how GTSAM's relate to them.

@@ -1,0 +1,264 @@
+//! Reading a recording once, in bounded memory: the unit checks on a prefix, then every
+//! sample in order; and the keyframe window cut from the stream with an early stop.
+
+use crate::imu_args::ImuArgs;
+use crate::{CliError, checks};
+use preint::{ImuSample, PreintError};
+use preint_io::{ImuReader, IoError, Progress, SourceInfo};
+use std::collections::VecDeque;
+
+/// Samples held in memory for the unit checks: 2¹⁸ (15 MB; 22 min at 200 Hz). The checks of
+/// a longer recording look at this prefix only.
+pub const UNIT_CHECK_PREFIX: usize = 1 << 18;
+
+/// Most samples a window cut from a stream may hold: 50 million (2.8 GB).
+pub const MAX_WINDOW_SAMPLES: usize = preint_io::reader::DEFAULT_MAX_SAMPLES;
+
+/// Stream samples kept on each side of a window: the values and order checks of
+/// [`preint::preintegrate`] reach three samples beyond the samples at `t_i` and `t_j`, one
+/// more before `t_i` for the first checked interval.
+const EDGE_SAMPLES: usize = 4;
+
+/// The samples of a recording, in order, after the unit checks on its first
+/// [`UNIT_CHECK_PREFIX`] samples (unless `--no-unit-check`).
+pub struct CheckedSamples {
+    prefix: std::vec::IntoIter<ImuSample>,
+    rest: ImuReader,
+    info: SourceInfo,
+    progress: Progress,
+}
+
+/// Opens the recording of `args` and runs the unit checks on its prefix.
+pub fn open_checked(args: &ImuArgs) -> Result<CheckedSamples, CliError> {
+    open_checked_until(args, None)
+}
+
+/// As [`open_checked`], with a prefix that also ends [`EDGE_SAMPLES`] − 1 samples after
+/// `until` \[ns\] (a window's end): nothing after the window is read for the checks.
+pub fn open_checked_until(args: &ImuArgs, until: Option<i64>) -> Result<CheckedSamples, CliError> {
+    let mut rest = args.open()?;
+    let (info, progress) = (rest.info().clone(), rest.progress().clone());
+    let (mut prefix, mut after) = (Vec::new(), 0);
+    while prefix.len() < UNIT_CHECK_PREFIX && after < EDGE_SAMPLES - 1 {
+        match rest.next() {
+            Some(s) => {
+                let s = s?;
+                after += usize::from(until.is_some_and(|t| s.t_ns > t));
+                prefix.push(s);
+            }
+            None => break,
+        }
+    }
+    if prefix.is_empty() {
+        return Err(IoError::Empty {
+            source_name: info.source_name.clone(),
+        }
+        .into());
+    }
+    if !args.no_unit_check {
+        checks::si_units(&prefix, args.path())?;
+    }
+    Ok(CheckedSamples {
+        prefix: prefix.into_iter(),
+        rest,
+        info,
+        progress,
+    })
+}
+
+impl CheckedSamples {
+    /// How the source is read.
+    pub fn info(&self) -> &SourceInfo {
+        &self.info
+    }
+
+    /// How far reading has got.
+    pub fn progress(&self) -> &Progress {
+        &self.progress
+    }
+}
+
+impl Iterator for CheckedSamples {
+    type Item = Result<ImuSample, CliError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        match self.prefix.next() {
+            Some(s) => Some(Ok(s)),
+            None => self.rest.next().map(|r| r.map_err(CliError::from)),
+        }
+    }
+}
+
+/// The part of a stream that the keyframe window `[t_i, t_j]` needs: the samples from
+/// [`EDGE_SAMPLES`] before `t_i` to [`EDGE_SAMPLES`] − 1 after `t_j` (reading stops there).
+#[derive(Debug)]
+pub struct StreamWindow {
+    /// The samples, in order.
+    pub samples: Vec<ImuSample>,
+    /// Index in the stream of `samples[0]`.
+    pub offset: usize,
+    /// Time of the stream's first sample \[ns\].
+    pub first_ns: i64,
+    /// `t_i` \[ns\]: `--from`, or the first sample's time.
+    pub t_i_ns: i64,
+    /// `t_j` \[ns\]: `--to`, or the last sample's time.
+    pub t_j_ns: i64,
+}
+
+/// Cuts the window `[from, to]` (defaults: the first and the last sample) from `stream`.
+/// Memory holds the window only; without `to`, reading goes to the end.
+pub fn cut_window(
+    stream: impl Iterator<Item = Result<ImuSample, CliError>>,
+    from: Option<i64>,
+    to: Option<i64>,
+) -> Result<StreamWindow, CliError> {
+    let mut before: VecDeque<ImuSample> = VecDeque::with_capacity(EDGE_SAMPLES + 1);
+    let mut inside: Vec<ImuSample> = Vec::new();
+    let (mut first_ns, mut dropped, mut after) = (None, 0usize, 0usize);
+    for s in stream {
+        let s = s?;
+        let t_i = *first_ns.get_or_insert(s.t_ns);
+        let t_i = from.unwrap_or(t_i);
+        if s.t_ns < t_i {
+            before.push_back(s);
+            if before.len() > EDGE_SAMPLES {
+                before.pop_front();
+                dropped += 1;
+            }
+            continue;
+        }
+        if to.is_some_and(|t_j| s.t_ns > t_j) {
+            after += 1;
+        }
+        if inside.len() == MAX_WINDOW_SAMPLES {
+            return Err(CliError::Failed(format!(
+                "the window holds more than {MAX_WINDOW_SAMPLES} samples; choose a shorter \
+                 --from/--to"
+            )));
+        }
+        inside.push(s);
+        if after == EDGE_SAMPLES - 1 {
+            break;
+        }
+    }
+    let first_ns = first_ns.unwrap_or(0);
+    let mut samples: Vec<ImuSample> = before.into_iter().collect();
+    samples.append(&mut inside);
+    let last_ns = samples.last().map_or(first_ns, |s| s.t_ns);
+    Ok(StreamWindow {
+        offset: dropped,
+        first_ns,
+        t_i_ns: from.unwrap_or(first_ns),
+        t_j_ns: to.unwrap_or(last_ns),
+        samples,
+    })
+}
+
+impl StreamWindow {
+    /// `e` from [`preint::preintegrate`] on [`StreamWindow::samples`], with sample indices
+    /// counted in the whole stream and the stream's first sample time.
+    pub fn in_stream(&self, e: PreintError) -> PreintError {
+        let o = self.offset;
+        match e {
+            PreintError::NonFinite { index, t_ns, field } => PreintError::NonFinite {
+                index: index + o,
+                t_ns,
+                field,
+            },
+            PreintError::DuplicateTimestamp { index, t_ns } => PreintError::DuplicateTimestamp {
+                index: index + o,
+                t_ns,
+            },
+            PreintError::DecreasingTimestamp {
+                index,
+                t_ns,
+                prev_t_ns,
+            } => PreintError::DecreasingTimestamp {
+                index: index + o,
+                t_ns,
+                prev_t_ns,
+            },
+            PreintError::GapTooLarge {
+                index,
+                t_ns,
+                gap_ns,
+                max_gap_ns,
+            } => PreintError::GapTooLarge {
+                index: index + o,
+                t_ns,
+                gap_ns,
+                max_gap_ns,
+            },
+            PreintError::KeyframeOutsideSamples { t_ns, last_ns, .. } => {
+                PreintError::KeyframeOutsideSamples {
+                    t_ns,
+                    first_ns: self.first_ns,
+                    last_ns,
+                }
+            }
+            other => other,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    fn stream(n: i64) -> impl Iterator<Item = Result<ImuSample, CliError>> {
+        (0..n).map(|k| {
+            Ok(ImuSample::new(
+                k * 10,
+                Vector3::new(k as f64, 0.0, 0.0),
+                Vector3::zeros(),
+            ))
+        })
+    }
+
+    #[test]
+    fn the_window_keeps_four_samples_before_and_three_after() {
+        let w = cut_window(stream(100), Some(305), Some(505)).unwrap();
+        // Samples 27..=30 before t_i = 305, 31..=50 inside, 51..=53 after t_j = 505.
+        let t: Vec<i64> = w.samples.iter().map(|s| s.t_ns).collect();
+        assert_eq!(t.first(), Some(&270));
+        assert_eq!(t.last(), Some(&530));
+        assert_eq!(t.len(), 27);
+        assert_eq!(
+            (w.offset, w.first_ns, w.t_i_ns, w.t_j_ns),
+            (27, 0, 305, 505)
+        );
+    }
+
+    #[test]
+    fn without_keyframes_the_window_is_the_whole_stream() {
+        let w = cut_window(stream(10), None, None).unwrap();
+        assert_eq!(
+            (w.samples.len(), w.offset, w.t_i_ns, w.t_j_ns),
+            (10, 0, 0, 90)
+        );
+    }
+
+    #[test]
+    fn reading_stops_after_the_window() {
+        let mut read = 0;
+        let counted = stream(1000).inspect(|_| read += 1);
+        cut_window(counted, Some(100), Some(200)).unwrap();
+        assert_eq!(read, 24, "samples 0..=23 read, the rest left unread");
+    }
+
+    #[test]
+    fn errors_count_samples_in_the_whole_stream() {
+        let w = cut_window(stream(100), Some(505), Some(705)).unwrap();
+        let e = w.in_stream(PreintError::GapTooLarge {
+            index: 2,
+            t_ns: 0,
+            gap_ns: 1,
+            max_gap_ns: 0,
+        });
+        assert!(
+            matches!(e, PreintError::GapTooLarge { index: 49, .. }),
+            "{e:?}"
+        );
+    }
+}
