@@ -17,7 +17,7 @@
 
 use crate::format::{list, opt_list};
 use crate::imu_args::ImuArgs;
-use crate::{CliError, Output, checks, noise};
+use crate::{CliError, Output, checks, noise, stream};
 use nalgebra::Vector3;
 use preint::{ImuNoise, ImuSample, PreintParams, Scheme};
 use preint_calib::bias::{
@@ -111,11 +111,27 @@ fn distinct_attitudes(samples: &[ImuSample], ivs: &[StillInterval]) -> usize {
 /// [`preint::params::DEFAULT_MAX_GAP_NS`]).
 pub const MAX_GAP_S: f64 = preint::params::DEFAULT_MAX_GAP_NS as f64 * 1e-9;
 
-/// Reads the samples in `[--from, --to]` and checks their units and that they have no gap.
+/// Reads the samples in `[--from, --to]` (only those are held; reading stops after `--to`)
+/// and checks their units and that they have no gap.
 fn read_samples(args: &Args) -> Result<Vec<ImuSample>, CliError> {
-    let (mut samples, _) = args.input.read_all()?;
     let (lo, hi) = (args.from.unwrap_or(i64::MIN), args.to.unwrap_or(i64::MAX));
-    samples.retain(|s| s.t_ns >= lo && s.t_ns <= hi);
+    let mut samples = Vec::new();
+    for s in stream::open_checked_until(&args.input, args.to)? {
+        let s = s?;
+        if s.t_ns > hi {
+            break;
+        }
+        if s.t_ns >= lo {
+            if samples.len() == stream::MAX_WINDOW_SAMPLES {
+                return Err(CliError::Failed(format!(
+                    "{}: more than {} samples in [{lo}, {hi}] ns; choose a shorter --from/--to",
+                    args.input.path().display(),
+                    stream::MAX_WINDOW_SAMPLES
+                )));
+            }
+            samples.push(s);
+        }
+    }
     if samples.len() < 2 {
         return Err(CliError::Failed(format!(
             "{}: fewer than two samples with timestamps in [{lo}, {hi}] ns",

@@ -22,7 +22,7 @@ use crate::format::list;
 use crate::imu_args::ImuArgs;
 use crate::preint_args::PreintArgs;
 use crate::scheme::{self};
-use crate::{CliError, Output, checks, input};
+use crate::{CliError, Output, checks, input, stream};
 use preint::{
     CombinedImuFactor, ImuBias, ImuFactor, Level, NavState, PreintegratedImu, preintegrate,
 };
@@ -116,7 +116,6 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
         Level::Covariance
     };
     let (_, params) = args.preint.params(level)?;
-    let (samples, _) = args.input.read_all()?;
     let gt = read_euroc_groundtruth(&args.poses)?;
     let (gi, gj) = (
         *input::nearest_row(&gt, args.from),
@@ -134,8 +133,12 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
         )));
     }
     let scheme = params.scheme;
-    let pim = preintegrate(&params, &gi.bias, &samples, gi.t_ns, gj.t_ns)
-        .map_err(|e| CliError::failed_in(args.input.path(), e))?;
+    // Only the part of the recording the window needs is read.
+    let stream = stream::open_checked_until(&args.input, Some(gj.t_ns))?;
+    let w = stream::cut_window(stream, Some(gi.t_ns), Some(gj.t_ns))?;
+    let samples = w.samples.as_slice();
+    let pim = preintegrate(&params, &gi.bias, samples, gi.t_ns, gj.t_ns)
+        .map_err(|e| CliError::failed_in(args.input.path(), w.in_stream(e)))?;
     let failed = |e: preint::FactorError| CliError::failed_in(args.input.path(), e);
     let (xi, xj) = (nav(&gi), nav(&gj));
     let ev = if args.combined {
@@ -154,7 +157,7 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
         gi,
         gj,
         requested: (args.from, args.to),
-        samples: input::count_in(&samples, gi.t_ns, gj.t_ns),
+        samples: input::count_in(samples, gi.t_ns, gj.t_ns),
         pim,
         truth_noise: tn,
         ev,
