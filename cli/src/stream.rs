@@ -6,6 +6,7 @@ use crate::{CliError, checks};
 use preint::{ImuSample, PreintError};
 use preint_io::{ImuReader, IoError, Progress, SourceInfo};
 use std::collections::VecDeque;
+use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 
 /// Samples held in memory for the unit checks: 2¹⁸ (15 MB; 22 min at 200 Hz). The checks of
 /// a longer recording look at this prefix only.
@@ -20,12 +21,88 @@ pub const MAX_WINDOW_SAMPLES: usize = preint_io::reader::DEFAULT_MAX_SAMPLES;
 const EDGE_SAMPLES: usize = 4;
 
 /// The samples of a recording, in order, after the unit checks on its first
-/// [`UNIT_CHECK_PREFIX`] samples (unless `--no-unit-check`).
+/// [`UNIT_CHECK_PREFIX`] samples (unless `--no-unit-check`). The rest of the recording is
+/// parsed by a second thread ([`Prefetch`]) while the caller works on what came before.
 pub struct CheckedSamples {
     prefix: std::vec::IntoIter<ImuSample>,
-    rest: ImuReader,
+    rest: Option<Prefetch>,
     info: SourceInfo,
     progress: Progress,
+}
+
+/// Samples per chunk handed from the reading thread.
+const CHUNK: usize = 4096;
+
+/// Chunks parsed ahead of the consumer (memory: 4 × 4096 samples, 0.9 MB).
+const CHUNKS_AHEAD: usize = 4;
+
+/// A reader running on its own thread, handing over chunks of samples through a bounded
+/// channel and getting the emptied chunks back, so that nothing is allocated per chunk
+/// after the first few. Dropping it stops the thread at its next chunk.
+struct Prefetch {
+    full: Receiver<Result<Vec<ImuSample>, IoError>>,
+    empty: SyncSender<Vec<ImuSample>>,
+    chunk: Vec<ImuSample>,
+    next: usize,
+}
+
+impl Prefetch {
+    fn start(mut reader: ImuReader) -> Self {
+        let (full_tx, full) = sync_channel(CHUNKS_AHEAD);
+        let (empty, empty_rx) = sync_channel::<Vec<ImuSample>>(CHUNKS_AHEAD + 1);
+        std::thread::spawn(move || {
+            loop {
+                let mut chunk = empty_rx
+                    .try_recv()
+                    .unwrap_or_else(|_| Vec::with_capacity(CHUNK));
+                chunk.clear();
+                let mut failed = None;
+                while chunk.len() < CHUNK {
+                    match reader.next() {
+                        Some(Ok(s)) => chunk.push(s),
+                        Some(Err(e)) => {
+                            failed = Some(e);
+                            break;
+                        }
+                        None => break,
+                    }
+                }
+                let done = chunk.len() < CHUNK;
+                if !chunk.is_empty() && full_tx.send(Ok(chunk)).is_err() {
+                    return;
+                }
+                if let Some(e) = failed {
+                    let _ = full_tx.send(Err(e));
+                    return;
+                }
+                if done {
+                    return;
+                }
+            }
+        });
+        Self {
+            full,
+            empty,
+            chunk: Vec::new(),
+            next: 0,
+        }
+    }
+
+    fn next_sample(&mut self) -> Option<Result<ImuSample, IoError>> {
+        if self.next == self.chunk.len() {
+            let used = std::mem::take(&mut self.chunk);
+            let _ = self.empty.try_send(used);
+            match self.full.recv().ok()? {
+                Ok(chunk) => {
+                    self.chunk = chunk;
+                    self.next = 0;
+                }
+                Err(e) => return Some(Err(e)),
+            }
+        }
+        self.next += 1;
+        Some(Ok(self.chunk[self.next - 1]))
+    }
 }
 
 /// Opens the recording of `args` and runs the unit checks on its prefix.
@@ -58,9 +135,10 @@ pub fn open_checked_until(args: &ImuArgs, until: Option<i64>) -> Result<CheckedS
     if !args.no_unit_check {
         checks::si_units(&prefix, args.path())?;
     }
+    let more = prefix.len() == UNIT_CHECK_PREFIX;
     Ok(CheckedSamples {
         prefix: prefix.into_iter(),
-        rest,
+        rest: more.then(|| Prefetch::start(rest)),
         info,
         progress,
     })
@@ -84,7 +162,11 @@ impl Iterator for CheckedSamples {
     fn next(&mut self) -> Option<Self::Item> {
         match self.prefix.next() {
             Some(s) => Some(Ok(s)),
-            None => self.rest.next().map(|r| r.map_err(CliError::from)),
+            None => self
+                .rest
+                .as_mut()?
+                .next_sample()
+                .map(|r| r.map_err(CliError::from)),
         }
     }
 }
