@@ -91,12 +91,10 @@ impl Prefetch {
     fn next_sample(&mut self) -> Option<Result<ImuSample, IoError>> {
         if self.next == self.chunk.len() {
             let used = std::mem::take(&mut self.chunk);
+            self.next = 0;
             let _ = self.empty.try_send(used);
             match self.full.recv().ok()? {
-                Ok(chunk) => {
-                    self.chunk = chunk;
-                    self.next = 0;
-                }
+                Ok(chunk) => self.chunk = chunk,
                 Err(e) => return Some(Err(e)),
             }
         }
@@ -327,6 +325,56 @@ mod tests {
         let counted = stream(1000).inspect(|_| read += 1);
         cut_window(counted, Some(100), Some(200)).unwrap();
         assert_eq!(read, 24, "samples 0..=23 read, the rest left unread");
+    }
+
+    /// EuRoC text of `n` rows, row `bad` (if any) malformed.
+    fn euroc_text(n: usize, bad: Option<usize>) -> String {
+        let mut t = String::from("#timestamp [ns],w_x,w_y,w_z,a_x,a_y,a_z\n");
+        for k in 0..n {
+            if Some(k) == bad {
+                t.push_str("not a row\n");
+            } else {
+                t.push_str(&format!("{},{k},0.5,0,0,0,9.8\n", 1_000 + k * 5_000_000));
+            }
+        }
+        t
+    }
+
+    #[test]
+    fn the_prefetch_thread_hands_over_every_sample_in_order() {
+        // 10 000 samples: two full chunks and a partial one.
+        let text = euroc_text(10_000, None);
+        let reader = ImuReader::from_text(&text, "p.csv", &preint_io::ReadOptions::euroc());
+        let mut p = Prefetch::start(reader.unwrap());
+        let mut k = 0usize;
+        while let Some(s) = p.next_sample() {
+            let s = s.unwrap();
+            assert_eq!(
+                (s.t_ns, s.gyro.x),
+                ((1_000 + k * 5_000_000) as i64, k as f64)
+            );
+            k += 1;
+        }
+        assert_eq!(k, 10_000);
+    }
+
+    #[test]
+    fn the_prefetch_thread_passes_an_error_on_after_the_samples_before_it() {
+        let text = euroc_text(10_000, Some(9_000));
+        let reader = ImuReader::from_text(&text, "p.csv", &preint_io::ReadOptions::euroc());
+        let mut p = Prefetch::start(reader.unwrap());
+        let mut k = 0usize;
+        let err = loop {
+            match p.next_sample() {
+                Some(Ok(_)) => k += 1,
+                Some(Err(e)) => break e.to_string(),
+                None => panic!("no error after {k} samples"),
+            }
+        };
+        assert_eq!(k, 9_000);
+        // Header on line 1, row 9000 on line 9002.
+        assert!(err.contains("p.csv:9002"), "{err}");
+        assert!(p.next_sample().is_none());
     }
 
     #[test]
