@@ -116,7 +116,9 @@ impl ImuArgs {
     pub fn read_all(&self) -> Result<(Vec<ImuSample>, SourceInfo), CliError> {
         let reader = self.open()?;
         let info = reader.info().clone();
+        let bar = crate::progress::ReadingBar::start(reader.progress(), "reading");
         let samples = reader.read_all()?;
+        drop(bar);
         if !self.no_unit_check {
             checks::si_units(&samples, self.path())?;
         }

@@ -116,7 +116,9 @@ pub const MAX_GAP_S: f64 = preint::params::DEFAULT_MAX_GAP_NS as f64 * 1e-9;
 fn read_samples(args: &Args) -> Result<Vec<ImuSample>, CliError> {
     let (lo, hi) = (args.from.unwrap_or(i64::MIN), args.to.unwrap_or(i64::MAX));
     let mut samples = Vec::new();
-    for s in stream::open_checked_until(&args.input, args.to)? {
+    let stream = stream::open_checked_until(&args.input, args.to)?;
+    let _bar = crate::progress::ReadingBar::start(stream.progress(), "calibrate");
+    for s in stream {
         let s = s?;
         if s.t_ns > hi {
             break;
