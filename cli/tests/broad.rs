@@ -19,7 +19,13 @@ fn seconds_to_ns(t: &str) -> i64 {
 fn broad_converts_to_the_hand_made_euroc_rows() {
     let dir = tmp("broad");
     let out = dir.join("imu.csv");
-    let o = run(&["convert", "--imu", &repo(BROAD), "--out", out.to_str().unwrap()]);
+    let o = run(&[
+        "convert",
+        "--imu",
+        &repo(BROAD),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let src = std::fs::read_to_string(repo(BROAD)).unwrap();
     let got = std::fs::read_to_string(&out).unwrap();

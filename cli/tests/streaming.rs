@@ -159,3 +159,29 @@ fn a_gap_a_few_samples_before_from_does_not_fail_the_window() {
         );
     }
 }
+
+#[test]
+fn advise_refuses_a_gap_naming_the_file_and_the_samples() {
+    let (header, rows) = euroc_lines();
+    let dir = tmp("advise-gap");
+    // Rows 0..1000, a 1 s gap (rows 1000..1200 left out), rows 1200..3000.
+    let mut text = format!("{header}\n");
+    for r in rows[..1000].iter().chain(&rows[1200..3000]) {
+        text.push_str(r);
+        text.push('\n');
+    }
+    let file = write(&dir, "gap.csv", &text);
+    let o = run(&[
+        "advise",
+        "--imu",
+        file.to_str().unwrap(),
+        "--noise",
+        &repo("tests/data/euroc/imu.yaml"),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("gap.csv") && err.contains("gap of 1.005") && err.contains("999"),
+        "{err}"
+    );
+}

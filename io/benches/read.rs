@@ -9,7 +9,10 @@ use std::hint::black_box;
 
 /// The EuRoC rows `copies` times, each copy shifted past the previous one.
 fn euroc_text(copies: i64) -> String {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data/euroc/V1_01_easy_imu0.csv");
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/euroc/V1_01_easy_imu0.csv"
+    );
     let text = std::fs::read_to_string(path).expect("tests/data/euroc is in the repository");
     let mut lines = text.lines();
     let mut out = format!("{}\n", lines.next().unwrap());
