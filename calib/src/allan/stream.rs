@@ -178,17 +178,22 @@ impl AllanStream {
     /// The mean sample period \[s\], after checking that every interval is within ±10 % of it.
     fn period(&self) -> Result<f64, AllanError> {
         let dt = (self.last_t_ns - self.first_t_ns) as f64 * 1e-9 / (self.samples - 1) as f64;
-        for iv in [self.shortest, self.longest] {
-            let d = iv.ns as f64 * 1e-9;
-            if (d - dt).abs() > 0.1 * dt {
-                return Err(AllanError::Timestamps(format!(
-                    "interval {} (samples {} and {}) is {d} s, mean period {dt} s (gap or \
-                     irregular sampling)",
-                    iv.index,
-                    iv.index,
-                    iv.index + 1
-                )));
-            }
+        let off = |iv: &Interval| (iv.ns as f64 * 1e-9 - dt).abs();
+        // The interval farthest from the mean (the longest one for a gap).
+        let iv = if off(&self.longest) >= off(&self.shortest) {
+            self.longest
+        } else {
+            self.shortest
+        };
+        let d = iv.ns as f64 * 1e-9;
+        if (d - dt).abs() > 0.1 * dt {
+            return Err(AllanError::Timestamps(format!(
+                "interval {} (samples {} and {}) is {d} s, mean period {dt} s (gap or \
+                 irregular sampling)",
+                iv.index,
+                iv.index,
+                iv.index + 1
+            )));
         }
         Ok(dt)
     }
