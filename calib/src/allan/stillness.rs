@@ -208,8 +208,8 @@ impl StillnessMonitor {
             w.reference = v;
         }
         w.n += 1;
-        for c in 0..6 {
-            let d = v[c] - w.reference[c];
+        for (c, x) in v.iter().enumerate() {
+            let d = x - w.reference[c];
             w.s1[c] += d;
             w.s2[c] += d * d;
         }

@@ -148,8 +148,8 @@ impl AllanStream {
         }
         self.last_t_ns = s.t_ns;
         self.samples += 1;
-        for c in 0..6 {
-            self.sum[c] += v[c] - self.reference[c];
+        for (c, x) in v.iter().enumerate() {
+            self.sum[c] += x - self.reference[c];
         }
         self.in_block += 1;
         if self.in_block == self.block_len {
