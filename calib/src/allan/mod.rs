@@ -3,7 +3,8 @@
 //!
 //! - [`deviation`]: the overlapping Allan deviation `σ(τ)` of one channel at log-spaced cluster
 //!   times, with the 1-σ error of every point.
-//! - [`fit`]: the white-noise density N (slope −½ line read at τ = 1 s), the random walk K
+//! - [`fit`]: the white-noise density N (slope −½ line fitted on τ ≥ 0.1 s, above the sensor's
+//!   internal filtering, and read at τ = 1 s), the random walk K
 //!   (slope +½ line read at τ = 3 s) and the bias instability B (the curve's floor / 0.664),
 //!   each line kept below the measured curve; upper bounds, flagged, when a slope region is
 //!   missing.
