@@ -24,7 +24,8 @@
 //! - Each line is fitted after subtracting the other fitted term (two passes), which removes most
 //!   of the bias from the crossover region where both terms matter.
 //! - **Caps.** Then `N ≤ min_τ σ(τ)√τ·(1 + kε(τ))` and `K ≤ min_τ σ(τ)√(3/τ)·(1 + kε(τ))`
-//!   over the reliable points, `k = 3` ([`CAP_SIGMAS`]): the line never exceeds the measured
+//!   over the reliable points (for N those at τ ≥ 0.1 s, see "Sensor bandwidth" below),
+//!   `k = 3` ([`CAP_SIGMAS`]): the line never exceeds the measured
 //!   curve by more than 3 of its statistical errors anywhere. A weighted mean over a region
 //!   where other noise already adds (σ√τ rising slowly) sits above the lowest points; the cap
 //!   brings it to them. Why not `k = 2`: the long-τ points of a random-walk curve are few and
@@ -38,6 +39,19 @@
 //! - Errors of fitted N and K: the relative error of the best-determined point of the fitted
 //!   region, `1/√(2(K_max − 1))` (neighbouring τ share data, so the region is hardly better than
 //!   that point).
+//! - **Sensor bandwidth.** The white-noise region, the cap and the bound of N use only points
+//!   with τ ≥ [`WHITE_NOISE_MIN_TAU`] = 0.1 s (all reliable points when none reaches 0.1 s).
+//!   An IMU filters before it samples (anti-alias and decimation filters; the ADIS16405 averages
+//!   internally), and filtered white noise lies **below** the white-noise line: for a
+//!   first-order low-pass of time constant T on white noise of density N,
+//!   `σ²(τ) = (N²/τ)·[1 − (T/2τ)(3 − 4e^{−τ/T} + e^{−2τ/T})]` (the first-order Gauss–Markov
+//!   Allan variance, IEEE Std 952-1997 Annex C; El-Sheimy, Hou, Niu 2008, Table 1 with
+//!   `q_c = N/T`), `≈ (N²/τ)(1 − 3T/2τ)` for τ ≫ T. At τ ~ T the deficit is tens of percent
+//!   (ADIS16405 at 100 Hz: `σ√τ` = 0.032 deg/s/√Hz at τ = 0.01 s against 0.041 at 1 s), and the
+//!   cap would take it for the white-noise level; at τ ≥ 0.1 s it is `3T/4τ` in σ (2 % for
+//!   T = 2.7 ms, which reproduces the ADIS16405 curve at 0.01 s). With this floor a recording
+//!   and its block means of length ≤ 0.1 s give the same N: the Allan variance of block means at
+//!   τ a multiple of the block length is that of the raw data.
 //! - **B** (bias instability): the minimum of σ(τ) over points with ≥ 8 clusters, divided by
 //!   `√(2 ln2/π) ≈ 0.664`. When the curve has no flat floor (e.g. white noise + random walk only)
 //!   this is an upper bound: for `σ² = N²/τ + K²τ/3` the minimum is `√(2NK/√3)` at
@@ -60,7 +74,7 @@ pub struct NoiseFit {
     /// τ range \[s\] of the points used for N (the τ of the minimum of `σ√τ` when a bound).
     pub white_tau_range: (f64, f64),
     /// `true` when no slope −½ region exists and N is only the upper bound `min_τ σ(τ)√τ`
-    /// over the reliable points (module docs).
+    /// over the reliable points at τ ≥ [`WHITE_NOISE_MIN_TAU`] (module docs).
     pub white_density_is_bound: bool,
     /// Random walk K [u/s/√Hz] (σ of the slope +½ line at τ = 3 s), capped as N, or a bound
     /// (see `random_walk_is_bound`).
@@ -80,6 +94,8 @@ pub struct NoiseFit {
 }
 
 const MIN_CLUSTERS: f64 = 8.0;
+/// Shortest τ \[s\] of the white-noise region, cap and bound (module docs, "Sensor bandwidth").
+pub const WHITE_NOISE_MIN_TAU: f64 = 0.1;
 const SLOPE_TOL: f64 = 0.15;
 /// Minimum number of points of a slope region.
 const MIN_RUN: usize = 3;
@@ -112,9 +128,13 @@ fn ls_slope(x: &[f64], y: &[f64]) -> f64 {
 }
 
 /// Indices (into `pts`, all reliable) of the kept runs of slope `target` (module docs).
-fn slope_region(pts: &[AllanPoint], slopes: &[f64], target: f64) -> Vec<usize> {
-    let cand =
-        |i: usize| pts[i].clusters >= MIN_CLUSTERS && (slopes[i] - target).abs() <= SLOPE_TOL;
+/// Only points with `τ ≥ min_tau` are candidates.
+fn slope_region(pts: &[AllanPoint], slopes: &[f64], target: f64, min_tau: f64) -> Vec<usize> {
+    let cand = |i: usize| {
+        pts[i].clusters >= MIN_CLUSTERS
+            && pts[i].tau >= min_tau
+            && (slopes[i] - target).abs() <= SLOPE_TOL
+    };
     let mut out = Vec::new();
     let mut i = 0;
     while i < pts.len() {
@@ -190,9 +210,20 @@ pub fn fit_noise(pts: &[AllanPoint], channel: usize) -> Result<NoiseFit, AllanEr
     if reliable.is_empty() {
         return Err(AllanError::NoWhiteNoiseRegion(channel));
     }
+    // The white-noise floor: 0.1 s, or the longest reliable τ when shorter (module docs).
+    let tau_w = reliable
+        .iter()
+        .map(|p| p.tau)
+        .fold(0.0, f64::max)
+        .min(WHITE_NOISE_MIN_TAU);
+    let reliable_w: Vec<&AllanPoint> = reliable
+        .iter()
+        .copied()
+        .filter(|p| p.tau >= tau_w)
+        .collect();
     let slopes = local_slopes(pts);
-    let white = slope_region(pts, &slopes, -0.5);
-    let rw = slope_region(pts, &slopes, 0.5);
+    let white = slope_region(pts, &slopes, -0.5, tau_w);
+    let rw = slope_region(pts, &slopes, 0.5, 0.0);
     // Two passes: each line fitted after subtracting the other's current term (σ²(τ) of the
     // white noise is N²/τ, of the random walk K²τ/3).
     let (mut n2, mut k2) = (0.0, 0.0);
@@ -205,7 +236,7 @@ pub fn fit_noise(pts: &[AllanPoint], channel: usize) -> Result<NoiseFit, AllanEr
             (k2, k_rel) = fit_line(pts, &rw, |t| n2 / t, |s2, t| 3.0 * s2 / t);
         }
     }
-    let n = read_line(pts, &reliable, &white, n2, n_rel, |t: f64| t.sqrt());
+    let n = read_line(pts, &reliable_w, &white, n2, n_rel, |t: f64| t.sqrt());
     let k = read_line(pts, &reliable, &rw, k2, k_rel, |t: f64| (3.0 / t).sqrt());
     let minp = reliable
         .iter()

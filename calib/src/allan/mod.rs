@@ -3,10 +3,15 @@
 //!
 //! - [`deviation`]: the overlapping Allan deviation `σ(τ)` of one channel at log-spaced cluster
 //!   times, with the 1-σ error of every point.
-//! - [`fit`]: the white-noise density N (slope −½ line read at τ = 1 s), the random walk K
+//! - [`fit`]: the white-noise density N (slope −½ line fitted on τ ≥ 0.1 s, above the sensor's
+//!   internal filtering, and read at τ = 1 s), the random walk K
 //!   (slope +½ line read at τ = 3 s) and the bias instability B (the curve's floor / 0.664),
 //!   each line kept below the measured curve; upper bounds, flagged, when a slope region is
 //!   missing.
+//! - [`stream`]: the same from a sample stream in bounded memory ([`AllanStream`], block means
+//!   at a base cluster time τ₀ that grows with the recording's length).
+//! - [`stillness`]: is a streamed recording static ([`StillnessMonitor`])? The Allan variance
+//!   of a moving recording describes the motion, not the sensor.
 //! - [`ImuAllan`]: the six channels of an IMU record and their Kalibr `imu.yaml` figures
 //!   (`gyroscope_noise_density`, `gyroscope_random_walk`, `accelerometer_noise_density`,
 //!   `accelerometer_random_walk`; the largest axis of each sensor).
@@ -15,9 +20,13 @@
 
 pub mod deviation;
 pub mod fit;
+pub mod stillness;
+pub mod stream;
 
 pub use deviation::{AllanPoint, allan_deviation, log_spaced_cluster_sizes};
-pub use fit::{BIAS_INSTABILITY_FACTOR, CAP_SIGMAS, NoiseFit, fit_noise};
+pub use fit::{BIAS_INSTABILITY_FACTOR, CAP_SIGMAS, NoiseFit, WHITE_NOISE_MIN_TAU, fit_noise};
+pub use stillness::{Stillness, StillnessMonitor, StillnessOptions};
+pub use stream::{AllanStream, MAX_BASE_BLOCKS};
 
 use preint::noise::ImuNoise;
 use preint::{ImuSample, dt_seconds};
@@ -49,6 +58,9 @@ pub enum AllanError {
     /// Channels have different lengths.
     #[error("channel lengths differ ({0} vs {1})")]
     LengthMismatch(usize, usize),
+    /// The recording is not static ([`Stillness::verdict`] says why).
+    #[error("{0}")]
+    NotStatic(String),
 }
 
 /// Allan analysis of a six-axis IMU record.
@@ -56,6 +68,9 @@ pub enum AllanError {
 pub struct ImuAllan {
     /// Sample period Δt \[s\].
     pub dt: f64,
+    /// τ₀ \[s\]: the period of the series the curves were computed from, `Δt` for the
+    /// samples themselves, `bΔt` for the base blocks of [`AllanStream`].
+    pub tau0: f64,
     /// Curves, channel order `[ω_x, ω_y, ω_z, a_x, a_y, a_z]`.
     pub curves: [Vec<AllanPoint>; 6],
     /// Fits, same order (gyro in rad/s units, accelerometer in m/s² units).
@@ -106,6 +121,16 @@ impl ImuAllan {
                 e => e,
             })?;
         }
+        Self::from_curves(dt, dt, curves)
+    }
+
+    /// Fits the six curves of a recording sampled every `dt` \[s\], computed from a series of
+    /// period `tau0` (`dt`, or the block length of [`AllanStream`]).
+    pub fn from_curves(
+        dt: f64,
+        tau0: f64,
+        curves: [Vec<AllanPoint>; 6],
+    ) -> Result<Self, AllanError> {
         let fits = [
             fit_noise(&curves[0], 0)?,
             fit_noise(&curves[1], 1)?,
@@ -114,7 +139,12 @@ impl ImuAllan {
             fit_noise(&curves[4], 4)?,
             fit_noise(&curves[5], 5)?,
         ];
-        Ok(Self { dt, curves, fits })
+        Ok(Self {
+            dt,
+            tau0,
+            curves,
+            fits,
+        })
     }
 
     /// Analyses IMU samples; the period is `(t_last − t_first)/(N − 1)` and every interval must

@@ -2,16 +2,33 @@
 //! density (slope −½ read at τ = 1 s), random walk (slope +½ read at τ = 3 s) and bias
 //! instability (flat minimum / 0.664); Kalibr `imu.yaml` (max over axes) and a chart
 //! (IEEE Std 952-1997, annex C).
+//!
+//! Streaming, in bounded memory: the samples are read once and reduced to at most 2²⁰ block
+//! means ([`preint_calib::allan::stream`]: τ₀ = Δt up to 2²⁰ samples, then doubling), so memory
+//! does not grow with the file. Checks before an answer is given:
+//! - **Units** on the first [`UNIT_CHECK_SECONDS`] s (at most [`UNIT_CHECK_MAX_SAMPLES`]
+//!   samples; [`crate::checks::si_units`]), unless `--no-unit-check`.
+//! - **Stillness** over the whole recording ([`preint_calib::allan::stillness`]): a moving
+//!   recording is refused (exit 2) with the fraction of still windows, unless
+//!   `--no-still-check` (for a sensor whose noise the detector takes for motion, e.g. strong
+//!   popcorn noise).
 
 use crate::charts::figures;
 use crate::format::IMU_AXES;
 use crate::imu_args::ImuArgs;
-use crate::{CliError, Output};
-use preint_calib::allan::ImuAllan;
+use crate::progress::ReadingBar;
+use crate::{CliError, Output, checks};
+use preint::ImuSample;
+use preint_calib::allan::{AllanStream, ImuAllan, Stillness, StillnessMonitor, StillnessOptions};
 use preint_io::write_kalibr_yaml;
 use serde_json::{Value, json};
 use std::fmt::Write as _;
 use std::path::PathBuf;
+
+/// Length of the prefix on which the units are checked \[s\].
+pub const UNIT_CHECK_SECONDS: f64 = 60.0;
+/// Largest number of samples of that prefix (5.6 MB; 60 s up to 1.67 kHz).
+pub const UNIT_CHECK_MAX_SAMPLES: usize = 100_000;
 
 /// Flags of `preint allan`.
 #[derive(clap::Args, Debug, Clone)]
@@ -22,6 +39,10 @@ pub struct Args {
     /// Output directory for allan.svg and imu.yaml.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Skip the check that the recording is static (the Allan deviation of a moving recording
+    /// describes the motion, not the sensor's noise).
+    #[arg(long)]
+    pub no_still_check: bool,
 }
 
 /// The Allan deviations, their fits, and the files written.
@@ -31,17 +52,59 @@ pub struct AllanRun {
     pub imu: String,
     /// Number of samples.
     pub samples: usize,
+    /// Samples per base block of the curves (τ₀ = `block_len`·Δt).
+    pub block_len: usize,
+    /// Whether the units were checked (`--no-unit-check` not given).
+    pub units_checked: bool,
+    /// The stillness check's findings (refused unless static or `--no-still-check`).
+    pub stillness: Stillness,
     /// Curves and fits per channel (order [`IMU_AXES`]).
     pub allan: ImuAllan,
     /// Charts and `imu.yaml`, when `--out` is given.
     pub files: Vec<String>,
 }
 
+/// The streamed pass: base blocks, the stillness monitor, and the unit check on the prefix.
+fn read_stream(args: &Args) -> Result<(AllanStream, Stillness), CliError> {
+    let file = args.input.path();
+    let reader = args.input.open()?;
+    let _bar = ReadingBar::start(reader.progress(), "allan");
+    let mut prefix: Option<Vec<ImuSample>> =
+        (!args.input.no_unit_check).then(|| Vec::with_capacity(UNIT_CHECK_MAX_SAMPLES));
+    let mut stream = AllanStream::new();
+    let mut still = StillnessMonitor::new(StillnessOptions::default());
+    for s in reader {
+        let s = s?;
+        if let Some(p) = &mut prefix {
+            p.push(s);
+            let span_s = (s.t_ns - p[0].t_ns) as f64 * 1e-9;
+            if p.len() >= UNIT_CHECK_MAX_SAMPLES || span_s >= UNIT_CHECK_SECONDS {
+                checks::si_units(p, file)?;
+                prefix = None;
+            }
+        }
+        stream.push(&s).map_err(|e| CliError::failed_in(file, e))?;
+        still.push(&s);
+    }
+    if let Some(p) = &prefix {
+        checks::si_units(p, file)?;
+    }
+    Ok((stream, still.finish()))
+}
+
 /// Computes the Allan deviations and, with `--out`, writes the two charts and `imu.yaml`.
 pub fn compute(args: &Args) -> Result<AllanRun, CliError> {
-    let (samples, _) = args.input.read_all()?;
-    let a = ImuAllan::from_samples(&samples, 10)
-        .map_err(|e| CliError::failed_in(args.input.path(), e))?;
+    let file = args.input.path();
+    let (stream, stillness) = read_stream(args)?;
+    if !args.no_still_check {
+        stillness
+            .verdict(&StillnessOptions::default())
+            .map_err(|e| CliError::failed_in(file, format!("{e} (or pass --no-still-check)")))?;
+    }
+    let (samples, block_len) = (stream.samples() as usize, stream.block_len());
+    let a = stream
+        .finish(10)
+        .map_err(|e| CliError::failed_in(file, e))?;
     let mut files = Vec::new();
     if let Some(dir) = &args.out {
         std::fs::create_dir_all(dir).map_err(|e| CliError::failed_in(dir, e))?;
@@ -56,7 +119,10 @@ pub fn compute(args: &Args) -> Result<AllanRun, CliError> {
     }
     Ok(AllanRun {
         imu: args.input.label(),
-        samples: samples.len(),
+        samples,
+        block_len,
+        units_checked: !args.input.no_unit_check,
+        stillness,
         allan: a,
         files,
     })
@@ -85,9 +151,19 @@ pub fn to_json(r: &AllanRun) -> Value {
             .map(|c| a.fits[c].random_walk)
             .collect::<Vec<_>>()
     };
+    let st = &r.stillness;
     json!({
         "samples": r.samples,
         "sample_period_s": a.dt,
+        "base_tau_s": a.tau0,
+        "block_len": r.block_len,
+        "checks": {
+            "units": if r.units_checked { format!("first {UNIT_CHECK_SECONDS} s") } else { "skipped (--no-unit-check)".into() },
+            "still_fraction": st.still_fraction(),
+            "still_windows": st.still_windows,
+            "windows": st.windows,
+            "max_tilt_deg": st.max_tilt_deg,
+        },
         "gyroscope_noise_density": white(0),
         "gyroscope_random_walk": walk(0),
         "accelerometer_noise_density": white(3),
@@ -112,6 +188,26 @@ pub fn to_text(r: &AllanRun) -> String {
         1.0 / a.dt,
         a.dt * r.samples as f64
     );
+    let st = &r.stillness;
+    let _ = writeln!(
+        h,
+        "still: {:.1} % of {} one-second windows, gravity turns by up to {:.2}°; units {}",
+        100.0 * st.still_fraction(),
+        st.windows,
+        st.max_tilt_deg,
+        if r.units_checked {
+            "checked on the first 60 s"
+        } else {
+            "not checked"
+        }
+    );
+    if r.block_len > 1 {
+        let _ = writeln!(
+            h,
+            "curves from means of {} samples (τ from {:.3} s; bounded memory)",
+            r.block_len, a.tau0
+        );
+    }
     let _ = writeln!(
         h,
         "{:<8} {:>16} {:>16} {:>16}",
