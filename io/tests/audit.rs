@@ -354,7 +354,7 @@ fn split_streams_report_each_channel_and_the_stamp_offsets() {
     assert!(
         a.findings[0]
             .message
-            .starts_with("gyro: 1 duplicate timestamps: index 400 (line 401)")
+            .starts_with("gyro: 1 duplicate timestamp: index 400 (line 401)")
     );
     assert_eq!(a.accel.timing.rate_hz(), Some(62.5));
     assert_eq!(a.gyro.timing.rate_hz(), Some(200.0));

@@ -67,6 +67,11 @@ fn more(count: u64, named: usize) -> String {
     }
 }
 
+/// `"1 gap"`, `"2 gaps"`.
+fn count(n: u64, one: &str, many: &str) -> String {
+    format!("{n} {}", if n == 1 { one } else { many })
+}
+
 fn list_events(l: &EventList<Event>, one: impl Fn(&Event) -> String) -> String {
     let names: Vec<String> = l.first.iter().take(NAMED).map(one).collect();
     format!("{}{}", names.join("; "), more(l.count, names.len()))
@@ -132,8 +137,8 @@ pub(crate) fn reading(
             Severity::Defect,
             "bad_rows",
             format!(
-                "{label}{} rows could not be read: {}{}",
-                bad_rows.count,
+                "{label}{} could not be read: {}{}",
+                count(bad_rows.count, "row", "rows"),
                 names.join("; "),
                 more(bad_rows.count, names.len())
             ),
@@ -154,8 +159,8 @@ pub(crate) fn reading(
             Severity::Defect,
             "non_finite",
             format!(
-                "{label}{} samples with a non-finite reading: {}{}",
-                non_finite.count,
+                "{label}{} with a non-finite reading: {}{}",
+                count(non_finite.count, "sample", "samples"),
                 names.join("; "),
                 more(non_finite.count, names.len())
             ),
@@ -173,7 +178,8 @@ pub(crate) fn timing(t: &Timing, label: &str, f: &mut Vec<Finding>) {
                 e.index, e.at, e.t_ns, e.prev_at
             )
         });
-        let m = format!("{label}{} duplicate timestamps: {msg}", d.count);
+        let what = count(d.count, "duplicate timestamp", "duplicate timestamps");
+        let m = format!("{label}{what}: {msg}");
         f.push(Finding::new(Severity::Defect, "duplicates", m));
     }
     let o = &t.out_of_order;
@@ -188,7 +194,8 @@ pub(crate) fn timing(t: &Timing, label: &str, f: &mut Vec<Finding>) {
                 e.prev_at
             )
         });
-        let m = format!("{label}{} samples go back in time: {msg}", o.count);
+        let what = count(o.count, "sample goes", "samples go");
+        let m = format!("{label}{what} back in time: {msg}");
         f.push(Finding::new(Severity::Defect, "out_of_order", m));
     }
     let gap = |e: &Event| {
@@ -202,23 +209,30 @@ pub(crate) fn timing(t: &Timing, label: &str, f: &mut Vec<Finding>) {
     };
     if t.long_gaps.count > 0 {
         let m = format!(
-            "{label}{} gaps longer than {} s (the integrator refuses windows across them): {}",
-            t.long_gaps.count,
+            "{label}{} longer than {} s (the integrator refuses windows across them): {}",
+            count(t.long_gaps.count, "gap", "gaps"),
             LONG_GAP_NS as f64 * 1e-9,
             list_events(&t.long_gaps, gap)
         );
         f.push(Finding::new(Severity::Defect, "long_gaps", m));
     }
     if let (Some(largest), true) = (&t.largest_gap, t.gaps.count > 0) {
-        let m = format!(
-            "{label}{} gaps (Δt > {GAP_FACTOR} × the {} ns reference interval; about {} samples \
-             missing), largest {}: {}",
-            t.gaps.count,
+        let mut m = format!(
+            "{label}{} (Δt > {GAP_FACTOR} × the {} ns reference interval; {} missing)",
+            count(t.gaps.count, "gap", "gaps"),
             t.reference_ns.unwrap_or(0),
-            t.missing_samples,
-            gap(largest),
-            list_events(&t.gaps, gap)
+            count(t.missing_samples, "sample", "samples")
         );
+        if t.gaps.count == 1 {
+            let _ = write!(m, ": {}", gap(largest));
+        } else {
+            let _ = write!(
+                m,
+                ", largest {}; first {}",
+                gap(largest),
+                list_events(&t.gaps, gap)
+            );
+        }
         f.push(Finding::new(Severity::Warning, "gaps", m));
     }
     rate(t, label, f);

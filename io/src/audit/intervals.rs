@@ -288,7 +288,7 @@ impl TimingStats {
 
     fn positive_interval(&mut self, index: u64, event: Event) -> Step {
         let dt = event.dt_ns();
-        let r = *self.reference.get_or_insert_with(|| dt);
+        let r = *self.reference.get_or_insert(dt);
         if self.counts.is_empty() {
             self.set_reference(r);
         }
