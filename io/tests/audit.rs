@@ -392,3 +392,103 @@ fn split_streams_report_each_channel_and_the_stamp_offsets() {
         (1, after, 0, 0)
     );
 }
+
+#[test]
+fn a_signal_below_its_resolution_is_not_clipped() {
+    // gyro z in steps of 1 mrad/s with noise below a step: it reads 0 mostly and ±1 mrad/s in
+    // 8 % of the samples, sometimes three in a row, but mostly alone.
+    let mut s = still(4000);
+    for (k, x) in s.iter_mut().enumerate() {
+        x.gyro.z = 1e-3 * (0.6 * noise(k, 2)).round();
+    }
+    let runs = (0..s.len() - 2)
+        .filter(|&k| (0..3).all(|j| s[k + j].gyro.z == 1e-3))
+        .count();
+    assert!(runs > 0, "the data has runs of three at its maximum");
+    let a = audit_text(&s);
+    assert!(a.is_clean(), "{:#?}", a.findings);
+    let z = &a.axes.unwrap()[2];
+    assert!(z.at_max.runs > 0 && !z.at_max.clipped());
+    let at_max = s.iter().filter(|x| x.gyro.z == 1e-3).count() as u64;
+    assert_eq!(z.at_max.total, at_max);
+}
+
+#[test]
+fn the_prefix_size_changes_nothing_but_the_unit_check_when_the_reference_is_the_same() {
+    let mut s = still(5000);
+    s.swap(4000, 4001);
+    s[4500].t_ns = s[4499].t_ns;
+    let audit = |prefix_samples| {
+        let located = (s.iter().enumerate()).map(|(k, x)| {
+            Ok(Located {
+                at: Location::Line(k as u64 + 2),
+                sample: *x,
+            })
+        });
+        let opts = AuditOptions {
+            prefix_samples,
+            max_listed: 20,
+        };
+        audit_stream(located, "rec", opts)
+    };
+    let (small, whole) = (audit(100), audit(1 << 15));
+    assert_eq!(small.timing, whole.timing);
+    let timing = |a: &Audit| {
+        a.findings
+            .iter()
+            .filter(|f| f.kind != "units")
+            .cloned()
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(timing(&small), timing(&whole));
+    assert_eq!(small.still, whole.still);
+}
+
+#[test]
+fn no_samples_and_one_stamp_are_reported_not_fatal() {
+    let a = audit_stream(std::iter::empty(), "none", AuditOptions::default());
+    assert_eq!(kinds(&a, Severity::Defect), ["empty"]);
+    let one = still(1)[0];
+    let same = (0..10).map(|k| {
+        Ok(Located {
+            at: Location::Message(k + 1),
+            sample: one,
+        })
+    });
+    let a = audit_stream(same, "bag", AuditOptions::default());
+    assert_eq!(a.timing.duplicates.count, 9);
+    assert_eq!(a.timing.duplicates.first[8].at, Location::Message(10));
+    assert!(message(&a, "rate").contains("no two samples have different stamps"));
+}
+
+proptest::proptest! {
+    /// Whatever the stamps and readings, every interval is counted once: duplicates,
+    /// out-of-order samples and positive intervals (binned in the histogram) add up to n − 1.
+    #[test]
+    fn every_interval_is_counted_once(
+        rows in proptest::collection::vec((0i64..50, -3.0f64..3.0, 0u8..8), 0..400),
+        prefix in 1usize..64,
+    ) {
+        let mut t = 0;
+        let located = rows.iter().enumerate().map(|(k, &(step, v, special))| {
+            t += step * 1_000_000 - 5_000_000;
+            let x = match special { 0 => f64::NAN, 1 => f64::INFINITY, _ => v };
+            let sample = ImuSample::new(t, Vector3::new(x, v, 0.0), Vector3::new(v, 0.0, 9.8));
+            Ok(Located { at: Location::Line(k as u64 + 1), sample })
+        });
+        let opts = AuditOptions { prefix_samples: prefix, max_listed: 5 };
+        let a = audit_stream(located, "p", opts);
+        let n = rows.len() as u64;
+        let tm = &a.timing;
+        let positive: u64 = tm.histogram.iter().sum();
+        proptest::prop_assert_eq!(tm.samples, n);
+        proptest::prop_assert_eq!(
+            positive + tm.duplicates.count + tm.out_of_order.count,
+            n.saturating_sub(1)
+        );
+        let special = rows.iter().filter(|r| r.2 < 2).count() as u64;
+        proptest::prop_assert_eq!(a.non_finite.count, special);
+        proptest::prop_assert!(tm.duplicates.first.len() <= 5);
+        proptest::prop_assert_eq!(a.is_clean(), a.findings.iter().all(|f| f.severity != Severity::Defect));
+    }
+}

@@ -31,8 +31,9 @@
 //! - `bad_rows`: `count`, `first: [{at, line, message}]`; `stopped`: the error that ended
 //!   reading, or null; `non_finite`: `count`, `first: [{index, at, line}]`.
 //! - `axes`: per axis (`gyro x` … `acc z`) `unit`, `max`, `min`, `constant`,
-//!   `flat_fraction`, `at_max` and `at_min` (`samples`, `runs`, `longest`, `first_index`,
-//!   `first_at`): runs of ≥ 3 equal readings at the extreme.
+//!   `flat_fraction`, `at_max` and `at_min` (`clipped`, `total`: samples at the extreme,
+//!   `samples`, `runs`, `longest`, `first_index`, `first_at`: runs of ≥ 3 equal readings at
+//!   it; clipped when they hold at least half of `total`).
 //! - `units` (on the first 32 768 samples, or null): `samples`, `gravity_median_m_s2`,
 //!   `gyro_median_rad_s`, `gyro_scale` (`pairs`, `misfit_deg`: `{deg_per_s, as_read,
 //!   rad_per_s}`, or null), `error` (the unit check's message, or null).
@@ -110,7 +111,8 @@ fn events(l: &EventList<Event>) -> Value {
 }
 
 fn flat(t: &FlatTop) -> Value {
-    json!({"samples": t.samples, "runs": t.runs, "longest": t.longest,
+    json!({"clipped": t.clipped(), "total": t.total, "samples": t.samples, "runs": t.runs,
+           "longest": t.longest,
            "first_index": t.first.map(|f| f.0), "first_at": t.first.map(|f| f.1.to_string())})
 }
 

@@ -7,7 +7,9 @@ use nalgebra::Vector3;
 /// A flat top is a run of at least this many consecutive equal readings at the axis' largest
 /// or smallest value over the recording. Noise makes an unclipped extreme a single sample
 /// (EuRoC, KITTI and the ADIS16405 hour in `tests/data` have no run of two at any extreme);
-/// a sensor driven past its range repeats its limit.
+/// a sensor driven past its range repeats its limit. An extreme counts as clipped when at
+/// least half of its samples are in flat tops ([`AxisReport::clipped`]): a signal whose noise
+/// is below its resolution visits its extreme level often, mostly for one or two samples.
 pub const MIN_FLAT_RUN: u64 = 3;
 
 /// The six axes in the order of [`AxisReport`]s: gyro x, y, z \[rad/s\], accelerometer x, y, z
@@ -24,7 +26,9 @@ pub const AXES: [(&str, &str); 6] = [
 /// Runs of at least [`MIN_FLAT_RUN`] equal readings at one extreme.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FlatTop {
-    /// Samples in those runs.
+    /// Samples at the extreme, in runs of any length.
+    pub total: u64,
+    /// Samples in runs of at least [`MIN_FLAT_RUN`].
     pub samples: u64,
     /// Number of runs.
     pub runs: u64,
@@ -49,6 +53,13 @@ pub struct AxisReport {
     pub at_max: FlatTop,
     /// Flat tops at `min`.
     pub at_min: FlatTop,
+}
+
+impl FlatTop {
+    /// Flat tops hold at least half of the samples at the extreme.
+    pub fn clipped(&self) -> bool {
+        self.runs > 0 && 2 * self.samples >= self.total
+    }
 }
 
 impl AxisReport {
@@ -85,8 +96,14 @@ impl Axis {
                 unit: AXES[k].1,
                 max: v,
                 min: v,
-                at_max: FlatTop::default(),
-                at_min: FlatTop::default(),
+                at_max: FlatTop {
+                    total: 1,
+                    ..FlatTop::default()
+                },
+                at_min: FlatTop {
+                    total: 1,
+                    ..FlatTop::default()
+                },
             },
             run_value: v,
             run_start: (index, at),
@@ -103,12 +120,15 @@ impl Axis {
         }
         // The extremes only widen: a run at today's extreme is at the final one unless a
         // later reading passes it, which resets that extreme's flat tops.
-        if v > self.report.max {
-            (self.report.max, self.report.at_max) = (v, FlatTop::default());
+        let r = &mut self.report;
+        if v > r.max {
+            (r.max, r.at_max) = (v, FlatTop::default());
         }
-        if v < self.report.min {
-            (self.report.min, self.report.at_min) = (v, FlatTop::default());
+        if v < r.min {
+            (r.min, r.at_min) = (v, FlatTop::default());
         }
+        r.at_max.total += u64::from(v == r.max);
+        r.at_min.total += u64::from(v == r.min);
     }
 
     fn close_run(&mut self) {

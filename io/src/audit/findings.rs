@@ -240,17 +240,19 @@ pub(crate) fn timing(t: &Timing, label: &str, f: &mut Vec<Finding>) {
 
 fn rate(t: &Timing, label: &str, f: &mut Vec<Finding>) {
     let (Some(median), Some(rate)) = (t.median_ns, t.rate_hz()) else {
-        if t.samples > 1 {
-            f.push(Finding::new(
-                Severity::Warning,
-                "rate",
-                format!(
-                    "{label}no nominal rate: the median interval is more than 5 % away from the \
-                     reference {} ns (the rate changes during the recording)",
-                    t.reference_ns.unwrap_or(0)
-                ),
-            ));
-        }
+        let why = match t.reference_ns {
+            _ if t.samples < 2 => return,
+            None => "no two samples have different stamps".to_string(),
+            Some(r) => format!(
+                "the median interval is more than 5 % away from the reference {r} ns (the rate \
+                 changes during the recording)"
+            ),
+        };
+        f.push(Finding::new(
+            Severity::Warning,
+            "rate",
+            format!("{label}no nominal rate: {why}"),
+        ));
         return;
     };
     let mut m = format!(
@@ -270,12 +272,17 @@ fn rate(t: &Timing, label: &str, f: &mut Vec<Finding>) {
         let _ = write!(m, "; drift {p:+.1} ppm (last vs first tenth)");
     }
     f.push(Finding::new(Severity::Info, "rate", m));
-    let jitter = t.robust_sd_ns.unwrap_or(f64::INFINITY);
-    if jitter > JITTER_WARNING * median {
-        let m = format!(
-            "{label}jittery stamps: robust sd of Δt {jitter:.0} ns is more than {} % of the \
-             {median:.0} ns interval (host receive times rather than sensor times?)",
+    let jitter = match t.robust_sd_ns {
+        Some(j) if j > JITTER_WARNING * median => format!(
+            "robust sd of Δt {j:.0} ns is more than {} % of the {median:.0} ns interval",
             JITTER_WARNING * 100.0
+        ),
+        None => "more than half of the intervals are over 5 % away from the median".to_string(),
+        Some(_) => String::new(),
+    };
+    if !jitter.is_empty() {
+        let m = format!(
+            "{label}jittery stamps: {jitter} (host receive times rather than sensor times?)"
         );
         f.push(Finding::new(Severity::Warning, "jitter", m));
     }
@@ -299,11 +306,11 @@ fn axis(ax: &AxisReport, samples: u64, f: &mut Vec<Finding>) {
         return;
     }
     let side = |what: &str, v: f64, t: &super::FlatTop| {
-        let (i, at) = t.first?;
+        let (i, at) = t.first.filter(|_| t.clipped())?;
         Some(format!(
-            "at its {what} {v} {}: {} samples in {} runs of ≥ {MIN_FLAT_RUN} equal readings \
-             (longest {}), first at index {i} ({at})",
-            ax.unit, t.samples, t.runs, t.longest
+            "at its {what} {v} {}: {} of its {} samples in {} runs of ≥ {MIN_FLAT_RUN} equal \
+             readings (longest {}), first at index {i} ({at})",
+            ax.unit, t.samples, t.total, t.runs, t.longest
         ))
     };
     let sides: Vec<String> = [
