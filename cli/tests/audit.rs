@@ -160,3 +160,71 @@ fn adis_is_clean_in_its_units_and_a_units_defect_in_the_wrong_ones() {
     wrong.push("--no-unit-check");
     assert!(run(&wrong).status.success());
 }
+
+/// A split recording's JSON: both channels' timing and the stamp offsets (hand-built streams:
+/// gyro at 200 Hz, accelerometer at 100 Hz stamped 1 ms after every other gyro stamp).
+#[test]
+fn split_streams_print_each_channel_and_the_offsets() {
+    use preint_cli::commands::audit::split_json;
+    use preint_io::audit::{AuditOptions, audit_channels};
+    use preint_io::{ChannelSample, ChannelStream, Location};
+    let stream = |n: i64, dt: i64, t0: i64| -> ChannelStream {
+        Box::new((0..n).map(move |k| {
+            let value = preint::nalgebra::Vector3::new(k as f64 * 1e-3, 0.0, 9.81);
+            let at = Location::Line(k as u64 + 1);
+            Ok(ChannelSample {
+                at,
+                t_ns: t0 + k * dt,
+                value,
+            })
+        }))
+    };
+    let a = audit_channels(
+        stream(400, 5_000_000, 0),
+        stream(199, 10_000_000, 1_000_000),
+        "g+a",
+        AuditOptions::default(),
+    );
+    assert!(a.is_clean(), "{:#?}", a.findings);
+    let j = split_json(&a);
+    assert_eq!(j["gyro"]["rate"]["nominal_hz"].as_f64(), Some(200.0));
+    assert_eq!(j["accel"]["rate"]["nominal_hz"].as_f64(), Some(100.0));
+    let o = &j["offsets"];
+    assert_eq!(
+        (o["count"].as_u64(), o["mean_ns"].as_f64()),
+        (Some(199), Some(1e6))
+    );
+    assert_eq!(
+        (
+            o["min_ns"].as_i64(),
+            o["max_ns"].as_i64(),
+            o["coincident"].as_u64()
+        ),
+        (Some(1_000_000), Some(1_000_000), Some(0))
+    );
+    // Gyro stamps 0 and 1985 … 1995 ms lie outside the accelerometer's 1 … 1981 ms.
+    assert_eq!(
+        (o["gyro_before"].as_u64(), o["gyro_after"].as_u64()),
+        (Some(1), Some(3))
+    );
+    assert_eq!(j["gyro"]["gaps"]["count"], 0);
+}
+
+#[test]
+fn topics_of_a_split_recording_need_a_container() {
+    let o = run(&[
+        "audit",
+        "--imu",
+        &repo(EUROC),
+        "--gyro-topic",
+        "/g",
+        "--accel-topic",
+        "/a",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--gyro-topic and --accel-topic need a bag, MCAP or db3 file"),
+        "{err}"
+    );
+}
