@@ -492,3 +492,49 @@ proptest::proptest! {
         proptest::prop_assert_eq!(a.is_clean(), a.findings.iter().all(|f| f.severity != Severity::Defect));
     }
 }
+
+#[test]
+fn stamps_at_the_ends_of_the_i64_range_do_not_overflow() {
+    let stamps = [i64::MAX, i64::MIN, 0, i64::MAX, i64::MIN + 1, -1, i64::MAX];
+    let one = still(1)[0];
+    let located = (stamps.iter().enumerate()).map(|(k, &t_ns)| {
+        Ok(Located {
+            at: Location::Line(k as u64 + 1),
+            sample: ImuSample { t_ns, ..one },
+        })
+    });
+    let a = audit_stream(located, "edge", AuditOptions::default());
+    assert_eq!(
+        (a.timing.out_of_order.count, a.timing.duplicates.count),
+        (4, 2)
+    );
+    assert_eq!(a.timing.out_of_order.first[0].dt_ns(), i64::MIN);
+    assert!(
+        message(&a, "out_of_order")
+            .contains(&format!("{} ns before line 1", i64::MIN.unsigned_abs()))
+    );
+    let gyro: ChannelStream = Box::new(
+        stamps
+            .map(|t_ns| {
+                Ok(ChannelSample {
+                    at: Location::Line(1),
+                    t_ns,
+                    value: one.gyro,
+                })
+            })
+            .into_iter(),
+    );
+    let accel: ChannelStream = Box::new(
+        [i64::MIN, 0, i64::MAX]
+            .map(|t_ns| {
+                Ok(ChannelSample {
+                    at: Location::Line(1),
+                    t_ns,
+                    value: one.acc,
+                })
+            })
+            .into_iter(),
+    );
+    let s = audit_channels(gyro, accel, "edge", AuditOptions::default());
+    assert_eq!(s.gyro.timing.samples, 7);
+}

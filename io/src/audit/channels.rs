@@ -60,8 +60,8 @@ impl Offsets {
             (None, None) => return,
             (None, Some(_)) => return self.accel_before += 1,
             (Some(_), None) => return self.accel_after += 1,
-            (Some(p), Some(n)) if (t - p).abs() <= (n - t).abs() => t - p,
-            (Some(_), Some(n)) => t - n,
+            (Some(p), Some(n)) if t.abs_diff(p) <= n.abs_diff(t) => t.saturating_sub(p),
+            (Some(_), Some(n)) => t.saturating_sub(n),
         };
         if self.count == 0 {
             (self.min_ns, self.max_ns) = (d, d);

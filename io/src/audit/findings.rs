@@ -190,7 +190,7 @@ pub(crate) fn timing(t: &Timing, label: &str, f: &mut Vec<Finding>) {
                 e.index,
                 e.at,
                 e.t_ns,
-                -e.dt_ns(),
+                e.dt_ns().unsigned_abs(),
                 e.prev_at
             )
         });

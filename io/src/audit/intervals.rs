@@ -59,9 +59,10 @@ pub struct Event {
 }
 
 impl Event {
-    /// `t_ns − prev_t_ns` \[ns\]: the gap, 0 for a duplicate, negative out of order.
+    /// `t_ns − prev_t_ns` \[ns\] (saturated to the `i64` range): the gap, 0 for a
+    /// duplicate, negative out of order.
     pub fn dt_ns(&self) -> i64 {
-        self.t_ns - self.prev_t_ns
+        self.t_ns.saturating_sub(self.prev_t_ns)
     }
 }
 
@@ -161,7 +162,7 @@ impl Timing {
 
     /// Span from the first to the latest stamp \[s\].
     pub fn span_s(&self) -> Option<f64> {
-        Some((self.last_t_ns? - self.first_t_ns?) as f64 * 1e-9)
+        Some((self.last_t_ns? as i128 - self.first_t_ns? as i128) as f64 * 1e-9)
     }
 
     /// Rate change from the first to the last tenth \[ppm\] (positive: faster at the end).
@@ -179,7 +180,7 @@ pub fn reference_interval(stamps: impl Iterator<Item = i64>) -> Option<i64> {
         if let Some(p) = prev
             && t > p
         {
-            d.push(t - p);
+            d.push(t.saturating_sub(p));
         }
         prev = Some(prev.map_or(t, |p: i64| p.max(t)));
     }
@@ -352,7 +353,8 @@ impl TimingStats {
     }
 
     fn gap(&mut self, event: Event, ratio: f64) {
-        self.out.missing_samples += (ratio.round() as u64).saturating_sub(1);
+        let missing = (ratio.round() as u64).saturating_sub(1);
+        self.out.missing_samples = self.out.missing_samples.saturating_add(missing);
         if self
             .out
             .largest_gap
