@@ -38,7 +38,7 @@ mod intervals;
 
 pub use axes::{AXES, AxisReport, FlatTop, MIN_FLAT_RUN, Still};
 pub use channels::{ChannelAudit, Offsets, SplitAudit, audit_channels};
-pub use findings::{Finding, Severity};
+pub use findings::{DRIFT_WARNING_PPM, Finding, JITTER_WARNING, Severity};
 pub use intervals::{
     Event, EventList, GAP_FACTOR, HISTOGRAM_EDGES, LONG_GAP_NS, Step, Timing, TimingStats,
     reference_interval,
