@@ -8,7 +8,7 @@ use nalgebra::Vector3;
 /// or smallest value over the recording. Noise makes an unclipped extreme a single sample
 /// (EuRoC, KITTI and the ADIS16405 hour in `tests/data` have no run of two at any extreme);
 /// a sensor driven past its range repeats its limit. An extreme counts as clipped when at
-/// least half of its samples are in flat tops ([`AxisReport::clipped`]): a signal whose noise
+/// least half of its samples are in flat tops ([`FlatTop::clipped`]): a signal whose noise
 /// is below its resolution visits its extreme level often, mostly for one or two samples.
 pub const MIN_FLAT_RUN: u64 = 3;
 
