@@ -64,6 +64,9 @@ pub enum Command {
     /// Write any readable recording (text in any layout and units, bag, MCAP) as EuRoC CSV
     /// (t ns, w rad/s, a m/s^2).
     Convert(convert::Args),
+    /// Audit a recording: rate, drift, jitter, gaps, duplicates, out-of-order samples, clipping,
+    /// units, stillness; a verdict, exit 2 on a defect with --strict.
+    Audit(crate::commands::audit::Args),
     /// Everything above on built-in scenes, into one HTML page with charts.
     Report(report::Args),
 }

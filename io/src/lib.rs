@@ -11,6 +11,8 @@
 //! - EuRoC ground truth ([`groundtruth`]), Kalibr `imu.yaml` ([`kalibr`]), EuRoC IMU writers
 //!   ([`euroc`]) — writers print shortest round-trip floats, so writing then reading is
 //!   bit-exact.
+//! - [`audit`]: what is wrong with a recording (timing, gaps, duplicates, clipping, units),
+//!   in one streaming pass.
 //! - [`plausibility`]: checks that the readings look like m/s², rad/s and the stated time unit.
 //!
 //! ```
@@ -29,6 +31,7 @@
 
 #![deny(missing_docs)]
 
+pub mod audit;
 pub mod channel;
 pub mod containers;
 pub mod detect;
@@ -45,6 +48,7 @@ pub mod split;
 mod text;
 pub mod units;
 
+pub use audit::{Audit, AuditOptions, Auditor, Finding, Severity, audit_reader};
 pub use channel::{ChannelSample, ChannelStream, Sensor};
 pub use detect::Format;
 pub use error::{IoError, Location};

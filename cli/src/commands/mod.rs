@@ -7,6 +7,7 @@ use crate::{CliError, Command, Output};
 
 pub mod advise;
 pub mod allan;
+pub mod audit;
 pub mod bench_steps;
 pub mod calibrate;
 pub mod convert;
@@ -28,6 +29,7 @@ pub fn run(command: &Command) -> Result<Output, CliError> {
         Command::Advise(a) => advise::run(a),
         Command::Speed(a) => speed::run(a),
         Command::Convert(a) => convert::run(a),
+        Command::Audit(a) => audit::run(a),
         Command::Report(a) => report::run(a),
     }
 }
