@@ -23,6 +23,15 @@ pub enum CliError {
     /// The computation failed (message says why).
     #[error("{0}")]
     Failed(String),
+    /// The command ran and its result is a refusal (e.g. `audit --strict` found a defect): the
+    /// output is printed as on success, then the message, and the exit code is 2.
+    #[error("{msg}")]
+    Refused {
+        /// What the command found.
+        output: Box<Output>,
+        /// Why that is a failure.
+        msg: String,
+    },
 }
 
 impl CliError {

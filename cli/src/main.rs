@@ -10,16 +10,22 @@ use std::process::ExitCode;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let print = |out: &preint_cli::Output| {
+        if cli.json {
+            println!("{}", out.json);
+        } else {
+            print!("{}", out.human);
+        }
+    };
     match preint_cli::run(&cli.command) {
         Ok(out) => {
-            if cli.json {
-                println!("{}", out.json);
-            } else {
-                print!("{}", out.human);
-            }
+            print(&out);
             ExitCode::SUCCESS
         }
         Err(e) => {
+            if let preint_cli::CliError::Refused { output, .. } = &e {
+                print(output);
+            }
             eprintln!("preint: error: {e}");
             ExitCode::from(2)
         }

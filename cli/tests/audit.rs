@@ -92,6 +92,13 @@ fn a_duplicated_row_is_a_defect_named_by_its_line_and_fails_only_with_strict() {
         err.contains("1 duplicate timestamp: index 301 (line 303)"),
         "{err}"
     );
+    // The report is printed with --strict too (stdout), with the JSON form under --json.
+    let report = String::from_utf8_lossy(&strict.stdout);
+    assert!(report.contains("index 301 (line 303)"), "{report}");
+    let strict_json = run(&["audit", "--imu", f, "--strict", "--json"]);
+    assert_eq!(strict_json.status.code(), Some(2));
+    let v: serde_json::Value = serde_json::from_slice(&strict_json.stdout).unwrap();
+    assert_eq!(v["findings"][0]["severity"], "defect");
     assert!(
         run(&["audit", "--imu", &repo(EUROC), "--strict"])
             .status

@@ -366,22 +366,27 @@ pub fn to_text(r: &AuditRun) -> String {
 }
 
 /// Runs `preint audit`; with `--strict`, a defect is an error (exit 2) listing the defects.
+/// The report is printed in both cases.
 pub fn run(args: &Args) -> Result<Output, CliError> {
     let r = compute(args)?;
+    let output = Output {
+        human: to_text(&r),
+        json: to_json(&r),
+    };
     if args.strict && r.count(Severity::Defect) > 0 {
         let defects: Vec<&str> = (r.findings().iter())
             .filter(|f| f.severity == Severity::Defect)
             .map(|f| f.message.as_str())
             .collect();
-        return Err(CliError::Failed(format!(
-            "{}: audit found {} defects (--strict): {}",
-            r.imu,
-            defects.len(),
-            defects.join(" | ")
-        )));
+        return Err(CliError::Refused {
+            output: Box::new(output),
+            msg: format!(
+                "{}: audit found {} defects (--strict): {}",
+                r.imu,
+                defects.len(),
+                defects.join(" | ")
+            ),
+        });
     }
-    Ok(Output {
-        human: to_text(&r),
-        json: to_json(&r),
-    })
+    Ok(output)
 }
