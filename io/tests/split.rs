@@ -66,7 +66,13 @@ fn merged_values_are_the_interpolated_accelerometer_at_the_gyro_stamps() {
     assert_eq!(s[2].gyro.x, 0.3);
     let r = handle.report();
     assert_eq!(
-        (r.gyro_samples, r.accel_samples, r.merged, r.dropped_before, r.dropped_after),
+        (
+            r.gyro_samples,
+            r.accel_samples,
+            r.merged,
+            r.dropped_before,
+            r.dropped_after
+        ),
         (6, 5, 3, 1, 2)
     );
 }
@@ -125,7 +131,10 @@ fn decreasing_or_repeated_stamps_are_named_by_file_and_line() {
 fn a_nan_row_an_empty_file_and_disjoint_files_are_errors() {
     let nan = ACCEL.replace("4,4,9.81", "4,nan,9.81");
     let m = err(GYRO, &nan).to_string();
-    assert!(m.contains("accel.csv:4:") && m.contains("not finite"), "{m}");
+    assert!(
+        m.contains("accel.csv:4:") && m.contains("not finite"),
+        "{m}"
+    );
     let nan = GYRO.replace("0.3,0.2,0.3\n", "NaN,0.2,0.3\n");
     let m = err(&nan, ACCEL).to_string();
     assert!(m.contains("gyro.csv:5:") && m.contains("not finite"), "{m}");
@@ -138,7 +147,10 @@ fn a_nan_row_an_empty_file_and_disjoint_files_are_errors() {
     assert!(m.contains("do not overlap"), "{m}");
     let short = "1000000000,1,2\n";
     let m = err(GYRO, &format!("t_ns,ax,ay,az\n{short}")).to_string();
-    assert!(m.contains("accel.csv:2:") && m.contains("expected 4 columns"), "{m}");
+    assert!(
+        m.contains("accel.csv:2:") && m.contains("expected 4 columns"),
+        "{m}"
+    );
 }
 
 #[test]

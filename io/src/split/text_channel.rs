@@ -60,7 +60,11 @@ fn header_time_unit(field: &str) -> Option<TimeUnit> {
 
 /// The unit factor a header's value fields name, and the unit's name.
 fn header_value_unit(fields: &[&str], sensor: Sensor) -> Option<(f64, String)> {
-    let has = |s: &str| fields.iter().any(|f| words(f).iter().skip(1).any(|x| x == s));
+    let has = |s: &str| {
+        fields
+            .iter()
+            .any(|f| words(f).iter().skip(1).any(|x| x == s))
+    };
     match sensor {
         Sensor::Gyro if has("deg") || has("dps") => Some(unit(GyroUnit::DegPerS)),
         Sensor::Gyro if has("rad") => Some(unit(GyroUnit::RadPerS)),
@@ -99,7 +103,11 @@ pub fn detect_channel(
             "--columns describes an IMU file; a --gyro or --accel file has the rows t, x, y, z",
         ));
     }
-    let lines: Vec<&str> = head.iter().map(|l| l.trim()).filter(|l| !l.is_empty()).collect();
+    let lines: Vec<&str> = head
+        .iter()
+        .map(|l| l.trim())
+        .filter(|l| !l.is_empty())
+        .collect();
     let first_field = |l: &str| {
         let mut f = "";
         Delimiter::sniff(l).for_each_field(l, |i, s| {
@@ -115,18 +123,24 @@ pub fn detect_channel(
         .ok_or_else(|| IoError::Empty {
             source_name: name.to_string(),
         })?;
-    let delimiter = opts.delimiter.unwrap_or_else(|| Delimiter::sniff(lines[data]));
+    let delimiter = opts
+        .delimiter
+        .unwrap_or_else(|| Delimiter::sniff(lines[data]));
     let mut header: Vec<&str> = Vec::new();
     if data > 0 {
         let h = lines[data - 1].trim_start_matches('#');
         delimiter.for_each_field(h, |_, f| header.push(f));
     }
     let mut notes = Vec::new();
-    let time = match (opts.time_unit, header.first().and_then(|f| header_time_unit(f))) {
+    let time = match (
+        opts.time_unit,
+        header.first().and_then(|f| header_time_unit(f)),
+    ) {
         (Some(t), _) => (t, "flag"),
         (None, Some(t)) => (t, "header"),
-        (None, None) if parse_scaled_integer(&first_field(lines[data]), 0)
-            .is_some_and(|t| t > 1_000_000_000_000) =>
+        (None, None)
+            if parse_scaled_integer(&first_field(lines[data]), 0)
+                .is_some_and(|t| t > 1_000_000_000_000) =>
         {
             (TimeUnit::Ns, "integer stamps since an epoch")
         }
@@ -202,7 +216,9 @@ impl RowParser {
         let exp = self.layout.time.to_ns_exponent();
         let time = parse_scaled(f[0], exp);
         let name = self.name.as_str();
-        if std::mem::take(&mut self.header_allowed) && time.is_none() && f[0].parse::<f64>().is_err()
+        if std::mem::take(&mut self.header_allowed)
+            && time.is_none()
+            && f[0].parse::<f64>().is_err()
         {
             return Ok(None);
         }
