@@ -171,3 +171,19 @@ fn the_effective_density_scales_only_the_accelerometer_white_noise() {
     assert_eq!(e.acc_random_walk, noise.acc_random_walk);
     assert!((e.update_rate_hz - 200.0).abs() < 1e-9);
 }
+
+#[test]
+fn white_ratio_on_stamps_alone() {
+    use preint_io::split::white_ratio_for_rates;
+    // Gyro 100 Hz, accelerometer 400 Hz on the same grid (one phase, offset 0): each merged
+    // sample is one accelerometer sample (weight 1), so over 1 s (100 intervals, trapezoid
+    // cells h_g inside and h_g/2 at the two ends) Σ W²/h_a = (99 + 2/4)·h_g²/h_a and
+    // ρ = 99.5/100 · h_g/h_a = 3.98.
+    let r = white_ratio_for_rates(100.0, 400.0, 1.0, 1);
+    assert!((r - 3.98).abs() < 1e-9, "{r}");
+    // Accelerometer slower than the gyro: ρ = 1 − κ h_a/T with κ = 0.309 for the cubic kernel
+    // (an independent quadrature of the Catmull–Rom weights over 400 random phases;
+    // docs/SPLIT_STREAMS.md, eq. 5): 1 − 0.309/63 = 0.99510 for 1 s windows.
+    let r = white_ratio_for_rates(200.0, 63.0, 1.0, 64);
+    assert!((r - 0.99510).abs() < 5e-4, "{r}");
+}
