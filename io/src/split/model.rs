@@ -183,7 +183,7 @@ pub fn white_ratio_for_rates(
             acc.add_gyro(t, j - 1, &hermite_weights(ts, t));
         }
         let span = n_g as f64 * hg * 1e-9;
-        sum += acc.finish(|i| acc_t(i)) / span;
+        sum += acc.finish(acc_t) / span;
     }
     sum / f64::from(phases)
 }
