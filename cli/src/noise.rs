@@ -43,6 +43,21 @@ pub fn effective(noise: &ImuNoise, report: Option<&MergeReport>) -> ImuNoise {
     report.map_or(*noise, |r| preint_io::split::effective_noise(noise, r))
 }
 
+/// Sets the accelerometer white-noise covariance of `params` to the effective density of a
+/// split recording's merged samples ([`effective`]; nothing changes without a `report`) and
+/// returns the densities used.
+pub fn apply_split(
+    noise: &ImuNoise,
+    report: Option<&MergeReport>,
+    params: &mut preint::PreintParams,
+) -> ImuNoise {
+    let eff = effective(noise, report);
+    if report.is_some() {
+        params.acc_cov = nalgebra::Matrix3::identity() * eff.acc_noise_density.powi(2);
+    }
+    eff
+}
+
 /// The effective densities as JSON ([`densities_json`]) with the merge's white-noise ratio
 /// `rho` and interpolation density `q_int` [m²/s³], for a split recording.
 pub fn effective_json(noise: &ImuNoise, report: &MergeReport) -> Value {
