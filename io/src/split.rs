@@ -188,8 +188,8 @@ pub fn open_split_with_report(
         layout: None,
         units: crate::Units {
             time: g.layout.time,
-            gyro: opts.gyro_unit.unwrap_or(crate::GyroUnit::RadPerS),
-            accel: opts.accel_unit.unwrap_or(crate::AccelUnit::MPerS2),
+            gyro: g.layout.gyro,
+            accel: a.layout.accel,
         },
         notes,
     };

@@ -95,7 +95,13 @@ fn units_from_flags_and_headers_apply_to_their_own_file() {
         time_unit: Some(preint_io::TimeUnit::S),
         ..ReadOptions::default()
     };
-    let s = open_split(&g, &a, &opts).unwrap().read_all().unwrap();
+    let reader = open_split(&g, &a, &opts).unwrap();
+    assert_eq!(
+        reader.info().describe(),
+        "delimited (time s, gyro deg/s, accel g)",
+        "gyro unit from the header, accelerometer unit from the flag"
+    );
+    let s = reader.read_all().unwrap();
     assert_eq!(s[0].t_ns, 1_010_000_000);
     assert_eq!(s[0].gyro.x, std::f64::consts::PI);
     assert_eq!(s[0].acc.z, 9.80665);

@@ -20,6 +20,10 @@ pub struct ChannelLayout {
     pub time: TimeUnit,
     /// Factor from the file's unit to rad/s (gyro) or m/s² (accelerometer).
     pub factor: f64,
+    /// Unit of a gyro file (rad/s for an accelerometer file).
+    pub gyro: GyroUnit,
+    /// Unit of an accelerometer file (m/s² for a gyro file).
+    pub accel: AccelUnit,
     /// How the units were decided.
     pub notes: Vec<String>,
 }
@@ -58,8 +62,8 @@ fn header_time_unit(field: &str) -> Option<TimeUnit> {
     .find_map(|(n, u)| has(n).then_some(u))
 }
 
-/// The unit factor a header's value fields name, and the unit's name.
-fn header_value_unit(fields: &[&str], sensor: Sensor) -> Option<(f64, String)> {
+/// The unit a header's value fields name.
+fn header_value_unit(fields: &[&str], sensor: Sensor) -> Option<Unit> {
     let has = |s: &str| {
         fields
             .iter()
@@ -74,12 +78,19 @@ fn header_value_unit(fields: &[&str], sensor: Sensor) -> Option<(f64, String)> {
     }
 }
 
-fn unit(u: GyroUnit) -> (f64, String) {
-    (u.to_rad_per_s(), u.to_string())
+/// A gyro or accelerometer unit.
+#[derive(Clone, Copy)]
+enum Unit {
+    Gyro(GyroUnit),
+    Accel(AccelUnit),
 }
 
-fn aunit(u: AccelUnit) -> (f64, String) {
-    (u.to_m_per_s2(), u.to_string())
+fn unit(u: GyroUnit) -> Unit {
+    Unit::Gyro(u)
+}
+
+fn aunit(u: AccelUnit) -> Unit {
+    Unit::Accel(u)
 }
 
 fn is_comment(line: &str) -> bool {
@@ -157,11 +168,15 @@ pub fn detect_channel(
         Sensor::Accel => opts.accel_unit.map(aunit),
     };
     let from_header = header.get(1..).and_then(|f| header_value_unit(f, sensor));
-    let ((factor, uname), how) = match (flag, from_header) {
+    let (u, how) = match (flag, from_header) {
         (Some(u), _) => (u, "flag"),
         (None, Some(u)) => (u, "header"),
         (None, None) if sensor == Sensor::Gyro => (unit(GyroUnit::RadPerS), "assumed"),
         (None, None) => (aunit(AccelUnit::MPerS2), "assumed"),
+    };
+    let (factor, uname, gyro, accel) = match u {
+        Unit::Gyro(g) => (g.to_rad_per_s(), g.to_string(), g, AccelUnit::MPerS2),
+        Unit::Accel(a) => (a.to_m_per_s2(), a.to_string(), GyroUnit::RadPerS, a),
     };
     notes.push(format!(
         "{name}: {sensor} rows t,x,y,z ({delimiter}-separated); time {} ({}), {sensor} {uname} \
@@ -172,6 +187,8 @@ pub fn detect_channel(
         delimiter,
         time: time.0,
         factor,
+        gyro,
+        accel,
         notes,
     })
 }
