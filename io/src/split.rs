@@ -29,9 +29,10 @@
 mod model;
 mod text_channel;
 
+use model::WeightAccumulator;
 pub use model::{
-    MergeReport, WeightAccumulator, effective_noise, hermite_weights, interpolation_psd,
-    white_ratio_for_rates,
+    MAX_RATE_WINDOW_SAMPLES, MergeReport, effective_noise, effective_noise_for_rates,
+    hermite_weights, interpolation_psd, white_ratio_for_rates,
 };
 pub use text_channel::{ChannelLayout, detect_channel};
 

@@ -185,11 +185,27 @@ fn white_ratio_on_stamps_alone() {
     // sample is one accelerometer sample (weight 1), so over 1 s (100 intervals, trapezoid
     // cells h_g inside and h_g/2 at the two ends) Σ W²/h_a = (99 + 2/4)·h_g²/h_a and
     // ρ = 99.5/100 · h_g/h_a = 3.98.
-    let r = white_ratio_for_rates(100.0, 400.0, 1.0, 1);
+    let r = white_ratio_for_rates(100.0, 400.0, 1.0, 1).unwrap();
     assert!((r - 3.98).abs() < 1e-9, "{r}");
     // Accelerometer slower than the gyro: ρ = 1 − κ h_a/T with κ = 0.309 for the cubic kernel
     // (an independent quadrature of the Catmull–Rom weights over 400 random phases;
     // docs/SPLIT_STREAMS.md, eq. 5): 1 − 0.309/63 = 0.99510 for 1 s windows.
-    let r = white_ratio_for_rates(200.0, 63.0, 1.0, 64);
+    let r = white_ratio_for_rates(200.0, 63.0, 1.0, 64).unwrap();
     assert!((r - 0.99510).abs() < 5e-4, "{r}");
+    let n =
+        preint_io::split::effective_noise_for_rates(&preint::ImuNoise::euroc(), 200.0, 63.0, 1.0)
+            .unwrap();
+    assert!((n.acc_noise_density / 2.0e-3 - 0.99510f64.sqrt()).abs() < 3e-4);
+    for bad in [
+        (0.0, 63.0, 1.0),
+        (200.0, f64::NAN, 1.0),
+        (200.0, 63.0, -1.0),
+        (1e9, 63.0, 1e3),
+    ] {
+        assert_eq!(
+            white_ratio_for_rates(bad.0, bad.1, bad.2, 4),
+            None,
+            "{bad:?}"
+        );
+    }
 }

@@ -156,15 +156,25 @@ pub fn effective_noise(noise: &ImuNoise, report: &MergeReport) -> ImuNoise {
 /// `ρ` (eq. 4) for uniform streams at `gyro_rate_hz` and `accel_rate_hz` over windows of
 /// `window_s` seconds, averaged over `phases` phases of the accelerometer grid against the
 /// window start: the same weights as a merge, on the stamps alone. For
-/// `accel_rate_hz ≤ gyro_rate_hz` it is `1 − κ h_a/T` to first order (eq. 5).
+/// `accel_rate_hz ≤ gyro_rate_hz` it is `1 − κ h_a/T` to first order (eq. 5). `None` unless
+/// the rates and the window are finite and positive, `phases ≥ 1`, and the window holds at
+/// most [`MAX_RATE_WINDOW_SAMPLES`] gyro samples.
 pub fn white_ratio_for_rates(
     gyro_rate_hz: f64,
     accel_rate_hz: f64,
     window_s: f64,
     phases: u32,
-) -> f64 {
-    let (hg, ha) = (1e9 / gyro_rate_hz, 1e9 / accel_rate_hz);
-    let n_g = (window_s * gyro_rate_hz).round() as i64;
+) -> Option<f64> {
+    let ok = |x: f64| x.is_finite() && x > 0.0;
+    let n_g = (window_s * gyro_rate_hz).round();
+    if !(ok(gyro_rate_hz) && ok(accel_rate_hz) && ok(window_s) && phases >= 1)
+        || !(1.0..=MAX_RATE_WINDOW_SAMPLES as f64).contains(&n_g)
+        || 1e9 / gyro_rate_hz < 1.0
+        || 1e9 / accel_rate_hz < 1.0
+    {
+        return None;
+    }
+    let (hg, ha, n_g) = (1e9 / gyro_rate_hz, 1e9 / accel_rate_hz, n_g as i64);
     let mut sum = 0.0;
     for p in 0..phases {
         let off = ha * f64::from(p) / f64::from(phases);
@@ -185,7 +195,27 @@ pub fn white_ratio_for_rates(
         let span = n_g as f64 * hg * 1e-9;
         sum += acc.finish(acc_t) / span;
     }
-    sum / f64::from(phases)
+    Some(sum / f64::from(phases))
+}
+
+/// Most gyro samples in a window of [`white_ratio_for_rates`] (10⁷).
+pub const MAX_RATE_WINDOW_SAMPLES: u64 = 10_000_000;
+
+/// The densities for uniform streams at `gyro_rate_hz` and `accel_rate_hz` and windows of
+/// `window_s` seconds, before any data is read: eq. 8 with `ρ` from
+/// [`white_ratio_for_rates`] (16 phases) and no interpolation term. `None` for invalid rates
+/// or window (see [`white_ratio_for_rates`]).
+pub fn effective_noise_for_rates(
+    noise: &ImuNoise,
+    gyro_rate_hz: f64,
+    accel_rate_hz: f64,
+    window_s: f64,
+) -> Option<ImuNoise> {
+    let rho = white_ratio_for_rates(gyro_rate_hz, accel_rate_hz, window_s, 16)?;
+    let mut out = *noise;
+    out.acc_noise_density = noise.acc_noise_density * rho.sqrt();
+    out.update_rate_hz = gyro_rate_hz;
+    Some(out)
 }
 
 /// Accumulates `W_j` (eq. 3) while samples are merged and `Σ W_j²/c_j` as accelerometer
