@@ -167,11 +167,14 @@ pub fn white_ratio_for_rates(
 ) -> Option<f64> {
     let ok = |x: f64| x.is_finite() && x > 0.0;
     let n_g = (window_s * gyro_rate_hz).round();
-    if !(ok(gyro_rate_hz) && ok(accel_rate_hz) && ok(window_s) && phases >= 1)
-        || !(1.0..=MAX_RATE_WINDOW_SAMPLES as f64).contains(&n_g)
-        || 1e9 / gyro_rate_hz < 1.0
-        || 1e9 / accel_rate_hz < 1.0
-    {
+    let valid = ok(gyro_rate_hz)
+        && ok(accel_rate_hz)
+        && ok(window_s)
+        && phases >= 1
+        && (1.0..=MAX_RATE_WINDOW_SAMPLES as f64).contains(&n_g)
+        && gyro_rate_hz <= 1e9
+        && accel_rate_hz <= 1e9;
+    if !valid {
         return None;
     }
     let (hg, ha, n_g) = (1e9 / gyro_rate_hz, 1e9 / accel_rate_hz, n_g as i64);
