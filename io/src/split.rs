@@ -368,6 +368,16 @@ impl Merger {
         self.report.white_weight_sq = acc.finish_seen();
         self.publish();
         let r = &self.report;
+        if r.accel_samples < 4 {
+            return Err(IoError::format(
+                &self.accel.name,
+                format!(
+                    "{} accelerometer samples; the cubic interpolation needs at least four (two \
+                     at or before a gyro stamp and two after it)",
+                    r.accel_samples
+                ),
+            ));
+        }
         if r.merged == 0 {
             return Err(IoError::format(
                 &format!("{} + {}", self.gyro.name, self.accel.name),

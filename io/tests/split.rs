@@ -109,7 +109,9 @@ fn units_from_flags_and_headers_apply_to_their_own_file() {
 }
 
 fn err(gyro: &str, accel: &str) -> IoError {
-    let d = dir(&format!("e{}", gyro.len() * 1000 + accel.len()));
+    static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let d = dir(&format!("e{n}"));
     let (g, a) = (write(&d, "gyro.csv", gyro), write(&d, "accel.csv", accel));
     match open_split(&g, &a, &opts_ns()).and_then(|r| r.read_all()) {
         Ok(_) => panic!("accepted bad input"),
@@ -148,6 +150,9 @@ fn a_nan_row_an_empty_file_and_disjoint_files_are_errors() {
         IoError::Empty { source_name } => assert!(source_name.ends_with("accel.csv")),
         e => panic!("{e}"),
     }
+    let three: String = ACCEL.lines().take(4).map(|l| format!("{l}\n")).collect();
+    let m = err(GYRO, &three).to_string();
+    assert!(m.contains("accel.csv") && m.contains("3 accelerometer samples"), "{m}");
     let late = GYRO.replace("\n10", "\n20");
     let m = err(&late, ACCEL).to_string();
     assert!(m.contains("do not overlap"), "{m}");
