@@ -152,7 +152,10 @@ fn a_nan_row_an_empty_file_and_disjoint_files_are_errors() {
     }
     let three: String = ACCEL.lines().take(4).map(|l| format!("{l}\n")).collect();
     let m = err(GYRO, &three).to_string();
-    assert!(m.contains("accel.csv") && m.contains("3 accelerometer samples"), "{m}");
+    assert!(
+        m.contains("accel.csv") && m.contains("3 accelerometer samples"),
+        "{m}"
+    );
     let late = GYRO.replace("\n10", "\n20");
     let m = err(&late, ACCEL).to_string();
     assert!(m.contains("do not overlap"), "{m}");
