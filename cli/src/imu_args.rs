@@ -4,6 +4,7 @@
 use crate::{CliError, checks};
 use preint::ImuSample;
 use preint_io::layout::{Column, parse_columns};
+use preint_io::split::MergeReport;
 use preint_io::{
     AccelUnit, Delimiter, Format, GyroUnit, ImuReader, ReadOptions, SourceInfo, Stamp, TimeUnit,
 };
@@ -114,15 +115,41 @@ impl ImuArgs {
     /// Every sample of the recording, with the unit checks unless `--no-unit-check`; and how
     /// it was read.
     pub fn read_all(&self) -> Result<(Vec<ImuSample>, SourceInfo), CliError> {
-        let reader = self.open()?;
-        let info = reader.info().clone();
+        self.read_all_split().map(|(s, info, _)| (s, info))
+    }
+
+    /// As [`ImuArgs::read_all`], also returning the merge report of a split recording
+    /// (`--gyro`/`--accel`), from which [`crate::noise::effective`] gives the noise densities
+    /// to preintegrate the merged samples with. The report's summary and the accelerometer
+    /// density factor are added to the source's notes.
+    pub fn read_all_split(
+        &self,
+    ) -> Result<(Vec<ImuSample>, SourceInfo, Option<MergeReport>), CliError> {
+        let opts = self.options();
+        let (reader, handle) = match (&self.imu, &self.gyro, &self.accel) {
+            (None, Some(g), Some(a)) => {
+                let (r, h) = preint_io::split::open_split_with_report(g, a, &opts)?;
+                (r, Some(h))
+            }
+            _ => (ImuReader::open(self.path(), &opts)?, None),
+        };
+        let mut info = reader.info().clone();
         let bar = crate::progress::ReadingBar::start(reader.progress(), "reading");
         let samples = reader.read_all()?;
         drop(bar);
+        let report = handle.map(|h| h.report());
+        if let Some(r) = &report {
+            info.notes.push(r.describe());
+            info.notes.push(format!(
+                "accelerometer white-noise density of the merged samples: sqrt(rho) = {:.5} \
+                 times the given density, plus the interpolation term (docs/SPLIT_STREAMS.md)",
+                r.white_ratio().sqrt()
+            ));
+        }
         if !self.no_unit_check {
             checks::si_units(&samples, self.path())?;
         }
-        Ok((samples, info))
+        Ok((samples, info, report))
     }
 }
 

@@ -3,6 +3,7 @@
 use crate::CliError;
 use preint::ImuNoise;
 use preint_io::read_kalibr_yaml;
+use preint_io::split::MergeReport;
 use serde_json::{Value, json};
 use std::path::Path;
 
@@ -33,4 +34,38 @@ pub fn densities_json(n: &ImuNoise) -> Value {
         "accelerometer_noise_density": n.acc_noise_density,
         "accelerometer_random_walk": n.acc_random_walk,
     })
+}
+
+/// The densities to preintegrate with: `noise` itself, or for the merged samples of a split
+/// recording (`report`) the effective densities of [`preint_io::split::effective_noise`]
+/// (accelerometer white noise `σ_a,eff = √(ρ σ_a² + q_int)`, everything else unchanged).
+pub fn effective(noise: &ImuNoise, report: Option<&MergeReport>) -> ImuNoise {
+    report.map_or(*noise, |r| preint_io::split::effective_noise(noise, r))
+}
+
+/// Sets the accelerometer white-noise covariance of `params` to the effective density of a
+/// split recording's merged samples ([`effective`]; nothing changes without a `report`) and
+/// returns the densities used.
+pub fn apply_split(
+    noise: &ImuNoise,
+    report: Option<&MergeReport>,
+    params: &mut preint::PreintParams,
+) -> ImuNoise {
+    let eff = effective(noise, report);
+    if report.is_some() {
+        params.acc_cov = nalgebra::Matrix3::identity() * eff.acc_noise_density.powi(2);
+    }
+    eff
+}
+
+/// The effective densities as JSON ([`densities_json`]) with the merge's white-noise ratio
+/// `rho` and interpolation density `q_int` [m²/s³], for a split recording.
+pub fn effective_json(noise: &ImuNoise, report: &MergeReport) -> Value {
+    let mut v = densities_json(&effective(noise, Some(report)));
+    v["split_white_ratio_rho"] = json!(report.white_ratio());
+    v["split_interpolation_psd"] = json!(preint_io::split::interpolation_psd(
+        report,
+        noise.acc_noise_density
+    ));
+    v
 }
