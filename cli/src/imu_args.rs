@@ -103,6 +103,12 @@ impl ImuArgs {
         }
     }
 
+    /// Whether the recording is a gyroscope file and an accelerometer file (`--gyro/--accel`),
+    /// merged with an effective accelerometer density ([`ImuArgs::read_all_split`]).
+    pub fn is_split_files(&self) -> bool {
+        self.imu.is_none() && self.gyro.is_some() && self.accel.is_some()
+    }
+
     /// A streaming reader of the recording.
     pub fn open(&self) -> Result<ImuReader, CliError> {
         let opts = self.options();

@@ -40,8 +40,6 @@ fn integrate_reads_a_split_recording_and_reports_the_merge() {
     let d = tmp("split-integrate");
     let (g, a, full) = split_sim(&d);
     let (g, a) = (g.to_str().unwrap(), a.to_str().unwrap());
-    // --no-unit-check: the scene's yaw rate (π/10 rad/s) is read as a large gyro bias by the
-    // unit check, which is not under test here.
     let v = json(&[
         "integrate",
         "--gyro",
@@ -52,7 +50,6 @@ fn integrate_reads_a_split_recording_and_reports_the_merge() {
         FROM,
         "--to",
         TO,
-        "--no-unit-check",
     ]);
     let notes: Vec<String> = v["input"]["notes"]
         .as_array()
@@ -77,6 +74,14 @@ fn integrate_reads_a_split_recording_and_reports_the_merge() {
         .unwrap();
     // Accelerometer slower than the gyro: √ρ within 1 % of 1 (docs/SPLIT_STREAMS.md, eq. 5).
     assert!((f - 1.0).abs() < 0.01, "{f}");
+    // The window is preintegrated with that density: the default 2e-3 m/s²/√Hz times √ρ
+    // (noise-free data: no interpolation term above the noise floor to add).
+    let used = v["noise"]["accelerometer_noise_density"].as_f64().unwrap();
+    assert!(
+        (used - 2e-3 * f).abs() <= 2e-3 * 1e-4 + 1e-9 * used.abs().max(1.0) && used < 2e-3,
+        "{used} vs {}",
+        2e-3 * f
+    );
     // Noise-free: the merged Δv equals the 200 Hz file's to the cubic interpolation error
     // (≈ 1e-7 m/s here; linear interpolation is off by 1.3e-3 m/s, tests/tests/split_streams.rs).
     let full = json(&[
@@ -87,7 +92,6 @@ fn integrate_reads_a_split_recording_and_reports_the_merge() {
         FROM,
         "--to",
         TO,
-        "--no-unit-check",
     ]);
     let (dv, dv_full) = (vec3(&v["delta_v"]), vec3(&full["delta_v"]));
     for k in 0..3 {

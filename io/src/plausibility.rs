@@ -148,11 +148,16 @@ pub fn still_windows(samples: &[ImuSample], dt: f64) -> Vec<&[ImuSample]> {
         .collect()
 }
 
+/// Fewest still windows (2 s) for a verdict on the gyro across the vertical: a few windows of
+/// a moving recording can look steady while it turns.
+const MIN_STILL_WINDOWS: usize = 4;
+
 /// Median over the still windows of the gyro's mean reading across the gravity direction
-/// (the part perpendicular to the accelerometer's mean), if there are any still windows.
+/// (the part perpendicular to the accelerometer's mean), if there are at least
+/// [`MIN_STILL_WINDOWS`].
 fn still_gyro_norm(samples: &[ImuSample], dt: f64) -> Option<f64> {
     let still = still_windows(samples, dt);
-    if still.is_empty() {
+    if still.len() < MIN_STILL_WINDOWS {
         return None;
     }
     let across = still

@@ -115,7 +115,7 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
     } else {
         Level::Covariance
     };
-    let (_, params) = args.preint.params(level)?;
+    let (noise, mut params) = args.preint.params(level)?;
     let gt = read_euroc_groundtruth(&args.poses)?;
     let (gi, gj) = (
         *input::nearest_row(&gt, args.from),
@@ -133,9 +133,22 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
         )));
     }
     let scheme = params.scheme;
-    // Only the part of the recording the window needs is read.
-    let stream = stream::open_checked_until(&args.input, Some(gj.t_ns))?;
-    let w = stream::cut_window(stream, Some(gi.t_ns), Some(gj.t_ns))?;
+    // Only the part of the recording the window needs is read (a split recording is merged
+    // whole, for the effective accelerometer density of its merged samples).
+    let w = if args.input.is_split_files() {
+        let (samples, _, split) = args.input.read_all_split()?;
+        crate::noise::apply_split(&noise, split.as_ref(), &mut params);
+        stream::StreamWindow {
+            offset: 0,
+            first_ns: samples[0].t_ns,
+            t_i_ns: gi.t_ns,
+            t_j_ns: gj.t_ns,
+            samples,
+        }
+    } else {
+        let stream = stream::open_checked_until(&args.input, Some(gj.t_ns))?;
+        stream::cut_window(stream, Some(gi.t_ns), Some(gj.t_ns))?
+    };
     let samples = w.samples.as_slice();
     let pim = preintegrate(&params, &gi.bias, samples, gi.t_ns, gj.t_ns)
         .map_err(|e| CliError::failed_in(args.input.path(), w.in_stream(e)))?;

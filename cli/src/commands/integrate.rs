@@ -64,16 +64,34 @@ pub struct Integration {
 /// recording through a [`Preintegrator`] that stores no samples, a window from the part of the
 /// stream it needs (reading stops after `--to`). Memory is bounded by the window, not the file.
 pub fn compute(args: &Args) -> Result<Integration, CliError> {
-    let (noise, params) = args.preint.params(Level::Combined)?;
+    let (noise, mut params) = args.preint.params(Level::Combined)?;
     let bias = ImuBias::new(
         args.bias_gyro.unwrap_or_default(),
         args.bias_acc.unwrap_or_default(),
     );
+    let scheme = params.scheme;
+    let fail = |e| CliError::failed_in(args.input.path(), e);
+    if args.input.is_split_files() {
+        // The merged accelerometer's effective density is known once the files are read.
+        let (samples, source, split) = args.input.read_all_split()?;
+        let noise = noise::apply_split(&noise, split.as_ref(), &mut params);
+        let t_i = args.from.unwrap_or(samples[0].t_ns);
+        let t_j = args.to.unwrap_or(samples[samples.len() - 1].t_ns);
+        let pim = preintegrate(&params, &bias, &samples, t_i, t_j).map_err(fail)?;
+        return Ok(Integration {
+            imu: args.input.label(),
+            source,
+            scheme,
+            samples: input::count_in(&samples, t_i, t_j),
+            noise,
+            noise_source: args.preint.noise_source(),
+            bias,
+            pim,
+        });
+    }
     let stream = stream::open_checked_until(&args.input, args.to)?;
     let source = stream.info().clone();
     let _bar = ReadingBar::start(stream.progress(), "integrate");
-    let scheme = params.scheme;
-    let fail = |e| CliError::failed_in(args.input.path(), e);
     let (pim, samples) = if args.from.is_none() && args.to.is_none() {
         whole_recording(stream, params, &bias, fail)?
     } else {
