@@ -1,4 +1,4 @@
-//! ROS 1 bag and MCAP input: the fixtures of `tests/data/ros` (written from the EuRoC CSV by
+//! ROS 1 bag, MCAP and ROS 2 `.db3` input: the fixtures of `tests/data/ros` (written from the EuRoC CSV by
 //! `tests/data/ros/generate.py`) give the CSV's samples bit for bit; topic, stamp and damage
 //! errors are typed and name the file and the message.
 
@@ -12,6 +12,12 @@ const ROWS: usize = 500;
 const SPLIT_ROWS: usize = 400;
 /// Record (log) time minus header stamp of every fixture message [ns].
 const RECORD_OFFSET_NS: i64 = 1_000_000;
+/// The EuRoC fixtures, one per container format.
+const ALL: [&str; 3] = [
+    "ros/euroc_imu.bag",
+    "ros/euroc_imu.mcap",
+    "ros/euroc_imu.db3",
+];
 
 fn data(p: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -55,8 +61,8 @@ fn assert_same_as_csv(samples: &[preint::ImuSample], shift_ns: i64) {
 }
 
 #[test]
-fn bag_and_mcap_give_the_csv_rows_bit_for_bit() {
-    for file in ["ros/euroc_imu.bag", "ros/euroc_imu.mcap"] {
+fn bag_mcap_and_db3_give_the_csv_rows_bit_for_bit() {
+    for file in ALL {
         let (samples, info) = read(&data(file), &ReadOptions::default());
         assert_same_as_csv(&samples, 0);
         let notes = info.notes.join("; ");
@@ -87,7 +93,7 @@ fn record_stamp_is_the_header_stamp_plus_the_recorders_offset() {
         stamp: Stamp::Record,
         ..ReadOptions::default()
     };
-    for file in ["ros/euroc_imu.bag", "ros/euroc_imu.mcap"] {
+    for file in ALL {
         let (samples, info) = read(&data(file), &opts);
         assert_same_as_csv(&samples, RECORD_OFFSET_NS);
         assert!(
@@ -120,7 +126,7 @@ fn topic(t: &str) -> ReadOptions {
 
 #[test]
 fn topic_errors_list_the_imu_topics() {
-    for ext in ["bag", "mcap"] {
+    for ext in ["bag", "mcap", "db3"] {
         let euroc = data(&format!("ros/euroc_imu.{ext}"));
         let e = format_error(&euroc, &topic("/imu1"));
         assert!(e.contains("no topic /imu1"), "{e}");
@@ -191,9 +197,43 @@ fn truncated_bag_is_a_typed_error() {
 }
 
 #[test]
+fn unindexed_bag_is_a_typed_error() {
+    // A recording that was not closed has index_pos = 0 in its header.
+    let mut bytes = std::fs::read(data("ros/euroc_imu.bag")).unwrap();
+    let at = bytes.windows(10).position(|w| w == b"index_pos=").unwrap() + 10;
+    bytes[at..at + 8].fill(0);
+    let out = std::env::temp_dir().join(format!("preint-io-{}-open.bag", std::process::id()));
+    std::fs::write(&out, &bytes).unwrap();
+    let e = format_error(&out, &ReadOptions::default());
+    assert!(e.contains("without an index"), "{e}");
+    std::fs::remove_file(out).unwrap();
+}
+
+#[test]
+fn truncated_db3_is_a_typed_error() {
+    let cut = truncated("ros/euroc_imu.db3", 0.5);
+    let err = ImuReader::open(&cut, &ReadOptions::default()).and_then(|r| r.read_all());
+    match err {
+        Err(IoError::Parse {
+            at: Location::Message(m),
+            source_name,
+            ..
+        }) => {
+            assert!(m >= 1 && m <= ROWS as u64);
+            assert_eq!(source_name, cut.display().to_string());
+        }
+        Err(IoError::Format { source_name, .. }) => {
+            assert_eq!(source_name, cut.display().to_string())
+        }
+        other => panic!("expected a typed error naming the file, got {other:?}"),
+    }
+    std::fs::remove_file(cut).unwrap();
+}
+
+#[test]
 fn files_that_are_not_containers_are_typed_errors() {
     let csv = data("euroc/V1_01_easy_imu0.csv");
-    for format in [Format::RosBag, Format::Mcap] {
+    for format in [Format::RosBag, Format::Mcap, Format::Db3] {
         let opts = ReadOptions {
             format: Some(format),
             ..ReadOptions::default()
@@ -201,15 +241,18 @@ fn files_that_are_not_containers_are_typed_errors() {
         let e = format_error(&csv, &opts);
         assert!(e.contains("not a"), "{e}");
     }
-    let e = format_error(&data("ros/euroc_imu.db3"), &ReadOptions::default());
-    assert!(e.contains("ros2 bag convert"), "{e}");
+    let missing = data("ros/no_such_file.db3");
+    assert!(matches!(
+        ImuReader::open(&missing, &ReadOptions::default()),
+        Err(IoError::File { .. })
+    ));
 }
 
 #[test]
 fn channels_of_a_split_recording() {
     let rows = csv_rows(SPLIT_ROWS);
     let opts = ReadOptions::default();
-    for ext in ["bag", "mcap"] {
+    for ext in ["bag", "mcap", "db3"] {
         let file = data(&format!("ros/split.{ext}"));
         let fmt = Format::from_extension(&file).unwrap();
         let gyro: Vec<ChannelSample> =

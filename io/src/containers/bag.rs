@@ -1,11 +1,11 @@
 //! ROS 1 bags (format 2.0), read with the `rosbag` crate: connections and message counts from
 //! the index section, messages from the chunks (bz2 and lz4 chunks decompressed one at a time).
 //!
-//! The crate borrows its memory-mapped file, so the messages are read on a thread that sends
-//! the decoded messages through a bounded channel ([`QUEUE`] messages): memory does not grow
-//! with the file (the mapped pages are the operating system's file cache).
+//! The crate borrows its memory-mapped file, so the messages are read on a thread
+//! ([`super::queue`]); the mapped pages are the operating system's file cache.
 
-use super::imu_msg::{Encoding, ImuMsg};
+use super::imu_msg::Encoding;
+use super::queue::on_thread;
 use super::{Messages, RawItem, Topic};
 use crate::error::IoError;
 use crate::reader::Progress;
@@ -15,10 +15,6 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
-
-/// Decoded messages in flight between the reading thread and the consumer.
-const QUEUE: usize = 4096;
 
 /// One connection (publisher of a topic) of the bag.
 struct Connection {
@@ -37,35 +33,41 @@ pub(crate) struct Bag {
 /// Length of the bag's version line, `#ROSBAG V2.0\n`.
 const VERSION_LEN: usize = 13;
 
-/// The `index_pos` field of the bag header record (the byte where the index section starts),
-/// if the header has one. Read here only to refuse, with a typed error, the truncated and
-/// unindexed files on which `rosbag` 0.6 would index its map out of bounds.
-fn index_pos(path: &Path) -> Result<Option<u64>, IoError> {
+/// Where the bag's sections start, from its header record: `(chunks, index)` \[bytes\], the
+/// chunk section right after the header record and the index section at the header's
+/// `index_pos` field. Read here only to refuse, with a typed error, the truncated, unindexed
+/// and damaged files on which `rosbag` 0.6 would slice its map out of bounds.
+fn sections(path: &Path) -> Result<Option<(u64, u64)>, IoError> {
     let mut head = Vec::new();
     std::fs::File::open(path)
-        .and_then(|f| f.take(4096).read_to_end(&mut head))
+        .and_then(|f| f.take(8192).read_to_end(&mut head))
         .map_err(|e| IoError::file(path, e))?;
     let u32_at = |at: usize| {
         head.get(at..at + 4)
             .map(|b| u32::from_le_bytes(b.try_into().expect("4 bytes")) as usize)
     };
+    if !head.starts_with(b"#ROSBAG V2.0\n") {
+        return Ok(None);
+    }
     let Some(header_len) = u32_at(VERSION_LEN) else {
         return Ok(None);
     };
     let start = VERSION_LEN + 4;
-    let end = (start + header_len).min(head.len());
+    let end = start + header_len;
+    // Header record: header fields, then its data (padding) of `data_len` bytes.
+    let Some(data_len) = u32_at(end) else {
+        return Ok(None);
+    };
+    let chunks = (end + 4 + data_len) as u64;
     let mut at = start;
-    while let Some(len) = u32_at(at) {
+    while let Some(len) = u32_at(at).filter(|_| at < end) {
         let field = head.get(at + 4..(at + 4 + len).min(end)).unwrap_or(&[]);
         if let Some(v) = field.strip_prefix(b"index_pos=")
             && let Ok(b) = <[u8; 8]>::try_from(v)
         {
-            return Ok(Some(u64::from_le_bytes(b)));
+            return Ok(Some((chunks, u64::from_le_bytes(b))));
         }
         at += 4 + len;
-        if at >= end {
-            break;
-        }
     }
     Ok(None)
 }
@@ -78,18 +80,18 @@ impl Bag {
             .map_err(|e| IoError::file(path, e))?
             .len();
         let bad = |msg: String| IoError::format(&name, msg);
-        match index_pos(path)? {
-            Some(p) if p > len => {
+        match sections(path)? {
+            Some((_, p)) if p > len => {
                 return Err(bad(format!(
                     "truncated ROS 1 bag: its index starts at byte {p}, beyond the end of the \
                      file ({len} bytes); `rosbag reindex` rebuilds the index of what is left"
                 )));
             }
-            Some(p) if p <= VERSION_LEN as u64 => {
-                return Err(bad(
-                    "ROS 1 bag without an index (recording not closed); run `rosbag reindex`"
-                        .into(),
-                ));
+            Some((chunks, p)) if p < chunks => {
+                return Err(bad(format!(
+                    "ROS 1 bag without an index (index_pos {p}, before the first chunk at byte \
+                     {chunks}: a recording not closed, or a damaged header); run `rosbag reindex`"
+                )));
             }
             Some(_) => {}
             None => return Err(bad("not a ROS 1 bag (version 2.0 header expected)".into())),
@@ -143,91 +145,54 @@ impl Bag {
             .collect();
         let total = ids.iter().map(|id| self.counts.get(id).unwrap_or(&0)).sum();
         let done = Arc::new(AtomicU64::new(0));
-        let (tx, rx) = sync_channel(QUEUE);
         let path = self.path.clone();
         let counter = done.clone();
-        std::thread::Builder::new()
-            .name("bag-reader".into())
-            .spawn(move || produce(&path, &ids, &tx, &counter))
-            .map_err(|e| IoError::file(&self.path, e))?;
+        let items = on_thread("bag-reader", &self.path, move |send| {
+            produce(&path, &ids, send, &counter)
+        })?;
         Ok(Messages {
-            items: Box::new(Received { rx, ended: false }),
+            items,
             progress: Progress::new(done, total),
         })
     }
 }
 
-/// What the reading thread sends.
-enum Sent {
-    Item(RawItem),
-    End,
-}
-
 /// Reads the messages of connections `ids` and sends them decoded, until the end of the bag,
 /// the first error, or the consumer hanging up.
-fn produce(path: &Path, ids: &[u32], tx: &SyncSender<Sent>, done: &AtomicU64) {
-    let fail = |msg: String| {
-        let _ = tx.send(Sent::Item(Err(msg)));
-    };
-    let bag = match RosBag::new(path) {
-        Ok(b) => b,
-        Err(e) => return fail(format!("not a readable ROS 1 bag: {e}")),
-    };
+fn produce(path: &Path, ids: &[u32], send: &mut dyn FnMut(RawItem) -> bool, done: &AtomicU64) {
+    if let Err(msg) = read_chunks(path, ids, send, done) {
+        send(Err(msg));
+    }
+}
+
+/// [`produce`], with the container's errors returned.
+fn read_chunks(
+    path: &Path,
+    ids: &[u32],
+    send: &mut dyn FnMut(RawItem) -> bool,
+    done: &AtomicU64,
+) -> Result<(), String> {
+    let bag = RosBag::new(path).map_err(|e| format!("not a readable ROS 1 bag: {e}"))?;
     for rec in bag.chunk_records() {
-        let chunk = match rec {
-            Ok(ChunkRecord::Chunk(c)) => c,
-            Ok(ChunkRecord::IndexData(_)) => continue,
-            Err(e) => return fail(format!("corrupt ROS 1 bag chunk: {e}")),
+        let chunk = match rec.map_err(|e| format!("corrupt ROS 1 bag chunk: {e}"))? {
+            ChunkRecord::Chunk(c) => c,
+            ChunkRecord::IndexData(_) => continue,
         };
         for msg in chunk.messages() {
-            let m = match msg {
-                Ok(MessageRecord::MessageData(m)) => m,
-                Ok(MessageRecord::Connection(_)) => continue,
-                Err(e) => return fail(format!("corrupt ROS 1 bag message record: {e}")),
+            let m = match msg.map_err(|e| format!("corrupt ROS 1 bag message record: {e}"))? {
+                MessageRecord::MessageData(m) => m,
+                MessageRecord::Connection(_) => continue,
             };
             if !ids.contains(&m.conn_id) {
                 continue;
             }
             done.fetch_add(1, Ordering::Relaxed);
-            let item: Result<(u64, ImuMsg), String> =
-                Encoding::Ros1.decode(m.data).map(|d| (m.time, d));
+            let item = Encoding::Ros1.decode(m.data).map(|d| (m.time, d));
             let failed = item.is_err();
-            if tx.send(Sent::Item(item)).is_err() || failed {
-                return;
+            if !send(item) || failed {
+                return Ok(());
             }
         }
     }
-    let _ = tx.send(Sent::End);
-}
-
-/// The consumer's end: ends with an error if the reading thread stops without saying so.
-struct Received {
-    rx: Receiver<Sent>,
-    ended: bool,
-}
-
-impl Iterator for Received {
-    type Item = RawItem;
-
-    fn next(&mut self) -> Option<RawItem> {
-        if self.ended {
-            return None;
-        }
-        match self.rx.recv() {
-            Ok(Sent::Item(item)) => {
-                self.ended = item.is_err();
-                Some(item)
-            }
-            Ok(Sent::End) => {
-                self.ended = true;
-                None
-            }
-            Err(_) => {
-                self.ended = true;
-                Some(Err(
-                    "the bag reader stopped before the end of the file".into()
-                ))
-            }
-        }
-    }
+    Ok(())
 }

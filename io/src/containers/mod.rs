@@ -1,6 +1,6 @@
-//! Container formats carrying `sensor_msgs/Imu`: ROS 1 bags (the `rosbag` crate) and MCAP files
-//! (the `mcap` crate; ROS 2's default storage, CDR messages, or ROS 1 messages in MCAP).
-//! ROS 2 `.db3` (SQLite) files are refused with the command that converts them to MCAP.
+//! Container formats carrying `sensor_msgs/Imu`: ROS 1 bags (the `rosbag` crate), MCAP files
+//! (the `mcap` crate; ROS 2's default storage, CDR messages, or ROS 1 messages in MCAP) and
+//! ROS 2 `.db3` bags (SQLite, the `rusqlite` crate; CDR messages).
 //!
 //! The messages of the selected topic are streamed (memory does not grow with the file) and
 //! decoded by [`imu_msg`]. A sample's time is `header.stamp` ([`Stamp::Header`], default) or the
@@ -9,8 +9,10 @@
 //! ([`Location::Message`]).
 
 mod bag;
+mod db3;
 mod imu_msg;
 mod mcap_file;
+mod queue;
 
 use crate::channel::{ChannelSample, ChannelStream, Sensor};
 use crate::detect::Format;
@@ -54,6 +56,7 @@ pub(crate) struct Messages {
 enum Container {
     Bag(bag::Bag),
     Mcap(mcap_file::McapFile),
+    Db3(db3::Db3),
 }
 
 impl Container {
@@ -62,15 +65,10 @@ impl Container {
         match format {
             Format::RosBag => Ok(Container::Bag(bag::Bag::open(path)?)),
             Format::Mcap => Ok(Container::Mcap(mcap_file::McapFile::open(path)?)),
-            Format::Db3 => Err(IoError::format(
-                &name,
-                "ROS 2 .db3 (SQLite) bags are not read by this build; convert it to MCAP with \
-                 `ros2 bag convert` (output storage_id: mcap) or the `rosbags-convert` tool, \
-                 then pass the .mcap file",
-            )),
+            Format::Db3 => Ok(Container::Db3(db3::Db3::open(path)?)),
             other => Err(IoError::format(
                 &name,
-                format!("{other} is not a container format (bag, mcap)"),
+                format!("{other} is not a container format (bag, mcap, db3)"),
             )),
         }
     }
@@ -79,6 +77,7 @@ impl Container {
         match self {
             Container::Bag(b) => b.topics(),
             Container::Mcap(m) => m.topics(),
+            Container::Db3(d) => d.topics(),
         }
     }
 
@@ -86,6 +85,7 @@ impl Container {
         match self {
             Container::Bag(b) => b.messages(topic),
             Container::Mcap(m) => m.messages(topic),
+            Container::Db3(d) => d.messages(topic),
         }
     }
 }
@@ -161,7 +161,7 @@ fn stamp_note(stamp: Stamp) -> String {
                           time the recorder received it)"
             .into(),
         Stamp::Record => "time stamps: record time of each message (bag record time, MCAP log \
-                          time), not header.stamp"
+                          time, .db3 timestamp), not header.stamp"
             .into(),
     }
 }

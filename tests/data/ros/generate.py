@@ -7,7 +7,8 @@ Run from anywhere: python3 tests/data/ros/generate.py
 Outputs (see README.md next to this script):
 - euroc_imu.bag   ROS 1, topic /imu0, sensor_msgs/Imu, the first ROWS rows of the CSV.
 - euroc_imu.mcap  ROS 2 (CDR in MCAP), the same messages.
-- split.bag, split.mcap  a RealSense-like split recording of the first SPLIT_ROWS rows:
+- euroc_imu.db3   ROS 2 (CDR in rosbag2's SQLite storage), the same messages.
+- split.bag, split.mcap, split.db3  a RealSense-like split recording of the first SPLIT_ROWS rows:
   /camera/gyro/sample (200 Hz, angular_velocity of every row, linear_acceleration zero),
   /camera/accel/sample (63 Hz, linear_acceleration interpolated linearly between the two
   CSV rows around t0 + round(k * 1e9 / 63) ns, angular_velocity zero) and /status
@@ -123,26 +124,29 @@ def write_bag(path, messages, compress):
             w.write(conns[topic], t, serialize(ts, True, msg, msgtype))
 
 
-def write_mcap(path, messages):
+def write_ros2(path, messages, storage):
+    """A ROS 2 bag in `storage` (MCAP or SQLITE3); its one storage file copied to `path`."""
     ts = get_typestore(Stores.ROS2_HUMBLE)
     with tempfile.TemporaryDirectory() as tmp:
         bagdir = Path(tmp) / "bag"
-        with Writer2(bagdir, version=9, storage_plugin=StoragePlugin.MCAP) as w:
+        with Writer2(bagdir, version=9, storage_plugin=storage) as w:
             conns = {}
             for topic, msgtype, t, msg in messages(ts, False):
                 if topic not in conns:
                     conns[topic] = w.add_connection(topic, msgtype, typestore=ts)
                 w.write(conns[topic], t, serialize(ts, False, msg, msgtype))
-        (mcap,) = bagdir.glob("*.mcap")
-        shutil.copyfile(mcap, path)
+        (storage_file,) = bagdir.glob("*" + path.suffix)
+        shutil.copyfile(storage_file, path)
 
 
 def main():
     write_bag(HERE / "euroc_imu.bag", euroc_messages, compress=False)
-    write_mcap(HERE / "euroc_imu.mcap", euroc_messages)
+    write_ros2(HERE / "euroc_imu.mcap", euroc_messages, StoragePlugin.MCAP)
+    write_ros2(HERE / "euroc_imu.db3", euroc_messages, StoragePlugin.SQLITE3)
     write_bag(HERE / "split.bag", split_messages, compress=True)
-    write_mcap(HERE / "split.mcap", split_messages)
-    for p in sorted(HERE.glob("*.bag")) + sorted(HERE.glob("*.mcap")):
+    write_ros2(HERE / "split.mcap", split_messages, StoragePlugin.MCAP)
+    write_ros2(HERE / "split.db3", split_messages, StoragePlugin.SQLITE3)
+    for p in sorted(HERE.glob("*.bag")) + sorted(HERE.glob("*.mcap")) + sorted(HERE.glob("*.db3")):
         print(f"{p.name}: {p.stat().st_size} bytes")
 
 
