@@ -280,8 +280,7 @@ fn channels_of_a_split_recording() {
             // Linear interpolation of the CSV accelerometer between the rows around t_k.
             let j = rows
                 .partition_point(|r| r.0 <= a.t_ns)
-                .min(SPLIT_ROWS - 1)
-                .max(1);
+                .clamp(1, SPLIT_ROWS - 1);
             let ((ta, va), (tb, vb)) = (rows[j - 1], rows[j]);
             let w = (a.t_ns - ta) as f64 / (tb - ta) as f64;
             for i in 0..3 {

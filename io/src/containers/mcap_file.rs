@@ -134,7 +134,7 @@ impl McapFile {
         let mut file = File::open(path).map_err(|e| io_err(path, e))?;
         let len = file.metadata().map_err(|e| io_err(path, e))?.len();
         let mut magic = [0u8; 8];
-        if file.read_exact(&mut magic).is_err() || &magic != ::mcap::MAGIC {
+        if file.read_exact(&mut magic).is_err() || magic != ::mcap::MAGIC {
             return Err(IoError::format(
                 &name,
                 "not an MCAP file (no MCAP magic at the start)",

@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
-"""Writes a long synthetic static IMU recording as a ROS 1 bag and a ROS 2 MCAP and .db3 file, for
-the container benchmark in docs/PERFORMANCE.md (outputs are not committed).
+"""Writes a long synthetic static IMU recording as a ROS 1 bag, a ROS 2 MCAP file and a ROS 2
+.db3 file, for the container benchmark in docs/PERFORMANCE.md (outputs are not committed).
 
     python3 tests/data/ros/bench_long.py OUT_DIR [HOURS] [RATE_HZ]
 
-Writes OUT_DIR/long.bag, OUT_DIR/long.mcap and OUT_DIR/long.db3: topic /imu, sensor_msgs/Imu, RATE_HZ (default
-200) for HOURS (default 3); gyro white noise 1e-3 rad/s per axis around zero, accelerometer
+Writes OUT_DIR/long.bag, OUT_DIR/long.mcap and OUT_DIR/long.db3: topic /imu, sensor_msgs/Imu,
+RATE_HZ (default 200) for HOURS (default 3); gyro white noise 1e-3 rad/s per axis around zero, accelerometer
 (0, 0, 9.81) m/s² plus 2e-2 m/s² white noise (seed 17). Payloads are packed here in the fixed
 ROS 1 / CDR layouts of sensor_msgs/Imu; the containers are written by `rosbags`.
 """
