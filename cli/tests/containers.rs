@@ -1,4 +1,4 @@
-//! End-to-end: the ROS 1 bag and MCAP fixtures of `tests/data/ros` (the first 500 rows of
+//! End-to-end: the ROS 1 bag, MCAP and ROS 2 `.db3` fixtures of `tests/data/ros` (the first 500 rows of
 //! EuRoC V1_01 imu0, written by `tests/data/ros/generate.py`) through `integrate` and
 //! `convert` give what the same rows give as EuRoC CSV.
 
@@ -37,7 +37,11 @@ fn integrate_bag_and_mcap_equals_integrate_csv() {
     let csv = write(&dir, "first_rows.csv", &first_rows());
     let from_csv = json(&["integrate", "--imu", csv.to_str().unwrap()]);
     assert!(from_csv["delta_R"].is_array(), "{from_csv}");
-    for (file, topic) in [("euroc_imu.bag", "/imu0"), ("euroc_imu.mcap", "/imu0")] {
+    for (file, topic) in [
+        ("euroc_imu.bag", "/imu0"),
+        ("euroc_imu.mcap", "/imu0"),
+        ("euroc_imu.db3", "/imu0"),
+    ] {
         let path = repo(&format!("tests/data/ros/{file}"));
         let out = json(&["integrate", "--imu", &path, "--topic", topic]);
         assert_eq!(
@@ -55,7 +59,7 @@ fn integrate_bag_and_mcap_equals_integrate_csv() {
 fn convert_mcap_and_bag_reproduce_the_csv_rows() {
     let dir = tmp("containers-convert");
     let expected: Vec<String> = first_rows().lines().skip(1).map(str::to_string).collect();
-    for file in ["euroc_imu.mcap", "euroc_imu.bag"] {
+    for file in ["euroc_imu.mcap", "euroc_imu.bag", "euroc_imu.db3"] {
         let out = dir.join(format!("{file}.csv"));
         let j = json(&[
             "convert",

@@ -13,10 +13,14 @@ use ::mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReader
 use ::mcap::sans_io::summary_reader::{SummaryReadEvent, SummaryReader, SummaryReaderOptions};
 use std::collections::BTreeMap;
 use std::fs::File;
-use std::io::{Read, Seek};
+use std::io::{BufReader, Read, Seek};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Read buffer \[bytes\]: the linear reader asks for one record at a time (a few hundred
+/// bytes for an IMU message), so reads go through a buffer, not one system call each.
+const READ_BUFFER: usize = 1 << 20;
 
 /// Largest record (other than a chunk) accepted \[bytes\]: bounds the allocation a corrupt
 /// length field can cause.
@@ -73,7 +77,8 @@ fn linear() -> LinearReader {
 /// early (a recording cut off) keeps the channels found before the damage; reading its
 /// messages then fails at the message where the damage is.
 fn scan_channels(path: &Path, name: &str) -> Result<Vec<Channel>, IoError> {
-    let mut file = File::open(path).map_err(|e| io_err(path, e))?;
+    let file = File::open(path).map_err(|e| io_err(path, e))?;
+    let mut file = BufReader::with_capacity(READ_BUFFER, file);
     let mut reader = linear();
     let mut schemas: BTreeMap<u16, String> = BTreeMap::new();
     let mut channels = Vec::new();
@@ -204,6 +209,7 @@ impl McapFile {
             wanted.push((c.id, enc));
         }
         let file = File::open(&self.path).map_err(|e| io_err(&self.path, e))?;
+        let file = BufReader::with_capacity(READ_BUFFER, file);
         let done = Arc::new(AtomicU64::new(0));
         Ok(Messages {
             items: Box::new(McapMessages {
@@ -220,7 +226,7 @@ impl McapFile {
 
 /// The messages of some channels, read front to back. Progress counts bytes of the file.
 struct McapMessages {
-    file: File,
+    file: BufReader<File>,
     reader: LinearReader,
     wanted: Vec<(u16, Encoding)>,
     done: Arc<AtomicU64>,
