@@ -103,10 +103,12 @@ impl ImuArgs {
         }
     }
 
-    /// Whether the recording is a gyroscope file and an accelerometer file (`--gyro/--accel`),
-    /// merged with an effective accelerometer density ([`ImuArgs::read_all_split`]).
+    /// Whether the recording is split: a gyroscope file and an accelerometer file
+    /// (`--gyro/--accel`) or two topics of a container (`--gyro-topic/--accel-topic`), merged
+    /// with an effective accelerometer density ([`ImuArgs::read_all_split`]).
     pub fn is_split_files(&self) -> bool {
-        self.imu.is_none() && self.gyro.is_some() && self.accel.is_some()
+        (self.imu.is_none() && self.gyro.is_some() && self.accel.is_some())
+            || (self.gyro_topic.is_some() && self.accel_topic.is_some())
     }
 
     /// A streaming reader of the recording.
@@ -125,16 +127,38 @@ impl ImuArgs {
     }
 
     /// As [`ImuArgs::read_all`], also returning the merge report of a split recording
-    /// (`--gyro`/`--accel`), from which [`crate::noise::effective`] gives the noise densities
+    /// (`--gyro`/`--accel` or `--gyro-topic`/`--accel-topic`), from which [`crate::noise::effective`] gives the noise densities
     /// to preintegrate the merged samples with. The report's summary and the accelerometer
     /// density factor are added to the source's notes.
     pub fn read_all_split(
         &self,
     ) -> Result<(Vec<ImuSample>, SourceInfo, Option<MergeReport>), CliError> {
         let opts = self.options();
-        let (reader, handle) = match (&self.imu, &self.gyro, &self.accel) {
-            (None, Some(g), Some(a)) => {
+        let container = || {
+            let path = self.path();
+            opts.format
+                .or_else(|| Format::from_extension(path))
+                .filter(|f| f.is_container())
+                .ok_or_else(|| {
+                    CliError::Usage(format!(
+                        "--gyro-topic/--accel-topic need a bag, MCAP or db3 file; {} is not one",
+                        path.display()
+                    ))
+                })
+        };
+        let (reader, handle) = match (
+            &self.imu,
+            &self.gyro,
+            &self.accel,
+            &self.gyro_topic,
+            &self.accel_topic,
+        ) {
+            (None, Some(g), Some(a), _, _) => {
                 let (r, h) = preint_io::split::open_split_with_report(g, a, &opts)?;
+                (r, Some(h))
+            }
+            (Some(p), _, _, Some(g), Some(a)) => {
+                let (r, h) = preint_io::containers::open_split(p, container()?, g, a, &opts)?;
                 (r, Some(h))
             }
             _ => (ImuReader::open(self.path(), &opts)?, None),

@@ -97,3 +97,73 @@ fn container_errors_exit_non_zero_and_name_the_problem() {
     assert!(err.contains("carries std_msgs"), "{err}");
     assert!(err.contains("split.mcap"), "{err}");
 }
+
+/// The split fixtures (gyro at 200 Hz and accelerometer at 63 Hz on two topics, from the first
+/// 400 EuRoC rows) merge to the same samples from every container; the window's rotation is
+/// that of the 200 Hz rows (the gyro samples are those rows), and the accelerometer density
+/// used is the effective one of the merge.
+#[test]
+fn split_topics_of_every_container_merge_and_preintegrate() {
+    let (from, to) = ("1403715274000000000", "1403715275000000000");
+    let mut results = Vec::new();
+    for file in ["split.bag", "split.mcap", "split.db3"] {
+        let v = json(&[
+            "integrate",
+            "--imu",
+            &repo(&format!("tests/data/ros/{file}")),
+            "--gyro-topic",
+            "/camera/gyro/sample",
+            "--accel-topic",
+            "/camera/accel/sample",
+            "--from",
+            from,
+            "--to",
+            to,
+        ]);
+        let notes = v["input"]["notes"].to_string();
+        assert!(notes.contains("cubic Hermite"), "{file}: {notes}");
+        let used = v["noise"]["accelerometer_noise_density"].as_f64().unwrap();
+        // √(ρσ² + q_int): ρ ≈ 0.995 at 200/63 Hz, and the interpolation term of a vibrating
+        // MAV's accelerometer sampled at 63 Hz is of the order of the white noise.
+        assert!(
+            used > 0.99 * 2e-3 && used < 1e-2 && used != 2e-3,
+            "{file}: {used}"
+        );
+        results.push(without_source(v));
+    }
+    assert_eq!(results[0], results[1], "bag vs MCAP");
+    assert_eq!(results[0], results[2], "bag vs db3");
+    let full = json(&[
+        "integrate",
+        "--imu",
+        &repo("tests/data/ros/euroc_imu.mcap"),
+        "--from",
+        from,
+        "--to",
+        to,
+    ]);
+    assert_eq!(results[0]["delta_R"], full["delta_R"]);
+    assert_eq!(results[0]["samples"], full["samples"]);
+}
+
+#[test]
+fn audit_reads_the_split_topics_of_a_container() {
+    let o = run(&[
+        "audit",
+        "--imu",
+        &repo("tests/data/ros/split.mcap"),
+        "--gyro-topic",
+        "/camera/gyro/sample",
+        "--accel-topic",
+        "/camera/accel/sample",
+        "--strict",
+    ]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // 400 gyro rows at EuRoC's 200 Hz; the accelerometer stamps at round(k·1e9/63) ns.
+    assert!(out.contains("gyro: 400 samples"), "{out}");
+    assert!(
+        out.contains("accel: 126 samples") && out.contains("63.0000 Hz"),
+        "{out}"
+    );
+}

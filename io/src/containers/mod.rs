@@ -220,7 +220,7 @@ fn open_numbered(
 pub fn open(path: &Path, format: Format, opts: &ReadOptions) -> Result<ImuReader, IoError> {
     let name = path.display().to_string();
     match (&opts.gyro_topic, &opts.accel_topic) {
-        (Some(g), Some(a)) => return open_split(path, format, g, a, opts),
+        (Some(g), Some(a)) => return open_split(path, format, g, a, opts).map(|(r, _)| r),
         (Some(_), None) | (None, Some(_)) => {
             return Err(IoError::format(
                 &name,
@@ -254,14 +254,15 @@ pub fn open(path: &Path, format: Format, opts: &ReadOptions) -> Result<ImuReader
     ))
 }
 
-/// The gyro of topic `gyro` merged with the accelerometer of topic `accel` ([`crate::split`]).
-fn open_split(
+/// The gyro of topic `gyro` merged with the accelerometer of topic `accel` ([`crate::split`]),
+/// with the handle of the merge's report (for the effective accelerometer density).
+pub fn open_split(
     path: &Path,
     format: Format,
     gyro: &str,
     accel: &str,
     opts: &ReadOptions,
-) -> Result<ImuReader, IoError> {
+) -> Result<(ImuReader, crate::split::MergeHandle), IoError> {
     let g = open_channel(path, format, gyro, Sensor::Gyro, opts)?;
     let a = open_channel(path, format, accel, Sensor::Accel, opts)?;
     let info = SourceInfo {
@@ -276,7 +277,7 @@ fn open_split(
             stamp_note(opts.stamp),
         ],
     };
-    crate::split::merge(g, a, info, opts)
+    crate::split::merge_with_report(g, a, info, opts)
 }
 
 /// The readings of one sensor (`sensor`) from the `sensor_msgs/Imu` messages of `topic`:
