@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 #[derive(clap::Args, Clone, Debug)]
 pub struct ImuArgs {
     /// IMU recording: EuRoC/TUM-VI CSV, UZH-FPV imu.txt, KITTI text, any delimited text (see
-    /// --columns and the unit flags), ROS bag or MCAP (see --topic).
+    /// --columns and the unit flags), ROS 1 bag, MCAP or ROS 2 db3 (see --topic).
     #[arg(long, required_unless_present_all = ["gyro", "accel"], conflicts_with_all = ["gyro", "accel"])]
     pub imu: Option<PathBuf>,
     /// A split recording's gyroscope file (rows t, wx, wy, wz), with --accel.
@@ -46,16 +46,16 @@ pub struct ImuArgs {
     /// Unit of the accelerometer: m/s2 or g (1 g = 9.80665 m/s^2).
     #[arg(long)]
     pub accel_unit: Option<AccelUnit>,
-    /// The sensor_msgs/Imu topic of a bag or MCAP file (default: its only one).
+    /// The sensor_msgs/Imu topic of a bag, MCAP or db3 file (default: its only one).
     #[arg(long, conflicts_with_all = ["gyro_topic", "accel_topic"])]
     pub topic: Option<String>,
-    /// A split recording in a bag or MCAP file: the topic whose angular velocity is used.
+    /// A split recording in a bag, MCAP or db3 file: the topic whose angular velocity is used.
     #[arg(long, requires = "accel_topic")]
     pub gyro_topic: Option<String>,
     /// The topic whose linear acceleration is used, with --gyro-topic.
     #[arg(long, requires = "gyro_topic")]
     pub accel_topic: Option<String>,
-    /// Time stamps of bag or MCAP messages: header (header.stamp, when the sensor sampled) or
+    /// Time stamps of bag, MCAP or db3 messages: header (header.stamp, when the sensor sampled) or
     /// record (when the recorder received the message).
     #[arg(long, default_value = "header")]
     pub stamp: Stamp,
