@@ -454,6 +454,14 @@ fn sizes_that_would_exhaust_memory_are_refused() {
             vec!["speed", "--samples", "1000000000000"],
             "--samples must be from 10 to",
         ),
+        (
+            vec!["bench-steps", "--rates", "1e9"],
+            "1000000000 Hz over a 1 s window is 1000000010 samples",
+        ),
+        (
+            vec!["bench-steps", "--rates", "100", "--window", "1e7"],
+            "--window must be at most 1000 s",
+        ),
     ] {
         let o = run(&args);
         let err = String::from_utf8_lossy(&o.stderr);

@@ -32,11 +32,23 @@ impl Row {
     }
 }
 
+/// Longest window \[s\] of [`measure`].
+pub const MAX_WINDOW_S: f64 = 1000.0;
+
+/// Most samples of one rate's grid in [`measure`] (560 MB).
+pub const MAX_SAMPLES: usize = 10_000_000;
+
 /// Errors of every scheme at every rate on `scene_name` (noise-free, window
-/// `[1 s, 1 s + window_s]`, gravity (0, 0, −9.81) m/s²), plus measured costs.
+/// `[1 s, 1 s + window_s]`, gravity (0, 0, −9.81) m/s²), plus measured costs. Windows longer
+/// than [`MAX_WINDOW_S`] and grids of more than [`MAX_SAMPLES`] are refused before allocating.
 pub fn measure(scene_name: &str, rates: &[f64], window_s: f64) -> Result<Vec<Row>, CliError> {
     let scene = input::scene(scene_name)?;
     checks::positive("--window", window_s)?;
+    if window_s > MAX_WINDOW_S {
+        return Err(CliError::Usage(format!(
+            "--window must be at most {MAX_WINDOW_S} s (the exact deltas are integrated over it), got {window_s}"
+        )));
+    }
     let g = Vector3::new(0.0, 0.0, -9.81);
     let t_i: i64 = 1_000_000_000;
     let t_j = t_i + (window_s * 1e9).round() as i64;
@@ -55,6 +67,12 @@ pub fn measure(scene_name: &str, rates: &[f64], window_s: f64) -> Result<Vec<Row
         }
         // Grid covering the window plus four samples each side (hermite4 needs neighbours).
         let (k0, k1) = (t_i / step - 4, t_j / step + 5);
+        if k1 - k0 + 1 > MAX_SAMPLES as i64 {
+            return Err(CliError::Usage(format!(
+                "rate {rate} Hz over a {window_s} s window is {} samples, more than {MAX_SAMPLES}                  (56 bytes each in memory); lower the rate or the window",
+                k1 - k0 + 1
+            )));
+        }
         let samples: Vec<_> = (k0..=k1)
             .map(|k| {
                 let t = k * step;
