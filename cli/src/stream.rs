@@ -15,6 +15,11 @@ pub const UNIT_CHECK_PREFIX: usize = 1 << 18;
 /// Most samples a window cut from a stream may hold: 50 million (2.8 GB).
 pub const MAX_WINDOW_SAMPLES: usize = preint_io::reader::DEFAULT_MAX_SAMPLES;
 
+/// Most samples `calibrate` and `advise` hold (their solvers need every sample of the span they
+/// analyse): 2²³ (470 MB; 11.6 h at 200 Hz). A longer span is refused before it is read
+/// further, with the flags that choose a part.
+pub const MAX_HELD_SAMPLES: usize = 1 << 23;
+
 /// Stream samples kept on each side of a window: the values and order checks of
 /// [`preint::preintegrate`] reach three samples beyond the samples at `t_i` and `t_j`, one
 /// more before `t_i` for the first checked interval.
@@ -234,6 +239,46 @@ pub fn cut_window(
     })
 }
 
+/// The samples of `stream` with `from ≤ t ≤ to` (either bound optional), read up to `to`;
+/// more than `limit` of them is an error naming `file` and the flags that shorten the span,
+/// raised before the sample past the limit is stored.
+pub fn hold_span(
+    stream: impl Iterator<Item = Result<ImuSample, CliError>>,
+    from: Option<i64>,
+    to: Option<i64>,
+    limit: usize,
+    file: &std::path::Path,
+) -> Result<Vec<ImuSample>, CliError> {
+    let (lo, hi) = (from.unwrap_or(i64::MIN), to.unwrap_or(i64::MAX));
+    let mut samples: Vec<ImuSample> = Vec::new();
+    for s in stream {
+        let s = s?;
+        if s.t_ns > hi {
+            break;
+        }
+        if s.t_ns < lo {
+            continue;
+        }
+        if samples.len() == limit {
+            return Err(CliError::Failed(format!(
+                "{}: more than {limit} samples ({:.0} MB) from t = {} ns on; analyse a part \
+                 with --from/--to",
+                file.display(),
+                (limit * std::mem::size_of::<ImuSample>()) as f64 * 1e-6,
+                samples.first().map_or(s.t_ns, |f| f.t_ns)
+            )));
+        }
+        samples.push(s);
+    }
+    if samples.len() < 2 {
+        return Err(CliError::Failed(format!(
+            "{}: fewer than two samples with timestamps in [{lo}, {hi}] ns",
+            file.display()
+        )));
+    }
+    Ok(samples)
+}
+
 impl StreamWindow {
     /// `e` from [`preint::preintegrate`] on [`StreamWindow::samples`], with sample indices
     /// counted in the whole stream and the stream's first sample time.
@@ -375,6 +420,24 @@ mod tests {
         // Header on line 1, row 9000 on line 9002.
         assert!(err.contains("p.csv:9002"), "{err}");
         assert!(p.next_sample().is_none());
+    }
+
+    #[test]
+    fn a_held_span_is_bounded_before_it_grows_past_the_limit() {
+        let file = std::path::Path::new("rec.csv");
+        let held = hold_span(stream(100), Some(200), Some(300), 11, file).unwrap();
+        assert_eq!(held.len(), 11);
+        assert_eq!((held[0].t_ns, held[10].t_ns), (200, 300));
+        let e = hold_span(stream(100), Some(200), Some(300), 10, file).unwrap_err();
+        let e = e.to_string();
+        assert!(
+            e.contains("rec.csv")
+                && e.contains("more than 10 samples")
+                && e.contains("--from/--to"),
+            "{e}"
+        );
+        let e = hold_span(stream(100), Some(2000), None, 10, file).unwrap_err();
+        assert!(e.to_string().contains("fewer than two samples"), "{e}");
     }
 
     #[test]

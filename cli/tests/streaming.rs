@@ -184,4 +184,16 @@ fn advise_refuses_a_gap_naming_the_file_and_the_samples() {
         err.contains("gap.csv") && err.contains("gap of 1.005") && err.contains("999"),
         "{err}"
     );
+    // The part after the gap (9 s) is analysed with --from.
+    let from = t_of(&rows[1200]).to_string();
+    let out = json(&[
+        "advise",
+        "--imu",
+        file.to_str().unwrap(),
+        "--noise",
+        &repo("tests/data/euroc/imu.yaml"),
+        "--from",
+        &from,
+    ]);
+    assert_eq!(out["samples"], 1800);
 }

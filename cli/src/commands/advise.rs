@@ -5,7 +5,7 @@
 use crate::analysis::advise::{Candidate, evaluate, recommend};
 use crate::analysis::denoise::denoise;
 use crate::imu_args::ImuArgs;
-use crate::{CliError, Output, checks, noise, scheme};
+use crate::{CliError, Output, checks, noise, scheme, stream};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -25,6 +25,12 @@ pub struct Args {
     /// Allowed discretisation error as a fraction of the noise σ.
     #[arg(long, default_value_t = 0.1)]
     pub fraction: f64,
+    /// Analyse only samples with timestamps >= this, in ns.
+    #[arg(long, allow_hyphen_values = true)]
+    pub from: Option<i64>,
+    /// Analyse only samples with timestamps <= this, in ns.
+    #[arg(long, allow_hyphen_values = true)]
+    pub to: Option<i64>,
 }
 
 /// The evaluation and the recommendation.
@@ -53,7 +59,16 @@ impl Advice {
 pub fn compute(args: &Args) -> Result<Advice, CliError> {
     checks::positive("--fraction", args.fraction)?;
     let noise = noise::or_default(Some(&args.noise))?;
-    let (samples, _) = args.input.read_all()?;
+    let stream = stream::open_checked_until(&args.input, args.to)?;
+    let bar = crate::progress::ReadingBar::start(stream.progress(), "advise");
+    let samples = stream::hold_span(
+        stream,
+        args.from,
+        args.to,
+        stream::MAX_HELD_SAMPLES,
+        args.input.path(),
+    )?;
+    drop(bar);
     checks::no_gaps(
         &samples,
         args.input.path(),
@@ -86,7 +101,7 @@ pub fn to_json(a: &Advice) -> Value {
     json!({
         "recommended_scheme": rec.map(|c| scheme::label(c.scheme)),
         "recommended_rate": rec.map(|c| c.rate_hz),
-        "fraction": a.args.fraction, "window_s": a.args.window,
+        "fraction": a.args.fraction, "window_s": a.args.window, "samples": a.samples,
         "denoise_cutoff_hz": {"gyro": a.cutoffs[0], "acc": a.cutoffs[1]},
         "candidates": rows,
         "method": "white noise removed by a zero-phase low-pass whose cutoff makes the residual match the noise density; reference = hermite4 at the recording's rate; disc_err = max over windows of the distance to it; noise_sigma = sqrt(trace) of each covariance block",

@@ -111,35 +111,19 @@ fn distinct_attitudes(samples: &[ImuSample], ivs: &[StillInterval]) -> usize {
 /// [`preint::params::DEFAULT_MAX_GAP_NS`]).
 pub const MAX_GAP_S: f64 = preint::params::DEFAULT_MAX_GAP_NS as f64 * 1e-9;
 
-/// Reads the samples in `[--from, --to]` (only those are held; reading stops after `--to`)
-/// and checks their units and that they have no gap.
+/// Reads the samples in `[--from, --to]` (only those are held, at most
+/// [`stream::MAX_HELD_SAMPLES`]; reading stops after `--to`) and checks their units and that
+/// they have no gap.
 fn read_samples(args: &Args) -> Result<Vec<ImuSample>, CliError> {
-    let (lo, hi) = (args.from.unwrap_or(i64::MIN), args.to.unwrap_or(i64::MAX));
-    let mut samples = Vec::new();
     let stream = stream::open_checked_until(&args.input, args.to)?;
     let _bar = crate::progress::ReadingBar::start(stream.progress(), "calibrate");
-    for s in stream {
-        let s = s?;
-        if s.t_ns > hi {
-            break;
-        }
-        if s.t_ns >= lo {
-            if samples.len() == stream::MAX_WINDOW_SAMPLES {
-                return Err(CliError::Failed(format!(
-                    "{}: more than {} samples in [{lo}, {hi}] ns; choose a shorter --from/--to",
-                    args.input.path().display(),
-                    stream::MAX_WINDOW_SAMPLES
-                )));
-            }
-            samples.push(s);
-        }
-    }
-    if samples.len() < 2 {
-        return Err(CliError::Failed(format!(
-            "{}: fewer than two samples with timestamps in [{lo}, {hi}] ns",
-            args.input.path().display()
-        )));
-    }
+    let samples = stream::hold_span(
+        stream,
+        args.from,
+        args.to,
+        stream::MAX_HELD_SAMPLES,
+        args.input.path(),
+    )?;
     checks::no_gaps(
         &samples,
         args.input.path(),
