@@ -239,6 +239,23 @@ pub fn cut_window(
     })
 }
 
+/// The samples of `args`' recording with `from ≤ t ≤ to` for the solver of `command`
+/// ([`hold_span`] with [`MAX_HELD_SAMPLES`], after the unit checks, with a progress bar),
+/// refused if two consecutive ones are more than the preintegrator's largest gap apart.
+pub fn read_span(
+    args: &ImuArgs,
+    from: Option<i64>,
+    to: Option<i64>,
+    command: &str,
+) -> Result<Vec<ImuSample>, CliError> {
+    let stream = open_checked_until(args, to)?;
+    let bar = crate::progress::ReadingBar::start(stream.progress(), command);
+    let samples = hold_span(stream, from, to, MAX_HELD_SAMPLES, args.path())?;
+    drop(bar);
+    checks::no_gaps(&samples, args.path(), preint::params::DEFAULT_MAX_GAP_NS)?;
+    Ok(samples)
+}
+
 /// The samples of `stream` with `from ≤ t ≤ to` (either bound optional), read up to `to`;
 /// more than `limit` of them is an error naming `file` and the flags that shorten the span,
 /// raised before the sample past the limit is stored.

@@ -247,7 +247,7 @@ pub struct HeaderUnits {
 
 /// Lower-case words of a header field, split at non-alphanumerics and lower→upper case changes
 /// (`w_RS_S_x [rad s^-1]` → `w rs s x rad s 1`, `accelX` → `accel x`).
-fn words(field: &str) -> Vec<String> {
+pub(crate) fn words(field: &str) -> Vec<String> {
     let mut out: Vec<String> = Vec::new();
     let mut cur = String::new();
     let mut prev_lower = false;

@@ -59,21 +59,7 @@ impl Advice {
 pub fn compute(args: &Args) -> Result<Advice, CliError> {
     checks::positive("--fraction", args.fraction)?;
     let noise = noise::or_default(Some(&args.noise))?;
-    let stream = stream::open_checked_until(&args.input, args.to)?;
-    let bar = crate::progress::ReadingBar::start(stream.progress(), "advise");
-    let samples = stream::hold_span(
-        stream,
-        args.from,
-        args.to,
-        stream::MAX_HELD_SAMPLES,
-        args.input.path(),
-    )?;
-    drop(bar);
-    checks::no_gaps(
-        &samples,
-        args.input.path(),
-        preint::params::DEFAULT_MAX_GAP_NS,
-    )?;
+    let samples = stream::read_span(&args.input, args.from, args.to, "advise")?;
     let (signal, cutoffs) = denoise(&samples, noise.gyro_noise_density, noise.acc_noise_density);
     let candidates = evaluate(&signal, &noise, 9.81, args.window, args.fraction)?;
     let recommended =

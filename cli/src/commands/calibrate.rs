@@ -115,21 +115,7 @@ pub const MAX_GAP_S: f64 = preint::params::DEFAULT_MAX_GAP_NS as f64 * 1e-9;
 /// [`stream::MAX_HELD_SAMPLES`]; reading stops after `--to`) and checks their units and that
 /// they have no gap.
 fn read_samples(args: &Args) -> Result<Vec<ImuSample>, CliError> {
-    let stream = stream::open_checked_until(&args.input, args.to)?;
-    let _bar = crate::progress::ReadingBar::start(stream.progress(), "calibrate");
-    let samples = stream::hold_span(
-        stream,
-        args.from,
-        args.to,
-        stream::MAX_HELD_SAMPLES,
-        args.input.path(),
-    )?;
-    checks::no_gaps(
-        &samples,
-        args.input.path(),
-        preint::params::DEFAULT_MAX_GAP_NS,
-    )?;
-    Ok(samples)
+    stream::read_span(&args.input, args.from, args.to, "calibrate")
 }
 
 /// The known-pose problem on the poses of `pfile` inside the samples' time span.

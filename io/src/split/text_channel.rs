@@ -2,7 +2,7 @@
 
 use crate::channel::{ChannelSample, Sensor};
 use crate::error::{IoError, Location};
-use crate::layout::Delimiter;
+use crate::layout::{Delimiter, words};
 use crate::lines::LineReader;
 use crate::number::{parse_finite, parse_scaled, parse_scaled_integer};
 use crate::reader::ReadOptions;
@@ -26,26 +26,6 @@ pub struct ChannelLayout {
     pub accel: AccelUnit,
     /// How the units were decided.
     pub notes: Vec<String>,
-}
-
-/// Lower-case words of a header field, split at non-alphanumerics and lower→upper changes.
-fn words(field: &str) -> Vec<String> {
-    let mut out: Vec<String> = Vec::new();
-    let mut cur = String::new();
-    let mut prev_lower = false;
-    for ch in field.chars() {
-        if (!ch.is_alphanumeric() || (ch.is_uppercase() && prev_lower)) && !cur.is_empty() {
-            out.push(std::mem::take(&mut cur));
-        }
-        if ch.is_alphanumeric() {
-            cur.extend(ch.to_lowercase());
-        }
-        prev_lower = ch.is_lowercase() || ch.is_ascii_digit();
-    }
-    if !cur.is_empty() {
-        out.push(cur);
-    }
-    out
 }
 
 fn header_time_unit(field: &str) -> Option<TimeUnit> {
