@@ -8,6 +8,9 @@
 //!    force near the Earth's surface; data in g reads ≈ 1).
 //! 3. **Gyroscope, moving.** The median gyro norm must stay below 20 rad/s (data in deg/s of a
 //!    moving IMU reads tens to hundreds).
+//!    A gyro that reads exactly zero on every sample (≥ 100) while the accelerometer varies is
+//!    no gyroscope (an accelerometer-only topic, a wrong column): no real gyro is noise-free.
+//!    (Noise-free simulated data at rest, with a constant accelerometer, passes.)
 //! 4. **Gyroscope, still.** Over the windows where the accelerometer is steady
 //!    ([`still_windows`]: decided from the accelerometer only, so the gyro's unit does not
 //!    matter), the gyro's mean reading across the gravity direction must stay below
@@ -108,8 +111,22 @@ pub fn check_si_units(samples: &[ImuSample], source_name: &str) -> Result<(), Io
              --gyro-unit deg/s"
         )));
     }
+    let first_acc = samples[0].acc;
+    if samples.len() >= MIN_SAMPLES_FOR_ZERO_GYRO
+        && samples.iter().all(|s| s.gyro == Vector3::zeros())
+        && samples.iter().any(|s| s.acc != first_acc)
+    {
+        return Err(units(format!(
+            "the gyro reads exactly 0 on all {} samples while the accelerometer varies: this \
+             is not a gyroscope channel (an accelerometer-only topic, or the wrong --columns?)",
+            samples.len()
+        )));
+    }
     Ok(())
 }
+
+/// Fewest samples for the zero-gyro check of [`check_si_units`].
+const MIN_SAMPLES_FOR_ZERO_GYRO: usize = 100;
 
 fn median(mut v: Vec<f64>) -> f64 {
     let mid = v.len() / 2;

@@ -94,3 +94,25 @@ fn g_and_time_units_are_refused() {
         "{e}"
     );
 }
+
+#[test]
+fn a_gyro_of_exact_zeros_beside_a_live_accelerometer_is_refused() {
+    let euroc = read(EUROC, &ReadOptions::default());
+    let zero_gyro: Vec<ImuSample> = euroc
+        .iter()
+        .map(|s| ImuSample::new(s.t_ns, nalgebra::Vector3::zeros(), s.acc))
+        .collect();
+    let e = err(&zero_gyro);
+    assert!(e.contains("exactly 0 on all 29120 samples"), "{e}");
+    // Noise-free data at rest (zero gyro, constant accelerometer) is plausible.
+    let rest: Vec<ImuSample> = (0..1000)
+        .map(|k| {
+            ImuSample::new(
+                k * 5_000_000,
+                nalgebra::Vector3::zeros(),
+                nalgebra::Vector3::new(0.0, 0.0, 9.81),
+            )
+        })
+        .collect();
+    assert!(check_units(&rest, "rest").is_ok());
+}
