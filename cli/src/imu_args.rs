@@ -137,7 +137,7 @@ impl ImuArgs {
         let container = || {
             let path = self.path();
             opts.format
-                .or_else(|| Format::from_extension(path))
+                .or_else(|| Format::of_file(path))
                 .filter(|f| f.is_container())
                 .ok_or_else(|| {
                     CliError::Usage(format!(

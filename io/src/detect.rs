@@ -72,6 +72,32 @@ impl Format {
         matches!(self, Format::RosBag | Format::Mcap | Format::Db3)
     }
 
+    /// The container format of the bytes a file starts with: ROS 1 bag (`#ROSBAG V2.0`), MCAP
+    /// (`\x89MCAP0\r\n`), SQLite (a ROS 2 `.db3`, `SQLite format 3\0`).
+    pub fn from_magic(head: &[u8]) -> Option<Format> {
+        if head.starts_with(b"#ROSBAG V2.0") {
+            Some(Format::RosBag)
+        } else if head.starts_with(b"\x89MCAP0\r\n") {
+            Some(Format::Mcap)
+        } else if head.starts_with(b"SQLite format 3\0") {
+            Some(Format::Db3)
+        } else {
+            None
+        }
+    }
+
+    /// The format of the file `path` as far as its name and first bytes tell: a container by
+    /// extension, else by [`Format::from_magic`]; `None` for text (decided from its lines).
+    pub fn of_file(path: &Path) -> Option<Format> {
+        Format::from_extension(path).or_else(|| {
+            use std::io::Read;
+            let mut head = [0u8; 16];
+            let mut f = std::fs::File::open(path).ok()?;
+            let n = f.read(&mut head).ok()?;
+            Format::from_magic(&head[..n])
+        })
+    }
+
     /// The container format an extension names (`.bag`, `.mcap`, `.db3`).
     pub fn from_extension(path: &Path) -> Option<Format> {
         match path.extension()?.to_str()?.to_ascii_lowercase().as_str() {

@@ -184,7 +184,7 @@ pub struct ImuReader {
 impl ImuReader {
     /// Opens `path` with `opts` (see [`ReadOptions`]).
     pub fn open(path: &Path, opts: &ReadOptions) -> Result<Self, IoError> {
-        let format = opts.format.or_else(|| Format::from_extension(path));
+        let format = opts.format.or_else(|| Format::of_file(path));
         if let Some(f) = format.filter(|f| f.is_container()) {
             return crate::containers::open(path, f, opts);
         }

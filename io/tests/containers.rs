@@ -298,3 +298,29 @@ fn channels_of_a_split_recording() {
         assert!(e.to_string().contains("carries std_msgs"), "{e}");
     }
 }
+
+/// A container without its extension is recognised by its first bytes.
+#[test]
+fn containers_renamed_without_their_extension_are_read_by_their_first_bytes() {
+    let dir = std::env::temp_dir().join(format!("preint-io-magic-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (name, format) in [
+        ("euroc_imu.bag", preint_io::Format::RosBag),
+        ("euroc_imu.mcap", preint_io::Format::Mcap),
+        ("euroc_imu.db3", preint_io::Format::Db3),
+    ] {
+        let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../tests/data/ros")
+            .join(name);
+        let renamed = dir.join(format!("{name}.dat"));
+        std::fs::copy(&src, &renamed).unwrap();
+        let reader = preint_io::ImuReader::open(&renamed, &preint_io::ReadOptions::default())
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(reader.info().format, format, "{name}");
+        let from_original = preint_io::ImuReader::open(&src, &preint_io::ReadOptions::default())
+            .unwrap()
+            .read_all()
+            .unwrap();
+        assert_eq!(reader.read_all().unwrap(), from_original, "{name}");
+    }
+}

@@ -156,7 +156,7 @@ fn split_channels(input: &ImuArgs) -> Result<Option<(ChannelStream, ChannelStrea
     let (Some(path), Some(g), Some(a)) = (&input.imu, &input.gyro_topic, &input.accel_topic) else {
         return Ok(None);
     };
-    let format = (input.format.or_else(|| Format::from_extension(path)))
+    let format = (input.format.or_else(|| Format::of_file(path)))
         .filter(|f| f.is_container())
         .ok_or_else(|| {
             CliError::Usage(format!(
