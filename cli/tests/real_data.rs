@@ -193,3 +193,60 @@ fn speed_reports_every_scheme_and_level() {
     let o = run(&["speed", "--samples", "3"]);
     assert_eq!(o.status.code(), Some(2));
 }
+
+/// `convert` checks units before it writes rad/s and m/s²: the ADIS block means (deg/s, g)
+/// under a header that names no unit are refused as read; with the unit flags they convert to
+/// the hand-scaled values.
+#[test]
+fn convert_refuses_undeclared_deg_per_s_and_g_and_converts_them_when_declared() {
+    let src = std::fs::read_to_string(repo(
+        "tests/data/adis16405/adis16405_run1_first3600s_10Hz_blockmean.csv",
+    ))
+    .unwrap();
+    let mut lines = src.lines();
+    lines.next();
+    let rows: Vec<&str> = lines.take(3000).collect();
+    let dir = tmp("convert-units");
+    let input = dir.join("plain.csv");
+    std::fs::write(
+        &input,
+        format!("t,wx,wy,wz,ax,ay,az\n{}\n", rows.join("\n")),
+    )
+    .unwrap();
+    let out = dir.join("imu.csv");
+    let (i, o) = (input.to_str().unwrap(), out.to_str().unwrap());
+    let refused = run(&["convert", "--imu", i, "--out", o, "--time-unit", "s"]);
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(err.contains("--accel-unit g"), "{err}");
+    json(&[
+        "convert",
+        "--imu",
+        i,
+        "--out",
+        o,
+        "--time-unit",
+        "s",
+        "--gyro-unit",
+        "deg/s",
+        "--accel-unit",
+        "g",
+    ]);
+    let written = std::fs::read_to_string(&out).unwrap();
+    let written: Vec<&str> = written.lines().filter(|l| !l.starts_with('#')).collect();
+    assert_eq!(written.len(), rows.len());
+    for (w, r) in written.iter().zip(&rows) {
+        let w: Vec<f64> = w.split(',').map(|x| x.parse().unwrap()).collect();
+        let r: Vec<f64> = r.split(',').map(|x| x.parse().unwrap()).collect();
+        for k in 0..3 {
+            assert!(
+                (w[1 + k] - r[1 + k].to_radians()).abs() <= 1e-15,
+                "{w:?} {r:?}"
+            );
+            assert!(
+                (w[4 + k] - r[4 + k] * 9.80665).abs() <= 1e-14,
+                "{w:?} {r:?}"
+            );
+        }
+    }
+}

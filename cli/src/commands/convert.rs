@@ -3,9 +3,9 @@
 
 use crate::imu_args::{ImuArgs, source_json};
 use crate::progress::ReadingBar;
-use crate::{CliError, Output};
-use preint_io::SourceInfo;
+use crate::{CliError, Output, stream};
 use preint_io::euroc::write_euroc_stream;
+use preint_io::{IoError, SourceInfo};
 use serde_json::{Value, json};
 use std::path::PathBuf;
 
@@ -33,15 +33,23 @@ pub struct Conversion {
     pub samples: u64,
 }
 
-/// Reads the recording sample by sample and writes each as a EuRoC row.
+/// Reads the recording sample by sample and writes each as a EuRoC row, after the unit checks
+/// on its first samples (a file in deg/s or g must not come out labelled rad/s and m/s²).
 pub fn compute(args: &Args) -> Result<Conversion, CliError> {
-    let reader = args.input.open()?;
-    let source = reader.info().clone();
-    let _bar = ReadingBar::start(reader.progress(), "convert");
+    let stream = stream::open_checked(&args.input)?;
+    let source = stream.info().clone();
+    let _bar = ReadingBar::start(stream.progress(), "convert");
     let out_name = args.out.display().to_string();
     let file = std::fs::File::create(&args.out).map_err(|e| CliError::failed_in(&args.out, e))?;
     let mut out = std::io::BufWriter::with_capacity(1 << 20, file);
-    let samples = write_euroc_stream(&mut out, reader, &out_name)?;
+    // The checked stream's errors are the reader's.
+    let samples = stream.map(|r| {
+        r.map_err(|e| match e {
+            CliError::Io(io) => io,
+            other => IoError::format(&source.source_name, other.to_string()),
+        })
+    });
+    let samples = write_euroc_stream(&mut out, samples, &out_name)?;
     if samples == 0 {
         return Err(CliError::Failed(format!(
             "{}: no samples",
