@@ -60,7 +60,12 @@ pub fn measure(scene_name: &str, rates: &[f64], window_s: f64) -> Result<Vec<Row
         3,
     )?;
     let mut rows = Vec::new();
+    let pb = crate::progress::bar(rates.len() as u64, "bench-steps");
     for &rate in rates {
+        if let Some(pb) = &pb {
+            pb.set_message(format!("{rate} Hz"));
+            pb.inc(1);
+        }
         let step = (1e9 / rate).round() as i64;
         if step <= 0 {
             return Err(CliError::Usage(format!("rate {rate} Hz is too high")));
@@ -99,6 +104,9 @@ pub fn measure(scene_name: &str, rates: &[f64], window_s: f64) -> Result<Vec<Row
                 err,
             });
         }
+    }
+    if let Some(pb) = pb {
+        pb.finish_and_clear();
     }
     Ok(rows)
 }

@@ -133,11 +133,19 @@ pub fn evaluate(
     let half: Vec<ImuSample> = samples.iter().step_by(2).copied().collect();
     let mut out = Vec::new();
     let mut d = 1;
+    let pb = crate::progress::bar(starts.len() as u64, "advise");
     while dt_s * d as f64 <= window_s / 8.0 && 1.0 / (dt_s * d as f64) >= 5.0 {
+        if let Some(pb) = &pb {
+            pb.set_position(0);
+            pb.set_message(format!("{:.1} Hz", 1.0 / (dt_s * d as f64)));
+        }
         let dec: Vec<ImuSample> = samples.iter().step_by(d).copied().collect();
         // Per scheme, the maxima over the windows.
         let (mut err, mut sig) = ([[0.0f64; 3]; 3], [[0.0f64; 3]; 3]);
         for &t0 in &starts {
+            if let Some(pb) = &pb {
+                pb.inc(1);
+            }
             let (t_i, t_j) = keyframes(&dec, t0, w_ns);
             let reference =
                 preintegrate(&reference_params, &bias, samples, t_i, t_j).map_err(fail)?;
@@ -171,6 +179,9 @@ pub fn evaluate(
             });
         }
         d *= 2;
+    }
+    if let Some(pb) = pb {
+        pb.finish_and_clear();
     }
     Ok(out)
 }

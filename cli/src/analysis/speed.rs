@@ -75,15 +75,27 @@ pub struct Throughput {
 /// `runs` runs each.
 pub fn throughput(samples: usize, runs: usize) -> Result<Vec<Throughput>, CliError> {
     let stream = synthetic_stream(samples);
-    scheme::ALL
+    let pb = crate::progress::bar(scheme::ALL.len() as u64, "speed");
+    let rows = scheme::ALL
         .into_iter()
         .map(|scheme| {
-            Ok(Throughput {
+            if let Some(pb) = &pb {
+                pb.set_message(scheme::label(scheme));
+            }
+            let row = Throughput {
                 scheme,
                 deltas: median_ns_per_sample(scheme, Level::Deltas, &stream, runs)?,
                 covariance: median_ns_per_sample(scheme, Level::Covariance, &stream, runs)?,
                 combined: median_ns_per_sample(scheme, Level::Combined, &stream, runs)?,
-            })
+            };
+            if let Some(pb) = &pb {
+                pb.inc(1);
+            }
+            Ok(row)
         })
-        .collect()
+        .collect();
+    if let Some(pb) = pb {
+        pb.finish_and_clear();
+    }
+    rows
 }

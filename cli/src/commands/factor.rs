@@ -147,6 +147,7 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
         }
     } else {
         let stream = stream::open_checked_until(&args.input, Some(gj.t_ns))?;
+        let _bar = crate::progress::ReadingBar::start(stream.progress(), "factor");
         stream::cut_window(stream, Some(gi.t_ns), Some(gj.t_ns))?
     };
     let samples = w.samples.as_slice();

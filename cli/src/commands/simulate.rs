@@ -55,8 +55,16 @@ pub fn compute(args: &Args) -> Result<Simulation, CliError> {
         Some(n) => preint_sim::SimConfig::with_noise(n),
         None => preint_sim::SimConfig::noise_free(),
     };
+    let pb = crate::progress::bar(2, "simulate");
+    if let Some(pb) = &pb {
+        pb.set_message("synthesising the samples and the ground truth");
+    }
     let data = preint_sim::simulate(sc.as_ref(), args.rate, args.duration, &cfg, args.seed)
         .map_err(CliError::failed)?;
+    if let Some(pb) = &pb {
+        pb.inc(1);
+        pb.set_message("writing the files");
+    }
     std::fs::create_dir_all(&args.out).map_err(|e| CliError::failed_in(&args.out, e))?;
     let yaml_noise = noise_model.unwrap_or(ImuNoise::zero(args.rate));
     let files = preint_sim::write_dataset(&args.out, &data, &yaml_noise)
@@ -64,6 +72,9 @@ pub fn compute(args: &Args) -> Result<Simulation, CliError> {
         .iter()
         .map(|p| p.display().to_string())
         .collect();
+    if let Some(pb) = pb {
+        pb.finish_and_clear();
+    }
     Ok(Simulation {
         args: args.clone(),
         samples: data.samples.len(),
