@@ -41,7 +41,11 @@ impl ReadingBar {
             while !flag.load(Ordering::Relaxed) {
                 std::thread::sleep(std::time::Duration::from_millis(100));
                 if pb.is_none() && started.elapsed().as_secs_f64() >= 1.0 {
-                    pb = Some(bytes_bar(progress.total(), &what));
+                    // Start the rate estimate from what was read before the bar appeared.
+                    let bar = bytes_bar(progress.total(), &what);
+                    bar.set_position(progress.done());
+                    bar.reset_eta();
+                    pb = Some(bar);
                 }
                 if let Some(pb) = &pb {
                     pb.set_position(progress.done());
