@@ -538,3 +538,55 @@ fn stamps_at_the_ends_of_the_i64_range_do_not_overflow() {
     let s = audit_channels(gyro, accel, "edge", AuditOptions::default());
     assert_eq!(s.gyro.timing.samples, 7);
 }
+
+/// Each channel of a split recording gets the unit checks it allows on its own: an accelerometer
+/// in g and a gyro of exact zeros are defects, the same streams in SI are not.
+#[test]
+fn split_channels_are_checked_for_units() {
+    let t: Vec<i64> = (0..300).map(|k| T0 + k * DT).collect();
+    let channel = |v: Vector3<f64>, jitter: f64| -> ChannelStream {
+        let samples: Vec<_> = (t.iter().enumerate())
+            .map(|(k, &t_ns)| {
+                Ok(ChannelSample {
+                    at: Location::Line(k as u64 + 1),
+                    t_ns,
+                    value: v + Vector3::from_fn(|a, _| jitter * noise(k, a)),
+                })
+            })
+            .collect();
+        Box::new(samples.into_iter())
+    };
+    let (gyro, up) = (Vector3::new(0.01, 0.0, 0.0), Vector3::new(0.0, 0.0, 9.81));
+    let units = |a: &preint_io::audit::SplitAudit| {
+        (a.findings.iter())
+            .filter(|f| f.kind == "units" && f.severity == Severity::Defect)
+            .map(|f| f.message.clone())
+            .collect::<Vec<_>>()
+    };
+    let si = audit_channels(
+        channel(gyro, 1e-3),
+        channel(up, 1e-2),
+        "si",
+        AuditOptions::default(),
+    );
+    assert!(units(&si).is_empty(), "{:?}", units(&si));
+    let in_g = audit_channels(
+        channel(gyro, 1e-3),
+        channel(up / 9.80665, 1e-3),
+        "g",
+        AuditOptions::default(),
+    );
+    let m = units(&in_g);
+    assert!(
+        m.len() == 1 && m[0].starts_with("accel: ") && m[0].contains("--accel-unit g"),
+        "{m:?}"
+    );
+    let zero = audit_channels(
+        channel(Vector3::zeros(), 0.0),
+        channel(up, 1e-2),
+        "zero",
+        AuditOptions::default(),
+    );
+    let m = units(&zero);
+    assert!(m.len() == 1 && m[0].contains("exactly 0"), "{m:?}");
+}

@@ -2,7 +2,8 @@
 //! stamps (RealSense: 200 Hz and 63 Hz). Each channel gets the timing audit of a single stream;
 //! between them, the audit measures where each accelerometer stamp sits relative to the
 //! nearest gyro stamp (a merge interpolates one channel onto the other's stamps) and how many
-//! samples of either channel lie outside the other's span (a merge cannot use them).
+//! samples of either channel lie outside the other's span (a merge cannot use them). Each
+//! channel's units are checked on its own (the median norm of its first readings).
 //!
 //! Both streams are read once, side by side in stamp order, in bounded memory.
 
@@ -25,6 +26,11 @@ pub struct ChannelAudit {
     pub stopped: Option<String>,
     /// Readings that are not finite.
     pub non_finite: EventList<(u64, Location)>,
+    /// Median norm of the readings over the first [`AuditOptions::prefix_samples`] (rad/s or
+    /// m/s² as read), `None` without finite readings.
+    pub median_norm: Option<f64>,
+    /// Whether every reading of that prefix is exactly zero.
+    pub all_zero: bool,
 }
 
 /// Accelerometer stamps against gyro stamps.
@@ -107,6 +113,8 @@ struct ChannelAuditor {
     timing: Option<TimingStats>,
     errors: ErrorLog,
     non_finite: EventList<(u64, Location)>,
+    /// Norms of the first `opts.prefix_samples` finite readings.
+    norms: Vec<f64>,
 }
 
 impl ChannelAuditor {
@@ -119,6 +127,7 @@ impl ChannelAuditor {
             timing: None,
             errors: ErrorLog::default(),
             non_finite: EventList::default(),
+            norms: Vec::new(),
         }
     }
 
@@ -127,6 +136,8 @@ impl ChannelAuditor {
         self.samples += 1;
         if !s.value.iter().all(|v| v.is_finite()) {
             self.non_finite.push((index, s.at), self.opts.max_listed);
+        } else if self.norms.len() < self.opts.prefix_samples {
+            self.norms.push(s.value.norm());
         }
         match &mut self.timing {
             Some(t) => {
@@ -173,7 +184,14 @@ impl ChannelAuditor {
         if self.timing.is_none() {
             self.start();
         }
+        let all_zero = !self.norms.is_empty() && self.norms.iter().all(|&n| n == 0.0);
+        let median_norm = (!self.norms.is_empty()).then(|| {
+            let mid = self.norms.len() / 2;
+            *self.norms.select_nth_unstable_by(mid, f64::total_cmp).1
+        });
         ChannelAudit {
+            median_norm,
+            all_zero,
             sensor: self.sensor,
             timing: self.timing.take().expect("started above").finish(),
             bad_rows: self.errors.bad_rows,
@@ -233,6 +251,31 @@ pub fn audit_channels(
     }
 }
 
+/// Fewest readings for the all-zero verdict of [`channel_units`].
+const MIN_READINGS_FOR_ZERO: u64 = 100;
+
+/// The unit checks one channel allows on its own (the checks of
+/// [`crate::plausibility::check_si_units`]): an accelerometer's median norm in [4, 20] m/s²,
+/// a gyro's below 20 rad/s and not identically zero.
+fn channel_units(c: &ChannelAudit) -> Option<String> {
+    let norm = c.median_norm?;
+    match c.sensor {
+        Sensor::Accel if !(4.0..=20.0).contains(&norm) => Some(format!(
+            "median accelerometer norm is {norm:.4}; expected about 9.81 m/s² (specific force). \
+             If the data is in g, set --accel-unit g"
+        )),
+        Sensor::Gyro if norm > 20.0 => Some(format!(
+            "median gyro norm is {norm:.2}; expected rad/s. If the data is in deg/s, set \
+             --gyro-unit deg/s"
+        )),
+        Sensor::Gyro if c.all_zero && c.timing.samples >= MIN_READINGS_FOR_ZERO => Some(
+            "the gyro reads exactly 0 on every sample checked: is this a gyroscope channel?"
+                .to_string(),
+        ),
+        _ => None,
+    }
+}
+
 fn split_findings(g: &ChannelAudit, a: &ChannelAudit, off: &Offsets) -> Vec<Finding> {
     let mut f = Vec::new();
     for c in [g, a] {
@@ -243,6 +286,13 @@ fn split_findings(g: &ChannelAudit, a: &ChannelAudit, off: &Offsets) -> Vec<Find
         }
         findings::reading(&c.bad_rows, &c.stopped, &c.non_finite, &label, &mut f);
         findings::timing(&c.timing, &label, &mut f);
+        if let Some(m) = channel_units(c) {
+            f.push(Finding::new(
+                Severity::Defect,
+                "units",
+                format!("{label}{m}"),
+            ));
+        }
     }
     if off.count > 0 {
         let m = format!(
