@@ -208,7 +208,7 @@ pub fn detect_text(
 
 /// A line whose first field is a number (not a header or comment).
 fn is_data_row(line: &str) -> bool {
-    if line.starts_with('#') || line.starts_with('%') {
+    if crate::lines::is_comment(line) {
         return false;
     }
     let mut first = "";

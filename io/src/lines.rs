@@ -134,6 +134,31 @@ impl<R: Read> LineReader<R> {
         }
     }
 
+    /// The next row `row` makes something of: lines are trimmed, blank and comment lines
+    /// ([`is_comment`]) skipped, and `row(text, at)` returning `Ok(None)` (a header) skips the
+    /// line too. `None` at the end of the stream.
+    pub fn next_row<T>(
+        &mut self,
+        mut row: impl FnMut(&str, Location) -> Result<Option<T>, IoError>,
+    ) -> Option<Result<T, IoError>> {
+        loop {
+            let line = match self.next_line() {
+                Ok(Some(line)) => line,
+                Ok(None) => return None,
+                Err(e) => return Some(Err(e)),
+            };
+            let text = line.text.trim();
+            if text.is_empty() || is_comment(text) {
+                continue;
+            }
+            match row(text, line.at) {
+                Ok(Some(t)) => return Some(Ok(t)),
+                Ok(None) => continue,
+                Err(e) => return Some(Err(e)),
+            }
+        }
+    }
+
     /// Moves the unread bytes to the front, grows the buffer if a line fills it, and reads.
     fn fill(&mut self) -> Result<(), IoError> {
         if self.start > 0 {
@@ -181,6 +206,11 @@ impl<R: Read> LineReader<R> {
 }
 
 /// The 1-based number of the line starting at byte `offset` of `text`, counting line ends as
+/// A comment line of a text recording: it starts with `#` or `%` (after trimming).
+pub fn is_comment(text: &str) -> bool {
+    text.starts_with('#') || text.starts_with('%')
+}
+
 /// [`LineReader`] does (`\n`, `\r\n`, lone `\r`). Used to name the line of an error found after
 /// a seek.
 pub fn line_number_at(mut inner: impl Read, offset: u64) -> std::io::Result<u64> {

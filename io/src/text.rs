@@ -10,8 +10,8 @@ use nalgebra::Vector3;
 use preint::ImuSample;
 use std::io::Read;
 
-/// The samples of a text source laid out as `layout`. Blank lines and lines starting with
-/// `#` or `%` are skipped; one header line (a first row whose time field is not a number) is
+/// The samples of a text source laid out as `layout`. Blank and comment lines
+/// ([`crate::lines::is_comment`]) are skipped; one header line (a first row whose time field is not a number) is
 /// skipped; every other row must have exactly the layout's number of fields, a decimal
 /// timestamp and finite readings, else the error names the line, column and value.
 pub struct TextSamples<R> {
@@ -31,27 +31,9 @@ impl<R: Read> Iterator for TextSamples<R> {
     type Item = Result<Located, IoError>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        loop {
-            let line = match self.lines.next_line() {
-                Ok(Some(line)) => line,
-                Ok(None) => return None,
-                Err(e) => return Some(Err(e)),
-            };
-            let text = line.text.trim();
-            if text.is_empty() || text.starts_with('#') || text.starts_with('%') {
-                continue;
-            }
-            match self.rows.parse(text, line.at) {
-                Ok(Some(sample)) => {
-                    return Some(Ok(Located {
-                        at: line.at,
-                        sample,
-                    }));
-                }
-                Ok(None) => continue,
-                Err(e) => return Some(Err(e)),
-            }
-        }
+        let rows = &mut self.rows;
+        self.lines
+            .next_row(|text, at| Ok(rows.parse(text, at)?.map(|sample| Located { at, sample })))
     }
 }
 

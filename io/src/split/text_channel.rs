@@ -3,7 +3,7 @@
 use crate::channel::{ChannelSample, Sensor};
 use crate::error::{IoError, Location};
 use crate::layout::{Delimiter, words};
-use crate::lines::LineReader;
+use crate::lines::{LineReader, is_comment};
 use crate::number::{parse_finite, parse_scaled, parse_scaled_integer};
 use crate::reader::ReadOptions;
 use crate::units::{AccelUnit, GyroUnit, TimeUnit};
@@ -71,10 +71,6 @@ fn unit(u: GyroUnit) -> Unit {
 
 fn aunit(u: AccelUnit) -> Unit {
     Unit::Accel(u)
-}
-
-fn is_comment(line: &str) -> bool {
-    line.starts_with('#') || line.starts_with('%')
 }
 
 /// Decides the layout of a channel file from its first lines (`head`) and the options: the
@@ -270,21 +266,7 @@ impl<R: Read> Iterator for TextChannel<R> {
     type Item = Result<ChannelSample, IoError>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        loop {
-            let line = match self.lines.next_line() {
-                Ok(Some(line)) => line,
-                Ok(None) => return None,
-                Err(e) => return Some(Err(e)),
-            };
-            let text = line.text.trim();
-            if text.is_empty() || is_comment(text) {
-                continue;
-            }
-            match self.rows.row(text, line.at) {
-                Ok(Some(s)) => return Some(Ok(s)),
-                Ok(None) => continue,
-                Err(e) => return Some(Err(e)),
-            }
-        }
+        let rows = &mut self.rows;
+        self.lines.next_row(|text, at| rows.row(text, at))
     }
 }
