@@ -4,7 +4,7 @@
 use crate::{CliError, checks};
 use preint::ImuSample;
 use preint_io::layout::{Column, parse_columns};
-use preint_io::split::MergeReport;
+use preint_io::split::{MergeHandle, MergeReport};
 use preint_io::{
     AccelUnit, Delimiter, Format, GyroUnit, ImuReader, ReadOptions, SourceInfo, Stamp, TimeUnit,
 };
@@ -106,33 +106,19 @@ impl ImuArgs {
     /// Whether the recording is split: a gyroscope file and an accelerometer file
     /// (`--gyro/--accel`) or two topics of a container (`--gyro-topic/--accel-topic`), merged
     /// with an effective accelerometer density ([`ImuArgs::read_all_split`]).
-    pub fn is_split_files(&self) -> bool {
+    pub fn is_split(&self) -> bool {
         (self.imu.is_none() && self.gyro.is_some() && self.accel.is_some())
             || (self.gyro_topic.is_some() && self.accel_topic.is_some())
     }
 
     /// A streaming reader of the recording.
     pub fn open(&self) -> Result<ImuReader, CliError> {
-        let opts = self.options();
-        Ok(match (&self.imu, &self.gyro, &self.accel) {
-            (None, Some(g), Some(a)) => preint_io::split::open_split(g, a, &opts)?,
-            _ => ImuReader::open(self.path(), &opts)?,
-        })
+        self.open_with_report().map(|(r, _)| r)
     }
 
-    /// Every sample of the recording, with the unit checks unless `--no-unit-check`; and how
-    /// it was read.
-    pub fn read_all(&self) -> Result<(Vec<ImuSample>, SourceInfo), CliError> {
-        self.read_all_split().map(|(s, info, _)| (s, info))
-    }
-
-    /// As [`ImuArgs::read_all`], also returning the merge report of a split recording
-    /// (`--gyro`/`--accel` or `--gyro-topic`/`--accel-topic`), from which [`crate::noise::effective`] gives the noise densities
-    /// to preintegrate the merged samples with. The report's summary and the accelerometer
-    /// density factor are added to the source's notes.
-    pub fn read_all_split(
-        &self,
-    ) -> Result<(Vec<ImuSample>, SourceInfo, Option<MergeReport>), CliError> {
+    /// As [`ImuArgs::open`], with the handle of the merge report of a split recording
+    /// (`--gyro`/`--accel` or `--gyro-topic`/`--accel-topic`; `None` otherwise).
+    fn open_with_report(&self) -> Result<(ImuReader, Option<MergeHandle>), CliError> {
         let opts = self.options();
         let container = || {
             let path = self.path();
@@ -146,23 +132,42 @@ impl ImuArgs {
                     ))
                 })
         };
-        let (reader, handle) = match (
-            &self.imu,
-            &self.gyro,
-            &self.accel,
-            &self.gyro_topic,
-            &self.accel_topic,
-        ) {
-            (None, Some(g), Some(a), _, _) => {
-                let (r, h) = preint_io::split::open_split_with_report(g, a, &opts)?;
-                (r, Some(h))
-            }
-            (Some(p), _, _, Some(g), Some(a)) => {
-                let (r, h) = preint_io::containers::open_split(p, container()?, g, a, &opts)?;
-                (r, Some(h))
-            }
-            _ => (ImuReader::open(self.path(), &opts)?, None),
-        };
+        Ok(
+            match (
+                &self.imu,
+                &self.gyro,
+                &self.accel,
+                &self.gyro_topic,
+                &self.accel_topic,
+            ) {
+                (None, Some(g), Some(a), _, _) => {
+                    let (r, h) = preint_io::split::open_split_with_report(g, a, &opts)?;
+                    (r, Some(h))
+                }
+                (Some(p), _, _, Some(g), Some(a)) => {
+                    let (r, h) = preint_io::containers::open_split(p, container()?, g, a, &opts)?;
+                    (r, Some(h))
+                }
+                _ => (ImuReader::open(self.path(), &opts)?, None),
+            },
+        )
+    }
+
+    /// Every sample of the recording, with the unit checks unless `--no-unit-check`; and how
+    /// it was read.
+    pub fn read_all(&self) -> Result<(Vec<ImuSample>, SourceInfo), CliError> {
+        self.read_all_split().map(|(s, info, _)| (s, info))
+    }
+
+    /// As [`ImuArgs::read_all`], also returning the merge report of a split recording
+    /// (`--gyro`/`--accel` or `--gyro-topic`/`--accel-topic`), from which
+    /// [`crate::noise::effective`] gives the noise densities to preintegrate the merged samples
+    /// with. The report's summary and the accelerometer density factor are added to the
+    /// source's notes.
+    pub fn read_all_split(
+        &self,
+    ) -> Result<(Vec<ImuSample>, SourceInfo, Option<MergeReport>), CliError> {
+        let (reader, handle) = self.open_with_report()?;
         let mut info = reader.info().clone();
         let bar = crate::progress::ReadingBar::start(reader.progress(), "reading");
         let samples = reader.read_all()?;

@@ -239,6 +239,33 @@ pub fn cut_window(
     })
 }
 
+/// A split recording (`--gyro/--accel`, `--gyro-topic/--accel-topic`) read whole, as the
+/// window `[from, to]` (defaults: its first and last merged sample), with how it was read and
+/// the merge report the effective accelerometer density comes from.
+pub fn split_window(
+    args: &ImuArgs,
+    from: Option<i64>,
+    to: Option<i64>,
+) -> Result<
+    (
+        StreamWindow,
+        SourceInfo,
+        Option<preint_io::split::MergeReport>,
+    ),
+    CliError,
+> {
+    let (samples, source, report) = args.read_all_split()?;
+    let (first_ns, last_ns) = (samples[0].t_ns, samples[samples.len() - 1].t_ns);
+    let w = StreamWindow {
+        offset: 0,
+        first_ns,
+        t_i_ns: from.unwrap_or(first_ns),
+        t_j_ns: to.unwrap_or(last_ns),
+        samples,
+    };
+    Ok((w, source, report))
+}
+
 /// The samples of `args`' recording with `from ≤ t ≤ to` for the solver of `command`
 /// ([`hold_span`] with [`MAX_HELD_SAMPLES`], after the unit checks, with a progress bar),
 /// refused if two consecutive ones are more than the preintegrator's largest gap apart.

@@ -135,16 +135,10 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
     let scheme = params.scheme;
     // Only the part of the recording the window needs is read (a split recording is merged
     // whole, for the effective accelerometer density of its merged samples).
-    let w = if args.input.is_split_files() {
-        let (samples, _, split) = args.input.read_all_split()?;
+    let w = if args.input.is_split() {
+        let (w, _, split) = stream::split_window(&args.input, Some(gi.t_ns), Some(gj.t_ns))?;
         crate::noise::apply_split(&noise, split.as_ref(), &mut params);
-        stream::StreamWindow {
-            offset: 0,
-            first_ns: samples[0].t_ns,
-            t_i_ns: gi.t_ns,
-            t_j_ns: gj.t_ns,
-            samples,
-        }
+        w
     } else {
         let stream = stream::open_checked_until(&args.input, Some(gj.t_ns))?;
         let _bar = crate::progress::ReadingBar::start(stream.progress(), "factor");

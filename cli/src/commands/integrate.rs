@@ -71,34 +71,26 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
     );
     let scheme = params.scheme;
     let fail = |e| CliError::failed_in(args.input.path(), e);
-    if args.input.is_split_files() {
-        // The merged accelerometer's effective density is known once the files are read.
-        let (samples, source, split) = args.input.read_all_split()?;
-        let noise = noise::apply_split(&noise, split.as_ref(), &mut params);
-        let t_i = args.from.unwrap_or(samples[0].t_ns);
-        let t_j = args.to.unwrap_or(samples[samples.len() - 1].t_ns);
-        let pim = preintegrate(&params, &bias, &samples, t_i, t_j).map_err(fail)?;
-        return Ok(Integration {
-            imu: args.input.label(),
-            source,
-            scheme,
-            samples: input::count_in(&samples, t_i, t_j),
-            noise,
-            noise_source: args.preint.noise_source(),
-            bias,
-            pim,
-        });
-    }
-    let stream = stream::open_checked_until(&args.input, args.to)?;
-    let source = stream.info().clone();
-    let _bar = ReadingBar::start(stream.progress(), "integrate");
-    let (pim, samples) = if args.from.is_none() && args.to.is_none() {
-        whole_recording(stream, params, &bias, fail)?
-    } else {
-        let w = stream::cut_window(stream, args.from, args.to)?;
-        let pim = preintegrate(&params, &bias, &w.samples, w.t_i_ns, w.t_j_ns)
+    let window = |params: &PreintParams, w: stream::StreamWindow| {
+        let pim = preintegrate(params, &bias, &w.samples, w.t_i_ns, w.t_j_ns)
             .map_err(|e| fail(w.in_stream(e)))?;
-        (pim, input::count_in(&w.samples, w.t_i_ns, w.t_j_ns))
+        Ok::<_, CliError>((pim, input::count_in(&w.samples, w.t_i_ns, w.t_j_ns)))
+    };
+    let (source, noise, (pim, samples)) = if args.input.is_split() {
+        // The merged accelerometer's effective density is known once the files are read.
+        let (w, source, split) = stream::split_window(&args.input, args.from, args.to)?;
+        let noise = noise::apply_split(&noise, split.as_ref(), &mut params);
+        (source, noise, window(&params, w)?)
+    } else {
+        let stream = stream::open_checked_until(&args.input, args.to)?;
+        let source = stream.info().clone();
+        let _bar = ReadingBar::start(stream.progress(), "integrate");
+        let result = if args.from.is_none() && args.to.is_none() {
+            whole_recording(stream, params, &bias, fail)?
+        } else {
+            window(&params, stream::cut_window(stream, args.from, args.to)?)?
+        };
+        (source, noise, result)
     };
     Ok(Integration {
         imu: args.input.label(),
