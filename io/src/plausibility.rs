@@ -99,17 +99,8 @@ pub fn check_si_units(samples: &[ImuSample], source_name: &str) -> Result<(), Io
         source_name: source_name.to_string(),
         msg,
     };
-    if !(4.0..=20.0).contains(&acc) {
-        return Err(units(format!(
-            "median accelerometer norm is {acc:.4}; expected about 9.81 m/s² (specific force). \
-             If the data is in g, set --accel-unit g"
-        )));
-    }
-    if gyro > 20.0 {
-        return Err(units(format!(
-            "median gyro norm is {gyro:.2}; expected rad/s. If the data is in deg/s, set \
-             --gyro-unit deg/s"
-        )));
+    if let Some(msg) = accel_norm_verdict(acc).or_else(|| gyro_norm_verdict(gyro)) {
+        return Err(units(msg));
     }
     let first_acc = samples[0].acc;
     if samples.len() >= MIN_SAMPLES_FOR_ZERO_GYRO
@@ -125,8 +116,29 @@ pub fn check_si_units(samples: &[ImuSample], source_name: &str) -> Result<(), Io
     Ok(())
 }
 
-/// Fewest samples for the zero-gyro check of [`check_si_units`].
-const MIN_SAMPLES_FOR_ZERO_GYRO: usize = 100;
+/// The error message if a median accelerometer norm `acc` (as read) is not in [4, 20] m/s².
+pub fn accel_norm_verdict(acc: f64) -> Option<String> {
+    (!(4.0..=20.0).contains(&acc)).then(|| {
+        format!(
+            "median accelerometer norm is {acc:.4}; expected about 9.81 m/s² (specific force). \
+             If the data is in g, set --accel-unit g"
+        )
+    })
+}
+
+/// The error message if a median gyro norm `gyro` (as read) exceeds 20 rad/s.
+pub fn gyro_norm_verdict(gyro: f64) -> Option<String> {
+    (gyro > 20.0).then(|| {
+        format!(
+            "median gyro norm is {gyro:.2}; expected rad/s. If the data is in deg/s, set \
+             --gyro-unit deg/s"
+        )
+    })
+}
+
+/// Fewest samples for the zero-gyro check of [`check_si_units`] (and of a split recording's
+/// gyro channel in the audit).
+pub const MIN_SAMPLES_FOR_ZERO_GYRO: usize = 100;
 
 fn median(mut v: Vec<f64>) -> f64 {
     let mid = v.len() / 2;

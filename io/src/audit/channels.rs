@@ -251,28 +251,20 @@ pub fn audit_channels(
     }
 }
 
-/// Fewest readings for the all-zero verdict of [`channel_units`].
-const MIN_READINGS_FOR_ZERO: u64 = 100;
-
-/// The unit checks one channel allows on its own (the checks of
+/// The unit checks one channel allows on its own (those of
 /// [`crate::plausibility::check_si_units`]): an accelerometer's median norm in [4, 20] m/s²,
 /// a gyro's below 20 rad/s and not identically zero.
 fn channel_units(c: &ChannelAudit) -> Option<String> {
+    use crate::plausibility::{MIN_SAMPLES_FOR_ZERO_GYRO, accel_norm_verdict, gyro_norm_verdict};
     let norm = c.median_norm?;
     match c.sensor {
-        Sensor::Accel if !(4.0..=20.0).contains(&norm) => Some(format!(
-            "median accelerometer norm is {norm:.4}; expected about 9.81 m/s² (specific force). \
-             If the data is in g, set --accel-unit g"
-        )),
-        Sensor::Gyro if norm > 20.0 => Some(format!(
-            "median gyro norm is {norm:.2}; expected rad/s. If the data is in deg/s, set \
-             --gyro-unit deg/s"
-        )),
-        Sensor::Gyro if c.all_zero && c.timing.samples >= MIN_READINGS_FOR_ZERO => Some(
-            "the gyro reads exactly 0 on every sample checked: is this a gyroscope channel?"
-                .to_string(),
-        ),
-        _ => None,
+        Sensor::Accel => accel_norm_verdict(norm),
+        Sensor::Gyro => gyro_norm_verdict(norm).or_else(|| {
+            (c.all_zero && c.timing.samples >= MIN_SAMPLES_FOR_ZERO_GYRO as u64).then(|| {
+                "the gyro reads exactly 0 on every sample checked: is this a gyroscope channel?"
+                    .to_string()
+            })
+        }),
     }
 }
 
