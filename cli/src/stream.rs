@@ -116,17 +116,31 @@ pub fn open_checked(args: &ImuArgs) -> Result<CheckedSamples, CliError> {
 /// As [`open_checked`], with a prefix that also ends [`EDGE_SAMPLES`] − 1 samples after
 /// `until` \[ns\] (a window's end): nothing after the window is read for the checks.
 pub fn open_checked_until(args: &ImuArgs, until: Option<i64>) -> Result<CheckedSamples, CliError> {
+    open_checked_prefix(args, until, UNIT_CHECK_PREFIX, None)
+}
+
+/// As [`open_checked_until`], with the unit checks on at most `max_samples` samples spanning at
+/// most `max_span_s` seconds (the prefix ends with the first sample that reaches it).
+pub fn open_checked_prefix(
+    args: &ImuArgs,
+    until: Option<i64>,
+    max_samples: usize,
+    max_span_s: Option<f64>,
+) -> Result<CheckedSamples, CliError> {
     let mut rest = args.open()?;
     let (info, progress) = (rest.info().clone(), rest.progress().clone());
-    let (mut prefix, mut after) = (Vec::new(), 0);
-    while prefix.len() < UNIT_CHECK_PREFIX && after < EDGE_SAMPLES - 1 {
-        match rest.next() {
-            Some(s) => {
-                let s = s?;
-                after += usize::from(until.is_some_and(|t| s.t_ns > t));
-                prefix.push(s);
-            }
-            None => break,
+    let max_span_ns = max_span_s.map_or(i64::MAX, |s| (s * 1e9) as i64);
+    let (mut prefix, mut after, mut ended) = (Vec::new(), 0, false);
+    while prefix.len() < max_samples && after < EDGE_SAMPLES - 1 {
+        let Some(s) = rest.next() else {
+            ended = true;
+            break;
+        };
+        let s = s?;
+        after += usize::from(until.is_some_and(|t| s.t_ns > t));
+        prefix.push(s);
+        if s.t_ns.saturating_sub(prefix[0].t_ns) >= max_span_ns {
+            break;
         }
     }
     if prefix.is_empty() {
@@ -138,7 +152,8 @@ pub fn open_checked_until(args: &ImuArgs, until: Option<i64>) -> Result<CheckedS
     if !args.no_unit_check {
         checks::si_units(&prefix, args.path())?;
     }
-    let more = prefix.len() == UNIT_CHECK_PREFIX;
+    // Nothing more is read once the source ended or the window `until` is complete.
+    let more = !ended && after < EDGE_SAMPLES - 1;
     Ok(CheckedSamples {
         prefix: prefix.into_iter(),
         rest: more.then(|| Prefetch::start(rest)),

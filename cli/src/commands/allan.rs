@@ -17,8 +17,7 @@ use crate::charts::figures;
 use crate::format::IMU_AXES;
 use crate::imu_args::ImuArgs;
 use crate::progress::ReadingBar;
-use crate::{CliError, Output, checks};
-use preint::ImuSample;
+use crate::{CliError, Output, stream};
 use preint_calib::allan::{AllanStream, ImuAllan, Stillness, StillnessMonitor, StillnessOptions};
 use preint_io::write_kalibr_yaml;
 use serde_json::{Value, json};
@@ -67,29 +66,21 @@ pub struct AllanRun {
 /// The streamed pass: base blocks, the stillness monitor, and the unit check on the prefix.
 fn read_stream(args: &Args) -> Result<(AllanStream, Stillness), CliError> {
     let file = args.input.path();
-    let reader = args.input.open()?;
-    let _bar = ReadingBar::start(reader.progress(), "allan");
-    let mut prefix: Option<Vec<ImuSample>> =
-        (!args.input.no_unit_check).then(|| Vec::with_capacity(UNIT_CHECK_MAX_SAMPLES));
-    let mut stream = AllanStream::new();
+    let samples = stream::open_checked_prefix(
+        &args.input,
+        None,
+        UNIT_CHECK_MAX_SAMPLES,
+        Some(UNIT_CHECK_SECONDS),
+    )?;
+    let _bar = ReadingBar::start(samples.progress(), "allan");
+    let mut allan = AllanStream::new();
     let mut still = StillnessMonitor::new(StillnessOptions::default());
-    for s in reader {
+    for s in samples {
         let s = s?;
-        if let Some(p) = &mut prefix {
-            p.push(s);
-            let span_s = (s.t_ns - p[0].t_ns) as f64 * 1e-9;
-            if p.len() >= UNIT_CHECK_MAX_SAMPLES || span_s >= UNIT_CHECK_SECONDS {
-                checks::si_units(p, file)?;
-                prefix = None;
-            }
-        }
-        stream.push(&s).map_err(|e| CliError::failed_in(file, e))?;
+        allan.push(&s).map_err(|e| CliError::failed_in(file, e))?;
         still.push(&s);
     }
-    if let Some(p) = &prefix {
-        checks::si_units(p, file)?;
-    }
-    Ok((stream, still.finish()))
+    Ok((allan, still.finish()))
 }
 
 /// Computes the Allan deviations and, with `--out`, writes the two charts and `imu.yaml`.
