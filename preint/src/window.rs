@@ -220,12 +220,7 @@ fn plan(
     t_j_ns: i64,
     max_gap_ns: i64,
 ) -> Result<Plan, PreintError> {
-    let (lo, hi) = bracket(samples, t_i_ns, t_j_ns)?;
-    // Gaps only matter where the window takes values or noise cells from: the interval before
-    // the earliest stencil sample at t_i and the one after the latest at t_j.
-    let (before, after) = scheme.stencil_reach();
-    let used = lo.saturating_sub(1 + before)..(hi + 2 + after).min(samples.len());
-    check_gaps(samples, used, max_gap_ns)?;
+    let (lo, hi) = bracket(samples, t_i_ns, t_j_ns, scheme.stencil_reach(), max_gap_ns)?;
     let mj = if samples[hi - 1].t_ns == t_j_ns {
         hi - 1
     } else {
@@ -273,10 +268,19 @@ fn plan(
     })
 }
 
-/// Checks the keyframes against the stream and the stream's values and order around the
-/// window (three samples beyond each edge), and returns `(lo, hi)`: the first sample at or
-/// after `t_i` and the first after `t_j`.
-fn bracket(samples: &[ImuSample], t_i_ns: i64, t_j_ns: i64) -> Result<(usize, usize), PreintError> {
+/// Checks the keyframes against the stream and the stream around the window, and returns
+/// `(lo, hi)`: the first sample at or after `t_i` and the first after `t_j`. Values and order
+/// are checked from three samples before `t_i` to three after `t_j`; gaps only where the
+/// window takes values or noise cells from (a stencil reaching `reach` = (before, after)
+/// samples beyond an interval): up to the interval before the earliest stencil sample at `t_i`
+/// and the one after the latest at `t_j`.
+fn bracket(
+    samples: &[ImuSample],
+    t_i_ns: i64,
+    t_j_ns: i64,
+    (before, after): (usize, usize),
+    max_gap_ns: i64,
+) -> Result<(usize, usize), PreintError> {
     if t_j_ns <= t_i_ns {
         return Err(PreintError::NonPositiveWindow { t_i_ns, t_j_ns });
     }
@@ -296,7 +300,16 @@ fn bracket(samples: &[ImuSample], t_i_ns: i64, t_j_ns: i64) -> Result<(usize, us
     let n = samples.len();
     let lo = samples.partition_point(|s| s.t_ns < t_i_ns);
     let hi = samples.partition_point(|s| s.t_ns <= t_j_ns);
-    check_samples(samples, lo.saturating_sub(3)..(hi + 3).min(n), i64::MAX)?;
+    let used = lo.saturating_sub(1 + before)..(hi + 2 + after).min(n);
+    for index in lo.saturating_sub(3)..(hi + 3).min(n) {
+        let gap_ns = if used.contains(&index) {
+            max_gap_ns
+        } else {
+            i64::MAX
+        };
+        let prev = index.checked_sub(1).map(|i| samples[i].t_ns);
+        check_sample(&samples[index], index, prev, Some(gap_ns))?;
+    }
     let bracketed = lo < n
         && hi >= 1
         && lo <= hi
@@ -313,26 +326,6 @@ fn bracket(samples: &[ImuSample], t_i_ns: i64, t_j_ns: i64) -> Result<(usize, us
         });
     }
     Ok((lo, hi))
-}
-
-/// No interval ending at a sample of `range` exceeds `max_gap_ns`.
-fn check_gaps(
-    samples: &[ImuSample],
-    range: std::ops::Range<usize>,
-    max_gap_ns: i64,
-) -> Result<(), PreintError> {
-    for index in range.filter(|&k| k > 0) {
-        let gap_ns = samples[index].t_ns.saturating_sub(samples[index - 1].t_ns);
-        if gap_ns > max_gap_ns {
-            return Err(PreintError::GapTooLarge {
-                index,
-                t_ns: samples[index].t_ns,
-                gap_ns,
-                max_gap_ns,
-            });
-        }
-    }
-    Ok(())
 }
 
 /// The stream samples strictly inside a window (`lo..hi`) and, for a wide stencil, the context
