@@ -23,11 +23,11 @@ pub const MAX_HELD_SAMPLES: usize = 1 << 23;
 /// Stream samples kept on each side of a window: the values and order checks of
 /// [`preint::preintegrate`] reach three samples beyond the samples at `t_i` and `t_j`, one
 /// more before `t_i` for the first checked interval.
-const EDGE_SAMPLES: usize = 4;
+pub const EDGE_SAMPLES: usize = 4;
 
 /// The samples of a recording, in order, after the unit checks on its first
 /// [`UNIT_CHECK_PREFIX`] samples (unless `--no-unit-check`). The rest of the recording is
-/// parsed by a second thread ([`Prefetch`]) while the caller works on what came before.
+/// parsed by a second thread (in chunks through a bounded channel) while the caller works on what came before.
 pub struct CheckedSamples {
     prefix: std::vec::IntoIter<ImuSample>,
     rest: Option<Prefetch>,

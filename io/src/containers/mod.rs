@@ -3,8 +3,8 @@
 //! ROS 2 `.db3` bags (SQLite, the `rusqlite` crate; CDR messages).
 //!
 //! The messages of the selected topic are streamed (memory does not grow with the file) and
-//! decoded by [`imu_msg`]. A sample's time is `header.stamp` ([`Stamp::Header`], default) or the
-//! time the recorder received it ([`Stamp::Record`]: bag record time, MCAP log time); which one
+//! decoded from their fixed field layout, bounds-checked. A sample's time is `header.stamp`
+//! ([`Stamp::Header`], default) or the time the recorder received it ([`Stamp::Record`]: bag record time, MCAP log time); which one
 //! is said in [`SourceInfo::notes`]. Errors name the file and the 1-based message of the topic
 //! ([`Location::Message`]).
 
