@@ -37,6 +37,7 @@ pub use noise::{CellRule, ImuNoise};
 pub use sample::{ImuBias, ImuSample, dt_seconds};
 
 pub mod error;
+pub mod extrinsics;
 pub(crate) mod fast;
 pub mod params;
 pub mod preintegrator;
@@ -45,6 +46,7 @@ pub mod scheme;
 pub mod window;
 
 pub use error::PreintError;
+pub use extrinsics::SensorPose;
 pub use factor::{CombinedImuFactor, FactorError, ImuFactor};
 pub use merge::{MergeError, merge};
 pub use navstate::{NavState, predict};

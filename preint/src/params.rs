@@ -2,6 +2,7 @@
 //! what to compute, bias re-integration thresholds and the largest allowed sample gap.
 
 use crate::error::PreintError;
+use crate::extrinsics::SensorPose;
 use crate::noise::ImuNoise;
 pub use crate::scheme::Scheme;
 use nalgebra::{Matrix3, Vector3};
@@ -87,6 +88,10 @@ pub struct PreintParams {
     /// [`Preintegrator::reintegrate`](crate::Preintegrator::reintegrate) is an error
     /// ([`PreintError::SamplesNotKept`]).
     pub keep_samples: bool,
+    /// Pose of the IMU in the body frame (GTSAM's `body_P_sensor`): with it the measurement is
+    /// the body's, lever arm and rotation included ([`crate::extrinsics`]); biases and noise
+    /// stay the sensor's. `None`: the IMU frame is the body frame. Default `None`.
+    pub body_p_sensor: Option<SensorPose>,
 }
 
 /// Default gyro-bias change [rad/s] above which the first-order correction is replaced by
@@ -127,6 +132,7 @@ impl PreintParams {
             reintegrate_acc_threshold: DEFAULT_REINTEGRATE_ACC,
             max_gap_ns: DEFAULT_MAX_GAP_NS,
             keep_samples: true,
+            body_p_sensor: None,
         }
     }
 
@@ -145,6 +151,12 @@ impl PreintParams {
     /// Same parameters with another gravity vector [m/s², world frame].
     pub fn with_gravity(mut self, gravity: Vector3<f64>) -> Self {
         self.gravity = gravity;
+        self
+    }
+
+    /// Same parameters with the IMU at `pose` in the body frame ([`crate::extrinsics`]).
+    pub fn with_body_p_sensor(mut self, pose: SensorPose) -> Self {
+        self.body_p_sensor = Some(pose);
         self
     }
 
@@ -180,6 +192,14 @@ impl PreintParams {
         }
         if self.reintegrate_acc_threshold.is_nan() || self.reintegrate_acc_threshold <= 0.0 {
             return bad("reintegrate_acc_threshold", "must be positive");
+        }
+        if let Some(pose) = &self.body_p_sensor
+            && !pose.is_valid()
+        {
+            return bad(
+                "body_p_sensor",
+                "non-finite entry or rotation not orthonormal",
+            );
         }
         if self.max_gap_ns <= 0 {
             return bad("max_gap_ns", "must be positive");

@@ -25,7 +25,7 @@
 
 use crate::scene::{Scene, t_s};
 use nalgebra::{Matrix3, Vector3};
-use preint::{ImuBias, ImuNoise, ImuSample};
+use preint::{ImuBias, ImuNoise, ImuSample, SensorPose};
 use preint_io::{GroundTruthState, IoError};
 use rand::SeedableRng;
 use rand::rngs::ChaCha12Rng;
@@ -99,6 +99,11 @@ pub struct SimConfig {
     pub acc_scale: Matrix3<f64>,
     /// Gyroscope scale-factor/misalignment matrix `S_g` (identity = ideal).
     pub gyro_scale: Matrix3<f64>,
+    /// Pose of the IMU in the body frame (`None`: the IMU is the body). The scene moves the
+    /// body; the IMU reads the rate and specific force of its own point and axes
+    /// ([`SceneState::sensor_sample`](crate::SceneState::sensor_sample)); the ground truth
+    /// stays the body's.
+    pub body_p_sensor: Option<SensorPose>,
 }
 
 impl Default for SimConfig {
@@ -110,6 +115,7 @@ impl Default for SimConfig {
             bias_random_walk: true,
             acc_scale: Matrix3::identity(),
             gyro_scale: Matrix3::identity(),
+            body_p_sensor: None,
         }
     }
 }
@@ -152,6 +158,13 @@ impl SimConfig {
         }
         if !finite(self.acc_scale.as_slice()) || !finite(self.gyro_scale.as_slice()) {
             return Err(SimError::Config("scale matrix is not finite".into()));
+        }
+        if let Some(pose) = &self.body_p_sensor
+            && !pose.is_valid()
+        {
+            return Err(SimError::Config(
+                "body_p_sensor: non-finite entry or rotation not orthonormal".into(),
+            ));
         }
         Ok(())
     }
@@ -265,7 +278,10 @@ pub fn simulate(
             bias.acc += w_ba * sba;
         }
         let st = scene.state(t_s(t_ns));
-        let ideal = st.ideal_sample(t_ns, &config.gravity);
+        let ideal = match &config.body_p_sensor {
+            Some(pose) => st.sensor_sample(t_ns, &config.gravity, pose),
+            None => st.ideal_sample(t_ns, &config.gravity),
+        };
         let acc = config.acc_scale * ideal.acc + bias.acc + n_a * sa;
         let gyro = config.gyro_scale * ideal.gyro + bias.gyro + n_g * sg;
         samples.push(ImuSample { t_ns, gyro, acc });

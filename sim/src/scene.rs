@@ -42,6 +42,26 @@ impl SceneState {
     }
 }
 
+impl SceneState {
+    /// What an ideal IMU mounted at `pose` in the body (sensor → body rotation `R`, sensor
+    /// origin `r` \[m\] in body coordinates) reads in this state at `t_ns`: the body rate in
+    /// sensor axes, `ω_s = Rᵀ ω_b`, and the specific force of the sensor's point,
+    /// `f_s = Rᵀ (R_wbᵀ(a − g) + ω̇_b × r + ω_b × (ω_b × r))` (rigid-body kinematics; `a` is the
+    /// body origin's acceleration).
+    pub fn sensor_sample(
+        &self,
+        t_ns: i64,
+        gravity: &Vector3<f64>,
+        pose: &preint::SensorPose,
+    ) -> ImuSample {
+        let body = self.ideal_sample(t_ns, gravity);
+        let (w, r) = (self.omega_b, pose.translation);
+        let f = body.acc + self.omega_dot_b.cross(&r) + w.cross(&w.cross(&r));
+        let rt = pose.rotation.inverse();
+        ImuSample::new(t_ns, rt.act(&w), rt.act(&f))
+    }
+}
+
 /// A trajectory with analytic derivatives, defined for every `t_s` (seconds from the scene
 /// start, which is timestamp 0 ns; see [`t_s`]).
 pub trait Scene {

@@ -68,6 +68,9 @@ pub(crate) struct Core<S: IntervalScheme> {
     ctx_before: usize,
     ctx_after: Option<Node>,
     first_t_ns: i64,
+    /// The first window node's rate [rad/s] (bias-corrected) and the first interval \[s\].
+    first_w: Vector3<f64>,
+    first_h: f64,
     origin: Origin,
     /// Window intervals integrated.
     done: usize,
@@ -186,6 +189,8 @@ impl<S: IntervalScheme> Core<S> {
             ctx_before: usize::from(ctx_before.is_some()),
             ctx_after,
             first_t_ns: 0,
+            first_w: Vector3::zeros(),
+            first_h: 0.0,
             origin: Origin::default(),
             done: 0,
             d: Deltas::default(),
@@ -211,14 +216,26 @@ impl<S: IntervalScheme> Core<S> {
         &self.ring[(j + self.ctx_before) % RING]
     }
 
+    /// The bias-corrected rates [rad/s] of the first and last window samples and the first
+    /// and last intervals \[s\] (`n ≥ 2`).
+    pub(crate) fn end_rates(&self) -> (Vector3<f64>, Vector3<f64>, f64, f64) {
+        let (n, last) = (self.n, self.node(self.n - 1));
+        let h_j = span_s(self.node(n - 2).t_ns, last.t_ns);
+        (self.first_w, last.w, self.first_h, h_j)
+    }
+
     /// Adds the node of a valid sample and integrates the intervals that became ready.
     #[inline(always)]
     pub(crate) fn push(&mut self, s: &ImuSample) {
         let node = Node::corrected(s, &self.fixed.bias_hat);
         if self.n == 0 {
             self.first_t_ns = s.t_ns;
+            self.first_w = node.w;
             S::start(&mut self.carry, &node);
             self.fast.start(&node);
+        }
+        if self.n == 1 {
+            self.first_h = span_s(self.first_t_ns, s.t_ns);
         }
         self.ring[(self.n + self.ctx_before) % RING] = node;
         self.n += 1;

@@ -20,6 +20,7 @@ pub(crate) mod validation;
 pub(crate) use edges::{Side, Src, WindowSpec};
 
 use crate::error::PreintError;
+use crate::extrinsics::{EndRates, EndSource};
 use crate::measurement::PreintegratedImu;
 use crate::params::{CovShape, Level, PreintParams};
 use crate::propagation::{AnisotropicNoise, BiasWalk, IsotropicNoise};
@@ -35,6 +36,7 @@ trait Engine: std::fmt::Debug + Send + Sync {
     fn run_slice(&mut self, samples: &[ImuSample], last_t_ns: i64, gap_limit: u64) -> usize;
     fn len(&self) -> usize;
     fn measurement(&self) -> PreintegratedImu;
+    fn end_rates(&self) -> (nalgebra::Vector3<f64>, nalgebra::Vector3<f64>, f64, f64);
     fn boxed_clone(&self) -> Box<dyn Engine>;
 }
 
@@ -54,6 +56,9 @@ where
     }
     fn measurement(&self) -> PreintegratedImu {
         Core::measurement(self)
+    }
+    fn end_rates(&self) -> (nalgebra::Vector3<f64>, nalgebra::Vector3<f64>, f64, f64) {
+        Core::end_rates(self)
     }
     fn boxed_clone(&self) -> Box<dyn Engine> {
         Box::new(self.clone())
@@ -278,7 +283,10 @@ impl Preintegrator {
         if count < 2 {
             return Err(PreintError::TooFewSamples { count });
         }
-        let m = self.engine.measurement();
+        let mut m = self.engine.measurement();
+        if let Some(pose) = &self.params.body_p_sensor {
+            m = crate::extrinsics::to_body(&m, pose, &self.end_rates(m.t_i_ns));
+        }
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
         let deltas = finite(m.delta_r.matrix().as_slice())
             && finite(m.delta_v.as_slice())
@@ -293,6 +301,44 @@ impl Preintegrator {
             return Ok(m);
         };
         Err(PreintError::NonFiniteResult { what })
+    }
+
+    /// The end rates of the window and the stream samples each is made of (for the lever arm):
+    /// the interpolation weights of a boundary sample, or the first or last pushed sample.
+    fn end_rates(&self, t_i_ns: i64) -> EndRates {
+        let (w_i, w_j, h_i, h_j) = self.engine.end_rates();
+        let side = |sd: &Side, t_ns: i64, (left_s, right_s): (f64, f64)| {
+            let mut src = [EndSource::default(); 4];
+            if sd.nw == 0 {
+                src[0] = EndSource {
+                    t_ns,
+                    w: 1.0,
+                    left_s,
+                    right_s,
+                };
+                return (src, 1);
+            }
+            for (i, x) in src.iter_mut().enumerate().take(sd.nw) {
+                let s = &sd.src[i];
+                *x = EndSource {
+                    t_ns: s.t_ns,
+                    w: sd.w[i],
+                    left_s: s.left_s,
+                    right_s: s.right_s,
+                };
+            }
+            (src, sd.nw)
+        };
+        let (src_i, n_i) = side(&self.spec.start, t_i_ns, (0.0, h_i));
+        let (src_j, n_j) = side(&self.spec.end, self.last_t_ns, (h_j, 0.0));
+        EndRates {
+            w_i,
+            w_j,
+            src_i,
+            n_i,
+            src_j,
+            n_j,
+        }
     }
 
     /// The measurement for a new bias estimate `bias`: if `‖δb_g‖ ≤ reintegrate_gyro_threshold`

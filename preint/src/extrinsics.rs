@@ -1,0 +1,299 @@
+//! An IMU that is not at the body origin: the sensor pose in the body frame and the exact map
+//! from the sensor's preintegrated deltas to the body's.
+//!
+//! # Model
+//!
+//! The IMU (frame s) is rigidly mounted at `body_P_sensor = (R, r)`: `R = R_bs` rotates sensor
+//! vectors into the body frame and `r` \[m\] is the sensor origin in body coordinates. Biases and
+//! noise are the sensor's, in the sensor frame (as in GTSAM's `body_P_sensor`). The sensor reads
+//! the body rate `ω_s = Rᵀ ω_b` and the specific force of the point it sits on,
+//!
+//! ```text
+//! f_s = Rᵀ (f_b + ω̇_b × r + ω_b × (ω_b × r)),
+//! ```
+//!
+//! where `f_b` is the specific force at the body origin: the lever arm adds the tangential
+//! (`ω̇ × r`) and centripetal (`ω × (ω × r)`) accelerations of the sensor's point.
+//!
+//! # The body deltas from the sensor's, exactly
+//!
+//! Preintegrating the sensor's samples gives the deltas of the sensor's point in frame s at
+//! keyframe i (`ΔR_s`, `Δv_s`, `Δp_s`, Forster et al. 2017, eq. 33). Writing the sensor's
+//! position and velocity through the body's (`p_s = p_b + R_wb r`, `v_s = v_b + R_wb (ω_b × r)`)
+//! gives the body's deltas without approximation:
+//!
+//! ```text
+//! ΔR = R ΔR_s Rᵀ
+//! Δv = R Δv_s + ω_i × r − ΔR (ω_j × r)
+//! Δp = R Δp_s + Δt (ω_i × r) + r − ΔR r
+//! ```
+//!
+//! with `ω_i = R ω_s,i`, `ω_j = R ω_s,j` the bias-corrected body rates at the window's first
+//! and last sample. This is the lever-arm correction of the specific force,
+//! `f_b = R f_s − ω̇ × r − ω × (ω × r)`, integrated in closed form: by parts,
+//! `∫ ΔR (ω̇ × r) dt = ΔR_j (ω_j × r) − ω_i × r − ∫ ΔR (ω × (ω × r)) dt`, so both terms together
+//! integrate to the end-point values above. No estimate of `ω̇` is needed and no term is
+//! dropped: the body deltas carry exactly the integration error the scheme makes on the
+//! sensor's own samples, whatever the scheme. (A per-sample correction needs `ω̇` from
+//! differences of neighbouring samples and carries that estimate's error; subtracting only the
+//! centripetal term, as GTSAM's `correctMeasurementsBySensorPose` does, leaves out
+//! `∫ ΔR (ω̇ × r) dt` entirely.)
+//!
+//! # Linearisation (chart of [`crate::measurement`], order [δφ, δv, δp])
+//!
+//! With `ΔR_s = ΔR°_s Exp(δφ_s)`, the body error is `e = A e_s + B_i δω_i + B_j δω_j` for the
+//! sensor error `e_s` and perturbations `δω = R δω_s` of the end rates:
+//!
+//! ```text
+//! A = [[R, 0, 0], [ΔR [ω_j × r]× R, R, 0], [ΔR [r]× R, 0, R]]
+//! B_i = [0; −[r]×; −Δt [r]×],   B_j = [0; ΔR [r]×; 0]
+//! ```
+//!
+//! The end rates are the bias-corrected readings of the first and last sample (for a window
+//! whose boundary sample is interpolated, the same combination of stream samples), so their
+//! noise is that of those samples, which also entered `e_s`: the covariance uses the gains the
+//! measurement keeps for its edge samples ([`crate::EdgeNoise`]) and is the exact first-order
+//! covariance of the body deltas, gyroscope noise moved into the velocity and position rows
+//! included. Bias Jacobians: `J = A J_s − (B_i + B_j) R` on the gyro columns (every sample sees
+//! `−δb_g`), `A J_s` on the accelerometer columns. Combined covariance: the gyro bias at the
+//! window's end, `b_g,i + δb_g`, is what `ω_j` should have been corrected with, so
+//! `e = A e_s + B_j R δb_g + …` and `[e; δb]` maps by `[[A, B_j R S_g], [0, I]]`
+//! (`S_g` selects `δb_g`).
+
+use crate::measurement::{BiasJacobians, Cov9, Cov15, EdgeSource, PreintegratedImu};
+use crate::params::Level;
+use nalgebra::{Matrix3, SMatrix, Vector3};
+use preint_lie::{SO3, hat};
+
+/// Pose of the IMU in the body frame, GTSAM's `body_P_sensor`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SensorPose {
+    /// `R_bs`: rotates sensor vectors into the body frame (`x_b = R_bs x_s`).
+    pub rotation: SO3,
+    /// The sensor origin in body coordinates \[m\] (the lever arm).
+    pub translation: Vector3<f64>,
+}
+
+impl SensorPose {
+    /// The pose from `R_bs` (sensor → body) and the sensor origin in the body frame \[m\].
+    pub fn new(rotation: SO3, translation: Vector3<f64>) -> Self {
+        Self {
+            rotation,
+            translation,
+        }
+    }
+
+    /// From `x, y, z` \[m\] and a unit quaternion `qw, qx, qy, qz` rotating sensor vectors into
+    /// the body frame; `None` if a value is not finite or the quaternion's norm is not within
+    /// 1e-6 of 1 (it is then normalised).
+    pub fn from_xyz_wxyz(v: [f64; 7]) -> Option<Self> {
+        if !v.iter().all(|x| x.is_finite()) {
+            return None;
+        }
+        let q = nalgebra::Quaternion::new(v[3], v[4], v[5], v[6]);
+        if (q.norm() - 1.0).abs() > 1e-6 {
+            return None;
+        }
+        let u = nalgebra::UnitQuaternion::from_quaternion(q);
+        let rotation = SO3::from_matrix_unchecked(*u.to_rotation_matrix().matrix());
+        Some(Self::new(rotation, Vector3::new(v[0], v[1], v[2])))
+    }
+
+    /// True if every entry is finite and the rotation is orthonormal to 1e-9.
+    pub fn is_valid(&self) -> bool {
+        let m = self.rotation.matrix();
+        m.iter().all(|x| x.is_finite())
+            && self.translation.iter().all(|x| x.is_finite())
+            && (m.transpose() * m - Matrix3::identity()).amax() < 1e-9
+            && m.determinant() > 0.0
+    }
+}
+
+/// A stream sample an end rate is made of: timestamp \[ns\], weight, and its intervals to its
+/// stream neighbours \[s\] (0 if unknown).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct EndSource {
+    pub t_ns: i64,
+    pub w: f64,
+    pub left_s: f64,
+    pub right_s: f64,
+}
+
+/// The end rates of a window: bias-corrected sensor rates [rad/s] at the first and last
+/// sample, and the stream samples each is made of.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct EndRates {
+    pub w_i: Vector3<f64>,
+    pub w_j: Vector3<f64>,
+    pub src_i: [EndSource; 4],
+    pub n_i: usize,
+    pub src_j: [EndSource; 4],
+    pub n_j: usize,
+}
+
+impl EndRates {
+    /// Weight of stream sample `t_ns` in the rate at the start (`start = true`) or end.
+    fn weight(&self, t_ns: i64, start: bool) -> f64 {
+        self.sources(start)
+            .iter()
+            .filter(|s| s.t_ns == t_ns)
+            .map(|s| s.w)
+            .sum()
+    }
+
+    fn sources(&self, start: bool) -> &[EndSource] {
+        if start {
+            &self.src_i[..self.n_i]
+        } else {
+            &self.src_j[..self.n_j]
+        }
+    }
+}
+
+type M9 = SMatrix<f64, 9, 9>;
+type M93 = SMatrix<f64, 9, 3>;
+
+/// `A`, `B_i`, `B_j` of the module docs for a measurement `m` of the sensor.
+fn linearisation(m: &PreintegratedImu, pose: &SensorPose, ends: &EndRates) -> (M9, M93, M93) {
+    let (rm, r) = (*pose.rotation.matrix(), pose.translation);
+    let dr = pose
+        .rotation
+        .compose(&m.delta_r)
+        .compose(&pose.rotation.inverse());
+    let drm = *dr.matrix();
+    let wj = rm * ends.w_j;
+    let mut a = M9::zeros();
+    for k in 0..3 {
+        a.fixed_view_mut::<3, 3>(3 * k, 3 * k).copy_from(&rm);
+    }
+    a.fixed_view_mut::<3, 3>(3, 0)
+        .copy_from(&(drm * hat(&wj.cross(&r)) * rm));
+    a.fixed_view_mut::<3, 3>(6, 0)
+        .copy_from(&(drm * hat(&r) * rm));
+    let mut bi = M93::zeros();
+    bi.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-hat(&r)));
+    bi.fixed_view_mut::<3, 3>(6, 0)
+        .copy_from(&(-hat(&r) * m.delta_t));
+    let mut bj = M93::zeros();
+    bj.fixed_view_mut::<3, 3>(3, 0).copy_from(&(drm * hat(&r)));
+    (a, bi, bj)
+}
+
+/// The body's measurement from the sensor's measurement `m` (module docs): deltas, covariances,
+/// bias Jacobians and edge sources. `m.level` decides what is transformed.
+pub(crate) fn to_body(
+    m: &PreintegratedImu,
+    pose: &SensorPose,
+    ends: &EndRates,
+) -> PreintegratedImu {
+    let (rm, r) = (*pose.rotation.matrix(), pose.translation);
+    let dr = pose
+        .rotation
+        .compose(&m.delta_r)
+        .compose(&pose.rotation.inverse());
+    let (wi, wj) = (rm * ends.w_i, rm * ends.w_j);
+    let mut out = m.clone();
+    out.delta_r = dr;
+    out.delta_v = rm * m.delta_v + wi.cross(&r) - dr.act(&wj.cross(&r));
+    out.delta_p = rm * m.delta_p + wi.cross(&r) * m.delta_t + r - dr.act(&r);
+    if m.level == Level::Deltas {
+        return out;
+    }
+    let (a, bi, bj) = linearisation(m, pose, ends);
+    // Bias Jacobians: gyro columns also through the end rates.
+    let js = jac_matrix(&m.jac);
+    let mut jb = a * js;
+    let gyro_extra = -(bi + bj) * rm;
+    jb.fixed_view_mut::<9, 3>(0, 0)
+        .zip_apply(&gyro_extra, |x, y| *x += y);
+    out.jac = jac_of(&jb);
+    // Edge sources: their gains through A and the end rates; the covariance swaps each
+    // source's share `(A G) Q (A G)ᵀ` for `G' Q G'ᵀ`.
+    let mut cov = a * m.cov * a.transpose();
+    let mut fixed = [EdgeSource::default(); crate::measurement::MAX_EDGE_SOURCES];
+    let mut n = 0;
+    // End-rate samples that no interval reads (Euler's last sample) enter through the end
+    // rates alone: sources with a zero integration gain.
+    let mut sources = [EdgeSource::default(); crate::measurement::MAX_EDGE_SOURCES + 8];
+    let mut ns = 0;
+    for s in m.edge_noise.sources() {
+        sources[ns] = *s;
+        ns += 1;
+    }
+    for (start, e) in [(true, ends.sources(true)), (false, ends.sources(false))] {
+        for src in e {
+            if sources[..ns].iter().all(|s| s.t_ns != src.t_ns) && ns < sources.len() {
+                sources[ns] = EdgeSource {
+                    t_ns: src.t_ns,
+                    gain: SMatrix::zeros(),
+                    left_s: src.left_s,
+                    right_s: src.right_s,
+                    start,
+                    end: !start,
+                };
+                ns += 1;
+            }
+        }
+    }
+    for s in &sources[..ns] {
+        let q = m.edge_noise.sample_cov(s.left_s, s.right_s);
+        let ag = a * s.gain;
+        let mut g = ag;
+        let ends_gain = (bi * ends.weight(s.t_ns, true) + bj * ends.weight(s.t_ns, false)) * rm;
+        g.fixed_view_mut::<9, 3>(0, 0)
+            .zip_apply(&ends_gain, |x, y| *x += y);
+        cov += g * q * g.transpose() - ag * q * ag.transpose();
+        if n < fixed.len() {
+            fixed[n] = EdgeSource { gain: g, ..*s };
+            n += 1;
+        }
+    }
+    let e = &m.edge_noise;
+    let mut noise = crate::EdgeNoise::new(e.gyro_cov, e.acc_cov, e.cell_rule);
+    for s in &fixed[..n] {
+        noise.push(*s);
+    }
+    out.edge_noise = noise;
+    let cov = (cov + cov.transpose()) * 0.5;
+    out.cov = cov;
+    // Combined covariance: [e; δb] ↦ [[A, B_j R S_g], [0, I]] [e_s; δb], plus the end-rate
+    // noise already in `cov` minus `A cov_s Aᵀ`.
+    let mut f = Cov15::identity();
+    f.fixed_view_mut::<9, 9>(0, 0).copy_from(&a);
+    f.fixed_view_mut::<9, 3>(0, 9).copy_from(&(bj * rm));
+    let mut c15 = f * m.cov15 * f.transpose();
+    let white_extra: Cov9 = cov - a * m.cov * a.transpose();
+    c15.fixed_view_mut::<9, 9>(0, 0)
+        .zip_apply(&white_extra, |x, y| *x += y);
+    if m.level == Level::Covariance {
+        // No random walk in the deltas at this level: keep `cov15 = diag(cov, Σ_bb)`.
+        c15.fixed_view_mut::<9, 6>(0, 9).fill(0.0);
+        c15.fixed_view_mut::<6, 9>(9, 0).fill(0.0);
+        c15.fixed_view_mut::<9, 9>(0, 0).copy_from(&cov);
+    }
+    out.cov15 = (c15 + c15.transpose()) * 0.5;
+    out
+}
+
+/// The bias Jacobians as one 9×6 matrix (rows [δφ, δv, δp], columns [b_g, b_a]).
+fn jac_matrix(j: &BiasJacobians) -> SMatrix<f64, 9, 6> {
+    let mut m = SMatrix::<f64, 9, 6>::zeros();
+    m.fixed_view_mut::<3, 3>(0, 0).copy_from(&j.d_r_d_bg);
+    m.fixed_view_mut::<3, 3>(3, 0).copy_from(&j.d_v_d_bg);
+    m.fixed_view_mut::<3, 3>(3, 3).copy_from(&j.d_v_d_ba);
+    m.fixed_view_mut::<3, 3>(6, 0).copy_from(&j.d_p_d_bg);
+    m.fixed_view_mut::<3, 3>(6, 3).copy_from(&j.d_p_d_ba);
+    m
+}
+
+/// The inverse of [`jac_matrix`] (the rotation rows' accelerometer block is zero in both).
+fn jac_of(m: &SMatrix<f64, 9, 6>) -> BiasJacobians {
+    let b = |i, j| -> Matrix3<f64> { m.fixed_view::<3, 3>(i, j).into_owned() };
+    BiasJacobians {
+        d_r_d_bg: b(0, 0),
+        d_v_d_bg: b(3, 0),
+        d_v_d_ba: b(3, 3),
+        d_p_d_bg: b(6, 0),
+        d_p_d_ba: b(6, 3),
+    }
+}
