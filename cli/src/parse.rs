@@ -25,6 +25,27 @@ pub fn vec3(s: &str) -> Result<Vector3<f64>, String> {
     Ok(Vector3::new(v[0], v[1], v[2]))
 }
 
+/// Parses `x,y,z,qw,qx,qy,qz` (GTSAM's `body_P_sensor`: the sensor origin in the body frame
+/// \[m\] and the unit quaternion rotating sensor vectors into the body frame).
+pub fn sensor_pose(s: &str) -> Result<preint::SensorPose, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != 7 {
+        return Err(format!(
+            "expected seven comma-separated numbers x,y,z,qw,qx,qy,qz (metres; quaternion \
+             rotating sensor vectors into the body frame), got `{s}`"
+        ));
+    }
+    let mut v = [0.0; 7];
+    for (i, p) in parts.iter().enumerate() {
+        v[i] = p
+            .parse()
+            .map_err(|_| format!("`{p}` is not a number (in `{s}`)"))?;
+    }
+    preint::SensorPose::from_xyz_wxyz(v).ok_or_else(|| {
+        format!("`{s}`: values must be finite and the quaternion of unit norm (±1e-3)")
+    })
+}
+
 /// Parses one positive finite number (e.g. a rate in Hz).
 pub fn positive(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {

@@ -19,6 +19,11 @@ pub struct PreintArgs {
     /// Gravity magnitude G (m/s^2); gravity is (0, 0, -G).
     #[arg(long, default_value_t = 9.81)]
     pub gravity: f64,
+    /// Pose of the IMU in the body frame, x,y,z,qw,qx,qy,qz: sensor origin in body coordinates
+    /// (m) and the unit quaternion rotating sensor vectors into the body frame. The output is
+    /// then the body's motion (lever arm and rotation removed exactly); biases stay the IMU's.
+    #[arg(long, value_parser = crate::parse::sensor_pose, allow_hyphen_values = true)]
+    pub body_p_sensor: Option<preint::SensorPose>,
 }
 
 impl PreintArgs {
@@ -31,6 +36,10 @@ impl PreintArgs {
             .with_scheme(self.scheme.into())
             .with_level(level)
             .with_gravity(Vector3::new(0.0, 0.0, -self.gravity));
+        let params = PreintParams {
+            body_p_sensor: self.body_p_sensor,
+            ..params
+        };
         Ok((noise, params))
     }
 

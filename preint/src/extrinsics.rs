@@ -85,13 +85,13 @@ impl SensorPose {
 
     /// From `x, y, z` \[m\] and a unit quaternion `qw, qx, qy, qz` rotating sensor vectors into
     /// the body frame; `None` if a value is not finite or the quaternion's norm is not within
-    /// 1e-6 of 1 (it is then normalised).
+    /// 1e-3 of 1 (a quaternion printed with a few decimals); it is then normalised.
     pub fn from_xyz_wxyz(v: [f64; 7]) -> Option<Self> {
         if !v.iter().all(|x| x.is_finite()) {
             return None;
         }
         let q = nalgebra::Quaternion::new(v[3], v[4], v[5], v[6]);
-        if (q.norm() - 1.0).abs() > 1e-6 {
+        if (q.norm() - 1.0).abs() > 1e-3 {
             return None;
         }
         let u = nalgebra::UnitQuaternion::from_quaternion(q);

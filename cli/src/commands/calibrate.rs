@@ -23,7 +23,7 @@ use preint::{ImuNoise, ImuSample, PreintParams, Scheme};
 use preint_calib::bias::{
     KnownPose, KnownPoseCalibration, KnownPoseOptions, MultiPoseCalibration, MultiPoseOptions,
     StaticCalibration, StaticOptions, StillInterval, StillOptions, calibrate_known_poses,
-    calibrate_multi_pose, calibrate_static, detect_still_intervals,
+    calibrate_multi_pose, calibrate_static, detect_still_intervals, roll_pitch_of_up,
 };
 use preint_io::read_euroc_groundtruth;
 use serde_json::{Value, json};
@@ -57,6 +57,12 @@ pub struct Args {
     /// Known-pose problem: standard deviation of the given positions in m (0: exact).
     #[arg(long, default_value_t = 0.0)]
     pub pose_pos_std: f64,
+    /// Pose of the IMU in the body frame, x,y,z,qw,qx,qy,qz (m; quaternion rotating sensor
+    /// vectors into the body frame). Known-pose problem: the poses are the body's and the
+    /// preintegration removes the lever arm. Static problem: roll and pitch are also given for
+    /// the body. Biases are always the IMU's, in its own axes.
+    #[arg(long, value_parser = crate::parse::sensor_pose, allow_hyphen_values = true)]
+    pub body_p_sensor: Option<preint::SensorPose>,
 }
 
 /// The problem solved and its estimates.
@@ -83,6 +89,9 @@ pub enum Calibration {
         used: StillInterval,
         /// Total still time found \[s\] and duration of the recording \[s\].
         still_s: (f64, f64),
+        /// With `--body-p-sensor`: the body's roll and pitch \[rad\] (the IMU's "up" rotated
+        /// into the body frame).
+        body_roll_pitch: Option<(f64, f64)>,
     },
 }
 
@@ -143,9 +152,12 @@ fn known_poses(
             pfile.display()
         )));
     }
-    let params = PreintParams::from_noise(noise)
-        .with_scheme(Scheme::Midpoint)
-        .with_gravity(Vector3::new(0.0, 0.0, -args.gravity));
+    let params = PreintParams {
+        body_p_sensor: args.body_p_sensor,
+        ..PreintParams::from_noise(noise)
+            .with_scheme(Scheme::Midpoint)
+            .with_gravity(Vector3::new(0.0, 0.0, -args.gravity))
+    };
     let opts = KnownPoseOptions {
         pose_rot_std: args.pose_rot_std,
         pose_pos_std: args.pose_pos_std,
@@ -200,10 +212,15 @@ pub fn compute(args: &Args) -> Result<Calibration, CliError> {
     let c = calibrate_static(&samples[used.start..used.end], &noise, &opts).map_err(&fail)?;
     let total_s = (samples[n - 1].t_ns - samples[0].t_ns) as f64 * 1e-9;
     let still_s = still.iter().map(|iv| iv.duration_s()).sum();
+    let body_roll_pitch = args.body_p_sensor.map(|pose| {
+        let (roll, pitch, _) = roll_pitch_of_up(&pose.rotation.act(&c.up_body));
+        (roll, pitch)
+    });
     Ok(Calibration::Static {
         c: Box::new(c),
         used,
         still_s: (still_s, total_s),
+        body_roll_pitch,
     })
 }
 
@@ -222,12 +239,18 @@ pub fn to_json(cal: &Calibration) -> Value {
             "units": {"gyro_bias": "rad/s", "acc_bias": "m/s^2", "gravity": "m/s^2"},
         }),
         Calibration::MultiPose(c) => multi_pose_json(c),
-        Calibration::Static { c, used, still_s } => json!({
+        Calibration::Static {
+            c,
+            used,
+            still_s,
+            body_roll_pitch,
+        } => json!({
             "model": "static-single-attitude",
             "interval_ns": [used.t_start_ns, used.t_end_ns], "still_s": still_s.0, "recording_s": still_s.1,
             "gyro_bias": list(&c.gyro_bias), "gyro_bias_std": list(&c.gyro_bias_std),
             "acc_bias": opt_list(c.acc_bias), "acc_bias_std": opt_list(c.acc_bias_std), "acc_bias_note": c.acc_bias_note,
             "roll": c.roll, "pitch": c.pitch, "roll_std": c.roll_std, "pitch_std": c.pitch_std,
+            "body_roll": body_roll_pitch.map(|b| b.0), "body_pitch": body_roll_pitch.map(|b| b.1),
             "unobservable": c.unobservable, "measured_gyro_density": list(&c.measured_gyro_density),
             "measured_acc_density": list(&c.measured_acc_density),
             "iterations": c.iterations, "cost": 0.5 * c.chi2, "chi2": c.chi2, "dof": c.dof,
@@ -297,10 +320,15 @@ pub fn to_text(cal: &Calibration) -> String {
             gyro_line(&c.gyro_bias, &c.gyro_bias_std),
             acc_line(&c.acc_bias, &c.acc_bias_std)
         ),
-        Calibration::Static { c, used, still_s } => format!(
+        Calibration::Static {
+            c,
+            used,
+            still_s,
+            body_roll_pitch,
+        } => format!(
             "static calibration (one attitude) on the longest still interval, {:.1} s from {} to \
              {} ns ({:.1} s still of {:.1} s recorded):\n{}  roll {:.4}° ± {:.1e}°, pitch \
-             {:.4}° ± {:.1e}°\n  b_a: not estimated ({})\n",
+             {:.4}° ± {:.1e}° (IMU axes){}\n  b_a: not estimated ({})\n",
             c.duration_s,
             used.t_start_ns,
             used.t_end_ns,
@@ -311,6 +339,11 @@ pub fn to_text(cal: &Calibration) -> String {
             c.roll_std.to_degrees(),
             c.pitch.to_degrees(),
             c.pitch_std.to_degrees(),
+            body_roll_pitch.map_or(String::new(), |(r, p)| format!(
+                "; body roll {:.4}°, pitch {:.4}°",
+                r.to_degrees(),
+                p.to_degrees()
+            )),
             c.acc_bias_note
         ),
     }

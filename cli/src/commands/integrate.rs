@@ -58,6 +58,8 @@ pub struct Integration {
     pub bias: ImuBias,
     /// The preintegrated measurement (with the 15×15 covariance).
     pub pim: PreintegratedImu,
+    /// The IMU's pose in the body (`--body-p-sensor`): the deltas are then the body's.
+    pub body_p_sensor: Option<preint::SensorPose>,
 }
 
 /// Reads the file once and preintegrates `[--from, --to]` at [`Level::Combined`]: the whole
@@ -70,6 +72,7 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
         args.bias_acc.unwrap_or_default(),
     );
     let scheme = params.scheme;
+    let body_p_sensor = params.body_p_sensor;
     let fail = |e| CliError::failed_in(args.input.path(), e);
     let window = |params: &PreintParams, w: stream::StreamWindow| {
         let pim = preintegrate(params, &bias, &w.samples, w.t_i_ns, w.t_j_ns)
@@ -101,6 +104,7 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
         noise_source: args.preint.noise_source(),
         bias,
         pim,
+        body_p_sensor,
     })
 }
 
@@ -187,6 +191,13 @@ pub fn to_json(r: &Integration) -> Value {
         "covariance_notes": covariance_notes(),
         "bias_hat": {"gyro": list(&r.bias.gyro), "acc": list(&r.bias.acc)},
         "gravity": list(&m.gravity),
+        "body_p_sensor": r.body_p_sensor.map(|p| json!({
+            "translation": list(&p.translation),
+            "rotation": rows(p.rotation.matrix()),
+            "note": "IMU pose in the body: translation = IMU origin in body coordinates [m], \
+                rotation = sensor-to-body; delta_R, delta_v, delta_p and their covariances are \
+                the body's, biases the IMU's (its own axes)",
+        })),
         "noise": noise,
         "units": {"delta_t": "s", "delta_v": "m/s (body frame i)", "delta_p": "m (body frame i)",
                   "covariance": "rad^2, (m/s)^2, m^2 blocks", "jacobians": "d(delta)/d(bias), bias order [b_g, b_a]"},
@@ -229,6 +240,18 @@ pub fn to_text(r: &Integration) -> String {
         "Δp = [{:.9}, {:.9}, {:.9}] m (body frame i, gravity excluded)",
         m.delta_p.x, m.delta_p.y, m.delta_p.z
     );
+    if let Some(pose) = &r.body_p_sensor {
+        let t = pose.translation;
+        let _ = writeln!(
+            h,
+            "body frame: IMU at [{:.4}, {:.4}, {:.4}] m in the body, rotated by {:.4}° (the deltas \
+             are the body's, lever arm removed exactly; biases are the IMU's)",
+            t.x,
+            t.y,
+            t.z,
+            pose.rotation.log().norm().to_degrees()
+        );
+    }
     let sd: Vec<f64> = (0..9).map(|i| m.cov[(i, i)].sqrt()).collect();
     let _ = writeln!(
         h,

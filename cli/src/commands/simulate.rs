@@ -28,6 +28,12 @@ pub struct Args {
     /// Output directory (created if missing).
     #[arg(long)]
     pub out: PathBuf,
+    /// Mount the IMU at this pose in the body, x,y,z,qw,qx,qy,qz: sensor origin in body
+    /// coordinates (m) and the unit quaternion rotating sensor vectors into the body frame.
+    /// The samples are the IMU's (rate in its axes, specific force of its point); the ground
+    /// truth stays the body's.
+    #[arg(long, value_parser = crate::parse::sensor_pose, allow_hyphen_values = true)]
+    pub body_p_sensor: Option<preint::SensorPose>,
 }
 
 /// What `simulate` wrote.
@@ -54,6 +60,10 @@ pub fn compute(args: &Args) -> Result<Simulation, CliError> {
     let cfg = match noise_model {
         Some(n) => preint_sim::SimConfig::with_noise(n),
         None => preint_sim::SimConfig::noise_free(),
+    };
+    let cfg = preint_sim::SimConfig {
+        body_p_sensor: args.body_p_sensor,
+        ..cfg
     };
     let pb = crate::progress::bar(2, "simulate");
     if let Some(pb) = &pb {

@@ -1,0 +1,111 @@
+//! `--body-p-sensor` end to end: `simulate` mounts the IMU at a pose in the body, `integrate`
+//! gives the body's deltas (checked against the body's ground truth written by `simulate`),
+//! `calibrate` reports the body's roll and pitch, and malformed poses are refused.
+
+mod common;
+
+use common::{json, nums, run, simulate, tmp};
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+
+/// 0.3 m lever arm along (1, −2, 2)/3; rotation 60° about (1, 1, 1)/√3 (sensor → body).
+const POSE: &str = "0.1,-0.2,0.2,0.8660254037844387,0.28867513459481287,0.28867513459481287,0.28867513459481287";
+
+/// The body's (t_ns, p, R_wb, v) rows of a `groundtruth.csv` written by `simulate`.
+fn truth(path: &std::path::Path) -> Vec<(i64, Vector3<f64>, UnitQuaternion<f64>, Vector3<f64>)> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .map(|l| {
+            let f: Vec<f64> = l.split(',').skip(1).map(|x| x.parse().unwrap()).collect();
+            let t: i64 = l.split(',').next().unwrap().parse().unwrap();
+            let q = UnitQuaternion::from_quaternion(Quaternion::new(f[3], f[4], f[5], f[6]));
+            (t, Vector3::new(f[0], f[1], f[2]), q, Vector3::new(f[7], f[8], f[9]))
+        })
+        .collect()
+}
+
+/// The body's exact Δv [m/s] over `[t_i, t_j]` from the ground truth (gravity (0, 0, −9.81)).
+fn true_delta_v(gt: &[(i64, Vector3<f64>, UnitQuaternion<f64>, Vector3<f64>)], t_i: i64, t_j: i64) -> Vector3<f64> {
+    let at = |t: i64| gt.iter().find(|r| r.0 == t).unwrap();
+    let (i, j) = (at(t_i), at(t_j));
+    let dt = (t_j - t_i) as f64 * 1e-9;
+    i.2.inverse() * (j.3 - i.3 - Vector3::new(0.0, 0.0, -9.81) * dt)
+}
+
+#[test]
+fn integrate_gives_the_body_deltas_of_an_imu_mounted_away_from_the_body_origin() {
+    let dir = tmp("extrinsics-integrate");
+    simulate(
+        &dir,
+        &["--scene", "aggressive", "--noise", "none", "--duration", "3", "--body-p-sensor", POSE],
+    );
+    let imu = dir.join("imu.csv");
+    let gt = truth(&dir.join("groundtruth.csv"));
+    let window = |extra: &[&str]| {
+        let mut a = vec![
+            "integrate", "--imu", imu.to_str().unwrap(), "--scheme", "hermite4",
+            "--from", "1000000000", "--to", "2000000000",
+        ];
+        a.extend_from_slice(extra);
+        json(&a)
+    };
+    let truth_dv = true_delta_v(&gt, 1_000_000_000, 2_000_000_000);
+    let err = |out: &serde_json::Value| {
+        let v = nums(&out["delta_v"]);
+        (Vector3::new(v[0], v[1], v[2]) - truth_dv).norm()
+    };
+    let body = window(&["--body-p-sensor", POSE]);
+    let as_is = window(&[]);
+    println!("Δv error: with --body-p-sensor {:.2e} m/s, without {:.2e}", err(&body), err(&as_is));
+    assert!(err(&body) < 1e-4, "{}", err(&body));
+    assert!(err(&as_is) > 0.1, "{}", err(&as_is));
+    assert_eq!(nums(&body["body_p_sensor"]["translation"]), vec![0.1, -0.2, 0.2]);
+    assert!(as_is["body_p_sensor"].is_null());
+    // The human output says which frame the deltas are in.
+    let o = run(&[
+        "integrate", "--imu", imu.to_str().unwrap(), "--from", "1000000000", "--to",
+        "2000000000", "--body-p-sensor", POSE,
+    ]);
+    assert!(o.status.success());
+    assert!(String::from_utf8_lossy(&o.stdout).contains("the deltas are the body's"));
+}
+
+#[test]
+fn malformed_body_p_sensor_is_refused_with_the_reason() {
+    let dir = tmp("extrinsics-bad");
+    simulate(&dir, &["--scene", "static", "--noise", "none", "--duration", "1"]);
+    let imu = dir.join("imu.csv");
+    for (bad, says) in [
+        ("0,0,0,1,0,0", "seven comma-separated numbers"),
+        ("0,0,0,2,0,0,0", "unit norm"),
+        ("0,0,nan,1,0,0,0", "finite"),
+        ("0,0,x,1,0,0,0", "is not a number"),
+    ] {
+        for cmd in ["integrate", "calibrate"] {
+            let o = run(&[cmd, "--imu", imu.to_str().unwrap(), "--body-p-sensor", bad]);
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert!(!o.status.success() && err.contains(says), "{cmd} {bad}: {err}");
+        }
+        let o = run(&["simulate", "--out", dir.to_str().unwrap(), "--body-p-sensor", bad]);
+        assert!(!o.status.success(), "simulate {bad}");
+    }
+}
+
+#[test]
+fn static_calibration_reports_the_body_roll_and_pitch() {
+    let dir = tmp("extrinsics-static");
+    simulate(
+        &dir,
+        &["--scene", "static", "--noise", "none", "--duration", "20", "--body-p-sensor", POSE],
+    );
+    let imu = dir.join("imu.csv");
+    let gt = truth(&dir.join("groundtruth.csv"));
+    let out = json(&["calibrate", "--imu", imu.to_str().unwrap(), "--body-p-sensor", POSE]);
+    let (roll, pitch, _) = gt[0].2.euler_angles();
+    let (br, bp) = (out["body_roll"].as_f64().unwrap(), out["body_pitch"].as_f64().unwrap());
+    println!("body roll {br} pitch {bp}; truth {roll} {pitch}; IMU roll {} pitch {}", out["roll"], out["pitch"]);
+    assert!((br - roll).abs() < 1e-6 && (bp - pitch).abs() < 1e-6, "{br} {bp} vs {roll} {pitch}");
+    let imu_roll = out["roll"].as_f64().unwrap();
+    assert!((imu_roll - roll).abs() > 0.1, "the IMU's own roll differs from the body's");
+}
