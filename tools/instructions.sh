@@ -6,6 +6,9 @@
 #   tools/instructions.sh                 # all nine figures
 #   tools/instructions.sh midpoint        # one scheme
 #   PUSH=1 tools/instructions.sh          # one sample at a time through `integrate`
+#   BODY=1 tools/instructions.sh          # the IMU away from the body origin (body_p_sensor)
+#   FINISH=1 tools/instructions.sh        # instructions of one `finish` (the measurement read
+#                                         # out), not per sample
 set -euo pipefail
 cd "$(dirname "$0")/.."
 command -v valgrind >/dev/null || { echo "needs valgrind (apt-get install valgrind)" >&2; exit 2; }
@@ -19,9 +22,17 @@ if [ "${PUSH:-0}" = 1 ]; then
   mode=push
   toggle='*push_all*'
 fi
+label=$mode
+per=$n
+if [ "${FINISH:-0}" = 1 ]; then
+  toggle='*Preintegrator*finish*'
+  label="$label, one finish"
+  per=1
+fi
+[ "${BODY:-0}" = 1 ] && label="$label, body_p_sensor"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-printf '%-9s %10s %12s %10s   (%s)\n' scheme deltas covariance combined "$mode"
+printf '%-9s %10s %12s %10s   (%s)\n' scheme deltas covariance combined "$label"
 for s in $schemes; do
   row=()
   for level in deltas covariance combined; do
@@ -29,7 +40,7 @@ for s in $schemes; do
       --toggle-collect="$toggle" "$bin" "$s" "$level" "$n" "$mode" \
       >/dev/null 2>"$tmp/log"
     ir=$(grep -E '^summary:|^totals:' "$tmp/out" | tail -n 1 | awk '{print $2}')
-    row+=("$((ir / n))")
+    row+=("$((ir / per))")
   done
   printf '%-9s %10s %12s %10s\n' "$s" "${row[0]}" "${row[1]}" "${row[2]}"
 done

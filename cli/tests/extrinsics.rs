@@ -8,7 +8,8 @@ use common::{json, nums, run, simulate, tmp};
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 /// 0.3 m lever arm along (1, −2, 2)/3; rotation 60° about (1, 1, 1)/√3 (sensor → body).
-const POSE: &str = "0.1,-0.2,0.2,0.8660254037844387,0.28867513459481287,0.28867513459481287,0.28867513459481287";
+const POSE: &str =
+    "0.1,-0.2,0.2,0.8660254037844387,0.28867513459481287,0.28867513459481287,0.28867513459481287";
 
 /// The body's (t_ns, p, R_wb, v) rows of a `groundtruth.csv` written by `simulate`.
 fn truth(path: &std::path::Path) -> Vec<(i64, Vector3<f64>, UnitQuaternion<f64>, Vector3<f64>)> {
@@ -20,13 +21,22 @@ fn truth(path: &std::path::Path) -> Vec<(i64, Vector3<f64>, UnitQuaternion<f64>,
             let f: Vec<f64> = l.split(',').skip(1).map(|x| x.parse().unwrap()).collect();
             let t: i64 = l.split(',').next().unwrap().parse().unwrap();
             let q = UnitQuaternion::from_quaternion(Quaternion::new(f[3], f[4], f[5], f[6]));
-            (t, Vector3::new(f[0], f[1], f[2]), q, Vector3::new(f[7], f[8], f[9]))
+            (
+                t,
+                Vector3::new(f[0], f[1], f[2]),
+                q,
+                Vector3::new(f[7], f[8], f[9]),
+            )
         })
         .collect()
 }
 
 /// The body's exact Δv [m/s] over `[t_i, t_j]` from the ground truth (gravity (0, 0, −9.81)).
-fn true_delta_v(gt: &[(i64, Vector3<f64>, UnitQuaternion<f64>, Vector3<f64>)], t_i: i64, t_j: i64) -> Vector3<f64> {
+fn true_delta_v(
+    gt: &[(i64, Vector3<f64>, UnitQuaternion<f64>, Vector3<f64>)],
+    t_i: i64,
+    t_j: i64,
+) -> Vector3<f64> {
     let at = |t: i64| gt.iter().find(|r| r.0 == t).unwrap();
     let (i, j) = (at(t_i), at(t_j));
     let dt = (t_j - t_i) as f64 * 1e-9;
@@ -38,14 +48,30 @@ fn integrate_gives_the_body_deltas_of_an_imu_mounted_away_from_the_body_origin()
     let dir = tmp("extrinsics-integrate");
     simulate(
         &dir,
-        &["--scene", "aggressive", "--noise", "none", "--duration", "3", "--body-p-sensor", POSE],
+        &[
+            "--scene",
+            "aggressive",
+            "--noise",
+            "none",
+            "--duration",
+            "3",
+            "--body-p-sensor",
+            POSE,
+        ],
     );
     let imu = dir.join("imu.csv");
     let gt = truth(&dir.join("groundtruth.csv"));
     let window = |extra: &[&str]| {
         let mut a = vec![
-            "integrate", "--imu", imu.to_str().unwrap(), "--scheme", "hermite4",
-            "--from", "1000000000", "--to", "2000000000",
+            "integrate",
+            "--imu",
+            imu.to_str().unwrap(),
+            "--scheme",
+            "hermite4",
+            "--from",
+            "1000000000",
+            "--to",
+            "2000000000",
         ];
         a.extend_from_slice(extra);
         json(&a)
@@ -57,15 +83,29 @@ fn integrate_gives_the_body_deltas_of_an_imu_mounted_away_from_the_body_origin()
     };
     let body = window(&["--body-p-sensor", POSE]);
     let as_is = window(&[]);
-    println!("Δv error: with --body-p-sensor {:.2e} m/s, without {:.2e}", err(&body), err(&as_is));
+    println!(
+        "Δv error: with --body-p-sensor {:.2e} m/s, without {:.2e}",
+        err(&body),
+        err(&as_is)
+    );
     assert!(err(&body) < 1e-4, "{}", err(&body));
     assert!(err(&as_is) > 0.1, "{}", err(&as_is));
-    assert_eq!(nums(&body["body_p_sensor"]["translation"]), vec![0.1, -0.2, 0.2]);
+    assert_eq!(
+        nums(&body["body_p_sensor"]["translation"]),
+        vec![0.1, -0.2, 0.2]
+    );
     assert!(as_is["body_p_sensor"].is_null());
     // The human output says which frame the deltas are in.
     let o = run(&[
-        "integrate", "--imu", imu.to_str().unwrap(), "--from", "1000000000", "--to",
-        "2000000000", "--body-p-sensor", POSE,
+        "integrate",
+        "--imu",
+        imu.to_str().unwrap(),
+        "--from",
+        "1000000000",
+        "--to",
+        "2000000000",
+        "--body-p-sensor",
+        POSE,
     ]);
     assert!(o.status.success());
     assert!(String::from_utf8_lossy(&o.stdout).contains("the deltas are the body's"));
@@ -74,7 +114,10 @@ fn integrate_gives_the_body_deltas_of_an_imu_mounted_away_from_the_body_origin()
 #[test]
 fn malformed_body_p_sensor_is_refused_with_the_reason() {
     let dir = tmp("extrinsics-bad");
-    simulate(&dir, &["--scene", "static", "--noise", "none", "--duration", "1"]);
+    simulate(
+        &dir,
+        &["--scene", "static", "--noise", "none", "--duration", "1"],
+    );
     let imu = dir.join("imu.csv");
     for (bad, says) in [
         ("0,0,0,1,0,0", "seven comma-separated numbers"),
@@ -85,9 +128,18 @@ fn malformed_body_p_sensor_is_refused_with_the_reason() {
         for cmd in ["integrate", "calibrate"] {
             let o = run(&[cmd, "--imu", imu.to_str().unwrap(), "--body-p-sensor", bad]);
             let err = String::from_utf8_lossy(&o.stderr);
-            assert!(!o.status.success() && err.contains(says), "{cmd} {bad}: {err}");
+            assert!(
+                !o.status.success() && err.contains(says),
+                "{cmd} {bad}: {err}"
+            );
         }
-        let o = run(&["simulate", "--out", dir.to_str().unwrap(), "--body-p-sensor", bad]);
+        let o = run(&[
+            "simulate",
+            "--out",
+            dir.to_str().unwrap(),
+            "--body-p-sensor",
+            bad,
+        ]);
         assert!(!o.status.success(), "simulate {bad}");
     }
 }
@@ -97,15 +149,42 @@ fn static_calibration_reports_the_body_roll_and_pitch() {
     let dir = tmp("extrinsics-static");
     simulate(
         &dir,
-        &["--scene", "static", "--noise", "none", "--duration", "20", "--body-p-sensor", POSE],
+        &[
+            "--scene",
+            "static",
+            "--noise",
+            "none",
+            "--duration",
+            "20",
+            "--body-p-sensor",
+            POSE,
+        ],
     );
     let imu = dir.join("imu.csv");
     let gt = truth(&dir.join("groundtruth.csv"));
-    let out = json(&["calibrate", "--imu", imu.to_str().unwrap(), "--body-p-sensor", POSE]);
+    let out = json(&[
+        "calibrate",
+        "--imu",
+        imu.to_str().unwrap(),
+        "--body-p-sensor",
+        POSE,
+    ]);
     let (roll, pitch, _) = gt[0].2.euler_angles();
-    let (br, bp) = (out["body_roll"].as_f64().unwrap(), out["body_pitch"].as_f64().unwrap());
-    println!("body roll {br} pitch {bp}; truth {roll} {pitch}; IMU roll {} pitch {}", out["roll"], out["pitch"]);
-    assert!((br - roll).abs() < 1e-6 && (bp - pitch).abs() < 1e-6, "{br} {bp} vs {roll} {pitch}");
+    let (br, bp) = (
+        out["body_roll"].as_f64().unwrap(),
+        out["body_pitch"].as_f64().unwrap(),
+    );
+    println!(
+        "body roll {br} pitch {bp}; truth {roll} {pitch}; IMU roll {} pitch {}",
+        out["roll"], out["pitch"]
+    );
+    assert!(
+        (br - roll).abs() < 1e-6 && (bp - pitch).abs() < 1e-6,
+        "{br} {bp} vs {roll} {pitch}"
+    );
     let imu_roll = out["roll"].as_f64().unwrap();
-    assert!((imu_roll - roll).abs() > 0.1, "the IMU's own roll differs from the body's");
+    assert!(
+        (imu_roll - roll).abs() > 0.1,
+        "the IMU's own roll differs from the body's"
+    );
 }

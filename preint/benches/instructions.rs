@@ -6,7 +6,8 @@
 //! euler | midpoint | hermite4, LEVEL: deltas | covariance | combined; `push`: one sample at a
 //! time through `integrate` instead of one slice); it prints nothing but a checksum, so that
 //! the work is not optimised away. Without arguments (as `cargo bench` runs every bench) it
-//! does nothing.
+//! does nothing. With the environment variable `BODY=1` the IMU is mounted away from the body
+//! origin (`body_p_sensor`: 0.3 m lever arm, rotated), as in `tests/tests/extrinsics.rs`.
 
 use preint::sample::synthetic_stream;
 use preint::{ImuBias, ImuNoise, Level, PreintParams, Preintegrator, Scheme};
@@ -38,6 +39,12 @@ fn main() {
         .with_scheme(scheme)
         .with_level(level);
     prm.keep_samples = false;
+    if std::env::var("BODY").is_ok_and(|v| v == "1") {
+        prm.body_p_sensor = Some(preint::SensorPose::new(
+            preint::SO3::exp(&preint::nalgebra::Vector3::new(0.3, -0.5, 0.8)),
+            preint::nalgebra::Vector3::new(0.1, -0.2, 0.2),
+        ));
+    }
     let mut pi = Preintegrator::new(prm, ImuBias::zero()).unwrap();
     if args.get(3).is_some_and(|a| a == "push") {
         push_all(&mut pi, &s);

@@ -60,7 +60,8 @@
 //! `e = A e_s + B_j R δb_g + …` and `[e; δb]` maps by `[[A, B_j R S_g], [0, I]]`
 //! (`S_g` selects `δb_g`).
 
-use crate::measurement::{BiasJacobians, Cov9, Cov15, EdgeSource, PreintegratedImu};
+use crate::measurement::{BiasJacobians, Cov9, EdgeSource, PreintegratedImu};
+use crate::noise::white_scale;
 use crate::params::Level;
 use nalgebra::{Matrix3, SMatrix, Vector3};
 use preint_lie::{SO3, hat};
@@ -179,100 +180,91 @@ fn linearisation(m: &PreintegratedImu, pose: &SensorPose, ends: &EndRates) -> (M
     (a, bi, bj)
 }
 
-/// The body's measurement from the sensor's measurement `m` (module docs): deltas, covariances,
-/// bias Jacobians and edge sources. `m.level` decides what is transformed.
-pub(crate) fn to_body(
-    m: &PreintegratedImu,
-    pose: &SensorPose,
-    ends: &EndRates,
-) -> PreintegratedImu {
+/// Makes the sensor's measurement `m` the body's (module docs): deltas, covariances, bias
+/// Jacobians and edge sources. `m.level` decides what is transformed.
+pub(crate) fn to_body(m: &mut PreintegratedImu, pose: &SensorPose, ends: &EndRates) {
     let (rm, r) = (*pose.rotation.matrix(), pose.translation);
+    let (a, bi, bj) = linearisation(m, pose, ends);
     let dr = pose
         .rotation
         .compose(&m.delta_r)
         .compose(&pose.rotation.inverse());
     let (wi, wj) = (rm * ends.w_i, rm * ends.w_j);
-    let mut out = m.clone();
-    out.delta_r = dr;
-    out.delta_v = rm * m.delta_v + wi.cross(&r) - dr.act(&wj.cross(&r));
-    out.delta_p = rm * m.delta_p + wi.cross(&r) * m.delta_t + r - dr.act(&r);
+    m.delta_r = dr;
+    m.delta_v = rm * m.delta_v + wi.cross(&r) - dr.act(&wj.cross(&r));
+    m.delta_p = rm * m.delta_p + wi.cross(&r) * m.delta_t + r - dr.act(&r);
     if m.level == Level::Deltas {
-        return out;
+        return;
     }
-    let (a, bi, bj) = linearisation(m, pose, ends);
     // Bias Jacobians: gyro columns also through the end rates.
-    let js = jac_matrix(&m.jac);
-    let mut jb = a * js;
+    let mut jb = a * jac_matrix(&m.jac);
     let gyro_extra = -(bi + bj) * rm;
     jb.fixed_view_mut::<9, 3>(0, 0)
         .zip_apply(&gyro_extra, |x, y| *x += y);
-    out.jac = jac_of(&jb);
-    // Edge sources: their gains through A and the end rates; the covariance swaps each
-    // source's share `(A G) Q (A G)ᵀ` for `G' Q G'ᵀ`.
-    let mut cov = a * m.cov * a.transpose();
-    let mut fixed = [EdgeSource::default(); crate::measurement::MAX_EDGE_SOURCES];
-    let mut n = 0;
-    // End-rate samples that no interval reads (Euler's last sample) enter through the end
-    // rates alone: sources with a zero integration gain.
-    let mut sources = [EdgeSource::default(); crate::measurement::MAX_EDGE_SOURCES + 8];
-    let mut ns = 0;
-    for s in m.edge_noise.sources() {
-        sources[ns] = *s;
-        ns += 1;
+    m.jac = jac_of(&jb);
+    // Edge sources: their gains through A and the end rates. Each sample's noise is
+    // block-diagonal (gyro, accelerometer), so a source read by an end rate swaps its share
+    // `(A G) Q (A G)ᵀ` of `A Σ_s Aᵀ` for `G' Q G'ᵀ`, `G' = A G + [E, 0]`: the difference is
+    // `X + Xᵀ + E Q_g Eᵀ` with `X = (A G)_g Q_g Eᵀ`.
+    let sensor = &m.edge_noise;
+    let mut noise = crate::EdgeNoise::new(sensor.gyro_cov, sensor.acc_cov, sensor.cell_rule);
+    let mut extra = Cov9::zeros();
+    let mut add = |s: &EdgeSource| {
+        let mut g = a * s.gain;
+        let (w_i, w_j) = (ends.weight(s.t_ns, true), ends.weight(s.t_ns, false));
+        if w_i != 0.0 || w_j != 0.0 {
+            let qg = sensor.gyro_cov * white_scale(sensor.cell_rule.cell_s(s.left_s, s.right_s));
+            let e = (bi * w_i + bj * w_j) * rm;
+            let x = g.fixed_view::<9, 3>(0, 0) * qg * e.transpose();
+            extra += x + x.transpose() + e * qg * e.transpose();
+            g.fixed_view_mut::<9, 3>(0, 0).zip_apply(&e, |x, y| *x += y);
+        }
+        noise.push(EdgeSource { gain: g, ..*s });
+    };
+    for s in sensor.sources() {
+        add(s);
     }
-    for (start, e) in [(true, ends.sources(true)), (false, ends.sources(false))] {
-        for src in e {
-            if sources[..ns].iter().all(|s| s.t_ns != src.t_ns) && ns < sources.len() {
-                sources[ns] = EdgeSource {
+    // End-rate samples no interval reads (Euler's last sample) enter through the end rate
+    // alone: sources with a zero integration gain.
+    for start in [true, false] {
+        for src in ends.sources(start) {
+            if sensor.find(src.t_ns).is_none() {
+                add(&EdgeSource {
                     t_ns: src.t_ns,
                     gain: SMatrix::zeros(),
                     left_s: src.left_s,
                     right_s: src.right_s,
                     start,
                     end: !start,
-                };
-                ns += 1;
+                });
             }
         }
     }
-    for s in &sources[..ns] {
-        let q = m.edge_noise.sample_cov(s.left_s, s.right_s);
-        let ag = a * s.gain;
-        let mut g = ag;
-        let ends_gain = (bi * ends.weight(s.t_ns, true) + bj * ends.weight(s.t_ns, false)) * rm;
-        g.fixed_view_mut::<9, 3>(0, 0)
-            .zip_apply(&ends_gain, |x, y| *x += y);
-        cov += g * q * g.transpose() - ag * q * ag.transpose();
-        if n < fixed.len() {
-            fixed[n] = EdgeSource { gain: g, ..*s };
-            n += 1;
-        }
-    }
-    let e = &m.edge_noise;
-    let mut noise = crate::EdgeNoise::new(e.gyro_cov, e.acc_cov, e.cell_rule);
-    for s in &fixed[..n] {
-        noise.push(*s);
-    }
-    out.edge_noise = noise;
-    let cov = (cov + cov.transpose()) * 0.5;
-    out.cov = cov;
-    // Combined covariance: [e; δb] ↦ [[A, B_j R S_g], [0, I]] [e_s; δb], plus the end-rate
-    // noise already in `cov` minus `A cov_s Aᵀ`.
-    let mut f = Cov15::identity();
-    f.fixed_view_mut::<9, 9>(0, 0).copy_from(&a);
-    f.fixed_view_mut::<9, 3>(0, 9).copy_from(&(bj * rm));
-    let mut c15 = f * m.cov15 * f.transpose();
-    let white_extra: Cov9 = cov - a * m.cov * a.transpose();
-    c15.fixed_view_mut::<9, 9>(0, 0)
-        .zip_apply(&white_extra, |x, y| *x += y);
+    m.edge_noise = noise;
+    let cov = a * m.cov * a.transpose() + extra;
+    m.cov = (cov + cov.transpose()) * 0.5;
+    // Combined covariance: [e; δb] ↦ [[A, K], [0, I]] [e_s; δb] with K = B_j R on the δb_g
+    // columns, plus the end-rate noise (`extra`).
     if m.level == Level::Covariance {
-        // No random walk in the deltas at this level: keep `cov15 = diag(cov, Σ_bb)`.
-        c15.fixed_view_mut::<9, 6>(0, 9).fill(0.0);
-        c15.fixed_view_mut::<6, 9>(9, 0).fill(0.0);
-        c15.fixed_view_mut::<9, 9>(0, 0).copy_from(&cov);
+        // No random walk in the deltas at this level: `cov15 = diag(cov, Σ_bb)`.
+        m.cov15.fixed_view_mut::<9, 9>(0, 0).copy_from(&m.cov);
+    } else {
+        let k = bj * rm;
+        let p = m.cov15.fixed_view::<9, 9>(0, 0).into_owned();
+        let c = m.cov15.fixed_view::<9, 6>(0, 9).into_owned();
+        let pbb = m.cov15.fixed_view::<6, 6>(9, 9).into_owned();
+        let ack = a * c.fixed_view::<9, 3>(0, 0) * k.transpose();
+        let pgg = pbb.fixed_view::<3, 3>(0, 0).into_owned();
+        let p_new = a * p * a.transpose() + ack + ack.transpose() + k * pgg * k.transpose() + extra;
+        let c_new = a * c + k * pbb.fixed_view::<3, 6>(0, 0);
+        m.cov15
+            .fixed_view_mut::<9, 9>(0, 0)
+            .copy_from(&((p_new + p_new.transpose()) * 0.5));
+        m.cov15.fixed_view_mut::<9, 6>(0, 9).copy_from(&c_new);
+        m.cov15
+            .fixed_view_mut::<6, 9>(9, 0)
+            .copy_from(&c_new.transpose());
     }
-    out.cov15 = (c15 + c15.transpose()) * 0.5;
-    out
 }
 
 /// The bias Jacobians as one 9×6 matrix (rows [δφ, δv, δp], columns [b_g, b_a]).

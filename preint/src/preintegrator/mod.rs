@@ -285,7 +285,8 @@ impl Preintegrator {
         }
         let mut m = self.engine.measurement();
         if let Some(pose) = &self.params.body_p_sensor {
-            m = crate::extrinsics::to_body(&m, pose, &self.end_rates(m.t_i_ns));
+            let ends = self.end_rates(m.t_i_ns);
+            crate::extrinsics::to_body(&mut m, pose, &ends);
         }
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
         let deltas = finite(m.delta_r.matrix().as_slice())
