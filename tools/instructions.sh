@@ -7,6 +7,7 @@
 #   tools/instructions.sh midpoint        # one scheme
 #   PUSH=1 tools/instructions.sh          # one sample at a time through `integrate`
 #   BODY=1 tools/instructions.sh          # the IMU away from the body origin (body_p_sensor)
+#   BODY=centripetal tools/instructions.sh  # … its lever arm removed per sample (GTSAM's model)
 #   FINISH=1 tools/instructions.sh        # instructions of one `finish` (the measurement read
 #                                         # out), not per sample
 set -euo pipefail
@@ -29,7 +30,7 @@ if [ "${FINISH:-0}" = 1 ]; then
   label="$label, one finish"
   per=1
 fi
-[ "${BODY:-0}" = 1 ] && label="$label, body_p_sensor"
+[ "${BODY:-0}" != 0 ] && label="$label, body_p_sensor ${BODY}"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 printf '%-9s %10s %12s %10s   (%s)\n' scheme deltas covariance combined "$label"

@@ -24,6 +24,20 @@ pub struct PreintArgs {
     /// then the body's motion (lever arm and rotation removed exactly); biases stay the IMU's.
     #[arg(long, value_parser = crate::parse::sensor_pose, allow_hyphen_values = true)]
     pub body_p_sensor: Option<preint::SensorPose>,
+    /// How the lever arm of --body-p-sensor is removed: exact (closed form from the window's
+    /// end rates, whatever the angular acceleration) or centripetal (GTSAM's per-sample
+    /// ω×(ω×r), exact only at a constant rate; for GTSAM's numbers).
+    #[arg(long, value_enum, default_value = "exact")]
+    pub lever_arm: LeverArmArg,
+}
+
+/// `--lever-arm`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LeverArmArg {
+    /// Closed form (`preint::LeverArm::Exact`).
+    Exact,
+    /// GTSAM's per-sample centripetal correction (`preint::LeverArm::Centripetal`).
+    Centripetal,
 }
 
 impl PreintArgs {
@@ -38,6 +52,10 @@ impl PreintArgs {
             .with_gravity(Vector3::new(0.0, 0.0, -self.gravity));
         let params = PreintParams {
             body_p_sensor: self.body_p_sensor,
+            lever_arm: match self.lever_arm {
+                LeverArmArg::Exact => preint::LeverArm::Exact,
+                LeverArmArg::Centripetal => preint::LeverArm::Centripetal,
+            },
             ..params
         };
         Ok((noise, params))

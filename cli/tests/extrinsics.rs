@@ -11,8 +11,11 @@ use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 const POSE: &str =
     "0.1,-0.2,0.2,0.8660254037844387,0.28867513459481287,0.28867513459481287,0.28867513459481287";
 
-/// The body's (t_ns, p, R_wb, v) rows of a `groundtruth.csv` written by `simulate`.
-fn truth(path: &std::path::Path) -> Vec<(i64, Vector3<f64>, UnitQuaternion<f64>, Vector3<f64>)> {
+/// One ground-truth row: t \[ns\], p \[m\], R_wb, v [m/s].
+type Row = (i64, Vector3<f64>, UnitQuaternion<f64>, Vector3<f64>);
+
+/// The body's rows of a `groundtruth.csv` written by `simulate`.
+fn truth(path: &std::path::Path) -> Vec<Row> {
     std::fs::read_to_string(path)
         .unwrap()
         .lines()
@@ -32,11 +35,7 @@ fn truth(path: &std::path::Path) -> Vec<(i64, Vector3<f64>, UnitQuaternion<f64>,
 }
 
 /// The body's exact Δv [m/s] over `[t_i, t_j]` from the ground truth (gravity (0, 0, −9.81)).
-fn true_delta_v(
-    gt: &[(i64, Vector3<f64>, UnitQuaternion<f64>, Vector3<f64>)],
-    t_i: i64,
-    t_j: i64,
-) -> Vector3<f64> {
+fn true_delta_v(gt: &[Row], t_i: i64, t_j: i64) -> Vector3<f64> {
     let at = |t: i64| gt.iter().find(|r| r.0 == t).unwrap();
     let (i, j) = (at(t_i), at(t_j));
     let dt = (t_j - t_i) as f64 * 1e-9;
@@ -83,6 +82,18 @@ fn integrate_gives_the_body_deltas_of_an_imu_mounted_away_from_the_body_origin()
     };
     let body = window(&["--body-p-sensor", POSE]);
     let as_is = window(&[]);
+    let gtsam_like = window(&["--body-p-sensor", POSE, "--lever-arm", "centripetal"]);
+    println!(
+        "Δv error with --lever-arm centripetal (GTSAM's model): {:.2e}",
+        err(&gtsam_like)
+    );
+    assert!(
+        err(&gtsam_like) > 1e-2,
+        "ω̇ × r left out: {}",
+        err(&gtsam_like)
+    );
+    assert_eq!(gtsam_like["body_p_sensor"]["lever_arm"], "centripetal");
+    assert_eq!(body["body_p_sensor"]["lever_arm"], "exact");
     println!(
         "Δv error: with --body-p-sensor {:.2e} m/s, without {:.2e}",
         err(&body),

@@ -7,7 +7,8 @@
 //! time through `integrate` instead of one slice); it prints nothing but a checksum, so that
 //! the work is not optimised away. Without arguments (as `cargo bench` runs every bench) it
 //! does nothing. With the environment variable `BODY=1` the IMU is mounted away from the body
-//! origin (`body_p_sensor`: 0.3 m lever arm, rotated), as in `tests/tests/extrinsics.rs`.
+//! origin (`body_p_sensor`: 0.3 m lever arm, rotated), as in `tests/tests/extrinsics.rs`; with
+//! `BODY=centripetal` its lever arm is removed per sample (`LeverArm::Centripetal`).
 
 use preint::sample::synthetic_stream;
 use preint::{ImuBias, ImuNoise, Level, PreintParams, Preintegrator, Scheme};
@@ -39,7 +40,11 @@ fn main() {
         .with_scheme(scheme)
         .with_level(level);
     prm.keep_samples = false;
-    if std::env::var("BODY").is_ok_and(|v| v == "1") {
+    let body = std::env::var("BODY").unwrap_or_default();
+    if body == "1" || body == "centripetal" {
+        if body == "centripetal" {
+            prm.lever_arm = preint::LeverArm::Centripetal;
+        }
         prm.body_p_sensor = Some(preint::SensorPose::new(
             preint::SO3::exp(&preint::nalgebra::Vector3::new(0.3, -0.5, 0.8)),
             preint::nalgebra::Vector3::new(0.1, -0.2, 0.2),

@@ -66,6 +66,22 @@ use crate::params::Level;
 use nalgebra::{Matrix3, SMatrix, Vector3};
 use preint_lie::{SO3, hat};
 
+/// How the lever arm of a [`SensorPose`] is removed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LeverArm {
+    /// The closed form of the module docs, from the window's end rates: exact whatever `ω̇`,
+    /// no per-sample cost. The default.
+    #[default]
+    Exact,
+    /// GTSAM's model (`PreintegrationBase::correctMeasurementsBySensorPose`): `ω × (ω × r)`
+    /// subtracted from every sample's specific force, `ω̇ × r` ignored, the gyroscope noise
+    /// and bias the centripetal term carries into the specific force propagated per sample.
+    /// Exact only at a constant rate (there, with Euler, it also cancels Euler's error on the
+    /// sensor's circular motion); otherwise it leaves out `∫ ΔR (ω̇ × r) dt`. For agreeing with
+    /// GTSAM's numbers.
+    Centripetal,
+}
+
 /// Pose of the IMU in the body frame, GTSAM's `body_P_sensor`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SensorPose {

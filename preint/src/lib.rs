@@ -46,7 +46,7 @@ pub mod scheme;
 pub mod window;
 
 pub use error::PreintError;
-pub use extrinsics::SensorPose;
+pub use extrinsics::{LeverArm, SensorPose};
 pub use factor::{CombinedImuFactor, FactorError, ImuFactor};
 pub use merge::{MergeError, merge};
 pub use navstate::{NavState, predict};

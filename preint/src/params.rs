@@ -2,7 +2,7 @@
 //! what to compute, bias re-integration thresholds and the largest allowed sample gap.
 
 use crate::error::PreintError;
-use crate::extrinsics::SensorPose;
+use crate::extrinsics::{LeverArm, SensorPose};
 use crate::noise::ImuNoise;
 pub use crate::scheme::Scheme;
 use nalgebra::{Matrix3, Vector3};
@@ -92,6 +92,8 @@ pub struct PreintParams {
     /// the body's, lever arm and rotation included ([`crate::extrinsics`]); biases and noise
     /// stay the sensor's. `None`: the IMU frame is the body frame. Default `None`.
     pub body_p_sensor: Option<SensorPose>,
+    /// How the lever arm of `body_p_sensor` is removed; default [`LeverArm::Exact`].
+    pub lever_arm: LeverArm,
 }
 
 /// Default gyro-bias change [rad/s] above which the first-order correction is replaced by
@@ -133,6 +135,7 @@ impl PreintParams {
             max_gap_ns: DEFAULT_MAX_GAP_NS,
             keep_samples: true,
             body_p_sensor: None,
+            lever_arm: LeverArm::Exact,
         }
     }
 

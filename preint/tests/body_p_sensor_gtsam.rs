@@ -17,7 +17,9 @@
 //!   crate's measured here with its own seeded noise, 2 000 realisations each).
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
-use preint::{ImuBias, ImuSample, Level, PreintParams, Preintegrator, SO3, Scheme, SensorPose};
+use preint::{
+    ImuBias, ImuSample, Level, LeverArm, PreintParams, Preintegrator, SO3, Scheme, SensorPose,
+};
 use preint_io::parse_euroc_imu;
 use serde_json::Value;
 use std::path::PathBuf;
@@ -245,4 +247,58 @@ fn lever_arm_covariance_is_consistent_on_gtsams_case() {
         "this crate's covariance with the lever arm: mean NEES {mean:.3} ({trials} realisations)"
     );
     assert!((mean - 9.0).abs() < 0.4, "{mean}");
+}
+
+/// `LeverArm::Centripetal` is GTSAM's model: on the lever-arm stream, Euler's deltas and
+/// covariance equal GTSAM's to ≤ 1e-12 relative, and its bias Jacobians equal central
+/// differences of GTSAM's deltas (GTSAM's Manifold analytic ones omit `R_bs`, as above).
+#[test]
+fn centripetal_mode_equals_gtsam_with_a_lever_arm() {
+    let f = json("body_p_sensor_lever.gtsam.json");
+    let s = lever_stream(&f);
+    let (gd, ad) = (
+        f["gyro_noise_density"].as_f64().unwrap(),
+        f["accel_noise_density"].as_f64().unwrap(),
+    );
+    let mut p = PreintParams::default()
+        .with_scheme(Scheme::Euler)
+        .with_level(Level::Covariance)
+        .with_body_p_sensor(pose(&f));
+    p.lever_arm = LeverArm::Centripetal;
+    p.gyro_cov = Matrix3::identity() * gd * gd;
+    p.acc_cov = Matrix3::identity() * ad * ad;
+    let mut pi = Preintegrator::new(p, ImuBias::zero()).unwrap();
+    pi.integrate_slice(&s).unwrap();
+    let m = pi.finish().unwrap();
+    let dm = |x: &Matrix3<f64>| DMatrix::from_column_slice(3, 3, x.as_slice());
+    let dv = |x: &Vector3<f64>| DMatrix::from_column_slice(3, 1, x.as_slice());
+    let checks = [
+        ("delta_R", rel(&dm(m.delta_r.matrix()), &mat(&f["delta_R"]))),
+        ("delta_v", rel(&dv(&m.delta_v), &dv(&v3(&f["delta_v"])))),
+        ("delta_p", rel(&dv(&m.delta_p), &dv(&v3(&f["delta_p"])))),
+        (
+            "covariance",
+            rel(
+                &DMatrix::from_column_slice(9, 9, m.cov.as_slice()),
+                &mat(&f["covariance"]),
+            ),
+        ),
+    ];
+    for (name, e) in checks {
+        println!("centripetal mode, {name}: max relative difference to GTSAM {e:.1e}");
+        assert!(e <= 1e-12, "{name}: {e:e}");
+    }
+    let fd = &f["bias_jacobians_finite_difference"];
+    let ours = [
+        ("dR_dbg", m.jac.d_r_d_bg),
+        ("dv_dbg", m.jac.d_v_d_bg),
+        ("dv_dba", m.jac.d_v_d_ba),
+        ("dp_dbg", m.jac.d_p_d_bg),
+        ("dp_dba", m.jac.d_p_d_ba),
+    ];
+    for (name, j) in ours {
+        let e = rel(&dm(&j), &mat(&fd[name]));
+        println!("centripetal mode, {name}: vs central differences of GTSAM's deltas {e:.1e}");
+        assert!(e <= 1e-6, "{name}: {e:e}");
+    }
 }

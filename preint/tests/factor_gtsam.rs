@@ -246,8 +246,9 @@ fn all_cases() -> Vec<Case> {
             let n = e.ok()?.file_name().into_string().ok()?;
             n.strip_suffix(".gtsam.json").map(str::to_string)
         })
-        // The combined fixtures have their own format and test (`combined_gtsam.rs`).
-        .filter(|n| !n.starts_with("combined_"))
+        // The combined and body_P_sensor fixtures have their own format and tests
+        // (`combined_gtsam.rs`, `body_p_sensor_gtsam.rs`).
+        .filter(|n| !n.starts_with("combined_") && !n.starts_with("body_p_sensor_"))
         .collect();
     names.sort();
     names

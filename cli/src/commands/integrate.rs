@@ -60,6 +60,8 @@ pub struct Integration {
     pub pim: PreintegratedImu,
     /// The IMU's pose in the body (`--body-p-sensor`): the deltas are then the body's.
     pub body_p_sensor: Option<preint::SensorPose>,
+    /// How its lever arm was removed.
+    pub lever_arm: preint::LeverArm,
 }
 
 /// Reads the file once and preintegrates `[--from, --to]` at [`Level::Combined`]: the whole
@@ -72,7 +74,7 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
         args.bias_acc.unwrap_or_default(),
     );
     let scheme = params.scheme;
-    let body_p_sensor = params.body_p_sensor;
+    let (body_p_sensor, lever_arm) = (params.body_p_sensor, params.lever_arm);
     let fail = |e| CliError::failed_in(args.input.path(), e);
     let window = |params: &PreintParams, w: stream::StreamWindow| {
         let pim = preintegrate(params, &bias, &w.samples, w.t_i_ns, w.t_j_ns)
@@ -105,6 +107,7 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
         bias,
         pim,
         body_p_sensor,
+        lever_arm,
     })
 }
 
@@ -194,6 +197,10 @@ pub fn to_json(r: &Integration) -> Value {
         "body_p_sensor": r.body_p_sensor.map(|p| json!({
             "translation": list(&p.translation),
             "rotation": rows(p.rotation.matrix()),
+            "lever_arm": match r.lever_arm {
+                preint::LeverArm::Exact => "exact",
+                preint::LeverArm::Centripetal => "centripetal",
+            },
             "note": "IMU pose in the body: translation = IMU origin in body coordinates [m], \
                 rotation = sensor-to-body; delta_R, delta_v, delta_p and their covariances are \
                 the body's, biases the IMU's (its own axes)",

@@ -55,6 +55,30 @@ pub(crate) struct Fixed {
     pub walk: BiasWalk,
     pub int_cov: Option<CovShape>,
     pub spec: WindowSpec,
+    /// The lever arm in sensor axes \[m\] when it is corrected per sample (GTSAM's model,
+    /// [`crate::extrinsics::LeverArm::Centripetal`]): the samples reach the loop with
+    /// `ω × (ω × r)` taken off their specific force (`Centripetal` in the preintegrator), and
+    /// the gains carry the gyro noise and bias that term moves.
+    pub centripetal: Option<Vector3<f64>>,
+}
+
+/// `D = ∂a_node/∂ω_node` of a node whose specific force lost `c(ω) = ω × (ω × r)`:
+/// `−∂c/∂ω = [ω × r]× + [ω]×[r]× = [ω × r]× + r ωᵀ − (ω·r) I`.
+#[inline(always)]
+fn centripetal_d(w: &Vector3<f64>, r: &Vector3<f64>) -> Matrix3<f64> {
+    let (x, wr) = (w.cross(r), w.dot(r));
+    let o = r * w.transpose();
+    Matrix3::new(
+        o[(0, 0)] - wr,
+        o[(0, 1)] - x.z,
+        o[(0, 2)] + x.y,
+        o[(1, 0)] + x.z,
+        o[(1, 1)] - wr,
+        o[(1, 2)] - x.x,
+        o[(2, 0)] - x.y,
+        o[(2, 1)] + x.x,
+        o[(2, 2)] - wr,
+    )
 }
 
 /// The loop of scheme `S` over one window.
@@ -68,9 +92,8 @@ pub(crate) struct Core<S: IntervalScheme> {
     ctx_before: usize,
     ctx_after: Option<Node>,
     first_t_ns: i64,
-    /// The first window node's rate [rad/s] (bias-corrected) and the first interval \[s\].
+    /// The first window node's rate [rad/s] (bias-corrected).
     first_w: Vector3<f64>,
-    first_h: f64,
     origin: Origin,
     /// Window intervals integrated.
     done: usize,
@@ -79,10 +102,13 @@ pub(crate) struct Core<S: IntervalScheme> {
     fast: S::Fast,
     e: ErrorState,
     edges: EdgeGains,
+    /// With a lever arm corrected per sample: `−Σ_j G_a,j D_j`, the bias Jacobian's share
+    /// through the nodes' centripetal terms (pulled back, gyro columns).
+    lever_j: crate::propagation::blocks::Cols9,
 }
 
 /// Hands retired samples' noise to the covariance, or their gains to the edge store.
-struct Retirer<'a, N> {
+struct Retirer<'a, N, const LEVER: bool> {
     ring: &'a [Node; RING],
     ctx_after: Option<&'a Node>,
     edges: &'a mut EdgeGains,
@@ -90,9 +116,12 @@ struct Retirer<'a, N> {
     ctx_before: usize,
     n: usize,
     at_end: bool,
+    /// Lever arm in sensor axes and the bias-Jacobian accumulator, when the centripetal term
+    /// is removed per sample.
+    lever: Option<(Vector3<f64>, &'a mut crate::propagation::blocks::Cols9)>,
 }
 
-impl<'a, N> Retirer<'a, N> {
+impl<'a, N, const LEVER: bool> Retirer<'a, N, LEVER> {
     /// For a window with `(ctx_before, n, at_end)`: context samples before it, samples, and
     /// whether it is complete.
     #[inline(always)]
@@ -102,6 +131,7 @@ impl<'a, N> Retirer<'a, N> {
         edges: &'a mut EdgeGains,
         noise: &'a N,
         (ctx_before, n, at_end): (usize, usize, bool),
+        lever: Option<(Vector3<f64>, &'a mut crate::propagation::blocks::Cols9)>,
     ) -> Self {
         Self {
             ring,
@@ -111,11 +141,12 @@ impl<'a, N> Retirer<'a, N> {
             ctx_before,
             n,
             at_end,
+            lever,
         }
     }
 }
 
-impl<N: NoiseCov> Retirer<'_, N> {
+impl<N: NoiseCov, const LEVER: bool> Retirer<'_, N, LEVER> {
     /// Node at extended index `i`.
     #[inline(always)]
     fn ext(&self, i: usize) -> &Node {
@@ -128,6 +159,59 @@ impl<N: NoiseCov> Retirer<'_, N> {
     /// Retires sample `id` (extended index) with its total gain.
     #[inline(always)]
     fn retire<S: IntervalScheme>(&mut self, p: &mut PackedSym9, id: usize, gain: &SampleGain) {
+        if LEVER {
+            self.retire_lever::<S>(p, id, gain);
+        } else {
+            self.retire_gain::<S>(p, id, gain);
+        }
+    }
+
+    /// [`Retirer::retire`] with a lever arm corrected per sample: the raw gyro noise also moves
+    /// the node's specific force, so its gain is `G_g + G_a D` (and the bias Jacobian takes
+    /// `−G_a D`).
+    #[inline(never)]
+    fn retire_lever<S: IntervalScheme>(
+        &mut self,
+        p: &mut PackedSym9,
+        id: usize,
+        gain: &SampleGain,
+    ) {
+        let w = self.ext(id).w;
+        let Some((r, _)) = &self.lever else { return };
+        let d = centripetal_d(&w, r);
+        let mut through = [[0.0; 9]; 3];
+        match gain.acc {
+            crate::propagation::AccGain::Rot { r: rot, cv, cp } => {
+                let m = rot * d;
+                for (c, col) in through.iter_mut().enumerate() {
+                    for i in 0..3 {
+                        col[3 + i] = cv * m[(i, c)];
+                        col[6 + i] = cp * m[(i, c)];
+                    }
+                }
+            }
+            crate::propagation::AccGain::Full(a) => {
+                crate::propagation::add_acc_through(&mut through, a, &d);
+            }
+        }
+        if let Some((_, j)) = &mut self.lever {
+            crate::propagation::blocks::sub_cols(j, &through);
+        }
+        let mut g = *gain.g;
+        crate::propagation::blocks::add_cols(&mut g, &through);
+        self.retire_gain::<S>(
+            p,
+            id,
+            &SampleGain {
+                g: &g,
+                acc: gain.acc,
+            },
+        );
+    }
+
+    /// Adds the noise of sample `id` with its total gain, or collects the gain of an edge sample.
+    #[inline(always)]
+    fn retire_gain<S: IntervalScheme>(&mut self, p: &mut PackedSym9, id: usize, gain: &SampleGain) {
         let (before, n) = (self.ctx_before, self.n);
         let in_window = id >= before && id < before + n;
         let (left, right) = if in_window {
@@ -190,7 +274,6 @@ impl<S: IntervalScheme> Core<S> {
             ctx_after,
             first_t_ns: 0,
             first_w: Vector3::zeros(),
-            first_h: 0.0,
             origin: Origin::default(),
             done: 0,
             d: Deltas::default(),
@@ -198,6 +281,7 @@ impl<S: IntervalScheme> Core<S> {
             fast: S::Fast::default(),
             e: ErrorState::default(),
             edges: EdgeGains::default(),
+            lever_j: [[0.0; 9]; 3],
         }
     }
 
@@ -216,12 +300,12 @@ impl<S: IntervalScheme> Core<S> {
         &self.ring[(j + self.ctx_before) % RING]
     }
 
-    /// The bias-corrected rates [rad/s] of the first and last window samples and the first
-    /// and last intervals \[s\] (`n ≥ 2`).
-    pub(crate) fn end_rates(&self) -> (Vector3<f64>, Vector3<f64>, f64, f64) {
+    /// The bias-corrected rates [rad/s] of the first and last window samples and the last
+    /// interval \[s\] (`n ≥ 2`).
+    pub(crate) fn end_rates(&self) -> (Vector3<f64>, Vector3<f64>, f64) {
         let (n, last) = (self.n, self.node(self.n - 1));
         let h_j = span_s(self.node(n - 2).t_ns, last.t_ns);
-        (self.first_w, last.w, self.first_h, h_j)
+        (self.first_w, last.w, h_j)
     }
 
     /// Adds the node of a valid sample and integrates the intervals that became ready.
@@ -234,9 +318,6 @@ impl<S: IntervalScheme> Core<S> {
             S::start(&mut self.carry, &node);
             self.fast.start(&node);
         }
-        if self.n == 1 {
-            self.first_h = span_s(self.first_t_ns, s.t_ns);
-        }
         self.ring[(self.n + self.ctx_before) % RING] = node;
         self.n += 1;
         self.advance(false);
@@ -244,11 +325,20 @@ impl<S: IntervalScheme> Core<S> {
 
     #[inline(always)]
     fn advance(&mut self, at_end: bool) {
+        let lever = || self.fixed.centripetal.is_some();
         match (self.linearise(), self.fixed.noise) {
-            (false, _) => self
-                .advance_with::<IsotropicNoise, false>(&IsotropicNoise { g: 0.0, a: 0.0 }, at_end),
-            (true, NoiseKind::Isotropic(q)) => self.advance_with::<_, true>(&q, at_end),
-            (true, NoiseKind::Anisotropic(q)) => self.advance_with::<_, true>(&q, at_end),
+            (false, _) => self.advance_with::<IsotropicNoise, false, false>(
+                &IsotropicNoise { g: 0.0, a: 0.0 },
+                at_end,
+            ),
+            (true, NoiseKind::Isotropic(q)) if lever() => {
+                self.advance_with::<_, true, true>(&q, at_end)
+            }
+            (true, NoiseKind::Anisotropic(q)) if lever() => {
+                self.advance_with::<_, true, true>(&q, at_end)
+            }
+            (true, NoiseKind::Isotropic(q)) => self.advance_with::<_, true, false>(&q, at_end),
+            (true, NoiseKind::Anisotropic(q)) => self.advance_with::<_, true, false>(&q, at_end),
         }
     }
 
@@ -263,13 +353,17 @@ impl<S: IntervalScheme> Core<S> {
     /// Integrates every interval that is ready; with `at_end`, all remaining intervals and
     /// the remaining noise (the window then has exactly `self.n` samples).
     #[inline(always)]
-    fn advance_with<N: NoiseCov, const LINEARISE: bool>(&mut self, noise: &N, at_end: bool) {
+    fn advance_with<N: NoiseCov, const LINEARISE: bool, const LEVER: bool>(
+        &mut self,
+        noise: &N,
+        at_end: bool,
+    ) {
         let n = self.n;
         while self.done + 1 < n && (at_end || self.ready(self.done)) {
             if at_end {
-                self.interval::<N, LINEARISE, true>(noise, self.done);
+                self.interval::<N, LINEARISE, true, LEVER>(noise, self.done);
             } else {
-                self.interval::<N, LINEARISE, false>(noise, self.done);
+                self.interval::<N, LINEARISE, false, LEVER>(noise, self.done);
             }
             self.done += 1;
             if self.done.is_multiple_of(RENORM_EVERY) {
@@ -279,7 +373,7 @@ impl<S: IntervalScheme> Core<S> {
         if at_end && LINEARISE && n >= 2 {
             let last = self.ctx_before + n - 1;
             let r_last = self.d.r;
-            let (e, mut r) = self.split(noise, true);
+            let (e, mut r) = self.split::<N, LEVER>(noise, true);
             if S::NODES_BEFORE + S::NODES_AFTER == 0 {
                 e.retire_last::<S>(last, &r_last, |p, id, g| r.retire::<S>(p, id, g));
             } else {
@@ -298,31 +392,34 @@ impl<S: IntervalScheme> Core<S> {
 
     /// The error state and a [`Retirer`] borrowing the ring and the edge store.
     #[inline(always)]
-    fn split<'a, N>(
+    fn split<'a, N, const LEVER: bool>(
         &'a mut self,
         noise: &'a N,
         at_end: bool,
-    ) -> (&'a mut ErrorState, Retirer<'a, N>) {
+    ) -> (&'a mut ErrorState, Retirer<'a, N, LEVER>) {
         let Self {
+            fixed,
             ring,
             ctx_after,
             edges,
             e,
             ctx_before,
             n,
+            lever_j,
             ..
         } = self;
         let window = (*ctx_before, *n, at_end);
+        let lever = fixed.centripetal.map(|r| (r, lever_j));
         (
             e,
-            Retirer::new(ring, ctx_after.as_ref(), edges, noise, window),
+            Retirer::new(ring, ctx_after.as_ref(), edges, noise, window, lever),
         )
     }
 
     /// Interval `k` (out of line: it keeps the per-interval code small enough for the
     /// compiler to inline the fixed-size matrix operations).
     #[inline(never)]
-    fn interval<N: NoiseCov, const LINEARISE: bool, const AT_END: bool>(
+    fn interval<N: NoiseCov, const LINEARISE: bool, const AT_END: bool, const LEVER: bool>(
         &mut self,
         noise: &N,
         k: usize,
@@ -340,6 +437,7 @@ impl<S: IntervalScheme> Core<S> {
             fast,
             e,
             edges,
+            lever_j,
             ..
         } = self;
         let (first_id, st) = stencil::<S>(ring, ctx_after.as_ref(), *ctx_before, *n, k, at_end);
@@ -347,12 +445,14 @@ impl<S: IntervalScheme> Core<S> {
             fast.step(&st);
             return;
         }
-        let mut r = Retirer::new(
+        let lever = fixed.centripetal.filter(|_| LEVER).map(|r| (r, lever_j));
+        let mut r = Retirer::<N, LEVER>::new(
             ring,
             ctx_after.as_ref(),
             edges,
             noise,
             (*ctx_before, *n, at_end),
+            lever,
         );
         if LINEARISE && S::NODES_BEFORE + S::NODES_AFTER > 0 {
             e.retire_below(first_id, |p, id, g| r.retire::<S>(p, id, g));
@@ -363,6 +463,16 @@ impl<S: IntervalScheme> Core<S> {
         }
         let lin = S::linearise(&step, &st);
         let pb = origin.pull_back(st.n1().t_ns, &d.v, &d.p);
+        let d_nodes = fixed
+            .centripetal
+            .filter(|_| LEVER && fixed.walk.combined)
+            .map(|r| {
+                let mut d = [Matrix3::zeros(); crate::scheme::MAX_STENCIL];
+                for (x, node) in d.iter_mut().zip(&st.nodes).take(st.len) {
+                    *x = centripetal_d(&node.w, &r);
+                }
+                d
+            });
         e.interval::<S>(
             &lin,
             &pb,
@@ -370,6 +480,7 @@ impl<S: IntervalScheme> Core<S> {
             st.k,
             st.len,
             &fixed.walk,
+            d_nodes.as_ref(),
             |p, id, g| r.retire::<S>(p, id, g),
         );
         int_cov(fixed, e, d, lin.tr.h);
@@ -415,6 +526,10 @@ impl<S: IntervalScheme> Core<S> {
     pub(crate) fn measurement(&self) -> PreintegratedImu {
         let mut core = self.clone();
         core.advance(true);
+        if core.fixed.centripetal.is_some() {
+            let extra = core.lever_j;
+            crate::propagation::blocks::add_cols(&mut core.e.j.g, &extra);
+        }
         core.output()
     }
 

@@ -20,7 +20,7 @@ pub(crate) mod validation;
 pub(crate) use edges::{Side, Src, WindowSpec};
 
 use crate::error::PreintError;
-use crate::extrinsics::{EndRates, EndSource};
+use crate::extrinsics::{EndRates, EndSource, LeverArm, SensorPose};
 use crate::measurement::PreintegratedImu;
 use crate::params::{CovShape, Level, PreintParams};
 use crate::propagation::{AnisotropicNoise, BiasWalk, IsotropicNoise};
@@ -36,7 +36,7 @@ trait Engine: std::fmt::Debug + Send + Sync {
     fn run_slice(&mut self, samples: &[ImuSample], last_t_ns: i64, gap_limit: u64) -> usize;
     fn len(&self) -> usize;
     fn measurement(&self) -> PreintegratedImu;
-    fn end_rates(&self) -> (nalgebra::Vector3<f64>, nalgebra::Vector3<f64>, f64, f64);
+    fn end_rates(&self) -> (nalgebra::Vector3<f64>, nalgebra::Vector3<f64>, f64);
     fn boxed_clone(&self) -> Box<dyn Engine>;
 }
 
@@ -57,8 +57,69 @@ where
     fn measurement(&self) -> PreintegratedImu {
         Core::measurement(self)
     }
-    fn end_rates(&self) -> (nalgebra::Vector3<f64>, nalgebra::Vector3<f64>, f64, f64) {
+    fn end_rates(&self) -> (nalgebra::Vector3<f64>, nalgebra::Vector3<f64>, f64) {
         Core::end_rates(self)
+    }
+    fn boxed_clone(&self) -> Box<dyn Engine> {
+        Box::new(self.clone())
+    }
+}
+
+/// GTSAM's per-sample lever-arm model in front of a scheme's loop
+/// ([`crate::extrinsics::LeverArm::Centripetal`]): each sample's specific force loses
+/// `ω × (ω × r)` (ω bias-corrected, `r` the lever arm in sensor axes) before the loop sees it;
+/// the loop's gains then carry the gyro noise and bias that term moves. No slice fast path.
+#[derive(Clone, Debug)]
+struct Centripetal<S: IntervalScheme> {
+    core: Core<S>,
+    r: nalgebra::Vector3<f64>,
+    b_g: nalgebra::Vector3<f64>,
+}
+
+/// Sample `s` with `ω × (ω × r)` taken off its specific force, `ω = ω_m − b_g`.
+fn without_centripetal(
+    s: &ImuSample,
+    r: &nalgebra::Vector3<f64>,
+    b_g: &nalgebra::Vector3<f64>,
+) -> ImuSample {
+    let w = s.gyro - b_g;
+    ImuSample::new(s.t_ns, s.gyro, s.acc - w.cross(&w.cross(r)))
+}
+
+impl<S: IntervalScheme + Send + Sync> Engine for Centripetal<S>
+where
+    S::Carry: Send + Sync,
+    S::Fast: Send + Sync,
+{
+    fn push(&mut self, s: &ImuSample) {
+        self.core.push(&without_centripetal(s, &self.r, &self.b_g));
+    }
+    /// The slice fast path on the corrected samples, a stack chunk at a time.
+    fn run_slice(&mut self, samples: &[ImuSample], last_t_ns: i64, gap_limit: u64) -> usize {
+        const CHUNK: usize = 128;
+        let mut buf = [ImuSample::new(0, Default::default(), Default::default()); CHUNK];
+        let (mut used, mut last) = (0, last_t_ns);
+        for chunk in samples.chunks(CHUNK) {
+            for (b, s) in buf.iter_mut().zip(chunk) {
+                *b = without_centripetal(s, &self.r, &self.b_g);
+            }
+            let n = self.core.run_slice(&buf[..chunk.len()], last, gap_limit);
+            used += n;
+            if n < chunk.len() {
+                break;
+            }
+            last = chunk[n - 1].t_ns;
+        }
+        used
+    }
+    fn len(&self) -> usize {
+        self.core.len()
+    }
+    fn measurement(&self) -> PreintegratedImu {
+        self.core.measurement()
+    }
+    fn end_rates(&self) -> (nalgebra::Vector3<f64>, nalgebra::Vector3<f64>, f64) {
+        self.core.end_rates()
     }
     fn boxed_clone(&self) -> Box<dyn Engine> {
         Box::new(self.clone())
@@ -161,9 +222,21 @@ impl Preintegrator {
                 reason: "non-finite component",
             });
         }
-        let fixed = fixed(&params, bias_hat, spec);
-        let engine: Box<dyn Engine> =
-            with_scheme!(params.scheme, S => Box::new(Core::<S>::new(fixed)));
+        let mut fixed = fixed(&params, bias_hat, spec);
+        let engine: Box<dyn Engine> = match fixed.centripetal {
+            Some(r) => {
+                let b_g = bias_hat.gyro;
+                for side in [&mut fixed.spec.start, &mut fixed.spec.end] {
+                    side.ctx = side.ctx.map(|c| without_centripetal(&c, &r, &b_g));
+                }
+                with_scheme!(params.scheme, S => Box::new(Centripetal {
+                    core: Core::<S>::new(fixed),
+                    r,
+                    b_g,
+                }))
+            }
+            None => with_scheme!(params.scheme, S => Box::new(Core::<S>::new(fixed))),
+        };
         let samples = if params.keep_samples {
             Vec::with_capacity(capacity)
         } else {
@@ -286,7 +359,12 @@ impl Preintegrator {
         let mut m = self.engine.measurement();
         if let Some(pose) = &self.params.body_p_sensor {
             let ends = self.end_rates(m.t_i_ns);
-            crate::extrinsics::to_body(&mut m, pose, &ends);
+            let pose = match self.params.lever_arm {
+                LeverArm::Exact => *pose,
+                // The nodes lost the centripetal term already: rotate only.
+                LeverArm::Centripetal => SensorPose::new(pose.rotation, nalgebra::Vector3::zeros()),
+            };
+            crate::extrinsics::to_body(&mut m, &pose, &ends);
         }
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
         let deltas = finite(m.delta_r.matrix().as_slice())
@@ -307,7 +385,10 @@ impl Preintegrator {
     /// The end rates of the window and the stream samples each is made of (for the lever arm):
     /// the interpolation weights of a boundary sample, or the first or last pushed sample.
     fn end_rates(&self, t_i_ns: i64) -> EndRates {
-        let (w_i, w_j, h_i, h_j) = self.engine.end_rates();
+        // The first sample is always an edge source when there is noise to carry (its own
+        // intervals are recorded there); the last may not be (Euler reads it in no interval),
+        // so its interval to the previous sample is given.
+        let (w_i, w_j, h_j) = self.engine.end_rates();
         let side = |sd: &Side, t_ns: i64, (left_s, right_s): (f64, f64)| {
             let mut src = [EndSource::default(); 4];
             if sd.nw == 0 {
@@ -330,7 +411,7 @@ impl Preintegrator {
             }
             (src, sd.nw)
         };
-        let (src_i, n_i) = side(&self.spec.start, t_i_ns, (0.0, h_i));
+        let (src_i, n_i) = side(&self.spec.start, t_i_ns, (0.0, 0.0));
         let (src_j, n_j) = side(&self.spec.end, self.last_t_ns, (h_j, 0.0));
         EndRates {
             w_i,
@@ -455,6 +536,14 @@ fn fixed(params: &PreintParams, bias_hat: ImuBias, spec: WindowSpec) -> Fixed {
             .map(CovShape::of)
             .filter(|c| *c != CovShape::Isotropic(0.0)),
         spec,
+        centripetal: match (&params.body_p_sensor, params.lever_arm) {
+            (Some(pose), LeverArm::Centripetal)
+                if pose.translation != nalgebra::Vector3::zeros() =>
+            {
+                Some(pose.rotation.inverse().act(&pose.translation))
+            }
+            _ => None,
+        },
     }
 }
 

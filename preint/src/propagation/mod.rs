@@ -237,6 +237,7 @@ impl ErrorState {
         k_pos: usize,
         len: usize,
         walk: &BiasWalk,
+        lever: Option<&[M3; crate::scheme::MAX_STENCIL]>,
         retire: impl Retire,
     ) {
         let form = S::GAIN_FORM;
@@ -249,7 +250,7 @@ impl ErrorState {
             self.wide::<S>(lin, &f, node.as_ref(), pb, first_id, k_pos, len);
         }
         if walk.combined {
-            self.walk_step::<S>(lin, &f, node.as_ref(), pb, len, walk);
+            self.walk_step::<S>(lin, &f, node.as_ref(), pb, (k_pos, len), walk, lever);
         }
         self.walk_t += crate::noise::walk_scale(lin.tr.h);
     }
@@ -427,14 +428,16 @@ impl ErrorState {
     /// The combined terms of an interval (module docs): its total gain `Γ_Σ` pulled back
     /// (`f`, `node`, `pb`) and in rotated coordinates.
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     fn walk_step<S: IntervalScheme>(
         &mut self,
         lin: &Linearisation<S::NodeTerms>,
         f: &GyroColumns,
         node: Option<&NodeColumns>,
         pb: &PullBack,
-        len: usize,
+        (k_pos, len): (usize, usize),
         walk: &BiasWalk,
+        lever: Option<&[M3; crate::scheme::MAX_STENCIL]>,
     ) {
         let form = S::GAIN_FORM;
         let mut sum = GainCoef::default();
@@ -473,6 +476,17 @@ impl ErrorState {
                 total(basis.gyro_columns(form, None), 0.0),
             )
         };
+        let (gsum, rot) = match lever {
+            Some(d) => {
+                let extra = self.lever_walk::<S>(lin, node, pb, (k_pos, len), d);
+                let fwd = pb.forward().apply(&extra);
+                let (mut gsum, mut rot) = (gsum, rot);
+                add_cols(&mut gsum.g, &extra.g);
+                add_cols(&mut rot.g, &fwd.g);
+                (gsum, rot)
+            }
+            None => (gsum, rot),
+        };
         // `C` is kept in rotated coordinates, where its zero blocks (e.g. Euler's first
         // intervals) are exact: `V = A C + ½ Γ_Σ P_bb`, `C ← V + ½ Γ_Σ P_bb`; `P_walk` is
         // pulled back, `P'_walk += V' Γ'_Σᵀ + Γ'_Σ V'ᵀ` with `V' = Φ_k+1⁻¹ V`.
@@ -487,6 +501,55 @@ impl ErrorState {
         let v = lin.tr.apply(&self.c).add(&half);
         self.p_walk.add_sym(&pb.apply(&v), &gsum);
         self.c = v.add(&half);
+    }
+}
+
+impl ErrorState {
+    /// The gyro columns a lever arm corrected per sample adds to an interval's total gain:
+    /// `Σ_j Γ_a,kj D_j`, pulled back (each stencil sample's accelerometer gain through its
+    /// `D_j = ∂a_node/∂ω_node`).
+    #[inline(never)]
+    fn lever_walk<S: IntervalScheme>(
+        &self,
+        lin: &Linearisation<S::NodeTerms>,
+        node: Option<&NodeColumns>,
+        pb: &PullBack,
+        (k_pos, len): (usize, usize),
+        d: &[M3; crate::scheme::MAX_STENCIL],
+    ) -> Gain96 {
+        let acc = lin.basis.acc_columns(pb.tau);
+        let n = if S::NODES_BEFORE + S::NODES_AFTER == 0 {
+            S::STENCIL
+        } else {
+            len
+        };
+        let mut extra = Gain96::default();
+        for (j, (c, dj)) in lin.coef.iter().zip(d).take(n).enumerate() {
+            let mut a = [[0.0; 6]; 3];
+            if j == k_pos {
+                add_acc::<FIRST, true>(&mut a, &acc, node, c);
+            } else if j == k_pos + 1 {
+                add_acc::<SECOND, true>(&mut a, &acc, node, c);
+            } else {
+                add_acc::<OUTER, true>(&mut a, &acc, node, c);
+            }
+            add_acc_through(&mut extra.g, &a, dj);
+        }
+        extra
+    }
+}
+
+/// `g += a·D` on the v and p rows: an accelerometer gain `a` carried into gyro columns through
+/// `D = ∂a_node/∂ω_node` (a lever arm corrected per sample, [`crate::extrinsics`]).
+#[inline]
+pub(crate) fn add_acc_through(g: &mut Cols9, a: &Cols6, d: &M3) {
+    for (c, col) in g.iter_mut().enumerate() {
+        for (m, am) in a.iter().enumerate() {
+            let w = d[(m, c)];
+            for i in 0..6 {
+                col[3 + i] += am[i] * w;
+            }
+        }
     }
 }
 
