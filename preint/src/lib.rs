@@ -23,6 +23,7 @@
 
 #![deny(missing_docs)]
 
+pub mod earth;
 pub mod factor;
 pub mod measurement;
 pub mod merge;
@@ -44,6 +45,7 @@ pub(crate) mod propagation;
 pub mod scheme;
 pub mod window;
 
+pub use earth::CoriolisMode;
 pub use error::PreintError;
 pub use factor::{CombinedImuFactor, FactorError, ImuFactor};
 pub use merge::{MergeError, merge};

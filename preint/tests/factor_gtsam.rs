@@ -221,6 +221,8 @@ fn load_case(name: &str) -> Case {
         },
         bias_hat,
         gravity: out.at("n_gravity").v3(),
+        omega_coriolis: None,
+        coriolis: preint::CoriolisMode::Exact,
         level: Level::Covariance,
         edge_noise: EdgeNoise::default(),
     };
