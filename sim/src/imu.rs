@@ -99,6 +99,10 @@ pub struct SimConfig {
     pub acc_scale: Matrix3<f64>,
     /// Gyroscope scale-factor/misalignment matrix `S_g` (identity = ideal).
     pub gyro_scale: Matrix3<f64>,
+    /// Rotation rate of the navigation frame ω_ie [rad/s, navigation frame] (Earth rotation):
+    /// the ideal readings are [`ideal_sample_rotating`](crate::rotating::ideal_sample_rotating)'s;
+    /// `None` (default) = a non-rotating frame.
+    pub earth_rate: Option<Vector3<f64>>,
 }
 
 impl Default for SimConfig {
@@ -110,6 +114,7 @@ impl Default for SimConfig {
             bias_random_walk: true,
             acc_scale: Matrix3::identity(),
             gyro_scale: Matrix3::identity(),
+            earth_rate: None,
         }
     }
 }
@@ -152,6 +157,9 @@ impl SimConfig {
         }
         if !finite(self.acc_scale.as_slice()) || !finite(self.gyro_scale.as_slice()) {
             return Err(SimError::Config("scale matrix is not finite".into()));
+        }
+        if self.earth_rate.is_some_and(|w| !finite(w.as_slice())) {
+            return Err(SimError::Config("earth rate is not finite".into()));
         }
         Ok(())
     }
@@ -265,7 +273,12 @@ pub fn simulate(
             bias.acc += w_ba * sba;
         }
         let st = scene.state(t_s(t_ns));
-        let ideal = st.ideal_sample(t_ns, &config.gravity);
+        let ideal = crate::rotating::ideal_sample_rotating(
+            &st,
+            t_ns,
+            &config.gravity,
+            config.earth_rate.as_ref(),
+        );
         let acc = config.acc_scale * ideal.acc + bias.acc + n_a * sa;
         let gyro = config.gyro_scale * ideal.gyro + bias.gyro + n_g * sg;
         samples.push(ImuSample { t_ns, gyro, acc });
