@@ -120,3 +120,39 @@ fn bad_earth_flags_are_refused_with_a_reason() {
         assert!(err.contains(msg), "{args:?}: {err}");
     }
 }
+
+#[test]
+fn calibrate_with_latitude_does_not_take_the_earth_rate_for_gyro_bias() {
+    // A tactical-grade gyro at rest at 45° N (static scene: yaw 0.8 rad from east), zero bias.
+    let d = tmp("earth-calib");
+    let noise = common::write_noise_yaml(&d, "imu.yaml", [5e-6, 0.0, 2e-4, 0.0], 100.0);
+    simulate(
+        &d,
+        &["--scene", "static", "--rate", "100", "--duration", "60", "--latitude", "45",
+          "--noise", noise.to_str().unwrap()],
+    );
+    let imu = d.join("imu.csv");
+    let base = ["calibrate", "--imu", imu.to_str().unwrap(), "--noise", noise.to_str().unwrap()];
+    let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    let plain = json(&base);
+    assert!((norm(vec3(&plain["gyro_bias"])) - 7.292115e-5).abs() < 5e-6, "{plain}");
+    assert!(plain["earth_rate"].is_null());
+
+    let mut lat = base.to_vec();
+    lat.extend_from_slice(&["--latitude", "45"]);
+    let out = json(&lat);
+    let (b, s) = (vec3(&out["gyro_bias"]), vec3(&out["gyro_bias_std"]));
+    let horizontal = 7.292115e-5 * 45f64.to_radians().cos();
+    assert!((norm(b) - horizontal).abs() < 5e-6, "{b:?}");
+    for k in 0..3 {
+        assert!(b[k].abs() <= 3.0 * s[k], "axis {k}: {b:?} ± {s:?}");
+    }
+    assert!(out["earth_rate"]["note"].as_str().unwrap().contains("not separable"));
+
+    let mut head = lat.clone();
+    let heading = format!("{}", 90.0 - 0.8f64.to_degrees());
+    head.extend_from_slice(&["--heading", &heading]);
+    let out = json(&head);
+    let (b, s) = (vec3(&out["gyro_bias"]), vec3(&out["gyro_bias_std"]));
+    assert!(s[0] < 1e-6 && norm(b) < 4.0 * s[0], "{b:?} ± {s:?}");
+}
