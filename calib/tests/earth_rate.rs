@@ -6,14 +6,16 @@
 use nalgebra::Vector3;
 use preint::earth::earth_rate_enu;
 use preint::{ImuBias, ImuNoise};
-use preint_calib::bias::{
-    StaticOptions, calibrate_static, earth_rate_in_body, remove_earth_rate,
-};
+use preint_calib::bias::{StaticOptions, calibrate_static, earth_rate_in_body, remove_earth_rate};
 use preint_sim::{SimConfig, StaticScene, simulate};
 
 const LAT: f64 = 45.0;
 
-fn calibrated() -> (preint_calib::bias::StaticCalibration, Vector3<f64>, StaticScene) {
+fn calibrated() -> (
+    preint_calib::bias::StaticCalibration,
+    Vector3<f64>,
+    StaticScene,
+) {
     let noise = ImuNoise {
         gyro_noise_density: 5e-6,
         gyro_random_walk: 0.0,
@@ -49,11 +51,19 @@ fn the_earth_rate_is_not_mistaken_for_gyro_bias() {
     let c = remove_earth_rate(&cal, &e);
     let up = cal.up_body;
     let err = c.gyro_bias - bias;
-    assert!(err.dot(&up).abs() < 4.0 * sigma.amax(), "vertical {}", err.dot(&up));
+    assert!(
+        err.dot(&up).abs() < 4.0 * sigma.amax(),
+        "vertical {}",
+        err.dot(&up)
+    );
     let horizontal = err - up * err.dot(&up);
     assert!((horizontal.norm() - e.unresolved).abs() < 5.0 * sigma.amax());
     for k in 0..3 {
-        assert!(err[k].abs() <= 3.0 * c.gyro_bias_std[k], "axis {k}: {err:?} σ {:?}", c.gyro_bias_std);
+        assert!(
+            err[k].abs() <= 3.0 * c.gyro_bias_std[k],
+            "axis {k}: {err:?} σ {:?}",
+            c.gyro_bias_std
+        );
     }
 
     // With the heading (the scene's yaw 0.8 rad from east): all of it is removed.
@@ -65,5 +75,9 @@ fn the_earth_rate_is_not_mistaken_for_gyro_bias() {
     assert_eq!(c.gyro_bias_std, cal.gyro_bias_std);
     // The removed vector is the true Earth rate in the body frame (to the tilt error).
     let truth = scene.r_wb.inverse().act(&earth_rate_enu(LAT));
-    assert!((e.removed - truth).amax() < 1e-8, "{:?} vs {truth:?}", e.removed);
+    assert!(
+        (e.removed - truth).amax() < 1e-8,
+        "{:?} vs {truth:?}",
+        e.removed
+    );
 }

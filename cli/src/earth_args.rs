@@ -36,7 +36,9 @@ impl EarthRateArgs {
 pub fn latitude(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
         Ok(x) if x.is_finite() && (-90.0..=90.0).contains(&x) => Ok(x),
-        _ => Err(format!("`{s}` is not a latitude in degrees within [-90, 90]")),
+        _ => Err(format!(
+            "`{s}` is not a latitude in degrees within [-90, 90]"
+        )),
     }
 }
 
@@ -46,7 +48,9 @@ pub fn coriolis_mode(s: &str) -> Result<CoriolisMode, String> {
         "first" => Ok(CoriolisMode::FirstOrder),
         "second" => Ok(CoriolisMode::SecondOrder),
         "exact" => Ok(CoriolisMode::Exact),
-        _ => Err(format!("`{s}` is not a Coriolis mode: use first, second or exact")),
+        _ => Err(format!(
+            "`{s}` is not a Coriolis mode: use first, second or exact"
+        )),
     }
 }
 
@@ -141,9 +145,21 @@ mod tests {
         let h = std::f64::consts::FRAC_1_SQRT_2 * 1.0002;
         let s = initial_state(&format!("0,0,0,0,0,0,{h},0,0,{h}")).unwrap();
         assert!((s.r.log().z - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
-        assert!(initial_state("0,0,0,0,0,0,2,0,0,0").unwrap_err().contains("norm"));
-        assert!(initial_state("0,0,0,0,0,0,1,0,0").unwrap_err().contains("ten"));
-        assert!(initial_state("0,0,nan,0,0,0,1,0,0,0").unwrap_err().contains("finite"));
+        assert!(
+            initial_state("0,0,0,0,0,0,2,0,0,0")
+                .unwrap_err()
+                .contains("norm")
+        );
+        assert!(
+            initial_state("0,0,0,0,0,0,1,0,0")
+                .unwrap_err()
+                .contains("ten")
+        );
+        assert!(
+            initial_state("0,0,nan,0,0,0,1,0,0,0")
+                .unwrap_err()
+                .contains("finite")
+        );
         assert_eq!(coriolis_mode("second").unwrap(), CoriolisMode::SecondOrder);
         assert!(coriolis_mode("third").is_err());
         assert!(latitude("91").is_err() && latitude("-45").is_ok());

@@ -13,7 +13,11 @@ fn truth(dir: &Path, t_ns: i64) -> ([f64; 3], [f64; 4], [f64; 3]) {
     let row = text
         .lines()
         .filter(|l| !l.starts_with('#'))
-        .map(|l| l.split(',').map(|x| x.trim().parse::<f64>().unwrap()).collect::<Vec<_>>())
+        .map(|l| {
+            l.split(',')
+                .map(|x| x.trim().parse::<f64>().unwrap())
+                .collect::<Vec<_>>()
+        })
         .find(|c| c[0] as i64 == t_ns)
         .expect("row at t_ns");
     (
@@ -24,7 +28,12 @@ fn truth(dir: &Path, t_ns: i64) -> ([f64; 3], [f64; 4], [f64; 3]) {
 }
 
 fn state_flag(p: [f64; 3], q: [f64; 4], v: [f64; 3]) -> String {
-    let all: Vec<String> = p.iter().chain(&v).chain(&q).map(|x| format!("{x:e}")).collect();
+    let all: Vec<String> = p
+        .iter()
+        .chain(&v)
+        .chain(&q)
+        .map(|x| format!("{x:e}"))
+        .collect();
     format!("--initial-state={}", all.join(","))
 }
 
@@ -38,7 +47,16 @@ fn prediction_in_a_rotating_frame_lands_on_the_simulated_truth() {
     let rate = "0.01,-0.02,0.03";
     let sim = simulate(
         &d,
-        &["--scene", "seed-ellipse", "--noise", "none", "--duration", "3", "--earth-rate", rate],
+        &[
+            "--scene",
+            "seed-ellipse",
+            "--noise",
+            "none",
+            "--duration",
+            "3",
+            "--earth-rate",
+            rate,
+        ],
     );
     assert_eq!(vec3(&sim["earth_rate"]), [0.01, -0.02, 0.03]);
     let (p1, q1, v1) = truth(&d, 1_000_000_000);
@@ -84,7 +102,10 @@ fn prediction_in_a_rotating_frame_lands_on_the_simulated_truth() {
     // The text form prints the prediction too.
     let o = run(&with_rate);
     let text = String::from_utf8_lossy(&o.stdout);
-    assert!(text.contains("predicted at t_j") && text.contains("Coriolis mode exact"), "{text}");
+    assert!(
+        text.contains("predicted at t_j") && text.contains("Coriolis mode exact"),
+        "{text}"
+    );
 }
 
 #[test]
@@ -92,7 +113,16 @@ fn latitude_gives_the_enu_earth_rate() {
     let d = tmp("earth-lat");
     let sim = simulate(
         &d,
-        &["--scene", "static", "--noise", "none", "--duration", "1", "--latitude", "-30"],
+        &[
+            "--scene",
+            "static",
+            "--noise",
+            "none",
+            "--duration",
+            "1",
+            "--latitude",
+            "-30",
+        ],
     );
     let w = vec3(&sim["earth_rate"]);
     assert_eq!(w[0], 0.0);
@@ -103,15 +133,59 @@ fn latitude_gives_the_enu_earth_rate() {
 #[test]
 fn bad_earth_flags_are_refused_with_a_reason() {
     let d = tmp("earth-bad");
-    simulate(&d, &["--scene", "static", "--noise", "none", "--duration", "1"]);
+    simulate(
+        &d,
+        &["--scene", "static", "--noise", "none", "--duration", "1"],
+    );
     let imu = d.join("imu.csv");
     let imu = imu.to_str().unwrap();
     let cases: [(&[&str], &str); 5] = [
-        (&["integrate", "--imu", imu, "--coriolis", "exact"], "--omega-coriolis"),
-        (&["integrate", "--imu", imu, "--coriolis", "third", "--omega-coriolis", "0,0,1e-4"], "first, second or exact"),
-        (&["integrate", "--imu", imu, "--initial-state=0,0,0,0,0,0,2,0,0,0"], "norm"),
-        (&["integrate", "--imu", imu, "--initial-state=0,0,0,0,0,0,1,0,0"], "ten"),
-        (&["simulate", "--out", d.to_str().unwrap(), "--latitude", "45", "--earth-rate", "0,0,1"], "cannot be used with"),
+        (
+            &["integrate", "--imu", imu, "--coriolis", "exact"],
+            "--omega-coriolis",
+        ),
+        (
+            &[
+                "integrate",
+                "--imu",
+                imu,
+                "--coriolis",
+                "third",
+                "--omega-coriolis",
+                "0,0,1e-4",
+            ],
+            "first, second or exact",
+        ),
+        (
+            &[
+                "integrate",
+                "--imu",
+                imu,
+                "--initial-state=0,0,0,0,0,0,2,0,0,0",
+            ],
+            "norm",
+        ),
+        (
+            &[
+                "integrate",
+                "--imu",
+                imu,
+                "--initial-state=0,0,0,0,0,0,1,0,0",
+            ],
+            "ten",
+        ),
+        (
+            &[
+                "simulate",
+                "--out",
+                d.to_str().unwrap(),
+                "--latitude",
+                "45",
+                "--earth-rate",
+                "0,0,1",
+            ],
+            "cannot be used with",
+        ),
     ];
     for (args, msg) in cases {
         let o = run(args);
@@ -128,14 +202,33 @@ fn calibrate_with_latitude_does_not_take_the_earth_rate_for_gyro_bias() {
     let noise = common::write_noise_yaml(&d, "imu.yaml", [5e-6, 0.0, 2e-4, 0.0], 100.0);
     simulate(
         &d,
-        &["--scene", "static", "--rate", "100", "--duration", "60", "--latitude", "45",
-          "--noise", noise.to_str().unwrap()],
+        &[
+            "--scene",
+            "static",
+            "--rate",
+            "100",
+            "--duration",
+            "60",
+            "--latitude",
+            "45",
+            "--noise",
+            noise.to_str().unwrap(),
+        ],
     );
     let imu = d.join("imu.csv");
-    let base = ["calibrate", "--imu", imu.to_str().unwrap(), "--noise", noise.to_str().unwrap()];
+    let base = [
+        "calibrate",
+        "--imu",
+        imu.to_str().unwrap(),
+        "--noise",
+        noise.to_str().unwrap(),
+    ];
     let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
     let plain = json(&base);
-    assert!((norm(vec3(&plain["gyro_bias"])) - 7.292115e-5).abs() < 5e-6, "{plain}");
+    assert!(
+        (norm(vec3(&plain["gyro_bias"])) - 7.292115e-5).abs() < 5e-6,
+        "{plain}"
+    );
     assert!(plain["earth_rate"].is_null());
 
     let mut lat = base.to_vec();
@@ -147,7 +240,12 @@ fn calibrate_with_latitude_does_not_take_the_earth_rate_for_gyro_bias() {
     for k in 0..3 {
         assert!(b[k].abs() <= 3.0 * s[k], "axis {k}: {b:?} ± {s:?}");
     }
-    assert!(out["earth_rate"]["note"].as_str().unwrap().contains("not separable"));
+    assert!(
+        out["earth_rate"]["note"]
+            .as_str()
+            .unwrap()
+            .contains("not separable")
+    );
 
     let mut head = lat.clone();
     let heading = format!("{}", 90.0 - 0.8f64.to_degrees());

@@ -108,10 +108,7 @@ pub fn gamma_p(w: &Vector3<f64>) -> Matrix3<f64> {
     } else {
         let t = t2.sqrt();
         let (s, c) = t.sin_cos();
-        (
-            (s - t * c) / (t2 * t),
-            (0.5 - (c + t * s - 1.0) / t2) / t2,
-        )
+        ((s - t * c) / (t2 * t), (0.5 - (c + t * s - 1.0) / t2) / t2)
     };
     let k = hat(w);
     Matrix3::identity() * 0.5 + k * a + k * k * b
@@ -167,7 +164,9 @@ pub(crate) fn predict_rotating(
             let xi_r = dr.log() - s.r.inverse().act(omega) * t;
             NavState {
                 r: s.r.compose(&SO3::exp(&xi_r)),
-                p: s.p + s.v * t + g * (0.5 * t * t) + s.r.act(&dp) - wv * (t * t) - c * (0.5 * t * t),
+                p: s.p + s.v * t + g * (0.5 * t * t) + s.r.act(&dp)
+                    - wv * (t * t)
+                    - c * (0.5 * t * t),
                 v: s.v + g * t + s.r.act(&dv) - wv * (2.0 * t) - c * t,
             }
         }
@@ -175,7 +174,11 @@ pub(crate) fn predict_rotating(
 }
 
 /// `ω×(ω×p)` for [`CoriolisMode::SecondOrder`], zero otherwise.
-pub(crate) fn centrifugal(omega: &Vector3<f64>, p: &Vector3<f64>, mode: CoriolisMode) -> Vector3<f64> {
+pub(crate) fn centrifugal(
+    omega: &Vector3<f64>,
+    p: &Vector3<f64>,
+    mode: CoriolisMode,
+) -> Vector3<f64> {
     if mode == CoriolisMode::SecondOrder {
         omega.cross(&omega.cross(p))
     } else {

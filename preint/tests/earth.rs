@@ -123,7 +123,10 @@ fn jacobians_of_every_mode_match_central_differences() {
             let omega = rng.v3(0.2);
             let pim = random_pim(&mut rng, omega, mode);
             let xi = NavState::new(SO3::exp(&rng.v3(1.4)), rng.v3(5.0), rng.v3(2.0));
-            let bi = ImuBias::new(pim.bias_hat.gyro + rng.v3(0.1), pim.bias_hat.acc + rng.v3(0.5));
+            let bi = ImuBias::new(
+                pim.bias_hat.gyro + rng.v3(0.1),
+                pim.bias_hat.acc + rng.v3(0.5),
+            );
             let bj = ImuBias::new(bi.gyro + rng.v3(0.01), bi.acc + rng.v3(0.05));
             let off = SVector::<f64, 9>::from_fn(|_, _| rng.s() * 0.5);
             let xj = predict(&pim, &xi, &bi).retract(&off);
@@ -148,7 +151,10 @@ fn residual_is_zero_at_the_prediction_and_minus_the_delta_error_to_first_order()
         let omega = rng.v3(0.2);
         let pim = random_pim(&mut rng, omega, mode);
         let xi = NavState::new(SO3::exp(&rng.v3(1.0)), rng.v3(50.0), rng.v3(10.0));
-        let b = ImuBias::new(pim.bias_hat.gyro + rng.v3(0.02), pim.bias_hat.acc + rng.v3(0.2));
+        let b = ImuBias::new(
+            pim.bias_hat.gyro + rng.v3(0.02),
+            pim.bias_hat.acc + rng.v3(0.2),
+        );
         let f = ImuFactor::new(pim.clone()).unwrap();
         let xj = predict(&pim, &xi, &b);
         let r0 = f.residual(&xi, &xj, &b);
@@ -253,7 +259,11 @@ fn non_finite_rates_are_refused() {
     let bad = PreintParams::default().with_omega_coriolis(Vector3::new(f64::NAN, 0.0, 0.0));
     assert!(bad.validate().is_err());
     let mut rng = Rng(3);
-    let pim = random_pim(&mut rng, Vector3::new(0.0, f64::INFINITY, 0.0), CoriolisMode::Exact);
+    let pim = random_pim(
+        &mut rng,
+        Vector3::new(0.0, f64::INFINITY, 0.0),
+        CoriolisMode::Exact,
+    );
     assert_eq!(
         ImuFactor::new(pim).unwrap_err(),
         FactorError::NonFinite {

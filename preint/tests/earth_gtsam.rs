@@ -40,7 +40,11 @@ fn mat<const N: usize>(v: &Value) -> SMatrix<f64, N, N> {
 }
 
 fn state(v: &Value) -> NavState {
-    NavState::new(SO3::from_matrix(&mat::<3>(&v["R"])), v3(&v["p"]), v3(&v["v"]))
+    NavState::new(
+        SO3::from_matrix(&mat::<3>(&v["R"])),
+        v3(&v["p"]),
+        v3(&v["v"]),
+    )
 }
 
 struct Case {
@@ -131,8 +135,13 @@ fn exact_prediction_matches_gtsam() {
         let e_r = x.r.minus(&g.r).norm();
         let e_p = (x.p - g.p).amax() / g.p.amax();
         let e_v = (x.v - g.v).amax() / g.v.amax();
-        println!("{name}: prediction vs GTSAM: rotation {e_r:.1e} rad, p {e_p:.1e}, v {e_v:.1e} (relative)");
-        assert!(e_r < 1e-14 && e_p < 1e-12 && e_v < 1e-12, "{name}: {e_r} {e_p} {e_v}");
+        println!(
+            "{name}: prediction vs GTSAM: rotation {e_r:.1e} rad, p {e_p:.1e}, v {e_v:.1e} (relative)"
+        );
+        assert!(
+            e_r < 1e-14 && e_p < 1e-12 && e_v < 1e-12,
+            "{name}: {e_r} {e_p} {e_v}"
+        );
     }
 }
 

@@ -81,8 +81,7 @@ pub fn earth_rate_in_body(
 pub fn remove_earth_rate(cal: &StaticCalibration, e: &EarthRateInBody) -> StaticCalibration {
     let mut out = cal.clone();
     out.gyro_bias = cal.gyro_bias - e.removed;
-    out.gyro_bias_std = Vector3::from_fn(|i, _| {
-        (cal.gyro_bias_std[i].powi(2) + e.added_cov[(i, i)]).sqrt()
-    });
+    out.gyro_bias_std =
+        Vector3::from_fn(|i, _| (cal.gyro_bias_std[i].powi(2) + e.added_cov[(i, i)]).sqrt());
     out
 }

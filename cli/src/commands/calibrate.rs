@@ -65,7 +65,12 @@ pub struct Args {
     pub latitude: Option<f64>,
     /// Heading of the body x axis (deg, clockwise from north): with --latitude, the whole
     /// Earth rate is removed from the gyro bias.
-    #[arg(long, value_name = "DEG", allow_hyphen_values = true, requires = "latitude")]
+    #[arg(
+        long,
+        value_name = "DEG",
+        allow_hyphen_values = true,
+        requires = "latitude"
+    )]
     pub heading: Option<f64>,
 }
 
@@ -182,7 +187,9 @@ pub fn compute(args: &Args) -> Result<Calibration, CliError> {
     if let Some(h) = args.heading
         && !h.is_finite()
     {
-        return Err(CliError::Usage(format!("--heading {h} is not a finite angle in degrees")));
+        return Err(CliError::Usage(format!(
+            "--heading {h} is not a finite angle in degrees"
+        )));
     }
     let earth_refused = |model: &str| {
         CliError::Usage(format!(

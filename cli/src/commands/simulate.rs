@@ -100,7 +100,10 @@ pub fn to_json(s: &Simulation) -> Value {
 pub fn to_text(s: &Simulation) -> String {
     let a = &s.args;
     let earth = match a.earth.rate() {
-        Some(w) => format!(", world frame rotating at [{:e}, {:e}, {:e}] rad/s", w.x, w.y, w.z),
+        Some(w) => format!(
+            ", world frame rotating at [{:e}, {:e}, {:e}] rad/s",
+            w.x, w.y, w.z
+        ),
         None => String::new(),
     };
     format!(

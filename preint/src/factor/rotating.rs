@@ -62,7 +62,12 @@ struct Implied {
     dp: [Matrix3<f64>; 6],
 }
 
-fn implied_exact(pim: &PreintegratedImu, xi: &NavState, xj: &NavState, w: &Vector3<f64>) -> Implied {
+fn implied_exact(
+    pim: &PreintegratedImu,
+    xi: &NavState,
+    xj: &NavState,
+    w: &Vector3<f64>,
+) -> Implied {
     let t = pim.delta_t;
     let tr = Transport::new(w, t, &pim.gravity);
     let b = tr.a.inverse();
@@ -118,7 +123,8 @@ fn implied_approx(
     let c = centrifugal(w, &xi.p, mode);
     let wc = w.cross(&xi.v);
     let wv = ri_t.act(&(xj.v - xi.v - g * t + wc * (2.0 * t) + c * t));
-    let wp = ri_t.act(&(xj.p - xi.p - xi.v * t - g * (0.5 * t * t) + wc * (t * t) + c * (0.5 * t * t)));
+    let wp =
+        ri_t.act(&(xj.p - xi.p - xi.v * t - g * (0.5 * t * t) + wc * (t * t) + c * (0.5 * t * t)));
     let (rim, rjm) = (*xi.r.matrix(), *xj.r.matrix());
     let om = hat(w);
     let om2 = if mode == CoriolisMode::SecondOrder {
