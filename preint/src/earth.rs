@@ -77,7 +77,7 @@ pub enum CoriolisMode {
 pub const EARTH_RATE_RAD_S: f64 = 7.292_115e-5;
 
 /// The Earth rate ω_ie [rad/s] in a local-level **east-north-up** world frame (x east,
-/// y north, z up, the crate's z-up convention) at geodetic latitude `latitude_deg` [deg]:
+/// y north, z up, the crate's z-up convention) at geodetic latitude `latitude_deg` \[deg\]:
 /// `Ω_E (0, cos φ, sin φ)`. For a frame whose x axis points north instead, swap the first
 /// two components.
 ///

@@ -43,7 +43,7 @@ pub struct EarthRateInBody {
     pub added_cov: Matrix3<f64>,
 }
 
-/// The Earth rate at `latitude_deg` [deg] for a body whose up direction is `up_body` (unit,
+/// The Earth rate at `latitude_deg` \[deg\] for a body whose up direction is `up_body` (unit,
 /// body frame) and, if known, whose attitude has roll/pitch `roll_pitch` \[rad\] and heading
 /// `heading_deg` [deg, clockwise from north].
 pub fn earth_rate_in_body(
