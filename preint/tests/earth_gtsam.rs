@@ -13,14 +13,17 @@
 //! ```
 //!
 //! The `N` block is the δp → δv term GTSAM PR #2806 adds to the whitening; the covariance of
-//! `e` is `L cov Lᵀ` with `L` that linear map.
+//! `e` is `L cov Lᵀ` with `L` that linear map. For the combined factor, `L` is extended by
+//! `−I` from our bias rows `[b_g,j − b_g,i, b_a,j − b_a,i]` to GTSAM's `[b_a,i − b_a,j,
+//! b_g,i − b_g,j]`, and `cov15` is GTSAM's combined `preintMeasCov()` in our chart (tangent
+//! backend: `φ = Jr(θ) dθ`, reordered).
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
 use preint::{
     BiasJacobians, CombinedImuFactor, CoriolisMode, Cov9, Cov15, EdgeNoise, ImuBias, ImuFactor,
     Level, NavState, PreintegratedImu, predict,
 };
-use preint_lie::{SO3, hat};
+use preint_lie::{SO3, hat, jr};
 use serde_json::Value;
 use std::path::PathBuf;
 
@@ -208,5 +211,44 @@ fn residual_covariance_in_gtsam_chart_matches_residual_covariance_at_the_predict
              {err_plain:.1e}; without the δp→δv block {err_without:.1e}"
         );
         assert!(err_at < 1e-9, "{name}: {err_at}");
+    }
+}
+
+#[test]
+fn combined_residual_covariance_in_gtsam_chart_matches_residual_covariance_at_the_prediction() {
+    for name in CASES {
+        let mut c = case(name);
+        let cf = &c.f["combined"];
+        // GTSAM's native [θ, p, v, b_a, b_g] → ours [φ, v, p, b_g, b_a], φ = Jr(θ) dθ.
+        let native = mat::<15>(&cf["preint_meas_cov"]);
+        let mut t = SMatrix::<f64, 15, 15>::identity();
+        t.fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&jr(&v3(&cf["delta_R_log"])));
+        let forster = t * native * t.transpose();
+        let perm = [0, 1, 2, 6, 7, 8, 3, 4, 5, 12, 13, 14, 9, 10, 11];
+        c.pim.cov15 = Cov15::from_fn(|r, col| forster[(perm[r], perm[col])]);
+        let pred = predict(&c.pim, &c.xi, &c.pim.bias_hat);
+        let mut l = SMatrix::<f64, 15, 15>::zeros();
+        l.fixed_view_mut::<9, 9>(0, 0)
+            .copy_from(&to_gtsam(&c, &pred.r));
+        l.fixed_view_mut::<3, 3>(9, 12)
+            .copy_from(&(-Matrix3::identity()));
+        l.fixed_view_mut::<3, 3>(12, 9)
+            .copy_from(&(-Matrix3::identity()));
+        let ours = l * c.pim.residual_cov15() * l.transpose();
+        let at = mat::<15>(&cf["residual_covariance_at_predicted"]);
+        let err = rel(&dm(&ours), &dm(&at));
+        println!("{name}: combined L cov15 Lᵀ vs residualCovarianceAt(R̂_j): {err:.1e}");
+        assert!(err < 1e-9, "{name}: {err}");
+        // Our χ² (residual whitened by residual_cov15) against GTSAM's (its error whitened by
+        // residualCovarianceAt(R̂_j)): equal to first order. They differ by the chart change
+        // `L`, which GTSAM freezes at R̂_j while R_j is a few σ (~1e-4 rad) away from it.
+        let b = c.pim.bias_hat;
+        let f = CombinedImuFactor::new(c.pim.clone()).unwrap();
+        let chi2_ours = f.chi2(&c.xi, &c.xj, &b, &b);
+        let e = SVector::<f64, 15>::from_fn(|i, _| cf["error"][i].as_f64().unwrap());
+        let chi2_gtsam = e.dot(&at.cholesky().unwrap().solve(&e));
+        println!("{name}: combined χ² {chi2_ours:.9} vs GTSAM {chi2_gtsam:.9}");
+        assert!((chi2_ours - chi2_gtsam).abs() < 1e-3 * chi2_gtsam);
     }
 }
