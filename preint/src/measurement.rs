@@ -216,7 +216,8 @@ impl EdgeNoise {
 /// A preintegrated IMU measurement between keyframes i and j (times `t_i_ns`, `t_j_ns`).
 ///
 /// `delta_v` and `delta_p` are in body frame i and exclude gravity (Forster eq. 33):
-/// `R_j = R_i ΔR`, `v_j = v_i + gΔt + R_i Δv`, `p_j = p_i + v_iΔt + ½gΔt² + R_i Δp`.
+/// `R_j = R_i ΔR`, `v_j = v_i + gΔt + R_i Δv`, `p_j = p_i + v_iΔt + ½gΔt² + R_i Δp` in a
+/// non-rotating world frame; with `omega_coriolis` set, [`crate::earth`] gives the prediction.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PreintegratedImu {
     /// Keyframe i time \[ns\].

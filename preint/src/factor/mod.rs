@@ -42,7 +42,10 @@
 //! ```
 //!
 //! all other blocks are zero. Every block is checked against central differences on the
-//! manifold in `preint/tests/factor.rs`.
+//! manifold in `preint/tests/factor.rs`. With an Earth rate (`pim.omega_coriolis`) the residual
+//! compares the deltas the states imply in the rotating frame instead (`rotating.rs`, each
+//! [`CoriolisMode`](crate::CoriolisMode); Jacobians checked in `preint/tests/earth.rs`); its
+//! covariance is the same.
 //!
 //! # Whitening
 //!
