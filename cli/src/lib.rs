@@ -32,6 +32,7 @@ pub mod charts;
 pub mod checks;
 pub mod cli;
 pub mod commands;
+pub mod earth_args;
 pub mod error;
 pub mod format;
 pub mod html;

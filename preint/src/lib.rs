@@ -13,6 +13,8 @@
 //! - The measurement: [`PreintegratedImu`] (its `cov`, `cov15`, `residual_cov15()` and bias
 //!   Jacobians), [`predict`] and [`NavState`].
 //! - Factors: [`ImuFactor`], [`CombinedImuFactor`] (residual, analytic Jacobians, whitening).
+//! - Earth rotation: [`earth`] (`PreintParams::omega_coriolis`, [`CoriolisMode`]): a world frame
+//!   rotating at a constant rate in prediction and both factors.
 //! - Schemes: [`scheme`] (the mathematics of each). Reading and writing files is the
 //!   `preint-io` crate's job; this crate does no I/O.
 //!
@@ -23,6 +25,7 @@
 
 #![deny(missing_docs)]
 
+pub mod earth;
 pub mod factor;
 pub mod measurement;
 pub mod merge;
@@ -45,6 +48,7 @@ pub(crate) mod propagation;
 pub mod scheme;
 pub mod window;
 
+pub use earth::CoriolisMode;
 pub use error::PreintError;
 pub use extrinsics::{LeverArm, SensorPose};
 pub use factor::{CombinedImuFactor, FactorError, ImuFactor};

@@ -10,6 +10,7 @@
 //! `ΔR(b) ≈ ΔR·Exp(∂ΔR/∂b_g·δb_g)`, `Δv(b) ≈ Δv + ∂Δv/∂b_g·δb_g + ∂Δv/∂b_a·δb_a`, and
 //! `Δp(b)` likewise (Forster eq. 44).
 
+use crate::earth::CoriolisMode;
 use crate::noise::{CellRule, white_scale};
 use crate::params::Level;
 use crate::sample::ImuBias;
@@ -215,7 +216,8 @@ impl EdgeNoise {
 /// A preintegrated IMU measurement between keyframes i and j (times `t_i_ns`, `t_j_ns`).
 ///
 /// `delta_v` and `delta_p` are in body frame i and exclude gravity (Forster eq. 33):
-/// `R_j = R_i ΔR`, `v_j = v_i + gΔt + R_i Δv`, `p_j = p_i + v_iΔt + ½gΔt² + R_i Δp`.
+/// `R_j = R_i ΔR`, `v_j = v_i + gΔt + R_i Δv`, `p_j = p_i + v_iΔt + ½gΔt² + R_i Δp` in a
+/// non-rotating world frame; with `omega_coriolis` set, [`crate::earth`] gives the prediction.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PreintegratedImu {
     /// Keyframe i time \[ns\].
@@ -248,6 +250,11 @@ pub struct PreintegratedImu {
     pub bias_hat: ImuBias,
     /// Gravity vector in the world frame [m/s²] (default (0, 0, −9.81)).
     pub gravity: Vector3<f64>,
+    /// Rotation rate of the navigation frame ω_ie [rad/s, navigation frame] that prediction
+    /// and the factors account for (`None`: a non-rotating frame). See [`crate::earth`].
+    pub omega_coriolis: Option<Vector3<f64>>,
+    /// How `omega_coriolis` enters prediction and the factors (ignored when it is `None`).
+    pub coriolis: CoriolisMode,
     /// What was computed: [`Level::Deltas`] (covariances and Jacobians zero),
     /// [`Level::Covariance`] (`cov`, `jac`; `cov15` is `diag(cov, Σ_bg Δt, Σ_ba Δt)` without
     /// the random walk's effect on the deltas, so it must not weight a combined factor) or

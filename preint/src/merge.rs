@@ -93,6 +93,10 @@ pub enum MergeError {
     /// The two windows use different gravity vectors (compared exactly).
     #[error("windows use different gravity vectors")]
     GravityMismatch,
+    /// The two windows use different navigation-frame rotation rates or Coriolis modes
+    /// (`omega_coriolis`, `coriolis`, compared exactly).
+    #[error("windows use different Earth rotation rates or Coriolis modes")]
+    EarthRateMismatch,
     /// The two windows were computed at different [`Level`]s (e.g. one without the combined
     /// covariance): the merged `cov15` would mix models.
     #[error("windows were computed at different levels ({a:?} and {b:?})")]
@@ -151,7 +155,8 @@ fn mat_to_jac(m: &M96) -> BiasJacobians {
 ///
 /// Errors: [`MergeError::NotConsecutive`] if `a.t_j_ns != b.t_i_ns`,
 /// [`MergeError::BiasMismatch`] / [`MergeError::GravityMismatch`] if `bias_hat` / `gravity`
-/// differ (exact comparison), [`MergeError::LevelMismatch`] if `level` differs.
+/// differ (exact comparison), [`MergeError::EarthRateMismatch`] if `omega_coriolis` or (with
+/// a rate) `coriolis` differ, [`MergeError::LevelMismatch`] if `level` differs.
 pub fn merge(a: &PreintegratedImu, b: &PreintegratedImu) -> Result<PreintegratedImu, MergeError> {
     check_mergeable(a, b)?;
     let ra = *a.delta_r.matrix();
@@ -178,6 +183,8 @@ pub fn merge(a: &PreintegratedImu, b: &PreintegratedImu) -> Result<Preintegrated
         jac,
         bias_hat: a.bias_hat,
         gravity: a.gravity,
+        omega_coriolis: a.omega_coriolis,
+        coriolis: a.coriolis,
         level: a.level,
         edge_noise,
     })
@@ -196,6 +203,11 @@ fn check_mergeable(a: &PreintegratedImu, b: &PreintegratedImu) -> Result<(), Mer
     }
     if a.gravity != b.gravity {
         return Err(MergeError::GravityMismatch);
+    }
+    if a.omega_coriolis != b.omega_coriolis
+        || (a.omega_coriolis.is_some() && a.coriolis != b.coriolis)
+    {
+        return Err(MergeError::EarthRateMismatch);
     }
     if a.level != b.level {
         return Err(MergeError::LevelMismatch {

@@ -118,7 +118,13 @@ impl preint_lie::Manifold for NavState {
 ///
 /// `g = pim.gravity` [m/s², world], `Δt = pim.delta_t` \[s\]. `bias` is the bias at keyframe i
 /// (order [b_g, b_a]); the correction is first order in `bias − pim.bias_hat`.
+///
+/// With `pim.omega_coriolis` set, the navigation frame rotates and the prediction follows
+/// `pim.coriolis` ([`crate::earth`] for the equations of each mode).
 pub fn predict(pim: &PreintegratedImu, state_i: &NavState, bias: &ImuBias) -> NavState {
+    if let Some(w) = &pim.omega_coriolis {
+        return crate::earth::predict_rotating(pim, state_i, bias, w, pim.coriolis);
+    }
     let (dr, dv, dp) = pim.corrected(bias);
     let dt = pim.delta_t;
     let g = pim.gravity;

@@ -1,6 +1,7 @@
 //! Preintegration parameters: gravity, continuous-time noise covariances, integration scheme,
 //! what to compute, bias re-integration thresholds and the largest allowed sample gap.
 
+use crate::earth::CoriolisMode;
 use crate::error::PreintError;
 use crate::extrinsics::{LeverArm, SensorPose};
 use crate::noise::ImuNoise;
@@ -94,6 +95,13 @@ pub struct PreintParams {
     pub body_p_sensor: Option<SensorPose>,
     /// How the lever arm of `body_p_sensor` is removed; default [`LeverArm::Exact`].
     pub lever_arm: LeverArm,
+    /// Rotation rate of the navigation frame ω_ie [rad/s, navigation frame] (Earth rotation,
+    /// e.g. [`earth_rate_enu`](crate::earth::earth_rate_enu)); `None` (the default) = a
+    /// non-rotating frame. Used by prediction and the factors, not by the per-sample loop.
+    pub omega_coriolis: Option<Vector3<f64>>,
+    /// How `omega_coriolis` enters prediction and the factors; default
+    /// [`CoriolisMode::Exact`].
+    pub coriolis: CoriolisMode,
 }
 
 /// Default gyro-bias change [rad/s] above which the first-order correction is replaced by
@@ -136,6 +144,8 @@ impl PreintParams {
             keep_samples: true,
             body_p_sensor: None,
             lever_arm: LeverArm::Exact,
+            omega_coriolis: None,
+            coriolis: CoriolisMode::Exact,
         }
     }
 
@@ -163,12 +173,29 @@ impl PreintParams {
         self
     }
 
+    /// Same parameters with a navigation-frame rotation rate ω_ie [rad/s, navigation frame].
+    pub fn with_omega_coriolis(mut self, omega: Vector3<f64>) -> Self {
+        self.omega_coriolis = Some(omega);
+        self
+    }
+
+    /// Same parameters with another [`CoriolisMode`].
+    pub fn with_coriolis(mut self, mode: CoriolisMode) -> Self {
+        self.coriolis = mode;
+        self
+    }
+
     /// Checks every field: finite values, symmetric covariances with non-negative diagonals,
     /// positive thresholds and gap.
     pub fn validate(&self) -> Result<(), PreintError> {
         let bad = |name, reason| Err(PreintError::InvalidParameter { name, reason });
         if !self.gravity.iter().all(|x| x.is_finite()) {
             return bad("gravity", "non-finite component");
+        }
+        if let Some(w) = &self.omega_coriolis
+            && !w.iter().all(|x| x.is_finite())
+        {
+            return bad("omega_coriolis", "non-finite component");
         }
         let covs = [
             ("gyro_cov", Some(&self.gyro_cov)),

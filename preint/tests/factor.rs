@@ -56,6 +56,8 @@ fn random_pim(rng: &mut Rng, delta_r: SO3) -> PreintegratedImu {
         },
         bias_hat: ImuBias::new(rng.v3(0.01), rng.v3(0.1)),
         gravity: Vector3::new(0.0, 0.0, -9.81),
+        omega_coriolis: None,
+        coriolis: preint::CoriolisMode::Exact,
         level: Level::Combined,
         edge_noise: EdgeNoise::default(),
     }
@@ -260,6 +262,8 @@ fn predict_free_fall_and_rest_by_hand() {
         jac: BiasJacobians::default(),
         bias_hat: ImuBias::zero(),
         gravity: Vector3::new(0.0, 0.0, -9.81),
+        omega_coriolis: None,
+        coriolis: preint::CoriolisMode::Exact,
         level: Level::Combined,
         edge_noise: EdgeNoise::default(),
     };

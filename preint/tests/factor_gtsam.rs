@@ -221,6 +221,8 @@ fn load_case(name: &str) -> Case {
         },
         bias_hat,
         gravity: out.at("n_gravity").v3(),
+        omega_coriolis: None,
+        coriolis: preint::CoriolisMode::Exact,
         level: Level::Covariance,
         edge_noise: EdgeNoise::default(),
     };
@@ -246,9 +248,13 @@ fn all_cases() -> Vec<Case> {
             let n = e.ok()?.file_name().into_string().ok()?;
             n.strip_suffix(".gtsam.json").map(str::to_string)
         })
-        // The combined and body_P_sensor fixtures have their own format and tests
-        // (`combined_gtsam.rs`, `body_p_sensor_gtsam.rs`).
-        .filter(|n| !n.starts_with("combined_") && !n.starts_with("body_p_sensor_"))
+        // The combined, body_P_sensor and Earth-rotation fixtures have their own formats and
+        // tests (`combined_gtsam.rs`, `body_p_sensor_gtsam.rs`, `earth_gtsam.rs`).
+        .filter(|n| {
+            !n.starts_with("combined_")
+                && !n.starts_with("body_p_sensor_")
+                && !n.starts_with("earth_")
+        })
         .collect();
     names.sort();
     names

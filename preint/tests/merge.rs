@@ -153,6 +153,8 @@ fn euler(s: &[ImuSample], bias: &ImuBias) -> PreintegratedImu {
         },
         bias_hat: *bias,
         gravity: Vector3::new(0.0, 0.0, -9.81),
+        omega_coriolis: None,
+        coriolis: preint::CoriolisMode::Exact,
         level: Level::Combined,
         edge_noise: EdgeNoise::default(),
     }

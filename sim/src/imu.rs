@@ -104,6 +104,10 @@ pub struct SimConfig {
     /// ([`SceneState::sensor_sample`](crate::SceneState::sensor_sample)); the ground truth
     /// stays the body's.
     pub body_p_sensor: Option<SensorPose>,
+    /// Rotation rate of the navigation frame ω_ie [rad/s, navigation frame] (Earth rotation):
+    /// the ideal readings are [`ideal_sample_rotating`](crate::rotating::ideal_sample_rotating)'s;
+    /// `None` (default) = a non-rotating frame.
+    pub earth_rate: Option<Vector3<f64>>,
 }
 
 impl Default for SimConfig {
@@ -116,6 +120,7 @@ impl Default for SimConfig {
             acc_scale: Matrix3::identity(),
             gyro_scale: Matrix3::identity(),
             body_p_sensor: None,
+            earth_rate: None,
         }
     }
 }
@@ -165,6 +170,9 @@ impl SimConfig {
             return Err(SimError::Config(
                 "body_p_sensor: non-finite entry or rotation not orthonormal".into(),
             ));
+        }
+        if self.earth_rate.is_some_and(|w| !finite(w.as_slice())) {
+            return Err(SimError::Config("earth rate is not finite".into()));
         }
         Ok(())
     }
@@ -278,10 +286,18 @@ pub fn simulate(
             bias.acc += w_ba * sba;
         }
         let st = scene.state(t_s(t_ns));
-        let ideal = match &config.body_p_sensor {
-            Some(pose) => st.sensor_sample(t_ns, &config.gravity, pose),
-            None => st.ideal_sample(t_ns, &config.gravity),
+        // The readings are those of the sensor's own point and axes (rigid-body kinematics,
+        // in the rotating frame if one is set); the truth stays the body's.
+        let sensor = match &config.body_p_sensor {
+            Some(pose) => st.at_sensor(pose),
+            None => st,
         };
+        let ideal = crate::rotating::ideal_sample_rotating(
+            &sensor,
+            t_ns,
+            &config.gravity,
+            config.earth_rate.as_ref(),
+        );
         let acc = config.acc_scale * ideal.acc + bias.acc + n_a * sa;
         let gyro = config.gyro_scale * ideal.gyro + bias.gyro + n_g * sg;
         samples.push(ImuSample { t_ns, gyro, acc });

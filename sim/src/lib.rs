@@ -14,6 +14,8 @@
 //! - [`imu`]: [`simulate`] (noise, bias random walk, scale/misalignment; ChaCha12 random
 //!   numbers, see the module docs for the exact seeding and draw order) and [`write_dataset`]
 //!   (EuRoC `imu.csv`, `groundtruth.csv`, Kalibr `imu.yaml`).
+//! - [`rotating`]: the ideal readings in a navigation frame rotating at ω_ie (Earth rotation,
+//!   [`SimConfig::earth_rate`]).
 //! - [`deadreckon`]: [`dead_reckon`] with Euler / midpoint rules and quaternion / matrix-Exp /
 //!   ZYX-Euler-angle attitude; [`euler_zyx_angles`], the raw Euler-angle states.
 
@@ -22,6 +24,7 @@
 pub mod deadreckon;
 pub mod deltas;
 pub mod imu;
+pub mod rotating;
 pub mod scene;
 pub mod scenes;
 

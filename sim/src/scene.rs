@@ -43,22 +43,35 @@ impl SceneState {
 }
 
 impl SceneState {
-    /// What an ideal IMU mounted at `pose` in the body (sensor → body rotation `R`, sensor
-    /// origin `r` \[m\] in body coordinates) reads in this state at `t_ns`: the body rate in
-    /// sensor axes, `ω_s = Rᵀ ω_b`, and the specific force of the sensor's point,
-    /// `f_s = Rᵀ (R_wbᵀ(a − g) + ω̇_b × r + ω_b × (ω_b × r))` (rigid-body kinematics; `a` is the
-    /// body origin's acceleration).
+    /// The state of a sensor mounted at `pose` in the body (sensor → body rotation `R`,
+    /// sensor origin `r` \[m\] in body coordinates), by rigid-body kinematics: position
+    /// `p + R_wb r`, velocity `v + R_wb (ω_b × r)`, acceleration
+    /// `a + R_wb (ω̇_b × r + ω_b × (ω_b × r))`, attitude `R_wb R`, rate `Rᵀ ω_b` and its
+    /// derivative `Rᵀ ω̇_b`.
+    pub fn at_sensor(&self, pose: &preint::SensorPose) -> SceneState {
+        let (w, wd, r) = (self.omega_b, self.omega_dot_b, pose.translation);
+        let rt = pose.rotation.inverse();
+        SceneState {
+            p: self.p + self.r_wb.act(&r),
+            v: self.v + self.r_wb.act(&w.cross(&r)),
+            a: self.a + self.r_wb.act(&(wd.cross(&r) + w.cross(&w.cross(&r)))),
+            r_wb: self.r_wb.compose(&pose.rotation),
+            omega_b: rt.act(&w),
+            omega_dot_b: rt.act(&wd),
+        }
+    }
+
+    /// What an ideal IMU mounted at `pose` in the body reads in this state at `t_ns`: the body
+    /// rate in sensor axes and the specific force of the sensor's point,
+    /// `f_s = Rᵀ (R_wbᵀ(a − g) + ω̇_b × r + ω_b × (ω_b × r))` (the ideal sample of
+    /// [`SceneState::at_sensor`]).
     pub fn sensor_sample(
         &self,
         t_ns: i64,
         gravity: &Vector3<f64>,
         pose: &preint::SensorPose,
     ) -> ImuSample {
-        let body = self.ideal_sample(t_ns, gravity);
-        let (w, r) = (self.omega_b, pose.translation);
-        let f = body.acc + self.omega_dot_b.cross(&r) + w.cross(&w.cross(&r));
-        let rt = pose.rotation.inverse();
-        ImuSample::new(t_ns, rt.act(&w), rt.act(&f))
+        self.at_sensor(pose).ideal_sample(t_ns, gravity)
     }
 }
 

@@ -15,6 +15,9 @@
 //!   VINS-Mono gyro bias), the pose noise propagated into every residual block with the
 //!   correlation between factors that share a pose.
 //!
+//! - [`earth_rate`]: the Earth rate in a static recording (its vertical part removed, its
+//!   horizontal part removed with a heading or else carried in the bias σ).
+//!
 //! Shared pieces: [`SegmentStats`] (means and variances of a run of samples) and the tilt
 //! geometry [`roll_pitch_of_up`], [`attitude_from_roll_pitch`].
 //!
@@ -32,6 +35,7 @@
 //! so it is wrong if the densities are; each result also reports `chi2` so that this can be
 //! checked (`chi2/dof ≈ 1` when the densities are right).
 
+pub mod earth_rate;
 pub mod known_poses;
 pub mod multipose;
 pub mod static_bias;
@@ -44,6 +48,7 @@ mod validate;
 use crate::gauss_newton::GnError;
 use preint::PreintError;
 
+pub use earth_rate::{EarthRateInBody, earth_rate_in_body, remove_earth_rate};
 pub use known_poses::{KnownPose, KnownPoseCalibration, KnownPoseOptions, calibrate_known_poses};
 pub use multipose::{
     ModelFit, MultiPoseCalibration, MultiPoseModel, MultiPoseOptions, calibrate_multi_pose,

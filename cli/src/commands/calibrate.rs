@@ -63,6 +63,21 @@ pub struct Args {
     /// the body. Biases are always the IMU's, in its own axes.
     #[arg(long, value_parser = crate::parse::sensor_pose, allow_hyphen_values = true)]
     pub body_p_sensor: Option<preint::SensorPose>,
+    /// Latitude (deg) of a static recording: the Earth rate's vertical part (Ω_E sin φ along
+    /// up) is removed from the gyro bias; its horizontal part (Ω_E cos φ, direction unknown
+    /// without --heading) is added to the bias σ. Single-attitude static model only.
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true,
+          value_parser = crate::earth_args::latitude)]
+    pub latitude: Option<f64>,
+    /// Heading of the body x axis (deg, clockwise from north): with --latitude, the whole
+    /// Earth rate is removed from the gyro bias.
+    #[arg(
+        long,
+        value_name = "DEG",
+        allow_hyphen_values = true,
+        requires = "latitude"
+    )]
+    pub heading: Option<f64>,
 }
 
 /// The problem solved and its estimates.
@@ -92,6 +107,8 @@ pub enum Calibration {
         /// With `--body-p-sensor`: the body's roll and pitch \[rad\] (the IMU's "up" rotated
         /// into the body frame).
         body_roll_pitch: Option<(f64, f64)>,
+        /// The Earth rate taken out of the gyro bias (`--latitude`).
+        earth: Option<preint_calib::bias::EarthRateInBody>,
     },
 }
 
@@ -179,7 +196,24 @@ pub fn compute(args: &Args) -> Result<Calibration, CliError> {
     checks::positive("--gravity", args.gravity)?;
     let noise = noise::or_default(args.noise.as_deref())?;
     let samples = read_samples(args)?;
+    if let Some(h) = args.heading
+        && !h.is_finite()
+    {
+        return Err(CliError::Usage(format!(
+            "--heading {h} is not a finite angle in degrees"
+        )));
+    }
+    let earth_refused = |model: &str| {
+        CliError::Usage(format!(
+            "--latitude is applied by the single-attitude static model; the {model} model does \
+             not model Earth rotation (drop --latitude, or calibrate one still interval with \
+             --from/--to)"
+        ))
+    };
     if let Some(pfile) = &args.poses {
+        if args.latitude.is_some() {
+            return Err(earth_refused("known-pose"));
+        }
         return known_poses(args, pfile, &samples, &noise);
     }
     let fail = fail_in(args.input.path());
@@ -189,6 +223,9 @@ pub fn compute(args: &Args) -> Result<Calibration, CliError> {
     let still =
         detect_still_intervals(&samples, &StillOptions::from_noise(&noise, rate)).map_err(&fail)?;
     if distinct_attitudes(&samples, &still) >= 3 {
+        if args.latitude.is_some() {
+            return Err(earth_refused("multi-position"));
+        }
         let opts = MultiPoseOptions {
             gravity: g,
             ..Default::default()
@@ -209,7 +246,13 @@ pub fn compute(args: &Args) -> Result<Calibration, CliError> {
         gravity: g,
         ..Default::default()
     };
-    let c = calibrate_static(&samples[used.start..used.end], &noise, &opts).map_err(&fail)?;
+    let mut c = calibrate_static(&samples[used.start..used.end], &noise, &opts).map_err(&fail)?;
+    let earth = args.latitude.map(|lat| {
+        preint_calib::bias::earth_rate_in_body(&c.up_body, (c.roll, c.pitch), lat, args.heading)
+    });
+    if let Some(e) = &earth {
+        c = preint_calib::bias::remove_earth_rate(&c, e);
+    }
     let total_s = (samples[n - 1].t_ns - samples[0].t_ns) as f64 * 1e-9;
     let still_s = still.iter().map(|iv| iv.duration_s()).sum();
     let body_roll_pitch = args.body_p_sensor.map(|pose| {
@@ -221,6 +264,7 @@ pub fn compute(args: &Args) -> Result<Calibration, CliError> {
         used,
         still_s: (still_s, total_s),
         body_roll_pitch,
+        earth,
     })
 }
 
@@ -244,6 +288,7 @@ pub fn to_json(cal: &Calibration) -> Value {
             used,
             still_s,
             body_roll_pitch,
+            earth,
         } => json!({
             "model": "static-single-attitude",
             "interval_ns": [used.t_start_ns, used.t_end_ns], "still_s": still_s.0, "recording_s": still_s.1,
@@ -255,7 +300,30 @@ pub fn to_json(cal: &Calibration) -> Value {
             "measured_acc_density": list(&c.measured_acc_density),
             "iterations": c.iterations, "cost": 0.5 * c.chi2, "chi2": c.chi2, "dof": c.dof,
             "units": {"gyro_bias": "rad/s", "roll": "rad", "pitch": "rad", "densities": "rad/s/sqrt(Hz), m/s^2/sqrt(Hz)"},
+            "earth_rate": earth.as_ref().map(earth_json),
         }),
+    }
+}
+
+/// What `--latitude` did to the gyro bias.
+fn earth_json(e: &preint_calib::bias::EarthRateInBody) -> Value {
+    json!({"latitude_deg": e.latitude_deg, "heading_deg": e.heading_deg,
+        "removed_body": list(&e.removed), "unresolved_horizontal": e.unresolved,
+        "note": earth_note(e), "units": "rad/s, body frame"})
+}
+
+/// One sentence on the Earth rate's share of the bias.
+fn earth_note(e: &preint_calib::bias::EarthRateInBody) -> String {
+    if e.heading_deg.is_some() {
+        "the Earth rate R_wb^T w_ie (from latitude, roll, pitch and heading) is removed from b_g"
+            .into()
+    } else {
+        format!(
+            "the vertical Earth rate is removed from b_g; its horizontal part ({:.3e} rad/s, \
+             direction unknown without --heading) is not separable from b_g and is included in \
+             the b_g sigma",
+            e.unresolved
+        )
     }
 }
 
@@ -325,10 +393,11 @@ pub fn to_text(cal: &Calibration) -> String {
             used,
             still_s,
             body_roll_pitch,
+            earth,
         } => format!(
             "static calibration (one attitude) on the longest still interval, {:.1} s from {} to \
              {} ns ({:.1} s still of {:.1} s recorded):\n{}  roll {:.4}° ± {:.1e}°, pitch \
-             {:.4}° ± {:.1e}° (IMU axes){}\n  b_a: not estimated ({})\n",
+             {:.4}° ± {:.1e}° (IMU axes){}\n  b_a: not estimated ({})\n{}",
             c.duration_s,
             used.t_start_ns,
             used.t_end_ns,
@@ -344,7 +413,11 @@ pub fn to_text(cal: &Calibration) -> String {
                 r.to_degrees(),
                 p.to_degrees()
             )),
-            c.acc_bias_note
+            c.acc_bias_note,
+            earth
+                .as_ref()
+                .map(|e| format!("  Earth rate at {}°: {}\n", e.latitude_deg, earth_note(e)))
+                .unwrap_or_default()
         ),
     }
 }

@@ -9,8 +9,8 @@ use crate::scheme::{self};
 use crate::{CliError, Output, input, noise, stream};
 use nalgebra::Vector3;
 use preint::{
-    ImuBias, ImuNoise, Level, PreintError, PreintParams, PreintegratedImu, Preintegrator,
-    preintegrate,
+    ImuBias, ImuNoise, Level, NavState, PreintError, PreintParams, PreintegratedImu, Preintegrator,
+    predict, preintegrate,
 };
 use preint_io::SourceInfo;
 use serde_json::{Value, json};
@@ -37,6 +37,9 @@ pub struct Args {
     /// Last keyframe time in ns (default: last sample).
     #[arg(long, allow_hyphen_values = true)]
     pub to: Option<i64>,
+    /// Earth rotation and the predicted state at the window's end.
+    #[command(flatten)]
+    pub predict: crate::earth_args::PredictArgs,
 }
 
 /// A preintegrated window.
@@ -62,6 +65,9 @@ pub struct Integration {
     pub body_p_sensor: Option<preint::SensorPose>,
     /// How its lever arm was removed.
     pub lever_arm: preint::LeverArm,
+    /// The state at the window's end predicted from `--initial-state` ([`preint::predict`]
+    /// with the bias estimate and the Earth rate of the measurement).
+    pub predicted: Option<NavState>,
 }
 
 /// Reads the file once and preintegrates `[--from, --to]` at [`Level::Combined`]: the whole
@@ -69,6 +75,9 @@ pub struct Integration {
 /// stream it needs (reading stops after `--to`). Memory is bounded by the window, not the file.
 pub fn compute(args: &Args) -> Result<Integration, CliError> {
     let (noise, mut params) = args.preint.params(Level::Combined)?;
+    if let Some((w, mode)) = args.predict.earth()? {
+        params = params.with_omega_coriolis(w).with_coriolis(mode);
+    }
     let bias = ImuBias::new(
         args.bias_gyro.unwrap_or_default(),
         args.bias_acc.unwrap_or_default(),
@@ -105,6 +114,7 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
         noise,
         noise_source: args.preint.noise_source(),
         bias,
+        predicted: args.predict.initial_state.map(|x| predict(&pim, &x, &bias)),
         pim,
         body_p_sensor,
         lever_arm,
@@ -173,7 +183,7 @@ pub fn to_json(r: &Integration) -> Value {
     noise["units"] = json!(
         "continuous-time densities: rad/s/sqrt(Hz), rad/s^2/sqrt(Hz), m/s^2/sqrt(Hz), m/s^3/sqrt(Hz)"
     );
-    json!({
+    let mut out = json!({
         "imu": r.imu,
         "input": source_json(&r.source),
         "scheme": scheme::label(r.scheme),
@@ -212,7 +222,17 @@ pub fn to_json(r: &Integration) -> Value {
             "dR_dbg": rows(&jac.d_r_d_bg), "dv_dbg": rows(&jac.d_v_d_bg), "dv_dba": rows(&jac.d_v_d_ba),
             "dp_dbg": rows(&jac.d_p_d_bg), "dp_dba": rows(&jac.d_p_d_ba),
         },
-    })
+        "omega_coriolis": m.omega_coriolis.map(|w| list(&w)),
+        "coriolis": m.omega_coriolis.map(|_| crate::earth_args::mode_label(m.coriolis)),
+    });
+    if let Some(x) = &r.predicted {
+        out["predicted"] = json!({
+            "position": list(&x.p), "velocity": list(&x.v), "rotation": rows(x.r.matrix()),
+            "units": {"position": "m (world frame)", "velocity": "m/s (world frame)",
+                      "rotation": "3x3 rows, body -> world"},
+        });
+    }
+    out
 }
 
 /// The human summary: deltas, noise, 1σ, the 9×9 covariance and the five bias Jacobians.
@@ -286,6 +306,25 @@ pub fn to_text(r: &Integration) -> String {
     ] {
         let _ = writeln!(h, "{name}:");
         h.push_str(&text_matrix(j, "  "));
+    }
+    if let Some(w) = m.omega_coriolis {
+        let _ = writeln!(
+            h,
+            "world frame rotating at ω = [{:e}, {:e}, {:e}] rad/s, Coriolis mode {}",
+            w.x,
+            w.y,
+            w.z,
+            crate::earth_args::mode_label(m.coriolis)
+        );
+    }
+    if let Some(x) = &r.predicted {
+        let _ = writeln!(
+            h,
+            "predicted at t_j: p = [{:.9}, {:.9}, {:.9}] m, v = [{:.9}, {:.9}, {:.9}] m/s (world frame)",
+            x.p.x, x.p.y, x.p.z, x.v.x, x.v.y, x.v.z
+        );
+        let _ = writeln!(h, "predicted R (body → world):");
+        h.push_str(&text_matrix(x.r.matrix(), "  "));
     }
     h
 }

@@ -34,6 +34,9 @@ pub struct Args {
     /// truth stays the body's.
     #[arg(long, value_parser = crate::parse::sensor_pose, allow_hyphen_values = true)]
     pub body_p_sensor: Option<preint::SensorPose>,
+    /// A rotating world frame (Earth rotation).
+    #[command(flatten)]
+    pub earth: crate::earth_args::EarthRateArgs,
 }
 
 /// What `simulate` wrote.
@@ -57,14 +60,12 @@ pub fn compute(args: &Args) -> Result<Simulation, CliError> {
         Some(path) => Some(read_kalibr_yaml(Path::new(path))?),
         None => Some(ImuNoise::euroc()),
     };
-    let cfg = match noise_model {
+    let mut cfg = match noise_model {
         Some(n) => preint_sim::SimConfig::with_noise(n),
         None => preint_sim::SimConfig::noise_free(),
     };
-    let cfg = preint_sim::SimConfig {
-        body_p_sensor: args.body_p_sensor,
-        ..cfg
-    };
+    cfg.body_p_sensor = args.body_p_sensor;
+    cfg.earth_rate = args.earth.rate();
     let pb = crate::progress::bar(2, "simulate");
     if let Some(pb) = &pb {
         pb.set_message("synthesising the samples and the ground truth");
@@ -93,18 +94,27 @@ pub fn compute(args: &Args) -> Result<Simulation, CliError> {
     })
 }
 
-/// The JSON form: scene, samples, rate_hz, duration_s, seed, noise densities (or `null`), files.
+/// The JSON form: scene, samples, rate_hz, duration_s, seed, noise densities (or `null`), files,
+/// earth_rate (rad/s, world frame, or `null`).
 pub fn to_json(s: &Simulation) -> Value {
     let a = &s.args;
     json!({"scene": a.scene, "samples": s.samples, "rate_hz": a.rate, "duration_s": a.duration,
-        "seed": a.seed, "noise": s.noise.as_ref().map(noise::densities_json), "files": s.files})
+        "seed": a.seed, "noise": s.noise.as_ref().map(noise::densities_json), "files": s.files,
+        "earth_rate": a.earth.rate().map(|w| crate::format::list(&w))})
 }
 
 /// The human summary: one line.
 pub fn to_text(s: &Simulation) -> String {
     let a = &s.args;
+    let earth = match a.earth.rate() {
+        Some(w) => format!(
+            ", world frame rotating at [{:e}, {:e}, {:e}] rad/s",
+            w.x, w.y, w.z
+        ),
+        None => String::new(),
+    };
     format!(
-        "simulated `{}`: {} samples at {} Hz over {} s (seed {}, noise {}); wrote {}\n",
+        "simulated `{}`: {} samples at {} Hz over {} s (seed {}, noise {}{earth}); wrote {}\n",
         a.scene,
         s.samples,
         a.rate,

@@ -42,7 +42,10 @@
 //! ```
 //!
 //! all other blocks are zero. Every block is checked against central differences on the
-//! manifold in `preint/tests/factor.rs`.
+//! manifold in `preint/tests/factor.rs`. With an Earth rate (`pim.omega_coriolis`) the residual
+//! compares the deltas the states imply in the rotating frame instead (`rotating.rs`, each
+//! [`CoriolisMode`](crate::CoriolisMode); Jacobians checked in `preint/tests/earth.rs`); its
+//! covariance is the same.
 //!
 //! # Whitening
 //!
@@ -64,6 +67,7 @@
 mod combined;
 mod imu;
 mod residual;
+mod rotating;
 
 pub use combined::CombinedImuFactor;
 pub use imu::ImuFactor;
@@ -277,12 +281,14 @@ impl<const R: usize> FactorJacobians<R> {
 fn check_pim(pim: &PreintegratedImu) -> Result<(), FactorError> {
     let fin = |s: &[f64]| s.iter().all(|x| x.is_finite());
     let j = &pim.jac;
-    let checks: [(&'static str, bool); 8] = [
+    let omega_ok = pim.omega_coriolis.is_none_or(|w| fin(w.as_slice()));
+    let checks: [(&'static str, bool); 9] = [
         ("delta_r", fin(pim.delta_r.matrix().as_slice())),
         ("delta_v", fin(pim.delta_v.as_slice())),
         ("delta_p", fin(pim.delta_p.as_slice())),
         ("delta_t", pim.delta_t.is_finite()),
         ("gravity", fin(pim.gravity.as_slice())),
+        ("omega_coriolis", omega_ok),
         (
             "bias_hat",
             fin(pim.bias_hat.gyro.as_slice()) && fin(pim.bias_hat.acc.as_slice()),

@@ -14,6 +14,9 @@ pub(super) fn residual9(
     xj: &NavState,
     bias_i: &ImuBias,
 ) -> (SVector<f64, 9>, ImuFactorJacobians) {
+    if let Some(w) = &pim.omega_coriolis {
+        return super::rotating::residual9_rotating(pim, xi, xj, bias_i, w);
+    }
     let dbg = bias_i.gyro - pim.bias_hat.gyro;
     let dba = bias_i.acc - pim.bias_hat.acc;
     let jb = &pim.jac;

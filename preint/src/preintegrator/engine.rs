@@ -48,6 +48,8 @@ impl NoiseKind {
 pub(crate) struct Fixed {
     pub bias_hat: ImuBias,
     pub gravity: Vector3<f64>,
+    pub omega_coriolis: Option<Vector3<f64>>,
+    pub coriolis: crate::earth::CoriolisMode,
     pub level: Level,
     pub gyro_cov: Matrix3<f64>,
     pub acc_cov: Matrix3<f64>,
@@ -580,6 +582,8 @@ impl<S: IntervalScheme> Core<S> {
             jac: chart.jac,
             bias_hat: fixed.bias_hat,
             gravity: fixed.gravity,
+            omega_coriolis: fixed.omega_coriolis,
+            coriolis: fixed.coriolis,
             level: fixed.level,
             edge_noise,
         }

@@ -520,6 +520,8 @@ fn fixed(params: &PreintParams, bias_hat: ImuBias, spec: WindowSpec) -> Fixed {
     Fixed {
         bias_hat,
         gravity: params.gravity,
+        omega_coriolis: params.omega_coriolis,
+        coriolis: params.coriolis,
         level: params.level,
         gyro_cov: params.gyro_cov,
         acc_cov: params.acc_cov,
