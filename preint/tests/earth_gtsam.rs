@@ -127,7 +127,7 @@ fn dm<const R: usize, const C: usize>(m: &SMatrix<f64, R, C>) -> DMatrix<f64> {
     DMatrix::from_column_slice(R, C, m.as_slice())
 }
 
-const CASES: [&str; 2] = ["lat48", "fast"];
+const CASES: [&str; 3] = ["lat48", "fast", "near"];
 
 #[test]
 fn exact_prediction_matches_gtsam() {
@@ -165,6 +165,8 @@ fn imu_factor_residual_matches_gtsam() {
             g.amax()
         );
         assert!(err_state < 1e-14 && err < 1e-9, "{name}: {err}\n{e}\n{g}");
+        // Near the origin the residual is not a small difference of large positions.
+        assert!(name != "near" || err < 1e-12, "{name}: {err}");
     }
 }
 
@@ -186,6 +188,7 @@ fn combined_factor_residual_matches_gtsam() {
              {err:.1e} relative to the residual"
         );
         assert!(err_state < 1e-14 && err < 1e-9, "{name}: {err}");
+        assert!(name != "near" || err < 1e-12, "{name}: {err}");
         assert!(g.fixed_rows::<6>(9).amax() == 0.0 && r.fixed_rows::<6>(9).amax() == 0.0);
     }
 }
