@@ -10,21 +10,20 @@
 
 use super::edges::{EdgeGains, EdgeLayout, WindowSpec, resolve};
 use super::output::Chart;
+use super::retire::{Retirer, centripetal_d, edge_count};
 use crate::fast::{FastDeltas, SliceInput};
 use crate::measurement::{EdgeNoise, PreintegratedImu};
-use crate::noise::{walk_scale, white_scale};
+use crate::noise::walk_scale;
 use crate::params::{CovShape, Level};
 use crate::propagation::blocks::{Gain96, PackedSym9};
 use crate::propagation::transition::Origin;
-use crate::propagation::{
-    AnisotropicNoise, BiasWalk, ErrorState, IsotropicNoise, NoiseCov, SampleGain,
-};
+use crate::propagation::{AnisotropicNoise, BiasWalk, ErrorState, IsotropicNoise, NoiseCov};
 use crate::sample::{ImuBias, ImuSample};
 use crate::scheme::{Deltas, IntervalScheme, Node, RENORM_EVERY, Stencil, span_s};
 use nalgebra::{Matrix3, Vector3};
 
 /// Nodes kept: enough for every stencil and for the slice path's write-back.
-const RING: usize = 8;
+pub(super) const RING: usize = 8;
 
 /// The white-noise covariance, in the shape decided once at construction.
 #[derive(Clone, Copy, Debug)]
@@ -64,25 +63,6 @@ pub(crate) struct Fixed {
     pub centripetal: Option<Vector3<f64>>,
 }
 
-/// `D = ∂a_node/∂ω_node` of a node whose specific force lost `c(ω) = ω × (ω × r)`:
-/// `−∂c/∂ω = [ω × r]× + [ω]×[r]× = [ω × r]× + r ωᵀ − (ω·r) I`.
-#[inline(always)]
-fn centripetal_d(w: &Vector3<f64>, r: &Vector3<f64>) -> Matrix3<f64> {
-    let (x, wr) = (w.cross(r), w.dot(r));
-    let o = r * w.transpose();
-    Matrix3::new(
-        o[(0, 0)] - wr,
-        o[(0, 1)] - x.z,
-        o[(0, 2)] + x.y,
-        o[(1, 0)] + x.z,
-        o[(1, 1)] - wr,
-        o[(1, 2)] - x.x,
-        o[(2, 0)] - x.y,
-        o[(2, 1)] + x.x,
-        o[(2, 2)] - wr,
-    )
-}
-
 /// The loop of scheme `S` over one window.
 #[derive(Clone, Debug)]
 pub(crate) struct Core<S: IntervalScheme> {
@@ -107,151 +87,6 @@ pub(crate) struct Core<S: IntervalScheme> {
     /// With a lever arm corrected per sample: `−Σ_j G_a,j D_j`, the bias Jacobian's share
     /// through the nodes' centripetal terms (pulled back, gyro columns).
     lever_j: crate::propagation::blocks::Cols9,
-}
-
-/// Hands retired samples' noise to the covariance, or their gains to the edge store.
-struct Retirer<'a, N, const LEVER: bool> {
-    ring: &'a [Node; RING],
-    ctx_after: Option<&'a Node>,
-    edges: &'a mut EdgeGains,
-    noise: &'a N,
-    ctx_before: usize,
-    n: usize,
-    at_end: bool,
-    /// Lever arm in sensor axes and the bias-Jacobian accumulator, when the centripetal term
-    /// is removed per sample.
-    lever: Option<(Vector3<f64>, &'a mut crate::propagation::blocks::Cols9)>,
-}
-
-impl<'a, N, const LEVER: bool> Retirer<'a, N, LEVER> {
-    /// For a window with `(ctx_before, n, at_end)`: context samples before it, samples, and
-    /// whether it is complete.
-    #[inline(always)]
-    fn new(
-        ring: &'a [Node; RING],
-        ctx_after: Option<&'a Node>,
-        edges: &'a mut EdgeGains,
-        noise: &'a N,
-        (ctx_before, n, at_end): (usize, usize, bool),
-        lever: Option<(Vector3<f64>, &'a mut crate::propagation::blocks::Cols9)>,
-    ) -> Self {
-        Self {
-            ring,
-            ctx_after,
-            edges,
-            noise,
-            ctx_before,
-            n,
-            at_end,
-            lever,
-        }
-    }
-}
-
-impl<N: NoiseCov, const LEVER: bool> Retirer<'_, N, LEVER> {
-    /// Node at extended index `i`.
-    #[inline(always)]
-    fn ext(&self, i: usize) -> &Node {
-        match self.ctx_after {
-            Some(c) if i == self.ctx_before + self.n => c,
-            _ => &self.ring[i % RING],
-        }
-    }
-
-    /// Retires sample `id` (extended index) with its total gain.
-    #[inline(always)]
-    fn retire<S: IntervalScheme>(&mut self, p: &mut PackedSym9, id: usize, gain: &SampleGain) {
-        if LEVER {
-            self.retire_lever::<S>(p, id, gain);
-        } else {
-            self.retire_gain::<S>(p, id, gain);
-        }
-    }
-
-    /// [`Retirer::retire`] with a lever arm corrected per sample: the raw gyro noise also moves
-    /// the node's specific force, so its gain is `G_g + G_a D` (and the bias Jacobian takes
-    /// `−G_a D`).
-    #[inline(never)]
-    fn retire_lever<S: IntervalScheme>(
-        &mut self,
-        p: &mut PackedSym9,
-        id: usize,
-        gain: &SampleGain,
-    ) {
-        let w = self.ext(id).w;
-        let Some((r, _)) = &self.lever else { return };
-        let d = centripetal_d(&w, r);
-        let mut through = [[0.0; 9]; 3];
-        match gain.acc {
-            crate::propagation::AccGain::Rot { r: rot, cv, cp } => {
-                let m = rot * d;
-                for (c, col) in through.iter_mut().enumerate() {
-                    for i in 0..3 {
-                        col[3 + i] = cv * m[(i, c)];
-                        col[6 + i] = cp * m[(i, c)];
-                    }
-                }
-            }
-            crate::propagation::AccGain::Full(a) => {
-                crate::propagation::add_acc_through(&mut through, a, &d);
-            }
-        }
-        if let Some((_, j)) = &mut self.lever {
-            crate::propagation::blocks::sub_cols(j, &through);
-        }
-        let mut g = *gain.g;
-        crate::propagation::blocks::add_cols(&mut g, &through);
-        self.retire_gain::<S>(
-            p,
-            id,
-            &SampleGain {
-                g: &g,
-                acc: gain.acc,
-            },
-        );
-    }
-
-    /// Adds the noise of sample `id` with its total gain, or collects the gain of an edge sample.
-    #[inline(always)]
-    fn retire_gain<S: IntervalScheme>(&mut self, p: &mut PackedSym9, id: usize, gain: &SampleGain) {
-        let (before, n) = (self.ctx_before, self.n);
-        let in_window = id >= before && id < before + n;
-        let (left, right) = if in_window {
-            let j = id - before;
-            let total = if self.at_end { n } else { usize::MAX };
-            let t = self.ring[id % RING].t_ns;
-            let left = if j > 0 {
-                span_s(self.ring[(id - 1) % RING].t_ns, t)
-            } else {
-                0.0
-            };
-            let right = if j + 1 < total {
-                span_s(t, self.ring[(id + 1) % RING].t_ns)
-            } else {
-                0.0
-            };
-            (left, right)
-        } else {
-            (0.0, 0.0)
-        };
-        let edge = !in_window
-            || id - before < edge_count::<S>()
-            || (self.at_end && id - before + edge_count::<S>() >= n);
-        if edge
-            && self
-                .edges
-                .push(id, self.ext(id).t_ns, &gain.full(), left, right)
-        {
-            return;
-        }
-        gain.add_noise(p, self.noise, white_scale(S::CELL_RULE.cell_s(left, right)));
-    }
-}
-
-/// First and last window samples whose gains are collected: those whose stencils or cells
-/// may reach across the window's edge.
-const fn edge_count<S: IntervalScheme>() -> usize {
-    S::NODES_BEFORE + 2
 }
 
 impl<S: IntervalScheme> Core<S> {

@@ -8,6 +8,7 @@
 //! |---|---|
 //! | `mod.rs` | the public API: construction, validation of every sample, bias update |
 //! | `engine.rs` | the interval loop of one scheme (ring of nodes, stencils, noise cells) |
+//! | `retire.rs` | a sample's noise once no interval reads it (or its gain, near an edge) |
 //! | `edges.rs` | the samples near the window's edges, collected for exact merges |
 //! | `output.rs` | the measurement in the documented chart |
 //! | `validation.rs` | the sample checks shared with the window path |
@@ -15,6 +16,7 @@
 mod edges;
 mod engine;
 mod output;
+mod retire;
 pub(crate) mod validation;
 
 pub(crate) use edges::{Side, Src, WindowSpec};
