@@ -92,46 +92,50 @@ fn rotation_only_equals_gtsam() {
     let mut pi = Preintegrator::new(p, bias).unwrap();
     pi.integrate_slice(&samples).unwrap();
     let m = pi.finish().unwrap();
-    let dm = |x: &Matrix3<f64>| DMatrix::from_column_slice(3, 3, x.as_slice());
-    let dv = |x: &Vector3<f64>| DMatrix::from_column_slice(3, 1, x.as_slice());
-    let checks = [
-        ("delta_R", rel(&dm(m.delta_r.matrix()), &mat(&f["delta_R"]))),
-        ("delta_v", rel(&dv(&m.delta_v), &dv(&v3(&f["delta_v"])))),
-        ("delta_p", rel(&dv(&m.delta_p), &dv(&v3(&f["delta_p"])))),
-        (
-            "covariance",
-            rel(
-                &DMatrix::from_column_slice(9, 9, m.cov.as_slice()),
-                &mat(&f["covariance"]),
-            ),
-        ),
-    ];
-    for (name, e) in checks {
-        println!("{name}: max relative difference to GTSAM {e:.1e}");
+    assert_equals_gtsam("rotation only", &m, &f);
+    let (fd, ana) = (&f["bias_jacobians_finite_difference"], &f["bias_jacobians"]);
+    for (name, _) in jacobians(&m) {
+        let g = rel(&mat(&ana[name]), &mat(&fd[name]));
+        println!("{name}: GTSAM's analytic vs central differences of its deltas {g:.1e}");
+        assert!(g > 0.1, "{name}: GTSAM's analytic Jacobian {g:e}");
     }
-    for (name, e) in checks {
-        assert!(e <= 1e-12, "{name}: {e:e}");
-    }
-    let fd = &f["bias_jacobians_finite_difference"];
-    let ana = &f["bias_jacobians"];
-    let ours = [
+}
+
+fn dm(x: &Matrix3<f64>) -> DMatrix<f64> {
+    DMatrix::from_column_slice(3, 3, x.as_slice())
+}
+
+/// The five bias Jacobians of `m` with their fixture names.
+fn jacobians(m: &preint::PreintegratedImu) -> [(&'static str, Matrix3<f64>); 5] {
+    [
         ("dR_dbg", m.jac.d_r_d_bg),
         ("dv_dbg", m.jac.d_v_d_bg),
         ("dv_dba", m.jac.d_v_d_ba),
         ("dp_dbg", m.jac.d_p_d_bg),
         ("dp_dba", m.jac.d_p_d_ba),
+    ]
+}
+
+/// Asserts `m`'s deltas and covariance equal the fixture's (≤ 1e-12 relative) and its bias
+/// Jacobians equal central differences of GTSAM's deltas (≤ 1e-6, the differencing error).
+fn assert_equals_gtsam(case: &str, m: &preint::PreintegratedImu, f: &Value) {
+    let dv = |x: &Vector3<f64>| DMatrix::from_column_slice(3, 1, x.as_slice());
+    let cov = DMatrix::from_column_slice(9, 9, m.cov.as_slice());
+    let checks = [
+        ("delta_R", rel(&dm(m.delta_r.matrix()), &mat(&f["delta_R"]))),
+        ("delta_v", rel(&dv(&m.delta_v), &dv(&v3(&f["delta_v"])))),
+        ("delta_p", rel(&dv(&m.delta_p), &dv(&v3(&f["delta_p"])))),
+        ("covariance", rel(&cov, &mat(&f["covariance"]))),
     ];
-    for (name, j) in ours {
-        let (e, g) = (
-            rel(&dm(&j), &mat(&fd[name])),
-            rel(&mat(&ana[name]), &mat(&fd[name])),
-        );
-        println!(
-            "{name}: ours vs central differences of GTSAM's deltas {e:.1e}; GTSAM's analytic \
-             {g:.1e}"
-        );
-        assert!(e <= 1e-6, "{name}: {e:e}");
-        assert!(g > 0.1, "{name}: GTSAM's analytic Jacobian {g:e}");
+    for (name, e) in checks {
+        println!("{case}, {name}: max relative difference to GTSAM {e:.1e}");
+        assert!(e <= 1e-12, "{case}, {name}: {e:e}");
+    }
+    let fd = &f["bias_jacobians_finite_difference"];
+    for (name, j) in jacobians(m) {
+        let e = rel(&dm(&j), &mat(&fd[name]));
+        println!("{case}, {name}: vs central differences of GTSAM's deltas {e:.1e}");
+        assert!(e <= 1e-6, "{case}, {name}: {e:e}");
     }
 }
 
@@ -270,35 +274,5 @@ fn centripetal_mode_equals_gtsam_with_a_lever_arm() {
     let mut pi = Preintegrator::new(p, ImuBias::zero()).unwrap();
     pi.integrate_slice(&s).unwrap();
     let m = pi.finish().unwrap();
-    let dm = |x: &Matrix3<f64>| DMatrix::from_column_slice(3, 3, x.as_slice());
-    let dv = |x: &Vector3<f64>| DMatrix::from_column_slice(3, 1, x.as_slice());
-    let checks = [
-        ("delta_R", rel(&dm(m.delta_r.matrix()), &mat(&f["delta_R"]))),
-        ("delta_v", rel(&dv(&m.delta_v), &dv(&v3(&f["delta_v"])))),
-        ("delta_p", rel(&dv(&m.delta_p), &dv(&v3(&f["delta_p"])))),
-        (
-            "covariance",
-            rel(
-                &DMatrix::from_column_slice(9, 9, m.cov.as_slice()),
-                &mat(&f["covariance"]),
-            ),
-        ),
-    ];
-    for (name, e) in checks {
-        println!("centripetal mode, {name}: max relative difference to GTSAM {e:.1e}");
-        assert!(e <= 1e-12, "{name}: {e:e}");
-    }
-    let fd = &f["bias_jacobians_finite_difference"];
-    let ours = [
-        ("dR_dbg", m.jac.d_r_d_bg),
-        ("dv_dbg", m.jac.d_v_d_bg),
-        ("dv_dba", m.jac.d_v_d_ba),
-        ("dp_dbg", m.jac.d_p_d_bg),
-        ("dp_dba", m.jac.d_p_d_ba),
-    ];
-    for (name, j) in ours {
-        let e = rel(&dm(&j), &mat(&fd[name]));
-        println!("centripetal mode, {name}: vs central differences of GTSAM's deltas {e:.1e}");
-        assert!(e <= 1e-6, "{name}: {e:e}");
-    }
+    assert_equals_gtsam("centripetal mode", &m, &f);
 }

@@ -61,20 +61,26 @@ pub(super) fn residual9(
         .fixed_view_mut::<3, 3>(6, 0)
         .copy_from(ri_t_rj.matrix());
     jac.v_j.fixed_view_mut::<3, 3>(3, 0).copy_from(&ri_tm);
-    jac.bg_i
-        .fixed_view_mut::<3, 3>(0, 0)
-        .copy_from(&(-jr_inv * e.matrix().transpose() * jr_db * jb.d_r_d_bg));
-    jac.bg_i
-        .fixed_view_mut::<3, 3>(3, 0)
-        .copy_from(&(-jb.d_v_d_bg));
-    jac.bg_i
-        .fixed_view_mut::<3, 3>(6, 0)
-        .copy_from(&(-jb.d_p_d_bg));
-    jac.ba_i
-        .fixed_view_mut::<3, 3>(3, 0)
-        .copy_from(&(-jb.d_v_d_ba));
-    jac.ba_i
-        .fixed_view_mut::<3, 3>(6, 0)
-        .copy_from(&(-jb.d_p_d_ba));
+    bias_blocks(&mut jac, &(jr_inv * e.matrix().transpose() * jr_db), jb);
     (r, jac)
+}
+
+/// The bias-i blocks of a 9-dim residual's Jacobian: the rotation row through the first-order
+/// bias correction, `−(∂r_φ/∂ΔR(b)) ∂ΔR/∂b_g` with `rot = ∂r_φ/∂ΔR(b)` (3×3), and the velocity
+/// and position rows `−∂Δv/∂b`, `−∂Δp/∂b`.
+pub(super) fn bias_blocks(
+    jac: &mut ImuFactorJacobians,
+    rot: &Matrix3<f64>,
+    jb: &crate::measurement::BiasJacobians,
+) {
+    for (row, m) in [
+        (0, -rot * jb.d_r_d_bg),
+        (3, -jb.d_v_d_bg),
+        (6, -jb.d_p_d_bg),
+    ] {
+        jac.bg_i.fixed_view_mut::<3, 3>(row, 0).copy_from(&m);
+    }
+    for (row, m) in [(3, -jb.d_v_d_ba), (6, -jb.d_p_d_ba)] {
+        jac.ba_i.fixed_view_mut::<3, 3>(row, 0).copy_from(&m);
+    }
 }

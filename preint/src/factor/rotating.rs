@@ -208,20 +208,6 @@ pub(super) fn residual9_rotating(
         blk.fixed_view_mut::<3, 3>(3, 0).copy_from(&imp.dv[k]);
         blk.fixed_view_mut::<3, 3>(6, 0).copy_from(&imp.dp[k]);
     }
-    jac.bg_i
-        .fixed_view_mut::<3, 3>(0, 0)
-        .copy_from(&(-jr_inv_e * e.matrix().transpose() * jr_db * jb.d_r_d_bg));
-    jac.bg_i
-        .fixed_view_mut::<3, 3>(3, 0)
-        .copy_from(&(-jb.d_v_d_bg));
-    jac.bg_i
-        .fixed_view_mut::<3, 3>(6, 0)
-        .copy_from(&(-jb.d_p_d_bg));
-    jac.ba_i
-        .fixed_view_mut::<3, 3>(3, 0)
-        .copy_from(&(-jb.d_v_d_ba));
-    jac.ba_i
-        .fixed_view_mut::<3, 3>(6, 0)
-        .copy_from(&(-jb.d_p_d_ba));
+    super::residual::bias_blocks(&mut jac, &(jr_inv_e * e.matrix().transpose() * jr_db), jb);
     (r, jac)
 }
