@@ -22,46 +22,8 @@ use preint::{
 };
 use preint_io::parse_euroc_imu;
 use serde_json::Value;
-use std::path::PathBuf;
-
-fn dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/gtsam")
-}
-
-fn json(name: &str) -> Value {
-    serde_json::from_str(&std::fs::read_to_string(dir().join(name)).unwrap()).unwrap()
-}
-
-fn mat(v: &Value) -> DMatrix<f64> {
-    let rows: Vec<Vec<f64>> = v
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|r| {
-            r.as_array()
-                .unwrap()
-                .iter()
-                .map(|x| x.as_f64().unwrap())
-                .collect()
-        })
-        .collect();
-    DMatrix::from_fn(rows.len(), rows[0].len(), |i, j| rows[i][j])
-}
-
-fn m3(v: &Value) -> Matrix3<f64> {
-    let m = mat(v);
-    Matrix3::from_fn(|i, j| m[(i, j)])
-}
-
-fn v3(v: &Value) -> Vector3<f64> {
-    let a: Vec<f64> = v
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect();
-    Vector3::new(a[0], a[1], a[2])
-}
+mod common;
+use common::gtsam_fixture::{dir, json, m3, mat, v3};
 
 fn pose(f: &Value) -> SensorPose {
     SensorPose::new(

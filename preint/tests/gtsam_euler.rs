@@ -10,7 +10,14 @@ use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
 use preint::{ImuBias, Level, PreintParams, Preintegrator, Scheme};
 use preint_io::parse_euroc_imu;
 use serde_json::Value;
-use std::path::PathBuf;
+
+mod common;
+use common::gtsam_fixture::{dir, m3, mat, v3};
+
+/// The JSON file at `path`.
+fn json(path: std::path::PathBuf) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap()
+}
 
 const CASES: &[&str] = &[
     "example",
@@ -23,44 +30,6 @@ const CASES: &[&str] = &[
     "aniso",
     "intcov",
 ];
-
-fn dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/gtsam")
-}
-
-fn json(path: PathBuf) -> Value {
-    serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap()
-}
-
-fn mat(v: &Value) -> DMatrix<f64> {
-    let rows: Vec<Vec<f64>> = v
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|r| {
-            r.as_array()
-                .unwrap()
-                .iter()
-                .map(|x| x.as_f64().unwrap())
-                .collect()
-        })
-        .collect();
-    DMatrix::from_fn(rows.len(), rows[0].len(), |i, j| rows[i][j])
-}
-
-fn m3(v: &Value) -> Matrix3<f64> {
-    let m = mat(v);
-    Matrix3::from_fn(|i, j| m[(i, j)])
-}
-
-fn v3(v: &Value) -> Vector3<f64> {
-    let a = v.as_array().unwrap();
-    Vector3::new(
-        a[0].as_f64().unwrap(),
-        a[1].as_f64().unwrap(),
-        a[2].as_f64().unwrap(),
-    )
-}
 
 /// Scalar `s` → `s I`, else the 3×3 matrix.
 fn cov3(v: &Value) -> Matrix3<f64> {
