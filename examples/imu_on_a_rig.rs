@@ -55,3 +55,11 @@ fn main() {
     assert!(ep < 1e-5 && ev < 1e-5, "{ep:e} {ev:e}");
     assert!(e0 > 0.1, "{e0:e}");
 }
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn runs() {
+        super::main();
+    }
+}
