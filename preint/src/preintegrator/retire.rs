@@ -97,7 +97,7 @@ impl<N: NoiseCov, const LEVER: bool> Retirer<'_, N, LEVER> {
     /// [`Retirer::retire`] with a lever arm corrected per sample: the raw gyro noise also moves
     /// the node's specific force, so its gain is `G_g + G_a D` (and the bias Jacobian takes
     /// `−G_a D`).
-    #[inline(never)]
+    #[inline(always)]
     fn retire_lever<S: IntervalScheme>(
         &mut self,
         p: &mut PackedSym9,
