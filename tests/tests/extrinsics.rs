@@ -529,3 +529,67 @@ fn lever_arm_covariance_matches_numeric_derivatives() {
         assert!(err < 1e-5, "{mode:?} {scheme:?}: {err:e}");
     }
 }
+
+/// Keyframes between samples: the window's boundary samples are interpolated from the stream
+/// (linear for euler and midpoint, cubic for hermite4), and so are the end rates of the lever
+/// arm. The 9×9 covariance of such a window against `Σ_k J_k Q_k J_kᵀ` from numeric derivatives
+/// with respect to every stream sample (cells from the stream neighbours), both models, every
+/// scheme.
+#[test]
+fn lever_arm_covariance_with_keyframes_between_samples() {
+    let scene = scene_by_name("aggressive").unwrap();
+    let pose = mount(0.3);
+    let s = sensor_stream(scene.as_ref(), &pose, T_I, T_I + 150_000_000, PERIOD);
+    let (t_i, t_j) = (T_I + 12_500_000, T_I + 101_000_000);
+    let noise = ImuNoise {
+        gyro_noise_density: 0.015,
+        acc_noise_density: 0.019,
+        ..ImuNoise::euroc()
+    };
+    let b0 = ImuBias::zero();
+    for (mode, scheme) in MODES
+        .iter()
+        .flat_map(|m| Scheme::ALL.iter().map(move |s| (*m, *s)))
+    {
+        let p = PreintParams {
+            body_p_sensor: Some(pose),
+            lever_arm: mode,
+            ..PreintParams::from_noise(&noise)
+                .with_scheme(scheme)
+                .with_level(Level::Covariance)
+                .with_gravity(g())
+        };
+        let m = preintegrate(&p, &b0, &s, t_i, t_j).unwrap();
+        let eps = 1e-6;
+        let mut num = SMatrix::<f64, 9, 9>::zeros();
+        for k in 1..s.len() - 1 {
+            let cell = scheme.cell_rule().cell_s(0.005, 0.005);
+            let mut jk = SMatrix::<f64, 9, 6>::zeros();
+            for c in 0..6 {
+                let shifted = |sign: f64| {
+                    let mut v = s.clone();
+                    if c < 3 {
+                        v[k].gyro[c] += sign * eps;
+                    } else {
+                        v[k].acc[c - 3] += sign * eps;
+                    }
+                    preintegrate(&p, &b0, &v, t_i, t_j).unwrap()
+                };
+                let d = shifted(1.0).delta_error(&shifted(-1.0)) / (2.0 * eps);
+                jk.fixed_view_mut::<9, 1>(0, c).copy_from(&d);
+            }
+            let mut q = SMatrix::<f64, 6, 6>::zeros();
+            for i in 0..3 {
+                q[(i, i)] = noise.gyro_noise_density.powi(2) / cell;
+                q[(i + 3, i + 3)] = noise.acc_noise_density.powi(2) / cell;
+            }
+            num += jk * q * jk.transpose();
+        }
+        let err = (m.cov - num).amax() / num.amax();
+        println!(
+            "{mode:?} {:<9} keyframes between samples: covariance vs numeric {err:.1e}",
+            scheme.name()
+        );
+        assert!(err < 1e-5, "{mode:?} {scheme:?}: {err:e}");
+    }
+}
