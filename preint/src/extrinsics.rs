@@ -283,6 +283,25 @@ pub(crate) fn to_body(m: &mut PreintegratedImu, pose: &SensorPose, ends: &EndRat
     }
 }
 
+/// `D = ∂a_node/∂ω_node` of a node whose specific force lost `c(ω) = ω × (ω × r)`:
+/// `−∂c/∂ω = [ω × r]× + [ω]×[r]× = [ω × r]× + r ωᵀ − (ω·r) I`.
+#[inline(always)]
+pub(crate) fn centripetal_d(w: &Vector3<f64>, r: &Vector3<f64>) -> Matrix3<f64> {
+    let (x, wr) = (w.cross(r), w.dot(r));
+    let o = r * w.transpose();
+    Matrix3::new(
+        o[(0, 0)] - wr,
+        o[(0, 1)] - x.z,
+        o[(0, 2)] + x.y,
+        o[(1, 0)] + x.z,
+        o[(1, 1)] - wr,
+        o[(1, 2)] - x.x,
+        o[(2, 0)] - x.y,
+        o[(2, 1)] + x.x,
+        o[(2, 2)] - wr,
+    )
+}
+
 /// The bias Jacobians as one 9×6 matrix (rows [δφ, δv, δp], columns [b_g, b_a]).
 fn jac_matrix(j: &BiasJacobians) -> SMatrix<f64, 9, 6> {
     let mut m = SMatrix::<f64, 9, 6>::zeros();

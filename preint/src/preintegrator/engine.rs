@@ -10,7 +10,7 @@
 
 use super::edges::{EdgeGains, EdgeLayout, WindowSpec, resolve};
 use super::output::Chart;
-use super::retire::{Retirer, centripetal_d, edge_count};
+use super::retire::{Retirer, edge_count};
 use crate::fast::{FastDeltas, SliceInput};
 use crate::measurement::{EdgeNoise, PreintegratedImu};
 use crate::noise::walk_scale;
@@ -300,15 +300,15 @@ impl<S: IntervalScheme> Core<S> {
         }
         let lin = S::linearise(&step, &st);
         let pb = origin.pull_back(st.n1().t_ns, &d.v, &d.p);
-        let d_nodes = fixed
+        let rates = fixed
             .centripetal
             .filter(|_| LEVER && fixed.walk.combined)
             .map(|r| {
-                let mut d = [Matrix3::zeros(); crate::scheme::MAX_STENCIL];
-                for (x, node) in d.iter_mut().zip(&st.nodes).take(st.len) {
-                    *x = centripetal_d(&node.w, &r);
+                let mut w = [Vector3::zeros(); crate::scheme::MAX_STENCIL];
+                for (x, node) in w.iter_mut().zip(&st.nodes).take(st.len) {
+                    *x = node.w;
                 }
-                d
+                (w, r)
             });
         e.interval::<S>(
             &lin,
@@ -317,7 +317,7 @@ impl<S: IntervalScheme> Core<S> {
             st.k,
             st.len,
             &fixed.walk,
-            d_nodes.as_ref(),
+            rates.as_ref(),
             |p, id, g| r.retire::<S>(p, id, g),
         );
         int_cov(fixed, e, d, lin.tr.h);

@@ -5,30 +5,12 @@
 
 use super::edges::EdgeGains;
 use super::engine::RING;
+use crate::extrinsics::centripetal_d;
 use crate::noise::white_scale;
 use crate::propagation::blocks::PackedSym9;
 use crate::propagation::{NoiseCov, SampleGain};
 use crate::scheme::{IntervalScheme, Node, span_s};
-use nalgebra::{Matrix3, Vector3};
-
-/// `D = ∂a_node/∂ω_node` of a node whose specific force lost `c(ω) = ω × (ω × r)`:
-/// `−∂c/∂ω = [ω × r]× + [ω]×[r]× = [ω × r]× + r ωᵀ − (ω·r) I`.
-#[inline(always)]
-pub(super) fn centripetal_d(w: &Vector3<f64>, r: &Vector3<f64>) -> Matrix3<f64> {
-    let (x, wr) = (w.cross(r), w.dot(r));
-    let o = r * w.transpose();
-    Matrix3::new(
-        o[(0, 0)] - wr,
-        o[(0, 1)] - x.z,
-        o[(0, 2)] + x.y,
-        o[(1, 0)] + x.z,
-        o[(1, 1)] - wr,
-        o[(1, 2)] - x.x,
-        o[(2, 0)] - x.y,
-        o[(2, 1)] + x.x,
-        o[(2, 2)] - wr,
-    )
-}
+use nalgebra::Vector3;
 
 /// Hands retired samples' noise to the covariance, or their gains to the edge store.
 pub(super) struct Retirer<'a, N, const LEVER: bool> {

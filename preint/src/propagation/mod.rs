@@ -64,7 +64,7 @@ use crate::scheme::linearisation::{
 };
 use crate::scheme::{GainCoef, IntervalScheme, Linearisation, NodeTermsOf};
 use blocks::{
-    Cols6, Cols9, Gain96, M3, PackedSym9, add_cols, mul_cols, rot_cols, scale_cols, sub_cols,
+    Cols6, Cols9, Gain96, M3, PackedSym9, V3, add_cols, mul_cols, rot_cols, scale_cols, sub_cols,
 };
 use transition::{PullBack, rotated_sym};
 
@@ -237,7 +237,7 @@ impl ErrorState {
         k_pos: usize,
         len: usize,
         walk: &BiasWalk,
-        lever: Option<&[M3; crate::scheme::MAX_STENCIL]>,
+        lever: Option<&([V3; crate::scheme::MAX_STENCIL], V3)>,
         retire: impl Retire,
     ) {
         let form = S::GAIN_FORM;
@@ -437,7 +437,7 @@ impl ErrorState {
         pb: &PullBack,
         (k_pos, len): (usize, usize),
         walk: &BiasWalk,
-        lever: Option<&[M3; crate::scheme::MAX_STENCIL]>,
+        lever: Option<&([V3; crate::scheme::MAX_STENCIL], V3)>,
     ) {
         let form = S::GAIN_FORM;
         let mut sum = GainCoef::default();
@@ -507,7 +507,7 @@ impl ErrorState {
 impl ErrorState {
     /// The gyro columns a lever arm corrected per sample adds to an interval's total gain:
     /// `Σ_j Γ_a,kj D_j`, pulled back (each stencil sample's accelerometer gain through its
-    /// `D_j = ∂a_node/∂ω_node`).
+    /// `D_j = ∂a_node/∂ω_node`, from the stencil's rates `w` and the lever arm `r`).
     #[inline(never)]
     fn lever_walk<S: IntervalScheme>(
         &self,
@@ -515,7 +515,7 @@ impl ErrorState {
         node: Option<&NodeColumns>,
         pb: &PullBack,
         (k_pos, len): (usize, usize),
-        d: &[M3; crate::scheme::MAX_STENCIL],
+        (w, r): &([V3; crate::scheme::MAX_STENCIL], V3),
     ) -> Gain96 {
         let acc = lin.basis.acc_columns(pb.tau);
         let n = if S::NODES_BEFORE + S::NODES_AFTER == 0 {
@@ -524,7 +524,12 @@ impl ErrorState {
             len
         };
         let mut extra = Gain96::default();
-        for (j, (c, dj)) in lin.coef.iter().zip(d).take(n).enumerate() {
+        for (j, (c, wj)) in lin.coef.iter().zip(w).take(n).enumerate() {
+            // A sample without an accelerometer gain in this interval (Euler's k+1).
+            if !S::NodeTerms::PRESENT && c.a == (0.0, 0.0) && c.b == (0.0, 0.0) {
+                continue;
+            }
+            let dj = &crate::extrinsics::centripetal_d(wj, r);
             let mut a = [[0.0; 6]; 3];
             if j == k_pos {
                 add_acc::<FIRST, true>(&mut a, &acc, node, c);
