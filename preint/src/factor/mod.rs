@@ -66,11 +66,13 @@
 
 mod combined;
 mod imu;
+pub mod logmap;
 mod residual;
 mod rotating;
 
 pub use combined::CombinedImuFactor;
 pub use imu::ImuFactor;
+pub use logmap::ResidualMode;
 
 use crate::measurement::PreintegratedImu;
 use crate::params::Level;
@@ -318,16 +320,19 @@ fn check_pim(pim: &PreintegratedImu) -> Result<(), FactorError> {
 struct Weighted<const R: usize> {
     pim: PreintegratedImu,
     sqrt_info: SMatrix<f64, R, R>,
+    mode: ResidualMode,
 }
 
 impl<const R: usize> Weighted<R> {
     /// Checks `pim` (its level at least `needed`, finite fields, positive Δt) and computes the
-    /// square-root information of `cov` (the residual's covariance, named `field` in errors).
+    /// square-root information of `cov` (the component-wise residual's covariance, named
+    /// `field` in errors), mapped to the Logmap chart for [`ResidualMode::Logmap`].
     fn new(
         pim: PreintegratedImu,
         needed: Level,
         field: &'static str,
         cov: SMatrix<f64, R, R>,
+        mode: ResidualMode,
     ) -> Result<Self, FactorError> {
         if pim.level < needed {
             return Err(FactorError::LevelTooLow {
@@ -339,8 +344,30 @@ impl<const R: usize> Weighted<R> {
         if !cov.iter().all(|x| x.is_finite()) {
             return Err(FactorError::NonFinite { field });
         }
-        let sqrt_info = sqrt_information(&cov)?;
-        Ok(Self { pim, sqrt_info })
+        let sqrt_info = match mode {
+            ResidualMode::ComponentWise => sqrt_information(&cov)?,
+            ResidualMode::Logmap => sqrt_information(&logmap::logmap_cov(&pim, &cov))?,
+        };
+        Ok(Self {
+            pim,
+            sqrt_info,
+            mode,
+        })
+    }
+
+    /// The 9-dim residual and Jacobians in this factor's [`ResidualMode`], extended to `R`
+    /// rows (the rows past nine zero, for the combined factor to fill).
+    fn residual9_mode(
+        &self,
+        xi: &crate::NavState,
+        xj: &crate::NavState,
+        bias_i: &crate::ImuBias,
+    ) -> (SVector<f64, 9>, ImuFactorJacobians) {
+        let (mut r, mut j) = residual::residual9(&self.pim, xi, xj, bias_i);
+        if self.mode == ResidualMode::Logmap {
+            logmap::to_logmap(&self.pim, bias_i, &mut r, &mut j);
+        }
+        (r, j)
     }
 
     /// `(U r, U J)`.
