@@ -6,8 +6,8 @@
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
 use preint::factor::FactorJacobians;
 use preint::{
-    BiasJacobians, CombinedImuFactor, CoriolisMode, EdgeNoise, ImuBias, ImuFactor, Level,
-    NavState, PreintegratedImu, ResidualMode, predict,
+    BiasJacobians, CombinedImuFactor, CoriolisMode, EdgeNoise, ImuBias, ImuFactor, Level, NavState,
+    PreintegratedImu, ResidualMode, predict,
 };
 use preint_lie::{SE3, SO3};
 
@@ -204,7 +204,10 @@ fn logmap_residual_is_the_se23_log_of_the_predicted_to_actual_state() {
         );
         let got = f.residual(&xi, &xj, &bi);
         assert!((got - want).amax() < 1e-12, "{got} vs {want}");
-        assert!(want.fixed_rows::<6>(3).amax() > 0.1, "a non-trivial residual");
+        assert!(
+            want.fixed_rows::<6>(3).amax() > 0.1,
+            "a non-trivial residual"
+        );
     }
 }
 
@@ -260,6 +263,9 @@ fn component_wise_is_the_default_and_unchanged() {
     assert_eq!(rc.fixed_rows::<6>(9), rl.fixed_rows::<6>(9));
     assert!((rc.fixed_rows::<6>(3) - rl.fixed_rows::<6>(3)).amax() > 1e-3);
     assert_eq!(ResidualMode::parse("logmap"), Some(ResidualMode::Logmap));
-    assert_eq!(ResidualMode::parse("Component"), Some(ResidualMode::ComponentWise));
+    assert_eq!(
+        ResidualMode::parse("Component"),
+        Some(ResidualMode::ComponentWise)
+    );
     assert_eq!(ResidualMode::parse("tangent"), None);
 }

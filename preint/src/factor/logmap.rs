@@ -27,7 +27,7 @@
 //! the Jacobians map the same way (`∂e/∂x = −P ∂r_L/∂x`), with GTSAM's pose perturbation
 //! `[dw, dt]` and world velocity equal to the [`NavState`](crate::NavState) tangent
 //! [δφ, δp, δv] to first order and its bias order [b_a, b_g]. Tested against GTSAM 4.3
-//! fixtures in `preint/tests/factor_logmap_gtsam.rs`. With an Earth rate GTSAM compares the
+//! fixtures in `preint/tests/factor_gtsam.rs`. With an Earth rate GTSAM compares the
 //! states in body frame j with the physical velocity; this residual compares the deltas (as the
 //! component-wise one does), so the two differ at second order there.
 //!
