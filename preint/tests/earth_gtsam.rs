@@ -19,6 +19,7 @@
 //! backend: `φ = Jr(θ) dθ`, reordered).
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
+use preint::ResidualMode;
 use preint::{
     BiasJacobians, CombinedImuFactor, CoriolisMode, Cov9, Cov15, EdgeNoise, ImuBias, ImuFactor,
     Level, NavState, PreintegratedImu, predict,
@@ -152,7 +153,7 @@ fn exact_prediction_matches_gtsam() {
 fn imu_factor_residual_matches_gtsam() {
     for name in CASES {
         let c = case(name);
-        let r = ImuFactor::new(c.pim.clone())
+        let r = ImuFactor::with_mode(c.pim.clone(), ResidualMode::ComponentWise)
             .unwrap()
             .residual(&c.xi, &c.xj, &c.pim.bias_hat);
         let e = to_gtsam(&c, &c.xj.r) * r;
@@ -175,7 +176,7 @@ fn combined_factor_residual_matches_gtsam() {
     for name in CASES {
         let c = case(name);
         let b = c.pim.bias_hat;
-        let r = CombinedImuFactor::new(c.pim.clone())
+        let r = CombinedImuFactor::with_mode(c.pim.clone(), ResidualMode::ComponentWise)
             .unwrap()
             .residual(&c.xi, &c.xj, &b, &b);
         let e = to_gtsam(&c, &c.xj.r) * r.fixed_rows::<9>(0);
@@ -247,7 +248,7 @@ fn combined_residual_covariance_in_gtsam_chart_matches_residual_covariance_at_th
         // residualCovarianceAt(R̂_j)): equal to first order. They differ by the chart change
         // `L`, which GTSAM freezes at R̂_j while R_j is a few σ (~1e-4 rad) away from it.
         let b = c.pim.bias_hat;
-        let f = CombinedImuFactor::new(c.pim.clone()).unwrap();
+        let f = CombinedImuFactor::with_mode(c.pim.clone(), ResidualMode::ComponentWise).unwrap();
         let chi2_ours = f.chi2(&c.xi, &c.xj, &b, &b);
         let e = SVector::<f64, 15>::from_fn(|i, _| cf["error"][i].as_f64().unwrap());
         let chi2_gtsam = e.dot(&at.cholesky().unwrap().solve(&e));
