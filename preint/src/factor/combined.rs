@@ -58,7 +58,14 @@ impl CombinedImuFactor {
         &self.0.sqrt_info
     }
 
-    /// Residual `[r_φ, r_v, r_p, r_bg, r_ba]` (rad, m/s, m, rad/s, m/s²).
+    /// The covariance `Σ_r` that weights the residual: `residual_cov15()` (component-wise) or
+    /// `diag(T, I₆) residual_cov15() diag(T, I₆)ᵀ` (Logmap), order [φ, v, p, b_g, b_a].
+    pub fn residual_covariance(&self) -> &SMatrix<f64, 15, 15> {
+        &self.0.cov
+    }
+
+    /// Residual `[r_φ, r_v, r_p, r_bg, r_ba]` (rad, m/s, m, rad/s, m/s²); in
+    /// [`ResidualMode::Logmap`] the first nine rows are the SE₂(3) residual.
     pub fn residual(
         &self,
         state_i: &NavState,

@@ -69,6 +69,12 @@ impl ImuFactor {
         &self.0.sqrt_info
     }
 
+    /// The covariance `Σ` that weights the residual: `cov` (component-wise) or `T cov Tᵀ`
+    /// (Logmap), order [φ, v, p].
+    pub fn residual_covariance(&self) -> &SMatrix<f64, 9, 9> {
+        &self.0.cov
+    }
+
     /// Predicted state at j ([`predict`], Forster eq. 33) for the bias `bias_i`.
     pub fn predict(&self, state_i: &NavState, bias_i: &ImuBias) -> NavState {
         predict(&self.0.pim, state_i, bias_i)

@@ -320,6 +320,8 @@ fn check_pim(pim: &PreintegratedImu) -> Result<(), FactorError> {
 struct Weighted<const R: usize> {
     pim: PreintegratedImu,
     sqrt_info: SMatrix<f64, R, R>,
+    /// The covariance `U` is the square-root information of (the residual's, in `mode`).
+    cov: SMatrix<f64, R, R>,
     mode: ResidualMode,
 }
 
@@ -344,13 +346,15 @@ impl<const R: usize> Weighted<R> {
         if !cov.iter().all(|x| x.is_finite()) {
             return Err(FactorError::NonFinite { field });
         }
-        let sqrt_info = match mode {
-            ResidualMode::ComponentWise => sqrt_information(&cov)?,
-            ResidualMode::Logmap => sqrt_information(&logmap::logmap_cov(&pim, &cov))?,
+        let cov = match mode {
+            ResidualMode::ComponentWise => cov,
+            ResidualMode::Logmap => logmap::logmap_cov(&pim, &cov),
         };
+        let sqrt_info = sqrt_information(&cov)?;
         Ok(Self {
             pim,
             sqrt_info,
+            cov,
             mode,
         })
     }
