@@ -102,7 +102,12 @@ impl Row {
 }
 
 /// Rows [9-dim component, 9-dim Logmap, 15-dim component, 15-dim Logmap] of one setup.
-fn rows_of(scene_name: &'static str, noise_name: &'static str, n_real: usize, seed: u64) -> Vec<Row> {
+fn rows_of(
+    scene_name: &'static str,
+    noise_name: &'static str,
+    n_real: usize,
+    seed: u64,
+) -> Vec<Row> {
     let scene = scene_by_name(scene_name).unwrap();
     let n = (WINDOW_S * 1_000_000_000 / PERIOD) as usize + 1;
     let t_j = T_I + WINDOW_S * 1_000_000_000;
@@ -129,7 +134,9 @@ fn rows_of(scene_name: &'static str, noise_name: &'static str, n_real: usize, se
     for (dim, pim) in [(9, &c9), (15, &c15)] {
         for mode in MODES {
             let disc_chi2 = if dim == 9 {
-                ImuFactor::with_mode(pim.clone(), mode).unwrap().chi2(&xi, &xj, &b)
+                ImuFactor::with_mode(pim.clone(), mode)
+                    .unwrap()
+                    .chi2(&xi, &xj, &b)
             } else {
                 CombinedImuFactor::with_mode(pim.clone(), mode)
                     .unwrap()
@@ -248,7 +255,10 @@ fn logmap_residual_is_closer_to_its_chi2_than_the_component_wise_one() {
             }
             "seed" => {
                 if cw.z() <= 4.42 {
-                    failures.push(format!("{what}: component-wise z = {:.2}, not over-confident", cw.z()));
+                    failures.push(format!(
+                        "{what}: component-wise z = {:.2}, not over-confident",
+                        cw.z()
+                    ));
                 }
                 if lm.z() >= cw.z() || lm.z().abs() >= cw.z().abs() {
                     failures.push(format!(
