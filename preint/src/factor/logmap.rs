@@ -27,9 +27,13 @@
 //! the Jacobians map the same way (`∂e/∂x = −P ∂r_L/∂x`), with GTSAM's pose perturbation
 //! `[dw, dt]` and world velocity equal to the [`NavState`](crate::NavState) tangent
 //! [δφ, δp, δv] to first order and its bias order [b_a, b_g]. Tested against GTSAM 4.3
-//! fixtures in `preint/tests/factor_gtsam.rs`. With an Earth rate GTSAM compares the
-//! states in body frame j with the physical velocity; this residual compares the deltas (as the
-//! component-wise one does), so the two differ at second order there.
+//! fixtures in `preint/tests/factor_gtsam.rs` (9-dim) and
+//! `preint/tests/combined_modes_gtsam.rs` (15-dim). With an Earth rate (`rotating.rs`) GTSAM
+//! compares the states in body frame j with the physical velocity `v − ω×p`; its Logmap error is
+//! then, exactly, `e = −P r_L + [0, 0, Jl(w)⁻¹ N r_p]` with `w = −r_φ`,
+//! `N = R_jᵀ[ω]× Exp(−ωΔt) R_i` and `r_p` the component-wise position row — the same `δp → δv`
+//! term as in the component-wise mode (GTSAM PR #2806's whitening), checked against GTSAM 4.3
+//! in `preint/tests/earth_gtsam.rs`.
 //!
 //! # Jacobians
 //!
