@@ -10,7 +10,9 @@ use nalgebra::{SMatrix, SVector};
 /// Forster's IMU factor between `(NavState_i, NavState_j, bias_i)` (module docs for the
 /// residual [r_φ, r_v, r_p], perturbations and Jacobians). It reads only a
 /// [`PreintegratedImu`] and weights the residual with its 9×9 covariance `cov` (the residual
-/// is `−[δφ, δv, δp]` to first order, whose covariance is `cov`). The bias is held constant
+/// is `−[δφ, δv, δp]` to first order, whose covariance is `cov`); in
+/// [`ResidualMode::Logmap`] (the default) the residual is its SE₂(3) form and the weight
+/// `T cov Tᵀ` ([`logmap`](super::logmap)). The bias is held constant
 /// over the window: on data whose bias drifts noticeably within a window, use
 /// [`CombinedImuFactor`](super::CombinedImuFactor), whose covariance includes the random walk.
 #[derive(Clone, Debug, PartialEq)]

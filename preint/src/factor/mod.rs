@@ -1,6 +1,11 @@
 //! IMU factors: the Forster residual between two [`NavState`](crate::NavState)s with analytic Jacobians, its
 //! whitened form, and the combined (15-dim) variant with the bias random walk.
 //!
+//! Each factor evaluates one of two residuals ([`ResidualMode`], set when it is built): the
+//! SE₂(3) **Logmap** residual ([`logmap`], the default, as in GTSAM 4.3, chosen on NEES
+//! evidence) or Forster's **component-wise** residual below. The Logmap one is computed from the
+//! component-wise residual and Jacobians described here.
+//!
 //! # Residual (Forster et al. 2017, T-RO, eq. 45)
 //!
 //! With `ΔR(b), Δv(b), Δp(b)` the deltas corrected to first order for the bias `b` at keyframe i
