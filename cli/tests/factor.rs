@@ -170,3 +170,59 @@ fn bad_keyframes_and_flags_are_usage_errors() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("/nonexistent/gt.csv"));
 }
+
+/// `--residual component|logmap`: the default is the library's (Logmap), printed in the JSON
+/// and the text; the two residuals share the rotation rows and differ in the velocity and
+/// position rows (rotated by ΔRᵀ and sheared by Jl(r_φ)⁻¹), their χ² agree to first order in
+/// the residual; an unknown name is a usage error.
+#[test]
+fn residual_mode_flag() {
+    let d = tmp("factor-residual");
+    simulate_aggressive(&d, 3, "3", true);
+    let base = ["--from", "1000000000", "--to", "3000000000"];
+    for combined in [false, true] {
+        let mut a = base.to_vec();
+        if combined {
+            a.push("--combined");
+        }
+        let default = factor(&d, &a);
+        let mut al = a.clone();
+        al.extend_from_slice(&["--residual", "logmap"]);
+        let lm = factor(&d, &al);
+        let mut ac = a.clone();
+        ac.extend_from_slice(&["--residual", "component"]);
+        let cw = factor(&d, &ac);
+        assert_eq!(default["residual_mode"], "logmap");
+        assert_eq!(default["residual"], lm["residual"]);
+        assert_eq!(cw["residual_mode"], "component");
+        let (rl, rc) = (nums(&lm["residual"]), nums(&cw["residual"]));
+        assert_eq!(rl[..3], rc[..3], "same rotation rows");
+        assert_eq!(rl[9..], rc[9..], "same bias rows");
+        let diff = (3..9).map(|k| (rl[k] - rc[k]).abs()).fold(0.0, f64::max);
+        assert!(diff > 1e-6, "velocity/position rows differ: {diff}");
+        let (xl, xc) = (lm["chi2"].as_f64().unwrap(), cw["chi2"].as_f64().unwrap());
+        assert!((xl - xc).abs() < 0.05 * xc, "χ² {xl} vs {xc}");
+        assert!(lm["weight"].as_str().unwrap().contains("Logmap"));
+    }
+    let imu = d.join("imu.csv");
+    let gt = d.join("groundtruth.csv");
+    let yaml = d.join("imu.yaml");
+    let mut args = vec![
+        "factor",
+        "--imu",
+        imu.to_str().unwrap(),
+        "--poses",
+        gt.to_str().unwrap(),
+        "--noise",
+        yaml.to_str().unwrap(),
+    ];
+    args.extend_from_slice(&base);
+    let o = run(&args);
+    assert!(o.status.success());
+    let text = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(text.contains("ImuFactor (logmap residual)"), "{text}");
+    args.extend_from_slice(&["--residual", "tangent"]);
+    let o = run(&args);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("component or logmap"));
+}

@@ -51,7 +51,7 @@ pub mod window;
 pub use earth::CoriolisMode;
 pub use error::PreintError;
 pub use extrinsics::{LeverArm, SensorPose};
-pub use factor::{CombinedImuFactor, FactorError, ImuFactor};
+pub use factor::{CombinedImuFactor, FactorError, ImuFactor, ResidualMode};
 pub use merge::{MergeError, merge};
 pub use navstate::{NavState, predict};
 pub use params::{Level, PreintParams, Scheme};

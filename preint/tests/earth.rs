@@ -4,6 +4,7 @@
 //! errors, the kernels against quadrature.
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
+use preint::ResidualMode;
 use preint::earth::{EARTH_RATE_RAD_S, earth_rate_enu, gamma_p, gamma_v};
 use preint::factor::FactorJacobians;
 use preint::{
@@ -132,11 +133,11 @@ fn jacobians_of_every_mode_match_central_differences() {
             let xj = predict(&pim, &xi, &bi).retract(&off);
             let vars = (xi, xj, bi, bj);
             let what = format!("case {case} {mode:?}");
-            let f9 = ImuFactor::new(pim.clone()).unwrap();
+            let f9 = ImuFactor::with_mode(pim.clone(), ResidualMode::ComponentWise).unwrap();
             let (_, j9) = f9.evaluate(&xi, &xj, &bi);
             let num9 = numeric(&vars, |v| f9.residual(&v.0, &v.1, &v.2), 1e-5);
             assert_jac_close(&analytic(&j9), &num9, 2e-7, &what);
-            let f15 = CombinedImuFactor::new(pim).unwrap();
+            let f15 = CombinedImuFactor::with_mode(pim, ResidualMode::ComponentWise).unwrap();
             let (_, j15) = f15.evaluate(&xi, &xj, &bi, &bj);
             let num15 = numeric(&vars, |v| f15.residual(&v.0, &v.1, &v.2, &v.3), 1e-5);
             assert_jac_close(&analytic(&j15), &num15, 2e-7, &what);
@@ -155,7 +156,7 @@ fn residual_is_zero_at_the_prediction_and_minus_the_delta_error_to_first_order()
             pim.bias_hat.gyro + rng.v3(0.02),
             pim.bias_hat.acc + rng.v3(0.2),
         );
-        let f = ImuFactor::new(pim.clone()).unwrap();
+        let f = ImuFactor::with_mode(pim.clone(), ResidualMode::ComponentWise).unwrap();
         let xj = predict(&pim, &xi, &b);
         let r0 = f.residual(&xi, &xj, &b);
         assert!(r0.amax() < 1e-11, "{mode:?}: {r0:?}");
@@ -163,7 +164,9 @@ fn residual_is_zero_at_the_prediction_and_minus_the_delta_error_to_first_order()
         let d = Vector3::new(1e-3, -2e-3, 3e-3);
         let mut moved = pim.clone();
         moved.delta_v += d;
-        let r = ImuFactor::new(moved).unwrap().residual(&xi, &xj, &b);
+        let r = ImuFactor::with_mode(moved, ResidualMode::ComponentWise)
+            .unwrap()
+            .residual(&xi, &xj, &b);
         assert!((r.fixed_rows::<3>(3) + d).amax() < 1e-11, "{mode:?}: {r:?}");
     }
 }
@@ -265,7 +268,7 @@ fn non_finite_rates_are_refused() {
         CoriolisMode::Exact,
     );
     assert_eq!(
-        ImuFactor::new(pim).unwrap_err(),
+        ImuFactor::with_mode(pim, ResidualMode::ComponentWise).unwrap_err(),
         FactorError::NonFinite {
             field: "omega_coriolis"
         }

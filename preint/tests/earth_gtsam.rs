@@ -17,13 +17,20 @@
 //! `−I` from our bias rows `[b_g,j − b_g,i, b_a,j − b_a,i]` to GTSAM's `[b_a,i − b_a,j,
 //! b_g,i − b_g,j]`, and `cov15` is GTSAM's combined `preintMeasCov()` in our chart (tangent
 //! backend: `φ = Jr(θ) dθ`, reordered).
+//!
+//! Logmap error mode (`earth_logmap_*.gtsam.json`, `generate_earth_logmap.py`): GTSAM's error is
+//! `[w, Jl(w)⁻¹ e_pos, Jl(w)⁻¹ e_vel]` of its component-wise one, `w = −r_φ`; since
+//! `M = Exp(−r_φ) ΔRᵀ`, this is exactly our [`ResidualMode::Logmap`] residual `r_L` mapped as
+//! `e = −P r_L + [0, 0, Jl(w)⁻¹ N r_p]` (`P`: [φ, v, p] → [rot, pos, vel], `r_p` the
+//! component-wise position row): the same `N` term as in the component-wise mode.
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
+use preint::ResidualMode;
 use preint::{
     BiasJacobians, CombinedImuFactor, CoriolisMode, Cov9, Cov15, EdgeNoise, ImuBias, ImuFactor,
     Level, NavState, PreintegratedImu, predict,
 };
-use preint_lie::{SO3, hat, jr};
+use preint_lie::{SO3, hat, jl_inv, jr};
 use serde_json::Value;
 use std::path::PathBuf;
 
@@ -152,7 +159,7 @@ fn exact_prediction_matches_gtsam() {
 fn imu_factor_residual_matches_gtsam() {
     for name in CASES {
         let c = case(name);
-        let r = ImuFactor::new(c.pim.clone())
+        let r = ImuFactor::with_mode(c.pim.clone(), ResidualMode::ComponentWise)
             .unwrap()
             .residual(&c.xi, &c.xj, &c.pim.bias_hat);
         let e = to_gtsam(&c, &c.xj.r) * r;
@@ -175,7 +182,7 @@ fn combined_factor_residual_matches_gtsam() {
     for name in CASES {
         let c = case(name);
         let b = c.pim.bias_hat;
-        let r = CombinedImuFactor::new(c.pim.clone())
+        let r = CombinedImuFactor::with_mode(c.pim.clone(), ResidualMode::ComponentWise)
             .unwrap()
             .residual(&c.xi, &c.xj, &b, &b);
         let e = to_gtsam(&c, &c.xj.r) * r.fixed_rows::<9>(0);
@@ -247,11 +254,62 @@ fn combined_residual_covariance_in_gtsam_chart_matches_residual_covariance_at_th
         // residualCovarianceAt(R̂_j)): equal to first order. They differ by the chart change
         // `L`, which GTSAM freezes at R̂_j while R_j is a few σ (~1e-4 rad) away from it.
         let b = c.pim.bias_hat;
-        let f = CombinedImuFactor::new(c.pim.clone()).unwrap();
+        let f = CombinedImuFactor::with_mode(c.pim.clone(), ResidualMode::ComponentWise).unwrap();
         let chi2_ours = f.chi2(&c.xi, &c.xj, &b, &b);
         let e = SVector::<f64, 15>::from_fn(|i, _| cf["error"][i].as_f64().unwrap());
         let chi2_gtsam = e.dot(&at.cholesky().unwrap().solve(&e));
         println!("{name}: combined χ² {chi2_ours:.9} vs GTSAM {chi2_gtsam:.9}");
         assert!((chi2_ours - chi2_gtsam).abs() < 1e-3 * chi2_gtsam);
+    }
+}
+
+/// GTSAM's Logmap-mode error from our Logmap residual `r_l` and component-wise position row
+/// `r_p` (module docs).
+fn logmap_to_gtsam(c: &Case, r_l: &SVector<f64, 9>, r_p: &Vector3<f64>) -> SVector<f64, 9> {
+    let a = SO3::exp(&(-c.omega * c.pim.delta_t));
+    let n = c.xj.r.matrix().transpose() * hat(&c.omega) * a.matrix() * c.xi.r.matrix();
+    let w: Vector3<f64> = -r_l.fixed_rows::<3>(0);
+    let mut e = SVector::<f64, 9>::zeros();
+    e.fixed_rows_mut::<3>(0).copy_from(&w);
+    e.fixed_rows_mut::<3>(3)
+        .copy_from(&(-r_l.fixed_rows::<3>(6)));
+    e.fixed_rows_mut::<3>(6)
+        .copy_from(&(-r_l.fixed_rows::<3>(3) + jl_inv(&w) * n * r_p));
+    e
+}
+
+#[test]
+fn logmap_residual_matches_gtsam_logmap_with_earth_rate() {
+    for name in CASES {
+        let c = case(name);
+        let g = fixture(&format!("logmap_{name}"));
+        let b = c.pim.bias_hat;
+        let r_cw = ImuFactor::with_mode(c.pim.clone(), ResidualMode::ComponentWise)
+            .unwrap()
+            .residual(&c.xi, &c.xj, &b);
+        let r_p = r_cw.fixed_rows::<3>(6).into_owned();
+        let r_l = ImuFactor::with_mode(c.pim.clone(), ResidualMode::Logmap)
+            .unwrap()
+            .residual(&c.xi, &c.xj, &b);
+        let rc_l = CombinedImuFactor::with_mode(c.pim.clone(), ResidualMode::Logmap)
+            .unwrap()
+            .residual(&c.xi, &c.xj, &b, &b);
+        assert_eq!(rc_l.fixed_rows::<9>(0), r_l, "{name}: combined rows 0..9");
+        let e = logmap_to_gtsam(&c, &r_l, &r_p);
+        for (key, len) in [("error", 9), ("combined_error", 15)] {
+            let gv = SVector::<f64, 9>::from_fn(|i, _| g[key][i].as_f64().unwrap());
+            assert_eq!(g[key].as_array().unwrap().len(), len);
+            let err = rel(&dm(&e), &dm(&gv));
+            let err_state = rel_to_state(&e, &gv, &c.xj);
+            println!(
+                "{name}: {key} (Logmap) vs GTSAM: {err_state:.1e} relative to the states, \
+                 {err:.1e} relative to the residual"
+            );
+            assert!(
+                err_state < 1e-14 && err < 1e-9,
+                "{name} {key}: {err}\n{e}\n{gv}"
+            );
+            assert!(name != "near" || err < 1e-12, "{name}: {err}");
+        }
     }
 }

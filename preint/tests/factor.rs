@@ -2,6 +2,7 @@
 //! against central differences on the manifold, whitening, typed errors.
 
 use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, SVector, Vector3};
+use preint::ResidualMode;
 use preint::factor::{FactorJacobians, sqrt_information};
 use preint::{
     BiasJacobians, CombinedImuFactor, Cov9, Cov15, EdgeNoise, FactorError, ImuBias, ImuFactor,
@@ -140,12 +141,12 @@ fn assert_jac_close(ana: &DMatrix<f64>, num: &DMatrix<f64>, tol: f64, what: &str
 }
 
 fn check_all_jacobians(pim: &PreintegratedImu, vars: &Vars, what: &str) {
-    let f9 = ImuFactor::new(pim.clone()).unwrap();
+    let f9 = ImuFactor::with_mode(pim.clone(), ResidualMode::ComponentWise).unwrap();
     let (_, j9) = f9.evaluate(&vars.0, &vars.1, &vars.2);
     let num9 = numeric(vars, |v| f9.residual(&v.0, &v.1, &v.2), 1e-5);
     assert_jac_close(&analytic(&j9), &num9, 2e-7, what);
 
-    let f15 = CombinedImuFactor::new(pim.clone()).unwrap();
+    let f15 = CombinedImuFactor::with_mode(pim.clone(), ResidualMode::ComponentWise).unwrap();
     let (_, j15) = f15.evaluate(&vars.0, &vars.1, &vars.2, &vars.3);
     let num15 = numeric(vars, |v| f15.residual(&v.0, &v.1, &v.2, &v.3), 1e-5);
     assert_jac_close(&analytic(&j15), &num15, 2e-7, what);
@@ -207,7 +208,9 @@ fn jacobians_with_rotation_residual_of_large_angle() {
     off.fixed_rows_mut::<3>(0)
         .copy_from(&(Vector3::new(1.0, 2.0, -0.5).normalize() * 2.8));
     let xj = state_j_near(&pim, &xi, &bi, &off);
-    let r = ImuFactor::new(pim.clone()).unwrap().residual(&xi, &xj, &bi);
+    let r = ImuFactor::with_mode(pim.clone(), ResidualMode::ComponentWise)
+        .unwrap()
+        .residual(&xi, &xj, &bi);
     assert!((r.fixed_rows::<3>(0).norm() - 2.8).abs() < 1e-9);
     check_all_jacobians(&pim, &(xi, xj, bi, bi), "large r_phi");
 }
@@ -236,7 +239,7 @@ fn residual_is_zero_at_the_prediction_and_equals_the_chart_offset_to_first_order
         pim.bias_hat.gyro + rng.v3(0.05),
         pim.bias_hat.acc + rng.v3(0.2),
     );
-    let f = ImuFactor::new(pim.clone()).unwrap();
+    let f = ImuFactor::with_mode(pim.clone(), ResidualMode::ComponentWise).unwrap();
     let xj = predict(&pim, &xi, &b);
     assert!(f.residual(&xi, &xj, &b).amax() < 1e-12);
     // Rotation residual offset: R_j ← R̂_j Exp(δ) gives r_φ = δ exactly.
@@ -342,7 +345,7 @@ fn whitening_is_upper_cholesky_of_information() {
         let r = rng.rot();
         random_pim(&mut rng, r)
     };
-    let f = ImuFactor::new(pim.clone()).unwrap();
+    let f = ImuFactor::with_mode(pim.clone(), ResidualMode::ComponentWise).unwrap();
     let u = *f.sqrt_information();
     for r in 0..9 {
         assert!(u[(r, r)] > 0.0);
@@ -377,7 +380,7 @@ fn chi2_by_hand_with_diagonal_covariance() {
     let mut pim = random_pim(&mut rng, SO3::identity());
     let sig = [0.01, 0.02, 0.03, 0.1, 0.2, 0.3, 1.0, 2.0, 3.0];
     pim.cov = Cov9::from_diagonal(&SVector::<f64, 9>::from_fn(|i, _| sig[i] * sig[i]));
-    let f = ImuFactor::new(pim.clone()).unwrap();
+    let f = ImuFactor::with_mode(pim.clone(), ResidualMode::ComponentWise).unwrap();
     let u = f.sqrt_information();
     for i in 0..9 {
         assert!((u[(i, i)] - 1.0 / sig[i]).abs() < 1e-12 / sig[i]);
@@ -406,7 +409,7 @@ fn typed_errors_instead_of_panics() {
         ..pim.clone()
     };
     assert!(matches!(
-        ImuFactor::new(z),
+        ImuFactor::with_mode(z, ResidualMode::ComponentWise),
         Err(FactorError::CovarianceNotPositiveDefinite { dim: 9, .. })
     ));
     // Rank-deficient but non-zero.
@@ -418,7 +421,7 @@ fn typed_errors_instead_of_panics() {
         ..pim.clone()
     };
     assert!(matches!(
-        ImuFactor::new(z),
+        ImuFactor::with_mode(z, ResidualMode::ComponentWise),
         Err(FactorError::CovarianceNotPositiveDefinite { dim: 9, .. })
     ));
     // Indefinite.
@@ -433,7 +436,7 @@ fn typed_errors_instead_of_panics() {
         ..pim.clone()
     };
     assert_eq!(
-        ImuFactor::new(z),
+        ImuFactor::with_mode(z, ResidualMode::ComponentWise),
         Err(FactorError::NonFinite { field: "cov" })
     );
     let z = PreintegratedImu {
@@ -441,7 +444,7 @@ fn typed_errors_instead_of_panics() {
         ..pim.clone()
     };
     assert_eq!(
-        ImuFactor::new(z),
+        ImuFactor::with_mode(z, ResidualMode::ComponentWise),
         Err(FactorError::NonFinite { field: "delta_v" })
     );
     let z = PreintegratedImu {
@@ -449,7 +452,7 @@ fn typed_errors_instead_of_panics() {
         ..pim.clone()
     };
     assert!(matches!(
-        ImuFactor::new(z),
+        ImuFactor::with_mode(z, ResidualMode::ComponentWise),
         Err(FactorError::NonPositiveDeltaT { .. })
     ));
     // Combined factor: zero bias random walk → singular cov15.
@@ -461,11 +464,11 @@ fn typed_errors_instead_of_panics() {
         ..pim.clone()
     };
     assert!(matches!(
-        CombinedImuFactor::new(z),
+        CombinedImuFactor::with_mode(z, ResidualMode::ComponentWise),
         Err(FactorError::CovarianceNotPositiveDefinite { dim: 15, .. })
     ));
     // Non-finite state: non-finite residual, no panic.
-    let f = ImuFactor::new(pim.clone()).unwrap();
+    let f = ImuFactor::with_mode(pim.clone(), ResidualMode::ComponentWise).unwrap();
     let bad = NavState::new(
         SO3::identity(),
         Vector3::new(f64::NAN, 0.0, 0.0),
@@ -485,8 +488,8 @@ fn combined_factor_bias_rows_and_whitening() {
         let r = rng.rot();
         random_pim(&mut rng, r)
     };
-    let f = CombinedImuFactor::new(pim.clone()).unwrap();
-    let f9 = ImuFactor::new(pim.clone()).unwrap();
+    let f = CombinedImuFactor::with_mode(pim.clone(), ResidualMode::ComponentWise).unwrap();
+    let f9 = ImuFactor::with_mode(pim.clone(), ResidualMode::ComponentWise).unwrap();
     let xi = random_state(&mut rng);
     let bi = ImuBias::new(rng.v3(0.01), rng.v3(0.1));
     let bj = ImuBias::new(
@@ -553,15 +556,17 @@ fn factors_check_the_level() {
         "cov15 is positive definite"
     );
     assert_eq!(
-        CombinedImuFactor::new(cov.clone()),
+        CombinedImuFactor::with_mode(cov.clone(), ResidualMode::ComponentWise),
         Err(FactorError::LevelTooLow {
             needed: Level::Combined,
             got: Level::Covariance
         })
     );
-    assert!(ImuFactor::new(cov).is_ok());
-    assert!(CombinedImuFactor::new(run(Level::Combined)).is_ok());
-    let e = ImuFactor::new(run(Level::Deltas)).unwrap_err();
+    assert!(ImuFactor::with_mode(cov, ResidualMode::ComponentWise).is_ok());
+    assert!(
+        CombinedImuFactor::with_mode(run(Level::Combined), ResidualMode::ComponentWise).is_ok()
+    );
+    let e = ImuFactor::with_mode(run(Level::Deltas), ResidualMode::ComponentWise).unwrap_err();
     assert_eq!(
         e,
         FactorError::LevelTooLow {

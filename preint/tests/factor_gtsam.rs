@@ -11,8 +11,10 @@
 //!   `∂e_{pos,vel}/∂δφ_i += M [r_{p,v}]×`, `∂e_{pos,vel}/∂δφ_j −= [M r_{p,v}]×`. GTSAM's pose
 //!   perturbation `[dw, dt]` (Pose3 retract, `dt` in body) and world-frame velocity match
 //!   [`NavState`]'s [δφ, δp, δv] to first order.
-//! - Logmap (GTSAM 4.3 default): `e = [w, Jl(w)⁻¹(−M r_p), Jl(w)⁻¹(−M r_v)]`, `w = −r_φ`
-//!   (residual only).
+//! - Logmap (GTSAM 4.3 default): `e = [w, Jl(w)⁻¹(−M r_p), Jl(w)⁻¹(−M r_v)]`, `w = −r_φ`, from
+//!   the component-wise residual; and the factor's own [`ResidualMode::Logmap`] residual
+//!   `r_L` with its Jacobians maps exactly as `e = −P r_L`, `∂e/∂x = −P ∂r_L/∂x` (`P`: [φ, v, p]
+//!   → [rot, pos, vel]; `preint::factor::logmap` docs).
 //!
 //! Fixtures: `tests/fixtures/gtsam/*.gtsam.json` with their `*.params.json` (states, bias).
 //! The `factor_*` ones are ComponentWise variants; regenerate with
@@ -22,7 +24,7 @@
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
 use preint::{
     BiasJacobians, Cov9, Cov15, EdgeNoise, ImuBias, ImuFactor, Level, NavState, PreintegratedImu,
-    predict,
+    ResidualMode, predict,
 };
 use preint_lie::{SO3, hat, jl_inv};
 use std::path::PathBuf;
@@ -301,7 +303,7 @@ fn prediction_matches_gtsam() {
 #[test]
 fn residual_matches_gtsam_in_both_error_modes() {
     for c in all_cases() {
-        let f = ImuFactor::new(c.pim.clone()).unwrap();
+        let f = ImuFactor::with_mode(c.pim.clone(), ResidualMode::ComponentWise).unwrap();
         let r = f.residual(&c.xi, &c.xj, &c.bias_i);
         let (rphi, rv, rp) = (
             r.fixed_rows::<3>(0).into_owned(),
@@ -348,7 +350,7 @@ fn jacobians_match_gtsam_componentwise() {
         .filter(|c| c.mode == "ComponentWise")
     {
         n += 1;
-        let f = ImuFactor::new(c.pim.clone()).unwrap();
+        let f = ImuFactor::with_mode(c.pim.clone(), ResidualMode::ComponentWise).unwrap();
         let (r, j) = f.evaluate(&c.xi, &c.xj, &c.bias_i);
         let m = *c.xj.r.inverse().compose(&c.xi.r).matrix();
         let rv = r.fixed_rows::<3>(3).into_owned();
@@ -422,7 +424,7 @@ fn chi2_matches_gtsam_after_frame_change() {
         .into_iter()
         .filter(|c| c.mode == "ComponentWise")
     {
-        let f = ImuFactor::new(c.pim.clone()).unwrap();
+        let f = ImuFactor::with_mode(c.pim.clone(), ResidualMode::ComponentWise).unwrap();
         let r = f.residual(&c.xi, &c.xj, &c.bias_i);
         let t = c.pim.delta_r.matrix() * c.xj.r.inverse().compose(&c.xi.r).matrix();
         let mut r2 = r;
@@ -445,10 +447,91 @@ fn chi2_matches_gtsam_after_frame_change() {
 #[test]
 fn whitened_residual_norm_is_chi2() {
     for c in all_cases() {
-        let f = ImuFactor::new(c.pim.clone()).unwrap();
+        let f = ImuFactor::with_mode(c.pim.clone(), ResidualMode::ComponentWise).unwrap();
         let (rw, _) = f.evaluate_whitened(&c.xi, &c.xj, &c.bias_i);
         let r: SVector<f64, 9> = f.residual(&c.xi, &c.xj, &c.bias_i);
         let chi2_ref = r.dot(&c.pim.cov.lu().solve(&r).unwrap());
         assert!(close(rw.norm_squared(), chi2_ref, 1e-7), "{}", c.name);
     }
+}
+
+/// Our 9×3 block (rows [φ, v, p]) as GTSAM's Logmap rows [rot, pos, vel]: `−P b`.
+fn minus_p(b: &SMatrix<f64, 9, 3>) -> SMatrix<f64, 9, 3> {
+    let mut o = SMatrix::<f64, 9, 3>::zeros();
+    o.fixed_rows_mut::<3>(0).copy_from(&(-b.fixed_rows::<3>(0)));
+    o.fixed_rows_mut::<3>(3).copy_from(&(-b.fixed_rows::<3>(6)));
+    o.fixed_rows_mut::<3>(6).copy_from(&(-b.fixed_rows::<3>(3)));
+    o
+}
+
+#[test]
+fn logmap_mode_residual_and_jacobians_match_gtsam_logmap() {
+    let mut n = 0;
+    for c in all_cases().into_iter().filter(|c| c.mode == "Logmap") {
+        n += 1;
+        let f = ImuFactor::with_mode(c.pim.clone(), ResidualMode::Logmap).unwrap();
+        let (r, j) = f.evaluate(&c.xi, &c.xj, &c.bias_i);
+        let fac = c.out.at("factor");
+        let e = fac.at("residual").vec();
+        let mapped = minus_p(&SMatrix::<f64, 9, 3>::from_fn(|row, col| {
+            if col == 0 { r[row] } else { 0.0 }
+        }));
+        let mut worst = 0.0f64;
+        for k in 0..9 {
+            let d = (mapped[(k, 0)] - e[k]).abs() / (1.0 + e[k].abs());
+            worst = worst.max(d);
+            assert!(
+                d < 1e-9,
+                "{}: e[{k}] ours {:e} gtsam {:e}",
+                c.name,
+                mapped[(k, 0)],
+                e[k]
+            );
+        }
+        let (hpi, hvi, hpj, hvj, hb) = (
+            fac.at("H_pose_i").mat(),
+            fac.at("H_vel_i").mat(),
+            fac.at("H_pose_j").mat(),
+            fac.at("H_vel_j").mat(),
+            fac.at("H_bias_i").mat(),
+        );
+        let pairs: [(&str, SMatrix<f64, 9, 3>, SMatrix<f64, 9, 3>); 8] = [
+            ("phi_i", j.phi_i, blk(&hpi, 0, 0)),
+            ("p_i", j.p_i, blk(&hpi, 0, 3)),
+            ("v_i", j.v_i, blk(&hvi, 0, 0)),
+            ("phi_j", j.phi_j, blk(&hpj, 0, 0)),
+            ("p_j", j.p_j, blk(&hpj, 0, 3)),
+            ("v_j", j.v_j, blk(&hvj, 0, 0)),
+            ("ba_i", j.ba_i, blk(&hb, 0, 0)),
+            ("bg_i", j.bg_i, blk(&hb, 0, 3)),
+        ];
+        let mut worst_j = 0.0f64;
+        for (name, ours, theirs) in pairs {
+            let d = (minus_p(&ours) - theirs).amax() / (1.0 + theirs.amax());
+            worst_j = worst_j.max(d);
+            assert!(
+                d < 1e-9,
+                "{}: block {name}: ours {} gtsam {theirs}",
+                c.name,
+                minus_p(&ours)
+            );
+        }
+        // GTSAM weights with residualCovariance(), its ΔRᵀ-rotated chart: the same χ² exactly.
+        let (ours, theirs) = (f.chi2(&c.xi, &c.xj, &c.bias_i), fac.at("chi2").num());
+        assert!(
+            close(ours, theirs, 1e-8),
+            "{}: χ² {ours} vs {theirs}",
+            c.name
+        );
+        eprintln!(
+            "{}: Logmap residual worst {worst:.1e}, Jacobians worst {worst_j:.1e}, χ² {ours:.6e} vs {theirs:.6e}",
+            c.name
+        );
+        assert!(
+            r.fixed_rows::<6>(3).amax() > 1e-4,
+            "{}: non-trivial",
+            c.name
+        );
+    }
+    assert!(n >= 5, "{n} Logmap fixtures");
 }

@@ -11,6 +11,10 @@
 //! Jacobians at i and j: `Σ = Σ_factor + J_i S J_iᵀ + J_j S J_jᵀ` with
 //! `S = diag(σ_R² I, σ_p² I, σ_v² I)` in the `NavState` tangent [δφ, δp, δv].
 //!
+//! `--residual component|logmap` picks the factor's [`ResidualMode`] (default: the library's,
+//! [`ResidualMode::default`]); the weight is then the covariance of that residual
+//! (`ImuFactor::residual_covariance`).
+//!
 //! Printed: the residual (order [r_φ, r_v, r_p] or [r_φ, r_v, r_p, r_bg, r_ba]), the whitened
 //! residual `U r` (`UᵀU = Σ⁻¹`, `U` upper triangular), `χ² = ‖U r‖²` with its χ² quantiles, and
 //! each block's marginal χ² (`r_bᵀ Σ_bb⁻¹ r_b`, 3 dof) to say which part disagrees.
@@ -24,7 +28,8 @@ use crate::preint_args::PreintArgs;
 use crate::scheme::{self};
 use crate::{CliError, Output, checks, input, stream};
 use preint::{
-    CombinedImuFactor, ImuBias, ImuFactor, Level, NavState, PreintegratedImu, preintegrate,
+    CombinedImuFactor, ImuBias, ImuFactor, Level, NavState, PreintegratedImu, ResidualMode,
+    preintegrate,
 };
 use preint_io::{GroundTruthState, read_euroc_groundtruth};
 use serde_json::{Value, json};
@@ -54,6 +59,10 @@ pub struct Args {
     /// by the covariance with the bias random walk) instead of ImuFactor (9-dim).
     #[arg(long)]
     pub combined: bool,
+    /// Residual: `component` (Forster's [r_phi, r_v, r_p]) or `logmap` (the SE_2(3) logarithm
+    /// of predicted^-1 * actual, GTSAM 4.3's default). Default: the library's default.
+    #[arg(long, value_parser = parse_residual, default_value = ResidualMode::default().name())]
+    pub residual: ResidualMode,
     /// Standard deviation of the ground truth's attitudes (rad), added to the weight.
     #[arg(long, default_value_t = 0.0)]
     pub pose_rot_std: f64,
@@ -63,6 +72,10 @@ pub struct Args {
     /// Standard deviation of the ground truth's velocities (m/s), added to the weight.
     #[arg(long, default_value_t = 0.0)]
     pub vel_std: f64,
+}
+
+fn parse_residual(s: &str) -> Result<ResidualMode, String> {
+    ResidualMode::parse(s).ok_or_else(|| format!("unknown residual {s:?}: use component or logmap"))
 }
 
 const BLOCKS: [&str; 5] = ["rotation", "velocity", "position", "gyro_bias", "acc_bias"];
@@ -80,6 +93,8 @@ pub struct FactorRun {
     pub scheme: preint::Scheme,
     /// `CombinedImuFactor` (else `ImuFactor`).
     pub combined: bool,
+    /// The factor's residual.
+    pub residual: ResidualMode,
     /// Ground truth at keyframe i.
     pub gi: GroundTruthState,
     /// Ground truth at keyframe j.
@@ -150,18 +165,19 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
     let failed = |e: preint::FactorError| CliError::failed_in(args.input.path(), e);
     let (xi, xj) = (nav(&gi), nav(&gj));
     let ev = if args.combined {
-        let f = CombinedImuFactor::new(pim.clone()).map_err(failed)?;
+        let f = CombinedImuFactor::with_mode(pim.clone(), args.residual).map_err(failed)?;
         let (r, j) = f.evaluate(&xi, &xj, &gi.bias, &gj.bias);
-        evaluate(r, j.state_i(), j.state_j(), pim.residual_cov15(), tn)?
+        evaluate(r, j.state_i(), j.state_j(), *f.residual_covariance(), tn)?
     } else {
-        let f = ImuFactor::new(pim.clone()).map_err(failed)?;
+        let f = ImuFactor::with_mode(pim.clone(), args.residual).map_err(failed)?;
         let (r, j) = f.evaluate(&xi, &xj, &gi.bias);
-        evaluate(r, j.state_i(), j.state_j(), pim.cov, tn)?
+        evaluate(r, j.state_i(), j.state_j(), *f.residual_covariance(), tn)?
     };
     Ok(FactorRun {
         imu: args.input.label(),
         scheme,
         combined: args.combined,
+        residual: args.residual,
         gi,
         gj,
         requested: (args.from, args.to),
@@ -203,6 +219,7 @@ pub fn to_json(f: &FactorRun) -> Value {
     json!({
         "factor": factor_name(f.combined),
         "scheme": scheme::label(f.scheme),
+        "residual_mode": f.residual.name(),
         "requested_ns": [f.requested.0, f.requested.1],
         "t_i_ns": f.gi.t_ns,
         "t_j_ns": f.gj.t_ns,
@@ -222,10 +239,11 @@ pub fn to_json(f: &FactorRun) -> Value {
         "marginal_chi2_quantiles": {"dof": 3, "0.95": m95, "0.99": m99},
         "ground_truth_noise": {"rot_rad": f.truth_noise.rot_rad, "pos_m": f.truth_noise.pos_m,
                                "vel_m_s": f.truth_noise.vel_m_s},
-        "weight": if f.combined {
-            "residual_cov15 (covariance of [r_phi, r_v, r_p, r_bg, r_ba]) + ground-truth noise through the Jacobians"
-        } else {
-            "cov (covariance of [r_phi, r_v, r_p]) + ground-truth noise through the Jacobians"
+        "weight": match (f.combined, f.residual) {
+            (true, ResidualMode::ComponentWise) => "residual_cov15 (covariance of [r_phi, r_v, r_p, r_bg, r_ba]) + ground-truth noise through the Jacobians",
+            (false, ResidualMode::ComponentWise) => "cov (covariance of [r_phi, r_v, r_p]) + ground-truth noise through the Jacobians",
+            (true, ResidualMode::Logmap) => "diag(T, I6) residual_cov15 diag(T, I6)^T, T = diag(I, dR^T, dR^T) (covariance of the Logmap residual) + ground-truth noise through the Jacobians",
+            (false, ResidualMode::Logmap) => "T cov T^T, T = diag(I, dR^T, dR^T) (covariance of the Logmap residual [phi, Jl^-1 dR^T r_v, Jl^-1 dR^T r_p]) + ground-truth noise through the Jacobians",
         },
         "units": {"residual": "rad, m/s, m (, rad/s, m/s^2) per block", "whitened_residual": "dimensionless",
                   "state": "p m (world), q body->world, v m/s (world), biases rad/s and m/s^2"},
@@ -239,10 +257,11 @@ pub fn to_text(f: &FactorRun) -> String {
     let mut h = String::new();
     let _ = writeln!(
         h,
-        "{}: {} at the ground truth, scheme {}, keyframes {} → {} ns (nearest rows to {} and {}), \
-         Δt = {:.6} s, {} samples",
+        "{}: {} ({} residual) at the ground truth, scheme {}, keyframes {} → {} ns (nearest rows \
+         to {} and {}), Δt = {:.6} s, {} samples",
         f.imu,
         factor_name(f.combined),
+        f.residual.name(),
         scheme::label(f.scheme),
         f.gi.t_ns,
         f.gj.t_ns,

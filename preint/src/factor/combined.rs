@@ -1,7 +1,6 @@
 //! [`CombinedImuFactor`]: the 15-dim factor with the bias change over the window.
 
-use super::residual::residual9;
-use super::{CombinedImuFactorJacobians, FactorError, Weighted};
+use super::{CombinedImuFactorJacobians, FactorError, ResidualMode, Weighted};
 use crate::measurement::PreintegratedImu;
 use crate::navstate::NavState;
 use crate::params::Level;
@@ -30,8 +29,21 @@ impl CombinedImuFactor {
     /// [`ImuFactor::new`](super::ImuFactor::new); a zero bias random walk makes `cov15`
     /// singular ([`FactorError::CovarianceNotPositiveDefinite`] with `dim = 15`).
     pub fn new(pim: PreintegratedImu) -> Result<Self, FactorError> {
+        Self::with_mode(pim, ResidualMode::default())
+    }
+
+    /// Builds the factor with the given [`ResidualMode`]: the first nine rows of the residual
+    /// are those of [`ImuFactor`](super::ImuFactor) in that mode, the bias rows unchanged;
+    /// [`ResidualMode::Logmap`] weights with `diag(T, I₆) residual_cov15() diag(T, I₆)ᵀ`
+    /// ([`logmap`](super::logmap) module docs). Errors as [`new`](Self::new).
+    pub fn with_mode(pim: PreintegratedImu, mode: ResidualMode) -> Result<Self, FactorError> {
         let cov = pim.residual_cov15();
-        Weighted::new(pim, Level::Combined, "cov15", cov).map(Self)
+        Weighted::new(pim, Level::Combined, "cov15", cov, mode).map(Self)
+    }
+
+    /// The residual this factor evaluates.
+    pub fn residual_mode(&self) -> ResidualMode {
+        self.0.mode
     }
 
     /// The preintegrated measurement this factor reads.
@@ -46,7 +58,14 @@ impl CombinedImuFactor {
         &self.0.sqrt_info
     }
 
-    /// Residual `[r_φ, r_v, r_p, r_bg, r_ba]` (rad, m/s, m, rad/s, m/s²).
+    /// The covariance `Σ_r` that weights the residual: `residual_cov15()` (component-wise) or
+    /// `diag(T, I₆) residual_cov15() diag(T, I₆)ᵀ` (Logmap), order [φ, v, p, b_g, b_a].
+    pub fn residual_covariance(&self) -> &SMatrix<f64, 15, 15> {
+        &self.0.cov
+    }
+
+    /// Residual `[r_φ, r_v, r_p, r_bg, r_ba]` (rad, m/s, m, rad/s, m/s²); in
+    /// [`ResidualMode::Logmap`] the first nine rows are the SE₂(3) residual.
     pub fn residual(
         &self,
         state_i: &NavState,
@@ -65,7 +84,7 @@ impl CombinedImuFactor {
         bias_i: &ImuBias,
         bias_j: &ImuBias,
     ) -> (SVector<f64, 15>, CombinedImuFactorJacobians) {
-        let (r9, j9) = residual9(&self.0.pim, state_i, state_j, bias_i);
+        let (r9, j9) = self.0.residual9_mode(state_i, state_j, bias_i);
         let mut r = SVector::<f64, 15>::zeros();
         r.fixed_rows_mut::<9>(0).copy_from(&r9);
         r.fixed_rows_mut::<3>(9)

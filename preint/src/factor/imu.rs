@@ -1,7 +1,6 @@
 //! [`ImuFactor`]: the 9-dim factor between two navigation states and the bias at i.
 
-use super::residual::residual9;
-use super::{FactorError, ImuFactorJacobians, Weighted};
+use super::{FactorError, ImuFactorJacobians, ResidualMode, Weighted};
 use crate::measurement::PreintegratedImu;
 use crate::navstate::{NavState, predict};
 use crate::params::Level;
@@ -11,7 +10,9 @@ use nalgebra::{SMatrix, SVector};
 /// Forster's IMU factor between `(NavState_i, NavState_j, bias_i)` (module docs for the
 /// residual [r_φ, r_v, r_p], perturbations and Jacobians). It reads only a
 /// [`PreintegratedImu`] and weights the residual with its 9×9 covariance `cov` (the residual
-/// is `−[δφ, δv, δp]` to first order, whose covariance is `cov`). The bias is held constant
+/// is `−[δφ, δv, δp]` to first order, whose covariance is `cov`); in
+/// [`ResidualMode::Logmap`] (the default) the residual is its SE₂(3) form and the weight
+/// `T cov Tᵀ` ([`logmap`](super::logmap)). The bias is held constant
 /// over the window: on data whose bias drifts noticeably within a window, use
 /// [`CombinedImuFactor`](super::CombinedImuFactor), whose covariance includes the random walk.
 #[derive(Clone, Debug, PartialEq)]
@@ -43,8 +44,20 @@ impl ImuFactor {
     /// assert!(factor.chi2(&xi, &off, &ImuBias::zero()) > 1.0);
     /// ```
     pub fn new(pim: PreintegratedImu) -> Result<Self, FactorError> {
+        Self::with_mode(pim, ResidualMode::default())
+    }
+
+    /// Builds the factor with the given [`ResidualMode`]: [`ResidualMode::ComponentWise`]
+    /// weights `[r_φ, r_v, r_p]` by `pim.cov`, [`ResidualMode::Logmap`] weights the SE₂(3)
+    /// residual by `T cov Tᵀ` ([`logmap`](super::logmap) module docs). Errors as [`new`](Self::new).
+    pub fn with_mode(pim: PreintegratedImu, mode: ResidualMode) -> Result<Self, FactorError> {
         let cov = pim.cov;
-        Weighted::new(pim, Level::Covariance, "cov", cov).map(Self)
+        Weighted::new(pim, Level::Covariance, "cov", cov, mode).map(Self)
+    }
+
+    /// The residual this factor evaluates.
+    pub fn residual_mode(&self) -> ResidualMode {
+        self.0.mode
     }
 
     /// The preintegrated measurement this factor reads.
@@ -52,9 +65,16 @@ impl ImuFactor {
         &self.0.pim
     }
 
-    /// Square-root information `U` (upper triangular, `cov⁻¹ = UᵀU`), order [δφ, δv, δp].
+    /// Square-root information `U` (upper triangular, `Σ⁻¹ = UᵀU`), order [δφ, δv, δp], of
+    /// `Σ = cov` (component-wise) or `T cov Tᵀ` (Logmap).
     pub fn sqrt_information(&self) -> &SMatrix<f64, 9, 9> {
         &self.0.sqrt_info
+    }
+
+    /// The covariance `Σ` that weights the residual: `cov` (component-wise) or `T cov Tᵀ`
+    /// (Logmap), order [φ, v, p].
+    pub fn residual_covariance(&self) -> &SMatrix<f64, 9, 9> {
+        &self.0.cov
     }
 
     /// Predicted state at j ([`predict`], Forster eq. 33) for the bias `bias_i`.
@@ -63,7 +83,8 @@ impl ImuFactor {
     }
 
     /// Residual `r = [r_φ [rad], r_v [m/s], r_p [m]]` (Forster eq. 45 with eq. 44 bias
-    /// correction). Non-finite states give non-finite residuals (no panic).
+    /// correction), or its SE₂(3) form `Log(D(b)⁻¹ Y)` for [`ResidualMode::Logmap`].
+    /// Non-finite states give non-finite residuals (no panic).
     pub fn residual(
         &self,
         state_i: &NavState,
@@ -80,7 +101,7 @@ impl ImuFactor {
         state_j: &NavState,
         bias_i: &ImuBias,
     ) -> (SVector<f64, 9>, ImuFactorJacobians) {
-        residual9(&self.0.pim, state_i, state_j, bias_i)
+        self.0.residual9_mode(state_i, state_j, bias_i)
     }
 
     /// Whitened residual `U r` and Jacobians `U J` (`U` = [`sqrt_information`](Self::sqrt_information)).
@@ -93,7 +114,7 @@ impl ImuFactor {
         self.0.whiten(self.evaluate(state_i, state_j, bias_i))
     }
 
-    /// Squared Mahalanobis norm `rᵀ cov⁻¹ r = ‖U r‖²` (dimensionless; χ² with 9 dof).
+    /// Squared Mahalanobis norm `rᵀ Σ⁻¹ r = ‖U r‖²` (dimensionless; χ² with 9 dof).
     pub fn chi2(&self, state_i: &NavState, state_j: &NavState, bias_i: &ImuBias) -> f64 {
         self.0.chi2(&self.residual(state_i, state_j, bias_i))
     }

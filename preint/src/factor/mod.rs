@@ -1,6 +1,11 @@
 //! IMU factors: the Forster residual between two [`NavState`](crate::NavState)s with analytic Jacobians, its
 //! whitened form, and the combined (15-dim) variant with the bias random walk.
 //!
+//! Each factor evaluates one of two residuals ([`ResidualMode`], set when it is built): the
+//! SE₂(3) **Logmap** residual ([`logmap`], the default, as in GTSAM 4.3, chosen on NEES
+//! evidence) or Forster's **component-wise** residual below. The Logmap one is computed from the
+//! component-wise residual and Jacobians described here.
+//!
 //! # Residual (Forster et al. 2017, T-RO, eq. 45)
 //!
 //! With `ΔR(b), Δv(b), Δp(b)` the deltas corrected to first order for the bias `b` at keyframe i
@@ -66,11 +71,13 @@
 
 mod combined;
 mod imu;
+pub mod logmap;
 mod residual;
 mod rotating;
 
 pub use combined::CombinedImuFactor;
 pub use imu::ImuFactor;
+pub use logmap::ResidualMode;
 
 use crate::measurement::PreintegratedImu;
 use crate::params::Level;
@@ -318,16 +325,21 @@ fn check_pim(pim: &PreintegratedImu) -> Result<(), FactorError> {
 struct Weighted<const R: usize> {
     pim: PreintegratedImu,
     sqrt_info: SMatrix<f64, R, R>,
+    /// The covariance `U` is the square-root information of (the residual's, in `mode`).
+    cov: SMatrix<f64, R, R>,
+    mode: ResidualMode,
 }
 
 impl<const R: usize> Weighted<R> {
     /// Checks `pim` (its level at least `needed`, finite fields, positive Δt) and computes the
-    /// square-root information of `cov` (the residual's covariance, named `field` in errors).
+    /// square-root information of `cov` (the component-wise residual's covariance, named
+    /// `field` in errors), mapped to the Logmap chart for [`ResidualMode::Logmap`].
     fn new(
         pim: PreintegratedImu,
         needed: Level,
         field: &'static str,
         cov: SMatrix<f64, R, R>,
+        mode: ResidualMode,
     ) -> Result<Self, FactorError> {
         if pim.level < needed {
             return Err(FactorError::LevelTooLow {
@@ -339,8 +351,32 @@ impl<const R: usize> Weighted<R> {
         if !cov.iter().all(|x| x.is_finite()) {
             return Err(FactorError::NonFinite { field });
         }
+        let cov = match mode {
+            ResidualMode::ComponentWise => cov,
+            ResidualMode::Logmap => logmap::logmap_cov(&pim, &cov),
+        };
         let sqrt_info = sqrt_information(&cov)?;
-        Ok(Self { pim, sqrt_info })
+        Ok(Self {
+            pim,
+            sqrt_info,
+            cov,
+            mode,
+        })
+    }
+
+    /// The 9-dim residual and Jacobians in this factor's [`ResidualMode`], extended to `R`
+    /// rows (the rows past nine zero, for the combined factor to fill).
+    fn residual9_mode(
+        &self,
+        xi: &crate::NavState,
+        xj: &crate::NavState,
+        bias_i: &crate::ImuBias,
+    ) -> (SVector<f64, 9>, ImuFactorJacobians) {
+        let (mut r, mut j) = residual::residual9(&self.pim, xi, xj, bias_i);
+        if self.mode == ResidualMode::Logmap {
+            logmap::to_logmap(&self.pim, bias_i, &mut r, &mut j);
+        }
+        (r, j)
     }
 
     /// `(U r, U J)`.
