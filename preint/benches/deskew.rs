@@ -1,5 +1,6 @@
 //! Cost of the state inside a window (`preint::deskew`): one window of 20 000 samples (200 Hz,
-//! 100 s) queried at M = 20 000 or 200 000 sorted times (between samples), against
+//! 100 s) queried at M = 1 (`t_j`: the pass alone), 20 000 or 200 000 sorted times (between
+//! samples), against
 //! `preintegrate` of the same window at `Level::Deltas`. The pass costs about one deltas step
 //! per sample; each query adds at most three (hermite4) or one (Euler, midpoint) steps.
 //!
@@ -31,7 +32,7 @@ fn bench(c: &mut Criterion) {
                 ))
             })
         });
-        for m in [20_000i64, 200_000] {
+        for m in [1i64, 20_000, 200_000] {
             let times: Vec<i64> = (1..=m).map(|k| t_i + k * ((t_j - t_i) / m)).collect();
             g.bench_function(format!("{scheme:?}/queries_{m}"), |b| {
                 b.iter(|| {
@@ -39,8 +40,7 @@ fn bench(c: &mut Criterion) {
                         &prm,
                         &ImuBias::zero(),
                         black_box(&s),
-                        t_i,
-                        t_j,
+                        (t_i, t_j),
                         &times,
                     ))
                 })

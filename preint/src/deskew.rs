@@ -46,6 +46,7 @@ use crate::extrinsics::{LeverArm, SensorPose};
 use crate::measurement::{BiasJacobians, Cov9, Cov15, EdgeNoise, PreintegratedImu};
 use crate::navstate::{NavState, predict};
 use crate::params::{PreintParams, Scheme};
+use crate::preintegrator::Preintegrator;
 use crate::sample::{ImuBias, ImuSample};
 use crate::scheme::{
     Deltas, IntervalScheme, MAX_STENCIL, Node, RENORM_EVERY, Stencil, span_s, with_scheme,
@@ -344,6 +345,25 @@ impl<'a> WindowDeltas<'a> {
         })
     }
 
+    /// The window of a [`Preintegrator`] that kept its samples (`PreintParams::keep_samples`,
+    /// the default): from its first to its last sample, with its parameters and bias estimate;
+    /// the deltas at its last sample are then those of [`Preintegrator::finish`]. Errors:
+    /// [`PreintError::SamplesNotKept`], [`PreintError::TooFewSamples`].
+    pub fn of_preintegrator(pi: &'a Preintegrator) -> Result<Self, PreintError> {
+        let samples = pi.samples();
+        if !pi.params().keep_samples {
+            return Err(PreintError::SamplesNotKept { count: pi.len() });
+        }
+        match (samples.first(), samples.last()) {
+            (Some(a), Some(b)) if samples.len() >= 2 => {
+                Self::new(pi.params(), pi.bias_hat(), samples, a.t_ns, b.t_ns)
+            }
+            _ => Err(PreintError::TooFewSamples {
+                count: samples.len(),
+            }),
+        }
+    }
+
     /// The deltas at `t_ns` ∈ `[t_i, t_j]`; successive calls must not go back in time.
     /// Errors: [`PreintError::QueryOutsideWindow`], [`PreintError::QueryNotSorted`] (the index
     /// counts the calls), [`PreintError::NonFiniteResult`].
@@ -449,7 +469,7 @@ fn to_body(d: &mut DeltasAt, pose: &SensorPose, w_i: &Vector3<f64>, w_j: &Vector
 ///     .collect();
 /// let p = PreintParams::default().with_scheme(Scheme::Hermite4);
 /// let b = ImuBias::zero();
-/// let at = deskew::deltas_at(&p, &b, &s, 2_500_000, 900_000_000, &[12_345_678, 500_000_000]).unwrap();
+/// let at = deskew::deltas_at(&p, &b, &s, (2_500_000, 900_000_000), &[12_345_678, 500_000_000]).unwrap();
 /// let w = preintegrate(&p, &b, &s, 2_500_000, 12_345_678).unwrap();
 /// assert_eq!((at[0].delta_v, at[0].delta_p), (w.delta_v, w.delta_p));
 /// ```
@@ -457,8 +477,7 @@ pub fn deltas_at(
     params: &PreintParams,
     bias: &ImuBias,
     samples: &[ImuSample],
-    t_i_ns: i64,
-    t_j_ns: i64,
+    (t_i_ns, t_j_ns): (i64, i64),
     times_ns: &[i64],
 ) -> Result<Vec<DeltasAt>, PreintError> {
     let mut w = WindowDeltas::new(params, bias, samples, t_i_ns, t_j_ns)?;

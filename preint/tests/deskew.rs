@@ -61,7 +61,7 @@ fn rel(a: &V3, b: &V3) -> f64 {
 /// `[t_i, t]` (rotation: angle of `ΔR_aᵀ ΔR_b`).
 fn max_diff(p: &PreintParams, bias: &ImuBias, s: &[ImuSample], t_i: i64, t_j: i64) -> f64 {
     let q = queries(s, t_i, t_j);
-    let at = deltas_at(p, bias, s, t_i, t_j, &q).unwrap();
+    let at = deltas_at(p, bias, s, (t_i, t_j), &q).unwrap();
     assert_eq!(at.len(), q.len());
     let mut worst: f64 = 0.0;
     for (d, &t) in at.iter().zip(&q) {
@@ -121,7 +121,7 @@ fn long_windows_renormalise_as_the_window_does() {
         let p = prm(scheme, Level::Combined);
         let (t_i, t_j) = (1_500_000, 2_099_500_000);
         let q = [1_025_000_000, 1_026_500_000, 2_000_000_000, t_j];
-        let at = deltas_at(&p, &bias(), &s, t_i, t_j, &q).unwrap();
+        let at = deltas_at(&p, &bias(), &s, (t_i, t_j), &q).unwrap();
         for (d, &t) in at.iter().zip(&q) {
             let w = preintegrate(&p, &bias(), &s, t_i, t).unwrap();
             assert_eq!(
@@ -217,13 +217,13 @@ fn deskewed_points_are_the_points_moved_through_the_predicted_states() {
     }
 }
 
-/// GTSAM 4.3's `deskewPointsAtTimes` (fixture `deskew_yaw.gtsam.json`) on the motion where its
+/// GTSAM 4.3's `deskewPointsAtTimes` (fixture `deskew_yaw.json`) on the motion where its
 /// model (constant-rate rotation, constant velocity in frame i) is exact: a constant yaw rate at
 /// constant world velocity, readings (0, 0, ω) and (0, 0, 9.81). Ours, from the samples, agrees
 /// to 1e-12 m for every scheme.
 #[test]
 fn gtsam_deskew_points_at_times_where_its_model_is_exact() {
-    let f = json("deskew_yaw.gtsam.json");
+    let f = json("deskew_yaw.json");
     let w = f["yaw_rate"].as_f64().unwrap();
     let rate = f["rate_hz"].as_i64().unwrap();
     let n = f["samples"].as_i64().unwrap();
@@ -276,38 +276,73 @@ fn gtsam_deskew_points_at_times_where_its_model_is_exact() {
     }
 }
 
+/// A preintegrator that kept its samples: the deltas inside equal `preintegrate` on its samples
+/// and, at its last sample, its own `finish`; one that did not keep them is refused.
+#[test]
+fn a_preintegrator_with_kept_samples_answers_inside_its_window() {
+    let s = stream();
+    for &scheme in Scheme::ALL {
+        let p = prm(scheme, Level::Combined);
+        let mut pi = preint::Preintegrator::new(p.clone(), bias()).unwrap();
+        pi.integrate_slice(&s[40..200]).unwrap();
+        let (t_i, t_j) = (s[40].t_ns, s[199].t_ns);
+        let mut w = WindowDeltas::of_preintegrator(&pi).unwrap();
+        let mid = s[120].t_ns + 1_111_111;
+        let at_mid = w.at(mid).unwrap();
+        let want = preintegrate(&p, &bias(), &s[40..200], t_i, mid).unwrap();
+        assert_eq!(
+            (at_mid.delta_r, at_mid.delta_v),
+            (want.delta_r, want.delta_v)
+        );
+        let end = w.at(t_j).unwrap();
+        let m = pi.finish().unwrap();
+        assert_eq!(
+            (end.delta_r, end.delta_v, end.delta_p),
+            (m.delta_r, m.delta_v, m.delta_p)
+        );
+        let mut p2 = p.clone();
+        p2.keep_samples = false;
+        let mut pi = preint::Preintegrator::new(p2, bias()).unwrap();
+        pi.integrate_slice(&s[40..200]).unwrap();
+        assert!(matches!(
+            WindowDeltas::of_preintegrator(&pi),
+            Err(PreintError::SamplesNotKept { count: 160 })
+        ));
+    }
+}
+
 #[test]
 fn bad_queries_and_inputs_are_typed_errors() {
     let s = stream();
     let p = prm(Scheme::Midpoint, Level::Deltas);
     let b = ImuBias::zero();
     let (t_i, t_j) = (s[10].t_ns, s[20].t_ns);
-    let e = deltas_at(&p, &b, &s, t_i, t_j, &[t_i - 1]).unwrap_err();
+    let e = deltas_at(&p, &b, &s, (t_i, t_j), &[t_i - 1]).unwrap_err();
     assert!(
         matches!(e, PreintError::QueryOutsideWindow { index: 0, .. }),
         "{e}"
     );
-    let e = deltas_at(&p, &b, &s, t_i, t_j, &[t_i + 5, t_j + 1]).unwrap_err();
+    let e = deltas_at(&p, &b, &s, (t_i, t_j), &[t_i + 5, t_j + 1]).unwrap_err();
     assert!(matches!(e, PreintError::QueryOutsideWindow { index: 1, t_ns, .. } if t_ns == t_j + 1));
-    let e = deltas_at(&p, &b, &s, t_i, t_j, &[t_i + 9, t_i + 5]).unwrap_err();
+    let e = deltas_at(&p, &b, &s, (t_i, t_j), &[t_i + 9, t_i + 5]).unwrap_err();
     assert!(
         matches!(e, PreintError::QueryNotSorted { index: 1, .. }),
         "{e}"
     );
-    let e = deltas_at(&p, &b, &s, t_j, t_i, &[t_i]).unwrap_err();
+    let e = deltas_at(&p, &b, &s, (t_j, t_i), &[t_i]).unwrap_err();
     assert!(matches!(e, PreintError::NonPositiveWindow { .. }), "{e}");
-    let e = deltas_at(&p, &b, &s, t_i, s[600].t_ns + 1, &[t_i]).unwrap_err();
+    let e = deltas_at(&p, &b, &s, (t_i, s[600].t_ns + 1), &[t_i]).unwrap_err();
     assert!(
         matches!(e, PreintError::KeyframeOutsideSamples { .. }),
         "{e}"
     );
     let mut bad = s.clone();
     bad[15].acc.x = f64::NAN;
-    let e = deltas_at(&p, &b, &bad, t_i, t_j, &[t_i]).unwrap_err();
+    let e = deltas_at(&p, &b, &bad, (t_i, t_j), &[t_i]).unwrap_err();
     assert!(matches!(e, PreintError::NonFinite { index: 15, .. }), "{e}");
     let nan_bias = ImuBias::new(V3::new(f64::NAN, 0.0, 0.0), V3::zeros());
     assert!(matches!(
-        deltas_at(&p, &nan_bias, &s, t_i, t_j, &[t_i]),
+        deltas_at(&p, &nan_bias, &s, (t_i, t_j), &[t_i]),
         Err(PreintError::InvalidParameter { .. })
     ));
     let mut st = NavState::identity();

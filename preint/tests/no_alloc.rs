@@ -167,7 +167,7 @@ fn queries_inside_a_window_do_not_allocate() {
         assert_eq!(count, 0, "{scheme:?}: {count} allocations in 3000 queries");
         assert!(last.unwrap().delta_p.norm().is_finite());
         let (out, count) = counted(|| {
-            preint::deskew::deltas_at(&prm, &ImuBias::zero(), &samples, t_i, t_j, &times).unwrap()
+            preint::deskew::deltas_at(&prm, &ImuBias::zero(), &samples, (t_i, t_j), &times).unwrap()
         });
         assert_eq!((out.len(), count), (times.len(), 2), "{scheme:?}");
     }

@@ -52,7 +52,7 @@ fn query_errors(scene: &dyn Scene, scheme: Scheme, rate: i64) -> [f64; 3] {
     let (t_i, t_j) = (1_000_000_000 + 1_234_567, 2_000_000_000 - 777_777);
     let s = stream(scene, rate, t_i, t_j);
     let q: Vec<i64> = (1..=37).map(|k| t_i + k * (t_j - t_i) / 37).collect();
-    let at = deltas_at(&prm(scheme), &ImuBias::zero(), &s, t_i, t_j, &q).unwrap();
+    let at = deltas_at(&prm(scheme), &ImuBias::zero(), &s, (t_i, t_j), &q).unwrap();
     let mut e = [0.0f64; 3];
     for (d, &t) in at.iter().zip(&q) {
         let (r, v, p) = exact_deltas(scene, t_i, t, g());

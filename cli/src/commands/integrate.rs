@@ -157,7 +157,7 @@ fn inside(
             .into_iter()
             .map(|s| (s.deltas, Some(s.state)))
             .collect(),
-        None => deltas_at(params, bias, &w.samples, ends.0, ends.1, times)?
+        None => deltas_at(params, bias, &w.samples, ends, times)?
             .into_iter()
             .map(|d| (d, None))
             .collect(),
