@@ -23,8 +23,8 @@
 //! agree to round-off (`preint/tests/deskew.rs`). At `t = t_i` the deltas are the identity.
 //!
 //! Cost: O(N + M) for N stream samples and M sorted queries, one step per stream interval plus
-//! at most three per query; no allocation but the output vector (the public functions), none at
-//! all through [`WindowDeltas::at`]. Only deltas are computed (no covariance).
+//! at most three per query; the public functions allocate their output vector and one box for
+//! the pass, [`WindowDeltas::at`] nothing. Only deltas are computed (no covariance).
 //!
 //! # Frames and units
 //!
