@@ -93,6 +93,36 @@ pub enum PreintError {
         /// `"deltas"`, `"covariance"` or `"bias Jacobians"`.
         what: &'static str,
     },
+    /// A query time of [`crate::deskew`] lies outside the keyframe window `[t_i, t_j]`.
+    #[error("query {index} (t = {t_ns} ns) is outside the window [{t_i_ns}, {t_j_ns}] ns")]
+    QueryOutsideWindow {
+        /// Query index (in the order given).
+        index: usize,
+        /// Query time \[ns\].
+        t_ns: i64,
+        /// Keyframe i time \[ns\].
+        t_i_ns: i64,
+        /// Keyframe j time \[ns\].
+        t_j_ns: i64,
+    },
+    /// The query times of [`crate::deskew`] decrease (they must be non-decreasing).
+    #[error("query {index} (t = {t_ns} ns) is earlier than the previous query ({prev_t_ns} ns)")]
+    QueryNotSorted {
+        /// Query index (in the order given).
+        index: usize,
+        /// Query time \[ns\].
+        t_ns: i64,
+        /// Previous query time \[ns\].
+        prev_t_ns: i64,
+    },
+    /// A point given to [`crate::deskew::deskew_points`] has a NaN or infinite coordinate.
+    #[error("point {index} (t = {t_ns} ns): non-finite coordinate")]
+    NonFinitePoint {
+        /// Point index (in the order given).
+        index: usize,
+        /// Point time \[ns\].
+        t_ns: i64,
+    },
     /// A parameter is invalid (non-finite, negative variance, non-positive threshold…).
     #[error("invalid parameter {name}: {reason}")]
     InvalidParameter {

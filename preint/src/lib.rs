@@ -10,6 +10,8 @@
 //! - Preintegration: [`preintegrate`] (a keyframe window of a stream, boundary samples
 //!   interpolated) or a [`Preintegrator`] fed sample by sample; [`merge()`] of consecutive
 //!   windows; [`Preintegrator::measurement_for_bias`] for a new bias estimate.
+//! - Inside a window: [`deskew`] (the deltas and predicted state at any time between the
+//!   keyframes, one pass over the samples; lidar points deskewed).
 //! - The measurement: [`PreintegratedImu`] (its `cov`, `cov15`, `residual_cov15()` and bias
 //!   Jacobians), [`predict`] and [`NavState`].
 //! - Factors: [`ImuFactor`], [`CombinedImuFactor`] (residual, analytic Jacobians, whitening).
@@ -25,6 +27,7 @@
 
 #![deny(missing_docs)]
 
+pub mod deskew;
 pub mod earth;
 pub mod factor;
 pub mod measurement;
@@ -48,6 +51,7 @@ pub(crate) mod propagation;
 pub mod scheme;
 pub mod window;
 
+pub use deskew::{DeltasAt, DeskewTarget, StateAt, WindowDeltas};
 pub use earth::CoriolisMode;
 pub use error::PreintError;
 pub use extrinsics::{LeverArm, SensorPose};

@@ -167,7 +167,7 @@ fn too_close(t_s: i64, t: i64, step: i64) -> bool {
 /// The boundary at `t_ns`, where `samples[m]` is the first sample at or after `t_ns`:
 /// `Ok(m)` if `samples[m]` is at `t_ns`, else `Err(m)` (`samples[m − 1] < t_ns < samples[m]`),
 /// with the boundary sample and its side description.
-fn boundary(
+pub(crate) fn boundary(
     scheme: Scheme,
     samples: &[ImuSample],
     t_ns: i64,
@@ -274,7 +274,7 @@ fn plan(
 /// window takes values or noise cells from (a stencil reaching `reach` = (before, after)
 /// samples beyond an interval): up to the interval before the earliest stencil sample at `t_i`
 /// and the one after the latest at `t_j`.
-fn bracket(
+pub(crate) fn bracket(
     samples: &[ImuSample],
     t_i_ns: i64,
     t_j_ns: i64,
@@ -330,17 +330,17 @@ fn bracket(
 
 /// The stream samples strictly inside a window (`lo..hi`) and, for a wide stencil, the context
 /// samples beyond its edges.
-struct Inner {
-    lo: usize,
-    hi: usize,
-    ctx_before: Option<usize>,
-    ctx_after: Option<usize>,
+pub(crate) struct Inner {
+    pub lo: usize,
+    pub hi: usize,
+    pub ctx_before: Option<usize>,
+    pub ctx_after: Option<usize>,
 }
 
 /// [`Inner`] for the boundaries `(t_i, bi)` and `(t_j, bj)` ([`boundary`]'s results). For a
 /// wide stencil, a stream sample closer than 1/8 interval to an interpolated boundary is left
 /// out (its information is in the boundary sample) and the context sample is the next one out.
-fn inner_samples(
+pub(crate) fn inner_samples(
     scheme: Scheme,
     samples: &[ImuSample],
     (t_i_ns, bi): (i64, Result<usize, usize>),

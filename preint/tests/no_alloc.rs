@@ -146,3 +146,29 @@ fn new_allocates_only_for_stored_samples_and_only_amortised() {
         }
     }
 }
+
+/// The state inside a window (`preint::deskew`): a query allocates nothing; `deltas_at` makes
+/// exactly the output vector (and the running pass's one box at construction).
+#[test]
+fn queries_inside_a_window_do_not_allocate() {
+    let samples: Vec<_> = (0..2000).map(sample).collect();
+    for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4] {
+        let prm = PreintParams::default().with_scheme(scheme);
+        let (t_i, t_j) = (12_345_678, 9_000_000_000);
+        let mut w = preint::WindowDeltas::new(&prm, &ImuBias::zero(), &samples, t_i, t_j).unwrap();
+        let times: Vec<i64> = (1..=3000).map(|k| t_i + k * 2_990_001).collect();
+        let (last, count) = counted(|| {
+            let mut last = None;
+            for &t in &times {
+                last = Some(w.at(t).unwrap());
+            }
+            last
+        });
+        assert_eq!(count, 0, "{scheme:?}: {count} allocations in 3000 queries");
+        assert!(last.unwrap().delta_p.norm().is_finite());
+        let (out, count) = counted(|| {
+            preint::deskew::deltas_at(&prm, &ImuBias::zero(), &samples, (t_i, t_j), &times).unwrap()
+        });
+        assert_eq!((out.len(), count), (times.len(), 2), "{scheme:?}");
+    }
+}

@@ -8,9 +8,10 @@ use crate::progress::ReadingBar;
 use crate::scheme::{self};
 use crate::{CliError, Output, input, noise, stream};
 use nalgebra::Vector3;
+use preint::deskew::{deltas_at, states_at};
 use preint::{
-    ImuBias, ImuNoise, Level, NavState, PreintError, PreintParams, PreintegratedImu, Preintegrator,
-    predict, preintegrate,
+    DeltasAt, ImuBias, ImuNoise, Level, NavState, PreintError, PreintParams, PreintegratedImu,
+    Preintegrator, predict, preintegrate,
 };
 use preint_io::SourceInfo;
 use serde_json::{Value, json};
@@ -40,6 +41,16 @@ pub struct Args {
     /// Earth rotation and the predicted state at the window's end.
     #[command(flatten)]
     pub predict: crate::earth_args::PredictArgs,
+    /// Times in ns inside the window (non-decreasing, comma-separated): also print the deltas
+    /// from t_i at each, and with --initial-state the predicted state (keeps the window's
+    /// samples in memory).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        value_name = "T1,T2,..."
+    )]
+    pub at: Vec<i64>,
 }
 
 /// A preintegrated window.
@@ -68,6 +79,9 @@ pub struct Integration {
     /// The state at the window's end predicted from `--initial-state` ([`preint::predict`]
     /// with the bias estimate and the Earth rate of the measurement).
     pub predicted: Option<NavState>,
+    /// The deltas (and with `--initial-state` the predicted state) at each `--at` time
+    /// ([`preint::deskew`]).
+    pub at: Vec<(DeltasAt, Option<NavState>)>,
 }
 
 /// Reads the file once and preintegrates `[--from, --to]` at [`Level::Combined`]: the whole
@@ -85,12 +99,15 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
     let scheme = params.scheme;
     let (body_p_sensor, lever_arm) = (params.body_p_sensor, params.lever_arm);
     let fail = |e| CliError::failed_in(args.input.path(), e);
+    let initial = args.predict.initial_state;
     let window = |params: &PreintParams, w: stream::StreamWindow| {
         let pim = preintegrate(params, &bias, &w.samples, w.t_i_ns, w.t_j_ns)
             .map_err(|e| fail(w.in_stream(e)))?;
-        Ok::<_, CliError>((pim, input::count_in(&w.samples, w.t_i_ns, w.t_j_ns)))
+        let at = inside(params, &bias, &w, &args.at, initial.as_ref())
+            .map_err(|e| fail(w.in_stream(e)))?;
+        Ok::<_, CliError>((pim, input::count_in(&w.samples, w.t_i_ns, w.t_j_ns), at))
     };
-    let (source, noise, (pim, samples)) = if args.input.is_split() {
+    let (source, noise, (pim, samples, at)) = if args.input.is_split() {
         // The merged accelerometer's effective density is known once the files are read.
         let (w, source, split) = stream::split_window(&args.input, args.from, args.to)?;
         let noise = noise::apply_split(&noise, split.as_ref(), &mut params);
@@ -99,8 +116,9 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
         let stream = stream::open_checked_until(&args.input, args.to)?;
         let source = stream.info().clone();
         let _bar = ReadingBar::start(stream.progress(), "integrate");
-        let result = if args.from.is_none() && args.to.is_none() {
-            whole_recording(stream, params, &bias, fail)?
+        let result = if args.from.is_none() && args.to.is_none() && args.at.is_empty() {
+            let (pim, count) = whole_recording(stream, params, &bias, fail)?;
+            (pim, count, vec![])
         } else {
             window(&params, stream::cut_window(stream, args.from, args.to)?)?
         };
@@ -118,7 +136,54 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
         pim,
         body_p_sensor,
         lever_arm,
+        at,
     })
+}
+
+/// The deltas (and states from `initial`) at the `--at` times of the window `w`, in one pass.
+fn inside(
+    params: &PreintParams,
+    bias: &ImuBias,
+    w: &stream::StreamWindow,
+    times: &[i64],
+    initial: Option<&NavState>,
+) -> Result<Vec<(DeltasAt, Option<NavState>)>, PreintError> {
+    if times.is_empty() {
+        return Ok(vec![]);
+    }
+    let ends = (w.t_i_ns, w.t_j_ns);
+    Ok(match initial {
+        Some(x) => states_at(params, bias, &w.samples, ends, x, times)?
+            .into_iter()
+            .map(|s| (s.deltas, Some(s.state)))
+            .collect(),
+        None => deltas_at(params, bias, &w.samples, ends, times)?
+            .into_iter()
+            .map(|d| (d, None))
+            .collect(),
+    })
+}
+
+/// The `--at` rows as JSON.
+fn at_json(at: &[(DeltasAt, Option<NavState>)]) -> Value {
+    at.iter()
+        .map(|(d, x)| {
+            let mut row = json!({
+                "t_ns": d.t_ns,
+                "delta_t": d.delta_t,
+                "delta_R": rows(d.delta_r.matrix()),
+                "delta_R_log": list(&d.delta_r.log()),
+                "delta_v": list(&d.delta_v),
+                "delta_p": list(&d.delta_p),
+            });
+            if let Some(x) = x {
+                row["predicted"] = json!({
+                    "position": list(&x.p), "velocity": list(&x.v), "rotation": rows(x.r.matrix()),
+                });
+            }
+            row
+        })
+        .collect()
 }
 
 /// Samples pushed into the preintegrator at a time.
@@ -225,6 +290,9 @@ pub fn to_json(r: &Integration) -> Value {
         "omega_coriolis": m.omega_coriolis.map(|w| list(&w)),
         "coriolis": m.omega_coriolis.map(|_| crate::earth_args::mode_label(m.coriolis)),
     });
+    if !r.at.is_empty() {
+        out["at"] = at_json(&r.at);
+    }
     if let Some(x) = &r.predicted {
         out["predicted"] = json!({
             "position": list(&x.p), "velocity": list(&x.v), "rotation": rows(x.r.matrix()),
@@ -325,6 +393,33 @@ pub fn to_text(r: &Integration) -> String {
         );
         let _ = writeln!(h, "predicted R (body → world):");
         h.push_str(&text_matrix(x.r.matrix(), "  "));
+    }
+    for (d, x) in &r.at {
+        let phi = d.delta_r.log();
+        let _ = write!(
+            h,
+            "at {} ns (Δt = {:.9} s): φ = [{:.9}, {:.9}, {:.9}] rad, Δv = [{:.9}, {:.9}, {:.9}] m/s, \
+             Δp = [{:.9}, {:.9}, {:.9}] m",
+            d.t_ns,
+            d.delta_t,
+            phi.x,
+            phi.y,
+            phi.z,
+            d.delta_v.x,
+            d.delta_v.y,
+            d.delta_v.z,
+            d.delta_p.x,
+            d.delta_p.y,
+            d.delta_p.z
+        );
+        if let Some(x) = x {
+            let _ = write!(
+                h,
+                "; p = [{:.9}, {:.9}, {:.9}] m, v = [{:.9}, {:.9}, {:.9}] m/s",
+                x.p.x, x.p.y, x.p.z, x.v.x, x.v.y, x.v.z
+            );
+        }
+        h.push('\n');
     }
     h
 }
