@@ -465,62 +465,85 @@ fn lever_arm_windows_merge_exactly() {
     }
 }
 
-/// The 9×9 covariance with a lever arm, both models, every scheme, against the covariance
-/// built from numeric derivatives: `Σ_k J_k Q_k J_kᵀ` with `J_k` the central differences of the
-/// body deltas with respect to sample k's six readings and `Q_k` its noise (the scheme's cell
-/// rule on its neighbours). 0.1 s at 200 Hz on `aggressive`, seed-course densities.
-#[test]
-fn lever_arm_covariance_matches_numeric_derivatives() {
-    let scene = scene_by_name("aggressive").unwrap();
-    let pose = mount(0.3);
-    let s = sensor_stream(scene.as_ref(), &pose, T_I, T_I + 100_000_000, PERIOD);
+/// `Σ_k J_k Q_k J_kᵀ` over the samples `ks` of `s`: `J_k` the central differences of
+/// `window(samples)`'s deltas with respect to sample k's six readings, `Q_k` its noise with the
+/// cell `cell(k)` [s] (the densities of `noise`).
+fn numeric_cov(
+    s: &[ImuSample],
+    ks: std::ops::Range<usize>,
+    noise: &ImuNoise,
+    cell: impl Fn(usize) -> f64,
+    window: impl Fn(&[ImuSample]) -> PreintegratedImu,
+) -> SMatrix<f64, 9, 9> {
+    let eps = 1e-6;
+    let mut num = SMatrix::<f64, 9, 9>::zeros();
+    for k in ks {
+        let mut jk = SMatrix::<f64, 9, 6>::zeros();
+        for c in 0..6 {
+            let shifted = |sign: f64| {
+                let mut v = s.to_vec();
+                if c < 3 {
+                    v[k].gyro[c] += sign * eps;
+                } else {
+                    v[k].acc[c - 3] += sign * eps;
+                }
+                window(&v)
+            };
+            let d = shifted(1.0).delta_error(&shifted(-1.0)) / (2.0 * eps);
+            jk.fixed_view_mut::<9, 1>(0, c).copy_from(&d);
+        }
+        let mut q = SMatrix::<f64, 6, 6>::zeros();
+        for i in 0..3 {
+            q[(i, i)] = noise.gyro_noise_density.powi(2) / cell(k);
+            q[(i + 3, i + 3)] = noise.acc_noise_density.powi(2) / cell(k);
+        }
+        num += jk * q * jk.transpose();
+    }
+    num
+}
+
+/// Seed-course densities, every (lever-arm model, scheme) pair and its parameters at
+/// `Level::Covariance` with the mount of [`mount`].
+fn covariance_cases() -> Vec<(LeverArm, Scheme, ImuNoise, PreintParams)> {
     let noise = ImuNoise {
         gyro_noise_density: 0.015,
         acc_noise_density: 0.019,
         ..ImuNoise::euroc()
     };
-    let b0 = ImuBias::zero();
-    for (mode, scheme) in MODES
+    MODES
         .iter()
         .flat_map(|m| Scheme::ALL.iter().map(move |s| (*m, *s)))
-    {
-        let p = PreintParams {
-            body_p_sensor: Some(pose),
-            lever_arm: mode,
-            ..PreintParams::from_noise(&noise)
-                .with_scheme(scheme)
-                .with_level(Level::Covariance)
-                .with_gravity(g())
-        };
+        .map(|(mode, scheme)| {
+            let p = PreintParams {
+                body_p_sensor: Some(mount(0.3)),
+                lever_arm: mode,
+                ..PreintParams::from_noise(&noise)
+                    .with_scheme(scheme)
+                    .with_level(Level::Covariance)
+                    .with_gravity(g())
+            };
+            (mode, scheme, noise, p)
+        })
+        .collect()
+}
+
+/// The 9×9 covariance with a lever arm, both models, every scheme, against the covariance
+/// built from numeric derivatives ([`numeric_cov`]; each sample's cell by the scheme's rule on
+/// its neighbours). 0.1 s at 200 Hz on `aggressive`, seed-course densities.
+#[test]
+fn lever_arm_covariance_matches_numeric_derivatives() {
+    let scene = scene_by_name("aggressive").unwrap();
+    let s = sensor_stream(scene.as_ref(), &mount(0.3), T_I, T_I + 100_000_000, PERIOD);
+    let b0 = ImuBias::zero();
+    for (mode, scheme, noise, p) in covariance_cases() {
         let m = run(&p, &b0, &s);
-        let eps = 1e-6;
-        let mut num = SMatrix::<f64, 9, 9>::zeros();
-        for k in 0..s.len() {
-            let span = |a: usize, b: usize| (s[b].t_ns - s[a].t_ns) as f64 * 1e-9;
+        let span = |a: usize, b: usize| (s[b].t_ns - s[a].t_ns) as f64 * 1e-9;
+        let cell = |k: usize| {
             let left = if k > 0 { span(k - 1, k) } else { 0.0 };
             let right = if k + 1 < s.len() { span(k, k + 1) } else { 0.0 };
-            let cell = scheme.cell_rule().cell_s(left, right);
-            let mut jk = SMatrix::<f64, 9, 6>::zeros();
-            for c in 0..6 {
-                let shifted = |sign: f64| {
-                    let mut v = s.clone();
-                    if c < 3 {
-                        v[k].gyro[c] += sign * eps;
-                    } else {
-                        v[k].acc[c - 3] += sign * eps;
-                    }
-                    run(&p, &b0, &v)
-                };
-                let d = shifted(1.0).delta_error(&shifted(-1.0)) / (2.0 * eps);
-                jk.fixed_view_mut::<9, 1>(0, c).copy_from(&d);
-            }
-            let mut q = SMatrix::<f64, 6, 6>::zeros();
-            for i in 0..3 {
-                q[(i, i)] = noise.gyro_noise_density.powi(2) / cell;
-                q[(i + 3, i + 3)] = noise.acc_noise_density.powi(2) / cell;
-            }
-            num += jk * q * jk.transpose();
-        }
+            scheme.cell_rule().cell_s(left, right)
+        };
+        let num = numeric_cov(&s, 0..s.len(), &noise, cell, |v| run(&p, &b0, v));
         let err = (m.cov - num).amax() / num.amax();
         println!(
             "{mode:?} {:<9} covariance vs numeric derivatives: max rel {err:.1e}",
@@ -532,59 +555,20 @@ fn lever_arm_covariance_matches_numeric_derivatives() {
 
 /// Keyframes between samples: the window's boundary samples are interpolated from the stream
 /// (linear for euler and midpoint, cubic for hermite4), and so are the end rates of the lever
-/// arm. The 9×9 covariance of such a window against `Σ_k J_k Q_k J_kᵀ` from numeric derivatives
-/// with respect to every stream sample (cells from the stream neighbours), both models, every
+/// arm. The 9×9 covariance of such a window against [`numeric_cov`] with respect to every
+/// stream sample the window reads (cells from the stream neighbours), both models, every
 /// scheme.
 #[test]
 fn lever_arm_covariance_with_keyframes_between_samples() {
     let scene = scene_by_name("aggressive").unwrap();
-    let pose = mount(0.3);
-    let s = sensor_stream(scene.as_ref(), &pose, T_I, T_I + 150_000_000, PERIOD);
+    let s = sensor_stream(scene.as_ref(), &mount(0.3), T_I, T_I + 150_000_000, PERIOD);
     let (t_i, t_j) = (T_I + 12_500_000, T_I + 101_000_000);
-    let noise = ImuNoise {
-        gyro_noise_density: 0.015,
-        acc_noise_density: 0.019,
-        ..ImuNoise::euroc()
-    };
     let b0 = ImuBias::zero();
-    for (mode, scheme) in MODES
-        .iter()
-        .flat_map(|m| Scheme::ALL.iter().map(move |s| (*m, *s)))
-    {
-        let p = PreintParams {
-            body_p_sensor: Some(pose),
-            lever_arm: mode,
-            ..PreintParams::from_noise(&noise)
-                .with_scheme(scheme)
-                .with_level(Level::Covariance)
-                .with_gravity(g())
-        };
+    for (mode, scheme, noise, p) in covariance_cases() {
         let m = preintegrate(&p, &b0, &s, t_i, t_j).unwrap();
-        let eps = 1e-6;
-        let mut num = SMatrix::<f64, 9, 9>::zeros();
-        for k in 1..s.len() - 1 {
-            let cell = scheme.cell_rule().cell_s(0.005, 0.005);
-            let mut jk = SMatrix::<f64, 9, 6>::zeros();
-            for c in 0..6 {
-                let shifted = |sign: f64| {
-                    let mut v = s.clone();
-                    if c < 3 {
-                        v[k].gyro[c] += sign * eps;
-                    } else {
-                        v[k].acc[c - 3] += sign * eps;
-                    }
-                    preintegrate(&p, &b0, &v, t_i, t_j).unwrap()
-                };
-                let d = shifted(1.0).delta_error(&shifted(-1.0)) / (2.0 * eps);
-                jk.fixed_view_mut::<9, 1>(0, c).copy_from(&d);
-            }
-            let mut q = SMatrix::<f64, 6, 6>::zeros();
-            for i in 0..3 {
-                q[(i, i)] = noise.gyro_noise_density.powi(2) / cell;
-                q[(i + 3, i + 3)] = noise.acc_noise_density.powi(2) / cell;
-            }
-            num += jk * q * jk.transpose();
-        }
+        let cell = |_| scheme.cell_rule().cell_s(0.005, 0.005);
+        let window = |v: &[ImuSample]| preintegrate(&p, &b0, v, t_i, t_j).unwrap();
+        let num = numeric_cov(&s, 1..s.len() - 1, &noise, cell, window);
         let err = (m.cov - num).amax() / num.amax();
         println!(
             "{mode:?} {:<9} keyframes between samples: covariance vs numeric {err:.1e}",
