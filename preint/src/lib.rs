@@ -49,6 +49,7 @@ pub mod params;
 pub mod preintegrator;
 pub(crate) mod propagation;
 pub mod scheme;
+pub mod truncation;
 pub mod window;
 
 pub use deskew::{DeltasAt, DeskewTarget, StateAt, WindowDeltas};
@@ -60,6 +61,7 @@ pub use merge::{MergeError, merge};
 pub use navstate::{NavState, predict};
 pub use params::{Level, PreintParams, Scheme};
 pub use preintegrator::{BiasUpdate, Preintegrator};
+pub use truncation::TruncationEstimate;
 pub use window::preintegrate;
 
 pub use factor::{CombinedImuFactorJacobians, FactorJacobians, ImuFactorJacobians};

@@ -51,6 +51,11 @@ pub struct Args {
         value_name = "T1,T2,..."
     )]
     pub at: Vec<i64>,
+    /// Also estimate the window's own discretisation (truncation) error from its samples
+    /// (`preint::truncation`: a hermite4 companion, or Richardson for hermite4). Reads the
+    /// window rather than streaming the whole recording.
+    #[arg(long)]
+    pub truncation: bool,
 }
 
 /// A preintegrated window.
@@ -82,6 +87,8 @@ pub struct Integration {
     /// The deltas (and with `--initial-state` the predicted state) at each `--at` time
     /// ([`preint::deskew`]).
     pub at: Vec<(DeltasAt, Option<NavState>)>,
+    /// The estimated truncation error of the deltas (`--truncation`).
+    pub truncation: Option<preint::TruncationEstimate>,
 }
 
 /// Reads the file once and preintegrates `[--from, --to]` at [`Level::Combined`]: the whole
@@ -105,9 +112,15 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
             .map_err(|e| fail(w.in_stream(e)))?;
         let at = inside(params, &bias, &w, &args.at, initial.as_ref())
             .map_err(|e| fail(w.in_stream(e)))?;
-        Ok::<_, CliError>((pim, input::count_in(&w.samples, w.t_i_ns, w.t_j_ns), at))
+        let truncation = args
+            .truncation
+            .then(|| preint::truncation::estimate(params, &bias, &w.samples, &pim))
+            .transpose()
+            .map_err(|e| fail(w.in_stream(e)))?;
+        let count = input::count_in(&w.samples, w.t_i_ns, w.t_j_ns);
+        Ok::<_, CliError>((pim, count, at, truncation))
     };
-    let (source, noise, (pim, samples, at)) = if args.input.is_split() {
+    let (source, noise, (pim, samples, at, truncation)) = if args.input.is_split() {
         // The merged accelerometer's effective density is known once the files are read.
         let (w, source, split) = stream::split_window(&args.input, args.from, args.to)?;
         let noise = noise::apply_split(&noise, split.as_ref(), &mut params);
@@ -116,9 +129,10 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
         let stream = stream::open_checked_until(&args.input, args.to)?;
         let source = stream.info().clone();
         let _bar = ReadingBar::start(stream.progress(), "integrate");
-        let result = if args.from.is_none() && args.to.is_none() && args.at.is_empty() {
+        let streamed = args.from.is_none() && args.to.is_none();
+        let result = if streamed && args.at.is_empty() && !args.truncation {
             let (pim, count) = whole_recording(stream, params, &bias, fail)?;
-            (pim, count, vec![])
+            (pim, count, vec![], None)
         } else {
             window(&params, stream::cut_window(stream, args.from, args.to)?)?
         };
@@ -137,6 +151,7 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
         body_p_sensor,
         lever_arm,
         at,
+        truncation,
     })
 }
 
@@ -293,6 +308,13 @@ pub fn to_json(r: &Integration) -> Value {
     if !r.at.is_empty() {
         out["at"] = at_json(&r.at);
     }
+    if let Some(t) = &r.truncation {
+        out["truncation"] = json!({
+            "error": t.error.iter().copied().collect::<Vec<f64>>(), "method": t.method,
+            "order": "[dphi, dv, dp]: measured minus exact deltas, the chart of covariance",
+            "units": {"dphi": "rad", "dv": "m/s", "dp": "m"},
+        });
+    }
     if let Some(x) = &r.predicted {
         out["predicted"] = json!({
             "position": list(&x.p), "velocity": list(&x.v), "rotation": rows(x.r.matrix()),
@@ -383,6 +405,22 @@ pub fn to_text(r: &Integration) -> String {
             w.y,
             w.z,
             crate::earth_args::mode_label(m.coriolis)
+        );
+    }
+    if let Some(t) = &r.truncation {
+        let e = &t.error;
+        let n = |i: usize| e.fixed_rows::<3>(i).norm();
+        let _ = writeln!(
+            h,
+            "truncation error (estimated, {}): |δφ| {:.2e} rad, |δv| {:.2e} m/s, |δp| {:.2e} m \
+             (1σ of the noise: {:.2e} rad, {:.2e} m/s, {:.2e} m)",
+            t.method,
+            n(0),
+            n(3),
+            n(6),
+            (m.cov[(0, 0)] + m.cov[(1, 1)] + m.cov[(2, 2)]).sqrt(),
+            (m.cov[(3, 3)] + m.cov[(4, 4)] + m.cov[(5, 5)]).sqrt(),
+            (m.cov[(6, 6)] + m.cov[(7, 7)] + m.cov[(8, 8)]).sqrt()
         );
     }
     if let Some(x) = &r.predicted {

@@ -1,0 +1,77 @@
+//! `integrate --truncation`: the window's own discretisation error, estimated from its samples,
+//! against the error the ground truth shows.
+
+mod common;
+
+use common::{json, nums, simulate, tmp};
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+
+#[test]
+fn integrate_truncation_estimates_the_error_the_ground_truth_shows() {
+    let dir = tmp("truncation");
+    simulate(
+        &dir,
+        &[
+            "--scene",
+            "aggressive",
+            "--noise",
+            "none",
+            "--rate",
+            "20",
+            "--duration",
+            "3",
+        ],
+    );
+    let imu = dir.join("imu.csv");
+    // The body's true Δv over [1 s, 2 s] from the written ground truth (gravity (0, 0, −9.81)).
+    let gt = std::fs::read_to_string(dir.join("groundtruth.csv")).unwrap();
+    let row = |t: &str| -> Vec<f64> {
+        let l = gt
+            .lines()
+            .find(|l| l.starts_with(&format!("{t},")))
+            .unwrap();
+        l.split(',').skip(1).map(|x| x.parse().unwrap()).collect()
+    };
+    let (a, b) = (row("1000000000"), row("2000000000"));
+    let q = UnitQuaternion::from_quaternion(Quaternion::new(a[3], a[4], a[5], a[6]));
+    let dv_true = q.inverse()
+        * (Vector3::new(b[7], b[8], b[9])
+            - Vector3::new(a[7], a[8], a[9])
+            - Vector3::new(0.0, 0.0, -9.81));
+    for scheme in ["euler", "midpoint"] {
+        let out = json(&[
+            "integrate",
+            "--imu",
+            imu.to_str().unwrap(),
+            "--scheme",
+            scheme,
+            "--from",
+            "1000000000",
+            "--to",
+            "2000000000",
+            "--truncation",
+        ]);
+        let dv = nums(&out["delta_v"]);
+        let e_true = Vector3::new(dv[0], dv[1], dv[2]) - dv_true;
+        let e = nums(&out["truncation"]["error"]);
+        let e_est = Vector3::new(e[3], e[4], e[5]);
+        let rel = (e_est - e_true).norm() / e_true.norm();
+        println!(
+            "{scheme}: true Δv error {:.3e} m/s, estimate {:.3e}, relative {rel:.1e}",
+            e_true.norm(),
+            e_est.norm()
+        );
+        assert!(rel < 0.02, "{scheme}: {rel}");
+        assert_eq!(out["truncation"]["method"], "hermite4 companion");
+    }
+    let plain = json(&[
+        "integrate",
+        "--imu",
+        imu.to_str().unwrap(),
+        "--from",
+        "1000000000",
+        "--to",
+        "2000000000",
+    ]);
+    assert!(plain["truncation"].is_null());
+}
