@@ -27,7 +27,9 @@
 //! Sherman–Morrison identity the mean χ² is then `dof + (eᵀΣ⁻¹e − (êᵀΣ⁻¹e)²/(1 + êᵀΣ⁻¹ê))`,
 //! exactly `dof` when the estimate `ê` equals `e`, and never more than `dof + 1` for an
 //! estimate along `e` of any size. The factor then states how much it can be trusted in the
-//! direction its own discretisation moves it.
+//! direction its own discretisation moves it. This holds for a residual linear in the deltas'
+//! error, as the component-wise one is; the Logmap residual is so to first order, and an offset
+//! as large as Euler's at 20 Hz leaves second-order terms (`docs/EVIDENCE.md`).
 
 use crate::error::PreintError;
 use crate::measurement::PreintegratedImu;
