@@ -7,9 +7,9 @@
 //! `Ω_E = 7.292115e-5` rad/s (WGS-84). Gravity stays fixed in the world frame.
 
 use crate::CliError;
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use nalgebra::Vector3;
 use preint::earth::earth_rate_enu;
-use preint::{CoriolisMode, NavState, SO3};
+use preint::{CoriolisMode, NavState};
 
 /// The rate of the simulated world frame (`simulate`).
 #[derive(clap::Args, Clone, Debug, Default)]
@@ -63,38 +63,15 @@ pub fn mode_label(m: CoriolisMode) -> &'static str {
     }
 }
 
-/// Largest accepted `| |q| − 1 |` of an `--initial-state` quaternion; closer ones are
-/// normalised, farther ones refused (a typo rather than rounding).
-pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-3;
-
 /// Parses `px,py,pz,vx,vy,vz,qw,qx,qy,qz` (m, m/s, quaternion body→world) into a state.
 pub fn initial_state(s: &str) -> Result<NavState, String> {
-    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
-    if parts.len() != 10 {
-        return Err(format!(
-            "expected ten comma-separated numbers px,py,pz,vx,vy,vz,qw,qx,qy,qz, got {} in `{s}`",
-            parts.len()
-        ));
-    }
-    let mut x = [0.0; 10];
-    for (i, p) in parts.iter().enumerate() {
-        x[i] = p
-            .parse::<f64>()
-            .ok()
-            .filter(|v| v.is_finite())
-            .ok_or_else(|| format!("`{p}` is not a finite number (in `{s}`)"))?;
-    }
-    let q = Quaternion::new(x[6], x[7], x[8], x[9]);
-    let n = q.norm();
-    if (n - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
-        return Err(format!(
-            "the quaternion qw,qx,qy,qz = {},{},{},{} has norm {n}, not 1 (within {QUATERNION_NORM_TOLERANCE})",
-            x[6], x[7], x[8], x[9]
-        ));
-    }
-    let r = UnitQuaternion::from_quaternion(q).to_rotation_matrix();
+    let x = crate::parse::numbers::<10>(
+        s,
+        "ten comma-separated numbers px,py,pz,vx,vy,vz,qw,qx,qy,qz",
+    )?;
+    let r = crate::parse::unit_quaternion([x[6], x[7], x[8], x[9]])?;
     Ok(NavState::new(
-        SO3::from_matrix(r.matrix()),
+        r,
         Vector3::new(x[0], x[1], x[2]),
         Vector3::new(x[3], x[4], x[5]),
     ))

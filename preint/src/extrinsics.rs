@@ -100,22 +100,6 @@ impl SensorPose {
         }
     }
 
-    /// From `x, y, z` \[m\] and a unit quaternion `qw, qx, qy, qz` rotating sensor vectors into
-    /// the body frame; `None` if a value is not finite or the quaternion's norm is not within
-    /// 1e-3 of 1 (a quaternion printed with a few decimals); it is then normalised.
-    pub fn from_xyz_wxyz(v: [f64; 7]) -> Option<Self> {
-        if !v.iter().all(|x| x.is_finite()) {
-            return None;
-        }
-        let q = nalgebra::Quaternion::new(v[3], v[4], v[5], v[6]);
-        if (q.norm() - 1.0).abs() > 1e-3 {
-            return None;
-        }
-        let u = nalgebra::UnitQuaternion::from_quaternion(q);
-        let rotation = SO3::from_matrix_unchecked(*u.to_rotation_matrix().matrix());
-        Some(Self::new(rotation, Vector3::new(v[0], v[1], v[2])))
-    }
-
     /// True if every entry is finite and the rotation is orthonormal to 1e-9.
     pub fn is_valid(&self) -> bool {
         let m = self.rotation.matrix();
