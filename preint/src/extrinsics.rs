@@ -197,11 +197,11 @@ pub(crate) fn to_body(m: &mut PreintegratedImu, pose: &SensorPose, ends: &EndRat
         return;
     }
     // Bias Jacobians: gyro columns also through the end rates.
-    let mut jb = a * jac_matrix(&m.jac);
+    let mut jb = a * m.jac.as_matrix();
     let gyro_extra = -(bi + bj) * rm;
     jb.fixed_view_mut::<9, 3>(0, 0)
         .zip_apply(&gyro_extra, |x, y| *x += y);
-    m.jac = jac_of(&jb);
+    m.jac = BiasJacobians::from_matrix(&jb);
     // Edge sources: their gains through A and the end rates. Each sample's noise is
     // block-diagonal (gyro, accelerometer), so a source read by an end rate swaps its share
     // `(A G) Q (A G)ᵀ` of `A Σ_s Aᵀ` for `G' Q G'ᵀ`, `G' = A G + [E, 0]`: the difference is
@@ -284,27 +284,4 @@ pub(crate) fn centripetal_d(w: &Vector3<f64>, r: &Vector3<f64>) -> Matrix3<f64> 
         o[(2, 1)] + x.x,
         o[(2, 2)] - wr,
     )
-}
-
-/// The bias Jacobians as one 9×6 matrix (rows [δφ, δv, δp], columns [b_g, b_a]).
-fn jac_matrix(j: &BiasJacobians) -> SMatrix<f64, 9, 6> {
-    let mut m = SMatrix::<f64, 9, 6>::zeros();
-    m.fixed_view_mut::<3, 3>(0, 0).copy_from(&j.d_r_d_bg);
-    m.fixed_view_mut::<3, 3>(3, 0).copy_from(&j.d_v_d_bg);
-    m.fixed_view_mut::<3, 3>(3, 3).copy_from(&j.d_v_d_ba);
-    m.fixed_view_mut::<3, 3>(6, 0).copy_from(&j.d_p_d_bg);
-    m.fixed_view_mut::<3, 3>(6, 3).copy_from(&j.d_p_d_ba);
-    m
-}
-
-/// The inverse of [`jac_matrix`] (the rotation rows' accelerometer block is zero in both).
-fn jac_of(m: &SMatrix<f64, 9, 6>) -> BiasJacobians {
-    let b = |i, j| -> Matrix3<f64> { m.fixed_view::<3, 3>(i, j).into_owned() };
-    BiasJacobians {
-        d_r_d_bg: b(0, 0),
-        d_v_d_bg: b(3, 0),
-        d_v_d_ba: b(3, 3),
-        d_p_d_bg: b(6, 0),
-        d_p_d_ba: b(6, 3),
-    }
 }

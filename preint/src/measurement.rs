@@ -53,6 +53,31 @@ pub struct BiasJacobians {
 }
 
 impl BiasJacobians {
+    /// The five blocks as one 9×6 matrix: rows [δφ, δv, δp] (the chart of this module),
+    /// columns [b_g, b_a]; the rotation rows' accelerometer block is zero.
+    pub fn as_matrix(&self) -> SMatrix<f64, 9, 6> {
+        let mut m = SMatrix::<f64, 9, 6>::zeros();
+        m.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.d_r_d_bg);
+        m.fixed_view_mut::<3, 3>(3, 0).copy_from(&self.d_v_d_bg);
+        m.fixed_view_mut::<3, 3>(3, 3).copy_from(&self.d_v_d_ba);
+        m.fixed_view_mut::<3, 3>(6, 0).copy_from(&self.d_p_d_bg);
+        m.fixed_view_mut::<3, 3>(6, 3).copy_from(&self.d_p_d_ba);
+        m
+    }
+
+    /// The blocks of a 9×6 matrix laid out as [`as_matrix`](Self::as_matrix)'s (its rotation
+    /// rows' accelerometer block is not read).
+    pub fn from_matrix(m: &SMatrix<f64, 9, 6>) -> Self {
+        let b = |i, j| -> Matrix3<f64> { m.fixed_view::<3, 3>(i, j).into_owned() };
+        Self {
+            d_r_d_bg: b(0, 0),
+            d_v_d_bg: b(3, 0),
+            d_v_d_ba: b(3, 3),
+            d_p_d_bg: b(6, 0),
+            d_p_d_ba: b(6, 3),
+        }
+    }
+
     /// True if every entry is finite.
     pub fn is_finite(&self) -> bool {
         [

@@ -110,26 +110,6 @@ pub enum MergeError {
 
 type M96 = SMatrix<f64, 9, 6>;
 
-fn jac_to_mat(j: &BiasJacobians) -> M96 {
-    let mut m = M96::zeros();
-    m.fixed_view_mut::<3, 3>(0, 0).copy_from(&j.d_r_d_bg);
-    m.fixed_view_mut::<3, 3>(3, 0).copy_from(&j.d_v_d_bg);
-    m.fixed_view_mut::<3, 3>(3, 3).copy_from(&j.d_v_d_ba);
-    m.fixed_view_mut::<3, 3>(6, 0).copy_from(&j.d_p_d_bg);
-    m.fixed_view_mut::<3, 3>(6, 3).copy_from(&j.d_p_d_ba);
-    m
-}
-
-fn mat_to_jac(m: &M96) -> BiasJacobians {
-    BiasJacobians {
-        d_r_d_bg: m.fixed_view::<3, 3>(0, 0).into_owned(),
-        d_v_d_bg: m.fixed_view::<3, 3>(3, 0).into_owned(),
-        d_v_d_ba: m.fixed_view::<3, 3>(3, 3).into_owned(),
-        d_p_d_bg: m.fixed_view::<3, 3>(6, 0).into_owned(),
-        d_p_d_ba: m.fixed_view::<3, 3>(6, 3).into_owned(),
-    }
-}
-
 /// Merges two consecutive preintegrations `a` over `[t_i, t_k]` and `b` over `[t_k, t_j]`
 /// into one over `[t_i, t_j]`: deltas, 9×9 and 15×15 covariances and bias Jacobians, by the
 /// formulas of the module docs. `Δt` is recomputed from the integer timestamps
@@ -164,8 +144,8 @@ pub fn merge(a: &PreintegratedImu, b: &PreintegratedImu) -> Result<Preintegrated
     let (am, bm) = transitions(a, b);
     let (shared, edge_noise) = shared_noise(a, b, &am, &bm);
     let cov: Cov9 = am * a.cov * am.transpose() + bm * b.cov * bm.transpose() + shared;
-    let jb = jac_to_mat(&b.jac);
-    let jac = mat_to_jac(&(am * jac_to_mat(&a.jac) + bm * jb));
+    let jb = b.jac.as_matrix();
+    let jac = BiasJacobians::from_matrix(&(am * a.jac.as_matrix() + bm * jb));
     let cov15 = combined_cov(a, b, &am, &bm, &jb, &shared, &cov);
     let summed = a.delta_t + b.delta_t;
     let from_ns = crate::sample::dt_seconds(a.t_i_ns, b.t_j_ns);
