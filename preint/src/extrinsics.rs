@@ -62,7 +62,8 @@
 
 use crate::measurement::{BiasJacobians, Cov9, EdgeSource, PreintegratedImu};
 use crate::noise::white_scale;
-use crate::params::Level;
+use crate::params::{Level, PreintParams};
+use crate::sample::ImuSample;
 use nalgebra::{Matrix3, SMatrix, Vector3};
 use preint_lie::{SO3, hat};
 
@@ -108,6 +109,51 @@ impl SensorPose {
             && (m.transpose() * m - Matrix3::identity()).amax() < 1e-9
             && m.determinant() > 0.0
     }
+}
+
+/// How `params` removes the lever arm of its `body_p_sensor`: the lever arm in sensor axes
+/// \[m\] when it is taken off every sample ([`LeverArm::Centripetal`] with a non-zero arm), and
+/// the pose whose map turns the sensor's measurement into the body's (rotation only in that
+/// case, since the samples lost the arm already). `(None, None)` without a sensor pose.
+pub(crate) fn plan(params: &PreintParams) -> (Option<Vector3<f64>>, Option<SensorPose>) {
+    match (&params.body_p_sensor, params.lever_arm) {
+        (Some(pose), LeverArm::Centripetal) if pose.translation != Vector3::zeros() => (
+            Some(pose.rotation.inverse().act(&pose.translation)),
+            Some(SensorPose::new(pose.rotation, Vector3::zeros())),
+        ),
+        (pose, _) => (None, *pose),
+    }
+}
+
+/// Sample `s` with `ω × (ω × r)` taken off its specific force (`ω = ω_m − b_g` [rad/s], `r`
+/// the lever arm in sensor axes \[m\]): GTSAM's per-sample lever-arm correction.
+pub(crate) fn without_centripetal(
+    s: &ImuSample,
+    r: &Vector3<f64>,
+    b_g: &Vector3<f64>,
+) -> ImuSample {
+    let w = s.gyro - b_g;
+    ImuSample::new(s.t_ns, s.gyro, s.acc - w.cross(&w.cross(r)))
+}
+
+/// The body's deltas `(ΔR, Δv [m/s], Δp [m])` from the sensor's `(ΔR_s, Δv_s, Δp_s)` over
+/// `dt_s` \[s\], with the bias-corrected sensor rates `w_i`, `w_j` [rad/s] at the window's ends
+/// (module docs).
+pub(crate) fn body_deltas(
+    pose: &SensorPose,
+    (dr_s, dv_s, dp_s): (&SO3, &Vector3<f64>, &Vector3<f64>),
+    dt_s: f64,
+    (w_i, w_j): (&Vector3<f64>, &Vector3<f64>),
+) -> (SO3, Vector3<f64>, Vector3<f64>) {
+    let (rm, r) = (*pose.rotation.matrix(), pose.translation);
+    let dr = pose
+        .rotation
+        .compose(dr_s)
+        .compose(&pose.rotation.inverse());
+    let (wi, wj) = (rm * w_i, rm * w_j);
+    let dv = rm * dv_s + wi.cross(&r) - dr.act(&wj.cross(&r));
+    let dp = rm * dp_s + wi.cross(&r) * dt_s + r - dr.act(&r);
+    (dr, dv, dp)
 }
 
 /// A stream sample an end rate is made of: timestamp \[ns\], weight, and its intervals to its
@@ -183,16 +229,11 @@ fn linearisation(m: &PreintegratedImu, pose: &SensorPose, ends: &EndRates) -> (M
 /// Makes the sensor's measurement `m` the body's (module docs): deltas, covariances, bias
 /// Jacobians and edge sources. `m.level` decides what is transformed.
 pub(crate) fn to_body(m: &mut PreintegratedImu, pose: &SensorPose, ends: &EndRates) {
-    let (rm, r) = (*pose.rotation.matrix(), pose.translation);
+    let rm = *pose.rotation.matrix();
     let (a, bi, bj) = linearisation(m, pose, ends);
-    let dr = pose
-        .rotation
-        .compose(&m.delta_r)
-        .compose(&pose.rotation.inverse());
-    let (wi, wj) = (rm * ends.w_i, rm * ends.w_j);
-    m.delta_r = dr;
-    m.delta_v = rm * m.delta_v + wi.cross(&r) - dr.act(&wj.cross(&r));
-    m.delta_p = rm * m.delta_p + wi.cross(&r) * m.delta_t + r - dr.act(&r);
+    let sensor = (&m.delta_r, &m.delta_v, &m.delta_p);
+    (m.delta_r, m.delta_v, m.delta_p) =
+        body_deltas(pose, sensor, m.delta_t, (&ends.w_i, &ends.w_j));
     if m.level == Level::Deltas {
         return;
     }

@@ -44,7 +44,7 @@
 //! (`docs/EVIDENCE.md`).
 
 use crate::error::PreintError;
-use crate::extrinsics::{LeverArm, SensorPose};
+use crate::extrinsics::SensorPose;
 use crate::measurement::{BiasJacobians, Cov9, Cov15, EdgeNoise, PreintegratedImu};
 use crate::navstate::{NavState, predict};
 use crate::params::{PreintParams, Scheme};
@@ -139,7 +139,7 @@ impl<'a> WindowDeltas<'a> {
         let (bi, node_i, _) = boundary(scheme, samples, t_i_ns, lo);
         let (bj, _, _) = boundary(scheme, samples, t_j_ns, mj);
         let inner = inner_samples(scheme, samples, (t_i_ns, bi), (t_j_ns, bj));
-        let (centripetal, body) = lever(params);
+        let (centripetal, body) = crate::extrinsics::plan(params);
         let corr = Corr {
             bias: *bias,
             centripetal,
@@ -246,7 +246,9 @@ impl<'a> WindowDeltas<'a> {
             delta_p: d.p,
         };
         if let Some(pose) = &self.body {
-            to_body(&mut out, pose, &s.first.w, &q.end.w);
+            let sensor = (&out.delta_r, &out.delta_v, &out.delta_p);
+            (out.delta_r, out.delta_v, out.delta_p) =
+                crate::extrinsics::body_deltas(pose, sensor, out.delta_t, (&s.first.w, &q.end.w));
         }
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
         if !(finite(out.delta_r.matrix().as_slice())
@@ -257,32 +259,6 @@ impl<'a> WindowDeltas<'a> {
         }
         Ok(out)
     }
-}
-
-/// The per-sample lever-arm vector (GTSAM's model) and the pose of the body map at the end.
-fn lever(params: &PreintParams) -> (Option<Vector3<f64>>, Option<SensorPose>) {
-    match (&params.body_p_sensor, params.lever_arm) {
-        (Some(pose), LeverArm::Centripetal) if pose.translation != Vector3::zeros() => (
-            Some(pose.rotation.inverse().act(&pose.translation)),
-            Some(SensorPose::new(pose.rotation, Vector3::zeros())),
-        ),
-        (Some(pose), _) => (None, Some(*pose)),
-        (None, _) => (None, None),
-    }
-}
-
-/// The body's deltas from the sensor's with the end rates `w_i`, `w_j` [rad/s, sensor frame]
-/// ([`crate::extrinsics`]; the same operations as the window's map).
-fn to_body(d: &mut DeltasAt, pose: &SensorPose, w_i: &Vector3<f64>, w_j: &Vector3<f64>) {
-    let (rm, r) = (*pose.rotation.matrix(), pose.translation);
-    let dr = pose
-        .rotation
-        .compose(&d.delta_r)
-        .compose(&pose.rotation.inverse());
-    let (wi, wj) = (rm * w_i, rm * w_j);
-    d.delta_r = dr;
-    d.delta_v = rm * d.delta_v + wi.cross(&r) - dr.act(&wj.cross(&r));
-    d.delta_p = rm * d.delta_p + wi.cross(&r) * d.delta_t + r - dr.act(&r);
 }
 
 /// The deltas at each of `times_ns` (non-decreasing, inside `[t_i_ns, t_j_ns]`): exactly those

@@ -17,11 +17,10 @@ pub(super) struct Corr {
 impl Corr {
     pub(super) fn node(&self, s: &ImuSample) -> Node {
         match &self.centripetal {
-            Some(r) => {
-                let w = s.gyro - self.bias.gyro;
-                let s = ImuSample::new(s.t_ns, s.gyro, s.acc - w.cross(&w.cross(r)));
-                Node::corrected(&s, &self.bias)
-            }
+            Some(r) => Node::corrected(
+                &crate::extrinsics::without_centripetal(s, r, &self.bias.gyro),
+                &self.bias,
+            ),
             None => Node::corrected(s, &self.bias),
         }
     }

@@ -22,7 +22,7 @@ pub(crate) mod validation;
 pub(crate) use edges::{Side, Src, WindowSpec};
 
 use crate::error::PreintError;
-use crate::extrinsics::{EndRates, EndSource, LeverArm, SensorPose};
+use crate::extrinsics::{EndRates, EndSource, without_centripetal};
 use crate::measurement::PreintegratedImu;
 use crate::params::{CovShape, Level, PreintParams};
 use crate::propagation::{AnisotropicNoise, BiasWalk, IsotropicNoise};
@@ -76,16 +76,6 @@ struct Centripetal<S: IntervalScheme> {
     core: Core<S>,
     r: nalgebra::Vector3<f64>,
     b_g: nalgebra::Vector3<f64>,
-}
-
-/// Sample `s` with `ω × (ω × r)` taken off its specific force, `ω = ω_m − b_g`.
-fn without_centripetal(
-    s: &ImuSample,
-    r: &nalgebra::Vector3<f64>,
-    b_g: &nalgebra::Vector3<f64>,
-) -> ImuSample {
-    let w = s.gyro - b_g;
-    ImuSample::new(s.t_ns, s.gyro, s.acc - w.cross(&w.cross(r)))
 }
 
 impl<S: IntervalScheme + Send + Sync> Engine for Centripetal<S>
@@ -359,13 +349,8 @@ impl Preintegrator {
             return Err(PreintError::TooFewSamples { count });
         }
         let mut m = self.engine.measurement();
-        if let Some(pose) = &self.params.body_p_sensor {
+        if let (_, Some(pose)) = crate::extrinsics::plan(&self.params) {
             let ends = self.end_rates(m.t_i_ns);
-            let pose = match self.params.lever_arm {
-                LeverArm::Exact => *pose,
-                // The nodes lost the centripetal term already: rotate only.
-                LeverArm::Centripetal => SensorPose::new(pose.rotation, nalgebra::Vector3::zeros()),
-            };
             crate::extrinsics::to_body(&mut m, &pose, &ends);
         }
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
@@ -540,14 +525,7 @@ fn fixed(params: &PreintParams, bias_hat: ImuBias, spec: WindowSpec) -> Fixed {
             .map(CovShape::of)
             .filter(|c| *c != CovShape::Isotropic(0.0)),
         spec,
-        centripetal: match (&params.body_p_sensor, params.lever_arm) {
-            (Some(pose), LeverArm::Centripetal)
-                if pose.translation != nalgebra::Vector3::zeros() =>
-            {
-                Some(pose.rotation.inverse().act(&pose.translation))
-            }
-            _ => None,
-        },
+        centripetal: crate::extrinsics::plan(params).0,
     }
 }
 
