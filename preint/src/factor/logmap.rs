@@ -68,7 +68,7 @@ use crate::measurement::PreintegratedImu;
 use crate::sample::ImuBias;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use preint_lie::se3::q_block;
-use preint_lie::{SO3, hat, jl, jl_inv};
+use preint_lie::{hat, jl, jl_inv};
 
 /// Which residual a factor evaluates (GTSAM's `ImuFactorErrorMode`, without its `Legacy`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -143,10 +143,9 @@ pub(super) fn to_logmap<const R: usize>(
     r: &mut SVector<f64, R>,
     jac: &mut FactorJacobians<R>,
 ) {
-    let dbg = bias_i.gyro - pim.bias_hat.gyro;
     let j_rg = pim.jac.d_r_d_bg;
-    let (exp_db, jr_db) = SO3::exp_jr(&(j_rg * dbg));
-    let q = pim.delta_r.compose(&exp_db).matrix().transpose();
+    let (dr, jr_db, _, _) = super::residual::corrected(pim, bias_i);
+    let q = dr.matrix().transpose();
     let phi: Vector3<f64> = r.fixed_rows::<3>(0).into_owned();
     let jli = jl_inv(&phi);
     let jlp = jl(&phi);

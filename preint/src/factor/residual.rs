@@ -4,7 +4,7 @@ use super::ImuFactorJacobians;
 use crate::measurement::PreintegratedImu;
 use crate::navstate::NavState;
 use crate::sample::ImuBias;
-use nalgebra::{Matrix3, SVector};
+use nalgebra::{Matrix3, SVector, Vector3};
 use preint_lie::{SO3, hat};
 
 /// The 9-dim residual and its Jacobians (module docs).
@@ -17,13 +17,8 @@ pub(super) fn residual9(
     if let Some(w) = &pim.omega_coriolis {
         return super::rotating::residual9_rotating(pim, xi, xj, bias_i, w);
     }
-    let dbg = bias_i.gyro - pim.bias_hat.gyro;
-    let dba = bias_i.acc - pim.bias_hat.acc;
     let jb = &pim.jac;
-    let (exp_db, jr_db) = SO3::exp_jr(&(jb.d_r_d_bg * dbg));
-    let dr = pim.delta_r.compose(&exp_db);
-    let dv = pim.delta_v + jb.d_v_d_bg * dbg + jb.d_v_d_ba * dba;
-    let dp = pim.delta_p + jb.d_p_d_bg * dbg + jb.d_p_d_ba * dba;
+    let (dr, jr_db, dv, dp) = corrected(pim, bias_i);
 
     let dt = pim.delta_t;
     let g = pim.gravity;
@@ -63,6 +58,23 @@ pub(super) fn residual9(
     jac.v_j.fixed_view_mut::<3, 3>(3, 0).copy_from(&ri_tm);
     bias_blocks(&mut jac, &(jr_inv * e.matrix().transpose() * jr_db), jb);
     (r, jac)
+}
+
+/// The deltas corrected to first order for the bias `bias_i` (Forster eq. 44, as
+/// [`PreintegratedImu::corrected`]): `(ΔR(b), Jr(∂ΔR/∂b_g δb_g), Δv(b) [m/s], Δp(b) [m])`, the
+/// right Jacobian of the rotation correction for the bias Jacobians.
+pub(super) fn corrected(
+    pim: &PreintegratedImu,
+    bias_i: &ImuBias,
+) -> (SO3, Matrix3<f64>, Vector3<f64>, Vector3<f64>) {
+    let dbg = bias_i.gyro - pim.bias_hat.gyro;
+    let dba = bias_i.acc - pim.bias_hat.acc;
+    let jb = &pim.jac;
+    let (exp_db, jr_db) = SO3::exp_jr(&(jb.d_r_d_bg * dbg));
+    let dr = pim.delta_r.compose(&exp_db);
+    let dv = pim.delta_v + jb.d_v_d_bg * dbg + jb.d_v_d_ba * dba;
+    let dp = pim.delta_p + jb.d_p_d_bg * dbg + jb.d_p_d_ba * dba;
+    (dr, jr_db, dv, dp)
 }
 
 /// The bias-i blocks of a 9-dim residual's Jacobian: the rotation row through the first-order

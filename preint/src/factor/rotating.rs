@@ -178,13 +178,8 @@ pub(super) fn residual9_rotating(
         CoriolisMode::Exact => implied_exact(pim, xi, xj, w),
         mode => implied_approx(pim, xi, xj, w, mode),
     };
-    let dbg = bias_i.gyro - pim.bias_hat.gyro;
-    let dba = bias_i.acc - pim.bias_hat.acc;
     let jb = &pim.jac;
-    let (exp_db, jr_db) = SO3::exp_jr(&(jb.d_r_d_bg * dbg));
-    let dr = pim.delta_r.compose(&exp_db);
-    let dv = pim.delta_v + jb.d_v_d_bg * dbg + jb.d_v_d_ba * dba;
-    let dp = pim.delta_p + jb.d_p_d_bg * dbg + jb.d_p_d_ba * dba;
+    let (dr, jr_db, dv, dp) = super::residual::corrected(pim, bias_i);
     let e = dr.inverse().compose(&imp.y);
     let (r_phi, jr_inv_e) = e.log_jac();
 
