@@ -3,28 +3,7 @@
 
 mod common;
 
-use common::{json, run, simulate, tmp, vec3};
-use std::path::Path;
-
-/// The ground-truth row at `t_ns`: (p, q wxyz, v).
-fn truth(dir: &Path, t_ns: i64) -> ([f64; 3], [f64; 4], [f64; 3]) {
-    let text = std::fs::read_to_string(dir.join("groundtruth.csv")).unwrap();
-    let row = text
-        .lines()
-        .filter(|l| !l.starts_with('#'))
-        .map(|l| {
-            l.split(',')
-                .map(|x| x.trim().parse::<f64>().unwrap())
-                .collect::<Vec<_>>()
-        })
-        .find(|c| c[0] as i64 == t_ns)
-        .expect("row at t_ns");
-    (
-        [row[1], row[2], row[3]],
-        [row[4], row[5], row[6], row[7]],
-        [row[8], row[9], row[10]],
-    )
-}
+use common::{json, run, simulate, tmp, truth, vec3};
 
 fn max_diff(a: [f64; 3], b: [f64; 3]) -> f64 {
     (0..3).map(|k| (a[k] - b[k]).abs()).fold(0.0, f64::max)

@@ -4,28 +4,7 @@
 
 mod common;
 
-use common::{json, matrix, run, simulate, tmp, vec3};
-use std::path::Path;
-
-/// The ground-truth row at `t_ns`: (p, q wxyz, v).
-fn truth(dir: &Path, t_ns: i64) -> ([f64; 3], [f64; 4], [f64; 3]) {
-    let text = std::fs::read_to_string(dir.join("groundtruth.csv")).unwrap();
-    let row = text
-        .lines()
-        .filter(|l| !l.starts_with('#'))
-        .map(|l| {
-            l.split(',')
-                .map(|x| x.trim().parse::<f64>().unwrap())
-                .collect::<Vec<_>>()
-        })
-        .find(|c| c[0] as i64 == t_ns)
-        .expect("row at t_ns");
-    (
-        [row[1], row[2], row[3]],
-        [row[4], row[5], row[6], row[7]],
-        [row[8], row[9], row[10]],
-    )
-}
+use common::{json, matrix, run, simulate, tmp, truth, vec3};
 
 fn state_flag(p: [f64; 3], q: [f64; 4], v: [f64; 3]) -> String {
     let all: Vec<String> = p

@@ -4,43 +4,12 @@
 
 mod common;
 
-use common::{json, nums, run, simulate, tmp};
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use common::{json, nums, run, simulate, tmp, true_delta_v, truth_at};
+use nalgebra::Vector3;
 
 /// 0.3 m lever arm along (1, −2, 2)/3; rotation 60° about (1, 1, 1)/√3 (sensor → body).
 const POSE: &str =
     "0.1,-0.2,0.2,0.8660254037844387,0.28867513459481287,0.28867513459481287,0.28867513459481287";
-
-/// One ground-truth row: t \[ns\], p \[m\], R_wb, v [m/s].
-type Row = (i64, Vector3<f64>, UnitQuaternion<f64>, Vector3<f64>);
-
-/// The body's rows of a `groundtruth.csv` written by `simulate`.
-fn truth(path: &std::path::Path) -> Vec<Row> {
-    std::fs::read_to_string(path)
-        .unwrap()
-        .lines()
-        .filter(|l| !l.starts_with('#'))
-        .map(|l| {
-            let f: Vec<f64> = l.split(',').skip(1).map(|x| x.parse().unwrap()).collect();
-            let t: i64 = l.split(',').next().unwrap().parse().unwrap();
-            let q = UnitQuaternion::from_quaternion(Quaternion::new(f[3], f[4], f[5], f[6]));
-            (
-                t,
-                Vector3::new(f[0], f[1], f[2]),
-                q,
-                Vector3::new(f[7], f[8], f[9]),
-            )
-        })
-        .collect()
-}
-
-/// The body's exact Δv [m/s] over `[t_i, t_j]` from the ground truth (gravity (0, 0, −9.81)).
-fn true_delta_v(gt: &[Row], t_i: i64, t_j: i64) -> Vector3<f64> {
-    let at = |t: i64| gt.iter().find(|r| r.0 == t).unwrap();
-    let (i, j) = (at(t_i), at(t_j));
-    let dt = (t_j - t_i) as f64 * 1e-9;
-    i.2.inverse() * (j.3 - i.3 - Vector3::new(0.0, 0.0, -9.81) * dt)
-}
 
 #[test]
 fn integrate_gives_the_body_deltas_of_an_imu_mounted_away_from_the_body_origin() {
@@ -59,7 +28,6 @@ fn integrate_gives_the_body_deltas_of_an_imu_mounted_away_from_the_body_origin()
         ],
     );
     let imu = dir.join("imu.csv");
-    let gt = truth(&dir.join("groundtruth.csv"));
     let window = |extra: &[&str]| {
         let mut a = vec![
             "integrate",
@@ -75,7 +43,7 @@ fn integrate_gives_the_body_deltas_of_an_imu_mounted_away_from_the_body_origin()
         a.extend_from_slice(extra);
         json(&a)
     };
-    let truth_dv = true_delta_v(&gt, 1_000_000_000, 2_000_000_000);
+    let truth_dv = true_delta_v(&dir, 1_000_000_000, 2_000_000_000);
     let err = |out: &serde_json::Value| {
         let v = nums(&out["delta_v"]);
         (Vector3::new(v[0], v[1], v[2]) - truth_dv).norm()
@@ -172,7 +140,6 @@ fn static_calibration_reports_the_body_roll_and_pitch() {
         ],
     );
     let imu = dir.join("imu.csv");
-    let gt = truth(&dir.join("groundtruth.csv"));
     let out = json(&[
         "calibrate",
         "--imu",
@@ -180,7 +147,7 @@ fn static_calibration_reports_the_body_roll_and_pitch() {
         "--body-p-sensor",
         POSE,
     ]);
-    let (roll, pitch, _) = gt[0].2.euler_angles();
+    let (roll, pitch, _) = truth_at(&dir, 0).q.euler_angles();
     let (br, bp) = (
         out["body_roll"].as_f64().unwrap(),
         out["body_pitch"].as_f64().unwrap(),
@@ -222,10 +189,9 @@ fn lever_arm_and_earth_rotation_together_predict_the_body_state() {
         ],
     );
     let imu = dir.join("imu.csv");
-    let gt = truth(&dir.join("groundtruth.csv"));
     let (t_i, t_j) = (1_000_000_000i64, 2_000_000_000i64);
-    let at = |t: i64| *gt.iter().find(|r| r.0 == t).unwrap();
-    let (_, p, q, v) = at(t_i);
+    let start = truth_at(&dir, t_i);
+    let (p, q, v) = (start.p, start.q, start.v);
     let init = format!(
         "{},{},{},{},{},{},{},{},{},{}",
         p.x, p.y, p.z, v.x, v.y, v.z, q.w, q.i, q.j, q.k
@@ -250,7 +216,8 @@ fn lever_arm_and_earth_rotation_together_predict_the_body_state() {
         "--initial-state",
         &init,
     ]);
-    let (_, pj, _, vj) = at(t_j);
+    let end = truth_at(&dir, t_j);
+    let (pj, vj) = (end.p, end.v);
     let pp = nums(&out["predicted"]["position"]);
     let pv = nums(&out["predicted"]["velocity"]);
     let ep = (Vector3::new(pp[0], pp[1], pp[2]) - pj).norm();

@@ -3,8 +3,8 @@
 
 mod common;
 
-use common::{json, nums, simulate, tmp};
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use common::{json, nums, simulate, tmp, true_delta_v};
+use nalgebra::Vector3;
 
 #[test]
 fn integrate_truncation_estimates_the_error_the_ground_truth_shows() {
@@ -23,21 +23,8 @@ fn integrate_truncation_estimates_the_error_the_ground_truth_shows() {
         ],
     );
     let imu = dir.join("imu.csv");
-    // The body's true Δv over [1 s, 2 s] from the written ground truth (gravity (0, 0, −9.81)).
-    let gt = std::fs::read_to_string(dir.join("groundtruth.csv")).unwrap();
-    let row = |t: &str| -> Vec<f64> {
-        let l = gt
-            .lines()
-            .find(|l| l.starts_with(&format!("{t},")))
-            .unwrap();
-        l.split(',').skip(1).map(|x| x.parse().unwrap()).collect()
-    };
-    let (a, b) = (row("1000000000"), row("2000000000"));
-    let q = UnitQuaternion::from_quaternion(Quaternion::new(a[3], a[4], a[5], a[6]));
-    let dv_true = q.inverse()
-        * (Vector3::new(b[7], b[8], b[9])
-            - Vector3::new(a[7], a[8], a[9])
-            - Vector3::new(0.0, 0.0, -9.81));
+    // The body's true Δv over [1 s, 2 s] from the written ground truth.
+    let dv_true = true_delta_v(&dir, 1_000_000_000, 2_000_000_000);
     for scheme in ["euler", "midpoint"] {
         let out = json(&[
             "integrate",

@@ -106,3 +106,32 @@ pub fn nums(v: &Value) -> Vec<f64> {
 pub fn matrix(v: &Value) -> Vec<Vec<f64>> {
     v.as_array().unwrap().iter().map(nums).collect()
 }
+
+/// The state of `simulate`'s `groundtruth.csv` in `dir` at `t_ns` (read by
+/// `preint_io::read_euroc_groundtruth`).
+pub fn truth_at(dir: &Path, t_ns: i64) -> preint_io::GroundTruthState {
+    preint_io::read_euroc_groundtruth(&dir.join("groundtruth.csv"))
+        .expect("groundtruth.csv")
+        .into_iter()
+        .find(|s| s.t_ns == t_ns)
+        .expect("a ground-truth row at t_ns")
+}
+
+/// [`truth_at`] as arrays: position \[m\], quaternion w, x, y, z (body → world), velocity [m/s].
+pub fn truth(dir: &Path, t_ns: i64) -> ([f64; 3], [f64; 4], [f64; 3]) {
+    let s = truth_at(dir, t_ns);
+    let q = s.q.quaternion();
+    (
+        [s.p.x, s.p.y, s.p.z],
+        [q.w, q.i, q.j, q.k],
+        [s.v.x, s.v.y, s.v.z],
+    )
+}
+
+/// The body's true Δv [m/s] over `[t_i, t_j]` (frame at t_i, gravity `(0, 0, −9.81)`) from
+/// the ground truth in `dir`.
+pub fn true_delta_v(dir: &Path, t_i: i64, t_j: i64) -> nalgebra::Vector3<f64> {
+    let (i, j) = (truth_at(dir, t_i), truth_at(dir, t_j));
+    let dt = (t_j - t_i) as f64 * 1e-9;
+    i.q.inverse() * (j.v - i.v - nalgebra::Vector3::new(0.0, 0.0, -9.81) * dt)
+}
