@@ -3,105 +3,27 @@
 //! rest in the rotating frame stays at rest (deltas by quadrature), merge and validation
 //! errors, the kernels against quadrature.
 
-use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
+use nalgebra::{DMatrix, Matrix3, SVector, Vector3};
 use preint::ResidualMode;
 use preint::earth::{EARTH_RATE_RAD_S, earth_rate_enu, gamma_p, gamma_v};
-use preint::factor::FactorJacobians;
 use preint::{
-    BiasJacobians, CombinedImuFactor, CoriolisMode, Cov15, EdgeNoise, FactorError, ImuBias,
-    ImuFactor, Level, MergeError, NavState, PreintParams, PreintegratedImu, merge, predict,
+    CombinedImuFactor, CoriolisMode, Cov15, FactorError, ImuBias, ImuFactor, MergeError, NavState,
+    PreintParams, PreintegratedImu, merge, predict,
 };
 use preint_lie::{SO3, hat};
+
+mod common;
+use common::factor_vars::{Rng, analytic, numeric};
+
+fn random_pim(rng: &mut Rng, omega: Vector3<f64>, mode: CoriolisMode) -> PreintegratedImu {
+    common::factor_vars::random_pim(rng, 1_000_000_000, None, Some((omega, mode)))
+}
 
 const MODES: [CoriolisMode; 3] = [
     CoriolisMode::FirstOrder,
     CoriolisMode::SecondOrder,
     CoriolisMode::Exact,
 ];
-
-/// xorshift64* — deterministic, no dev-dependency.
-struct Rng(u64);
-impl Rng {
-    fn s(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        let u = (self.0.wrapping_mul(0x2545F4914F6CDD1D) >> 11) as f64 / (1u64 << 53) as f64;
-        2.0 * u - 1.0
-    }
-    fn v3(&mut self, a: f64) -> Vector3<f64> {
-        Vector3::new(self.s(), self.s(), self.s()) * a
-    }
-    fn m3(&mut self, a: f64) -> Matrix3<f64> {
-        Matrix3::from_fn(|_, _| self.s() * a)
-    }
-    fn spd<const N: usize>(&mut self, scale: f64) -> SMatrix<f64, N, N> {
-        let a = SMatrix::<f64, N, N>::from_fn(|_, _| self.s());
-        (a * a.transpose() + SMatrix::<f64, N, N>::identity() * 0.1) * scale
-    }
-}
-
-fn random_pim(rng: &mut Rng, omega: Vector3<f64>, mode: CoriolisMode) -> PreintegratedImu {
-    PreintegratedImu {
-        t_i_ns: 1_000_000_000,
-        t_j_ns: 1_700_000_000,
-        delta_t: 0.7,
-        delta_r: SO3::exp(&rng.v3(1.4)),
-        delta_v: rng.v3(3.0),
-        delta_p: rng.v3(2.0),
-        cov: rng.spd::<9>(1e-4),
-        cov15: rng.spd::<15>(1e-4),
-        jac: BiasJacobians {
-            d_r_d_bg: rng.m3(0.7),
-            d_v_d_bg: rng.m3(2.0),
-            d_v_d_ba: rng.m3(0.7),
-            d_p_d_bg: rng.m3(1.0),
-            d_p_d_ba: rng.m3(0.3),
-        },
-        bias_hat: ImuBias::new(rng.v3(0.01), rng.v3(0.1)),
-        gravity: Vector3::new(0.0, 0.0, -9.81),
-        omega_coriolis: Some(omega),
-        coriolis: mode,
-        level: Level::Combined,
-        edge_noise: EdgeNoise::default(),
-    }
-}
-
-/// (x_i, x_j, b_i, b_j); tangent [φ_i, p_i, v_i, φ_j, p_j, v_j, bg_i, ba_i, bg_j, ba_j].
-type Vars = (NavState, NavState, ImuBias, ImuBias);
-
-fn retract_vars(x: &Vars, d: &SVector<f64, 30>) -> Vars {
-    let s = |k: usize| d.fixed_rows::<3>(k).into_owned();
-    let t9 = |k: usize| SVector::<f64, 9>::from_column_slice(d.fixed_rows::<9>(k).as_slice());
-    (
-        x.0.retract(&t9(0)),
-        x.1.retract(&t9(9)),
-        ImuBias::new(x.2.gyro + s(18), x.2.acc + s(21)),
-        ImuBias::new(x.3.gyro + s(24), x.3.acc + s(27)),
-    )
-}
-
-fn numeric<const R: usize>(x: &Vars, f: impl Fn(&Vars) -> SVector<f64, R>, h: f64) -> DMatrix<f64> {
-    let mut j = DMatrix::zeros(R, 30);
-    for k in 0..30 {
-        let mut d = SVector::<f64, 30>::zeros();
-        d[k] = h;
-        let diff = f(&retract_vars(x, &d)) - f(&retract_vars(x, &(-d)));
-        j.column_mut(k).copy_from(&(diff / (2.0 * h)));
-    }
-    j
-}
-
-fn analytic<const R: usize>(j: &FactorJacobians<R>) -> DMatrix<f64> {
-    let blocks = [
-        j.phi_i, j.p_i, j.v_i, j.phi_j, j.p_j, j.v_j, j.bg_i, j.ba_i, j.bg_j, j.ba_j,
-    ];
-    let mut m = DMatrix::zeros(R, 30);
-    for (b, blk) in blocks.iter().enumerate() {
-        m.view_mut((0, 3 * b), (R, 3)).copy_from(blk);
-    }
-    m
-}
 
 fn assert_jac_close(ana: &DMatrix<f64>, num: &DMatrix<f64>, tol: f64, what: &str) {
     for c in 0..ana.ncols() {

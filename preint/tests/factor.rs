@@ -1,67 +1,20 @@
 //! ImuFactor / CombinedImuFactor / NavState / predict: hand-computed values, every Jacobian block
 //! against central differences on the manifold, whitening, typed errors.
 
-use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, SVector, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3, SVector, Vector3};
 use preint::ResidualMode;
-use preint::factor::{FactorJacobians, sqrt_information};
+use preint::factor::sqrt_information;
 use preint::{
     BiasJacobians, CombinedImuFactor, Cov9, Cov15, EdgeNoise, FactorError, ImuBias, ImuFactor,
     Level, NavState, PreintegratedImu, predict,
 };
 use preint_lie::{Manifold, SO3};
 
-/// xorshift64* — deterministic, no dev-dependency.
-struct Rng(u64);
-impl Rng {
-    fn u(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545F4914F6CDD1D) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn s(&mut self) -> f64 {
-        2.0 * self.u() - 1.0
-    }
-    fn v3(&mut self, a: f64) -> Vector3<f64> {
-        Vector3::new(self.s(), self.s(), self.s()) * a
-    }
-    fn m3(&mut self, a: f64) -> Matrix3<f64> {
-        Matrix3::from_fn(|_, _| self.s() * a)
-    }
-    fn rot(&mut self) -> SO3 {
-        // Angle up to ~2.5 rad.
-        SO3::exp(&self.v3(1.4))
-    }
-    fn spd<const N: usize>(&mut self, scale: f64) -> SMatrix<f64, N, N> {
-        let a = SMatrix::<f64, N, N>::from_fn(|_, _| self.s());
-        (a * a.transpose() + SMatrix::<f64, N, N>::identity() * 0.1) * scale
-    }
-}
+mod common;
+use common::factor_vars::{NAMES, Rng, Vars, analytic, numeric};
 
 fn random_pim(rng: &mut Rng, delta_r: SO3) -> PreintegratedImu {
-    PreintegratedImu {
-        t_i_ns: 1_000_000_000,
-        t_j_ns: 1_700_000_000,
-        delta_t: 0.7,
-        delta_r,
-        delta_v: rng.v3(3.0),
-        delta_p: rng.v3(2.0),
-        cov: rng.spd::<9>(1e-4),
-        cov15: rng.spd::<15>(1e-4),
-        jac: BiasJacobians {
-            d_r_d_bg: rng.m3(0.7),
-            d_v_d_bg: rng.m3(2.0),
-            d_v_d_ba: rng.m3(0.7),
-            d_p_d_bg: rng.m3(1.0),
-            d_p_d_ba: rng.m3(0.3),
-        },
-        bias_hat: ImuBias::new(rng.v3(0.01), rng.v3(0.1)),
-        gravity: Vector3::new(0.0, 0.0, -9.81),
-        omega_coriolis: None,
-        coriolis: preint::CoriolisMode::Exact,
-        level: Level::Combined,
-        edge_noise: EdgeNoise::default(),
-    }
+    common::factor_vars::random_pim(rng, 1_000_000_000, Some(delta_r), None)
 }
 
 fn random_state(rng: &mut Rng) -> NavState {
@@ -77,54 +30,6 @@ fn state_j_near(
 ) -> NavState {
     predict(pim, xi, b).retract(off)
 }
-
-/// Variables of the combined factor, perturbed block by block through their retractions:
-/// (x_i, x_j, b_i, b_j), tangent [φ_i, p_i, v_i, φ_j, p_j, v_j, bg_i, ba_i, bg_j, ba_j].
-type Vars = (NavState, NavState, ImuBias, ImuBias);
-
-fn retract_vars(x: &Vars, d: &SVector<f64, 30>) -> Vars {
-    let s = |k: usize| d.fixed_rows::<3>(k).into_owned();
-    let mut t9 = SVector::<f64, 9>::zeros();
-    t9.copy_from(&d.fixed_rows::<9>(0));
-    let xi = x.0.retract(&t9);
-    t9.copy_from(&d.fixed_rows::<9>(9));
-    let xj = x.1.retract(&t9);
-    (
-        xi,
-        xj,
-        ImuBias::new(x.2.gyro + s(18), x.2.acc + s(21)),
-        ImuBias::new(x.3.gyro + s(24), x.3.acc + s(27)),
-    )
-}
-
-/// Central differences: column k = (f(x ⊕ h e_k) − f(x ⊖ h e_k)) / 2h (residuals are vectors, so
-/// `local` on the output is a subtraction).
-fn numeric<const R: usize>(x: &Vars, f: impl Fn(&Vars) -> SVector<f64, R>, h: f64) -> DMatrix<f64> {
-    let mut j = DMatrix::zeros(R, 30);
-    for k in 0..30 {
-        let mut d = SVector::<f64, 30>::zeros();
-        d[k] = h;
-        let fp = f(&retract_vars(x, &d));
-        let fm = f(&retract_vars(x, &(-d)));
-        j.column_mut(k).copy_from(&((fp - fm) / (2.0 * h)));
-    }
-    j
-}
-
-fn analytic<const R: usize>(j: &FactorJacobians<R>) -> DMatrix<f64> {
-    let blocks = [
-        j.phi_i, j.p_i, j.v_i, j.phi_j, j.p_j, j.v_j, j.bg_i, j.ba_i, j.bg_j, j.ba_j,
-    ];
-    let mut m = DMatrix::zeros(R, 30);
-    for (b, blk) in blocks.iter().enumerate() {
-        m.view_mut((0, 3 * b), (R, 3)).copy_from(blk);
-    }
-    m
-}
-
-const NAMES: [&str; 10] = [
-    "phi_i", "p_i", "v_i", "phi_j", "p_j", "v_j", "bg_i", "ba_i", "bg_j", "ba_j",
-];
 
 fn assert_jac_close(ana: &DMatrix<f64>, num: &DMatrix<f64>, tol: f64, what: &str) {
     for c in 0..ana.ncols() {

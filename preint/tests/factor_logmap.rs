@@ -3,102 +3,19 @@
 //! from zero, a bias change), the residual against an independent SE(3) logarithm, its
 //! weighting, and the component-wise path left as it is.
 
-use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
-use preint::factor::FactorJacobians;
+use nalgebra::{DMatrix, SMatrix, SVector, Vector3};
 use preint::{
-    BiasJacobians, CombinedImuFactor, CoriolisMode, EdgeNoise, ImuBias, ImuFactor, Level, NavState,
-    PreintegratedImu, ResidualMode, predict,
+    CombinedImuFactor, CoriolisMode, ImuBias, ImuFactor, NavState, PreintegratedImu, ResidualMode,
+    predict,
 };
 use preint_lie::{SE3, SO3};
 
-/// xorshift64* — deterministic, no dev-dependency.
-struct Rng(u64);
-impl Rng {
-    fn s(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        let u = (self.0.wrapping_mul(0x2545F4914F6CDD1D) >> 11) as f64 / (1u64 << 53) as f64;
-        2.0 * u - 1.0
-    }
-    fn v3(&mut self, a: f64) -> Vector3<f64> {
-        Vector3::new(self.s(), self.s(), self.s()) * a
-    }
-    fn m3(&mut self, a: f64) -> Matrix3<f64> {
-        Matrix3::from_fn(|_, _| self.s() * a)
-    }
-    fn spd<const N: usize>(&mut self, scale: f64) -> SMatrix<f64, N, N> {
-        let a = SMatrix::<f64, N, N>::from_fn(|_, _| self.s());
-        (a * a.transpose() + SMatrix::<f64, N, N>::identity() * 0.1) * scale
-    }
-}
+mod common;
+use common::factor_vars::{NAMES, Rng, Vars, analytic, numeric};
 
 fn random_pim(rng: &mut Rng, omega: Option<(Vector3<f64>, CoriolisMode)>) -> PreintegratedImu {
-    PreintegratedImu {
-        t_i_ns: 0,
-        t_j_ns: 700_000_000,
-        delta_t: 0.7,
-        delta_r: SO3::exp(&rng.v3(1.4)),
-        delta_v: rng.v3(3.0),
-        delta_p: rng.v3(2.0),
-        cov: rng.spd::<9>(1e-4),
-        cov15: rng.spd::<15>(1e-4),
-        jac: BiasJacobians {
-            d_r_d_bg: rng.m3(0.7),
-            d_v_d_bg: rng.m3(2.0),
-            d_v_d_ba: rng.m3(0.7),
-            d_p_d_bg: rng.m3(1.0),
-            d_p_d_ba: rng.m3(0.3),
-        },
-        bias_hat: ImuBias::new(rng.v3(0.01), rng.v3(0.1)),
-        gravity: Vector3::new(0.0, 0.0, -9.81),
-        omega_coriolis: omega.map(|o| o.0),
-        coriolis: omega.map_or(CoriolisMode::Exact, |o| o.1),
-        level: Level::Combined,
-        edge_noise: EdgeNoise::default(),
-    }
+    common::factor_vars::random_pim(rng, 0, None, omega)
 }
-
-/// (x_i, x_j, b_i, b_j), tangent [φ_i, p_i, v_i, φ_j, p_j, v_j, bg_i, ba_i, bg_j, ba_j].
-type Vars = (NavState, NavState, ImuBias, ImuBias);
-
-fn retract_vars(x: &Vars, d: &SVector<f64, 30>) -> Vars {
-    let s = |k: usize| d.fixed_rows::<3>(k).into_owned();
-    let t = |k: usize| SVector::<f64, 9>::from_fn(|r, _| d[k + r]);
-    (
-        x.0.retract(&t(0)),
-        x.1.retract(&t(9)),
-        ImuBias::new(x.2.gyro + s(18), x.2.acc + s(21)),
-        ImuBias::new(x.3.gyro + s(24), x.3.acc + s(27)),
-    )
-}
-
-fn numeric<const R: usize>(x: &Vars, f: impl Fn(&Vars) -> SVector<f64, R>) -> DMatrix<f64> {
-    let h = 1e-5;
-    let mut j = DMatrix::zeros(R, 30);
-    for k in 0..30 {
-        let mut d = SVector::<f64, 30>::zeros();
-        d[k] = h;
-        let col = (f(&retract_vars(x, &d)) - f(&retract_vars(x, &(-d)))) / (2.0 * h);
-        j.column_mut(k).copy_from(&col);
-    }
-    j
-}
-
-fn analytic<const R: usize>(j: &FactorJacobians<R>) -> DMatrix<f64> {
-    let blocks = [
-        j.phi_i, j.p_i, j.v_i, j.phi_j, j.p_j, j.v_j, j.bg_i, j.ba_i, j.bg_j, j.ba_j,
-    ];
-    let mut m = DMatrix::zeros(R, 30);
-    for (b, blk) in blocks.iter().enumerate() {
-        m.view_mut((0, 3 * b), (R, 3)).copy_from(blk);
-    }
-    m
-}
-
-const NAMES: [&str; 10] = [
-    "phi_i", "p_i", "v_i", "phi_j", "p_j", "v_j", "bg_i", "ba_i", "bg_j", "ba_j",
-];
 
 fn assert_jac_close(ana: &DMatrix<f64>, num: &DMatrix<f64>, what: &str) {
     for c in 0..ana.ncols() {
@@ -117,11 +34,11 @@ fn assert_jac_close(ana: &DMatrix<f64>, num: &DMatrix<f64>, what: &str) {
 fn check(pim: &PreintegratedImu, v: &Vars, what: &str) {
     let f9 = ImuFactor::with_mode(pim.clone(), ResidualMode::Logmap).unwrap();
     let (_, j9) = f9.evaluate(&v.0, &v.1, &v.2);
-    let num9 = numeric(v, |x| f9.residual(&x.0, &x.1, &x.2));
+    let num9 = numeric(v, |x| f9.residual(&x.0, &x.1, &x.2), 1e-5);
     assert_jac_close(&analytic(&j9), &num9, &format!("{what} (9)"));
     let f15 = CombinedImuFactor::with_mode(pim.clone(), ResidualMode::Logmap).unwrap();
     let (_, j15) = f15.evaluate(&v.0, &v.1, &v.2, &v.3);
-    let num15 = numeric(v, |x| f15.residual(&x.0, &x.1, &x.2, &x.3));
+    let num15 = numeric(v, |x| f15.residual(&x.0, &x.1, &x.2, &x.3), 1e-5);
     assert_jac_close(&analytic(&j15), &num15, &format!("{what} (15)"));
 }
 

@@ -156,4 +156,5 @@ pub fn compose(a: &PreintegratedImu, b: &PreintegratedImu) -> (SO3, V3, V3) {
         a.delta_p + a.delta_v * b.delta_t + a.delta_r.act(&b.delta_p),
     )
 }
+pub mod factor_vars;
 pub mod gtsam_fixture;
