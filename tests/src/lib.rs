@@ -8,8 +8,9 @@
 //! `preint/tests/factor_gtsam.rs` (factor residual, Jacobians and prediction after the
 //! documented sign/chart mapping). This library only holds helpers that compute
 //! *nothing* that is asserted against: a seeded Gaussian generator (so the suite does not depend
-//! on a particular `rand` version's stream), paths, statistics (median, log-log slope) and the
-//! JSON writer for `target/evidence/`.
+//! on a particular `rand` version's stream), paths, statistics (median, log-log slope), the JSON
+//! writer for `target/evidence/`, a scene's true state as a `NavState` and the preintegration of
+//! a whole slice of samples (the measurement the tests then check).
 //!
 //! Environment:
 //! - `PREINT_FULL=1` runs the heavy Monte Carlo / long-stream cases at full size (see each test).
@@ -17,6 +18,26 @@
 
 use preint_lie::SO3;
 use std::path::PathBuf;
+
+/// The scene's exact state at `t_ns` as a [`preint::NavState`]: attitude body → world,
+/// position \[m\] and velocity [m/s] in the world frame.
+pub fn true_state(scene: &dyn preint_sim::Scene, t_ns: i64) -> preint::NavState {
+    let s = scene.state(preint_sim::t_s(t_ns));
+    preint::NavState::new(s.r_wb, s.p, s.v)
+}
+
+/// Every sample of `samples` pushed through one [`preint::Preintegrator`] with the bias
+/// estimate `bias`: the window from the first to the last sample.
+pub fn integrate_all(
+    params: &preint::PreintParams,
+    bias: &preint::ImuBias,
+    samples: &[preint::ImuSample],
+) -> preint::PreintegratedImu {
+    let mut pi = preint::Preintegrator::with_capacity(params.clone(), *bias, samples.len())
+        .expect("valid parameters");
+    pi.integrate_slice(samples).expect("valid samples");
+    pi.finish().expect("a measurement")
+}
 
 /// `<workspace>/tests/data` (real recordings, see its README).
 pub fn data_dir() -> PathBuf {

@@ -13,13 +13,11 @@
 //!
 //! Output: `target/evidence/earth_factor.json`.
 
-use evidence::{Gauss, full_run, mean, noisy_stream, write_json};
+use evidence::{Gauss, full_run, mean, noisy_stream, true_state, write_json};
 use nalgebra::Vector3;
-use preint::{
-    ImuBias, ImuFactor, ImuNoise, Level, NavState, PreintParams, Scheme, SensorPose, preintegrate,
-};
+use preint::{ImuBias, ImuFactor, ImuNoise, Level, PreintParams, Scheme, SensorPose, preintegrate};
 use preint_lie::SO3;
-use preint_sim::{SimConfig, scene_by_name, simulate, t_s};
+use preint_sim::{SimConfig, scene_by_name, simulate};
 
 #[test]
 fn factor_nees_of_a_rig_moving_in_a_rotating_frame() {
@@ -42,11 +40,10 @@ fn factor_nees_of_a_rig_moving_in_a_rotating_frame() {
     let dt = 0.005;
     let (sg, sa) = (noise.gyro_sample_std(dt), noise.acc_sample_std(dt));
     let (t_i, t_j) = (1_000_000_000, 2_000_000_000);
-    let truth = |t: i64| {
-        let s = scene.state(t_s(t));
-        NavState::new(s.r_wb, s.p, s.v)
-    };
-    let (xi, xj) = (truth(t_i), truth(t_j));
+    let (xi, xj) = (
+        true_state(scene.as_ref(), t_i),
+        true_state(scene.as_ref(), t_j),
+    );
     let b0 = ImuBias::zero();
     let mut out = serde_json::Map::new();
     for scheme in [Scheme::Midpoint, Scheme::Hermite4] {

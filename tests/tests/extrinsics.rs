@@ -11,11 +11,11 @@
 //! Output: `target/evidence/extrinsics.json` (errors per scheme, the alternatives' errors,
 //! mean NEES).
 
-use evidence::{Gauss, full_run, mean, noisy_stream, write_json};
+use evidence::{Gauss, full_run, integrate_all as run, mean, noisy_stream, write_json};
 use nalgebra::{SMatrix, SVector, Vector3};
 use preint::{
-    ImuBias, ImuNoise, ImuSample, Level, LeverArm, PreintParams, PreintegratedImu, Preintegrator,
-    Scheme, SensorPose, merge, preintegrate,
+    ImuBias, ImuNoise, ImuSample, Level, LeverArm, PreintParams, PreintegratedImu, Scheme,
+    SensorPose, merge, preintegrate,
 };
 use preint_lie::SO3;
 use preint_sim::{Scene, exact_deltas, scene_by_name, t_s};
@@ -66,12 +66,6 @@ const MODES: [LeverArm; 2] = [LeverArm::Exact, LeverArm::Centripetal];
 
 fn with_mode(p: PreintParams, lever_arm: LeverArm) -> PreintParams {
     PreintParams { lever_arm, ..p }
-}
-
-fn run(p: &PreintParams, bias: &ImuBias, s: &[ImuSample]) -> PreintegratedImu {
-    let mut pi = Preintegrator::with_capacity(p.clone(), *bias, s.len()).unwrap();
-    pi.integrate_slice(s).unwrap();
-    pi.finish().unwrap()
 }
 
 /// (rotation [rad], Δv [m/s], Δp [m]) errors of `m` against the scene's exact body deltas.

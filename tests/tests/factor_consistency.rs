@@ -43,13 +43,13 @@
 //! Size: N = 2 000 realisations per row (≈ 25 s in the test profile on 2 cores);
 //! `PREINT_FULL=1` runs N = 20 000. Output: `target/evidence/factor_consistency.json`.
 
-use evidence::{Gauss, full_run, mean, noisy_stream, write_json};
+use evidence::{Gauss, full_run, integrate_all, mean, noisy_stream, true_state, write_json};
 use nalgebra::Vector3;
 use preint::{
-    CombinedImuFactor, ImuBias, ImuFactor, ImuNoise, ImuSample, Level, NavState, PreintParams,
-    PreintegratedImu, Preintegrator, Scheme, merge, preintegrate,
+    CombinedImuFactor, ImuBias, ImuFactor, ImuNoise, ImuSample, Level, PreintParams,
+    PreintegratedImu, Scheme, merge, preintegrate,
 };
-use preint_sim::{Scene, scene_by_name, t_s};
+use preint_sim::{scene_by_name, t_s};
 
 const T_I: i64 = 1_000_000_000;
 const PERIOD: i64 = 5_000_000;
@@ -74,15 +74,8 @@ fn gravity() -> Vector3<f64> {
     Vector3::new(0.0, 0.0, -9.81)
 }
 
-fn truth(scene: &dyn Scene, t_ns: i64) -> NavState {
-    let s = scene.state(t_s(t_ns));
-    NavState::new(s.r_wb, s.p, s.v)
-}
-
 fn run(params: &PreintParams, samples: &[ImuSample]) -> PreintegratedImu {
-    let mut pi = Preintegrator::with_capacity(params.clone(), bias(), samples.len()).unwrap();
-    pi.integrate_slice(samples).unwrap();
-    pi.finish().unwrap()
+    integrate_all(params, &bias(), samples)
 }
 
 /// Ten 1 s windows of the stream, preintegrated on their own and merged.
@@ -134,7 +127,10 @@ fn rows_of(scene_name: &'static str, window_s: i64, n_real: usize, seed: u64) ->
     let scene = scene_by_name(scene_name).unwrap();
     let n = (window_s * 1_000_000_000 / PERIOD) as usize + 1;
     let t_j = T_I + window_s * 1_000_000_000;
-    let (xi, xj) = (truth(scene.as_ref(), T_I), truth(scene.as_ref(), t_j));
+    let (xi, xj) = (
+        true_state(scene.as_ref(), T_I),
+        true_state(scene.as_ref(), t_j),
+    );
     let b = bias();
     let clean: Vec<ImuSample> = (0..n as i64)
         .map(|k| {

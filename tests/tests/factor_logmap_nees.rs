@@ -27,13 +27,13 @@
 //! Size: N = 1 000 realisations per setup (CI, ≈ 10 s in the test profile); `PREINT_FULL=1`: N = 4 000 and the `high` rows.
 //! Output: `target/evidence/factor_logmap_nees.json`.
 
-use evidence::{Gauss, full_run, mean, noisy_stream, write_json};
+use evidence::{Gauss, full_run, integrate_all, mean, noisy_stream, true_state, write_json};
 use nalgebra::Vector3;
 use preint::{
-    CombinedImuFactor, ImuBias, ImuFactor, ImuNoise, ImuSample, Level, NavState, PreintParams,
-    PreintegratedImu, Preintegrator, ResidualMode, Scheme,
+    CombinedImuFactor, ImuBias, ImuFactor, ImuNoise, ImuSample, Level, PreintParams,
+    PreintegratedImu, ResidualMode, Scheme,
 };
-use preint_sim::{Scene, scene_by_name, t_s};
+use preint_sim::{scene_by_name, t_s};
 
 const T_I: i64 = 1_000_000_000;
 const PERIOD: i64 = 5_000_000;
@@ -55,15 +55,8 @@ fn gravity() -> Vector3<f64> {
     Vector3::new(0.0, 0.0, -9.81)
 }
 
-fn truth(scene: &dyn Scene, t_ns: i64) -> NavState {
-    let s = scene.state(t_s(t_ns));
-    NavState::new(s.r_wb, s.p, s.v)
-}
-
 fn run(params: &PreintParams, samples: &[ImuSample]) -> PreintegratedImu {
-    let mut pi = Preintegrator::with_capacity(params.clone(), bias(), samples.len()).unwrap();
-    pi.integrate_slice(samples).unwrap();
-    pi.finish().unwrap()
+    integrate_all(params, &bias(), samples)
 }
 
 fn noise(name: &str) -> ImuNoise {
@@ -111,7 +104,10 @@ fn rows_of(
     let scene = scene_by_name(scene_name).unwrap();
     let n = (WINDOW_S * 1_000_000_000 / PERIOD) as usize + 1;
     let t_j = T_I + WINDOW_S * 1_000_000_000;
-    let (xi, xj) = (truth(scene.as_ref(), T_I), truth(scene.as_ref(), t_j));
+    let (xi, xj) = (
+        true_state(scene.as_ref(), T_I),
+        true_state(scene.as_ref(), t_j),
+    );
     let b = bias();
     let clean: Vec<ImuSample> = (0..n as i64)
         .map(|k| {

@@ -30,11 +30,9 @@
 //!
 //! Output: per scheme and scene mean NEES (9 and 15) in `target/evidence/nees.json`.
 
-use evidence::{Gauss, full_run, mean, noisy_stream, write_json};
+use evidence::{Gauss, full_run, integrate_all, mean, noisy_stream, write_json};
 use nalgebra::{SMatrix, SVector, Vector3};
-use preint::{
-    ImuBias, ImuNoise, ImuSample, Level, PreintParams, PreintegratedImu, Preintegrator, Scheme,
-};
+use preint::{ImuBias, ImuNoise, ImuSample, Level, PreintParams, PreintegratedImu, Scheme};
 use preint_sim::{Scene, scene_by_name, t_s};
 
 const T_I: i64 = 1_000_000_000;
@@ -62,9 +60,7 @@ fn ideal(scene: &dyn Scene, g: &Vector3<f64>) -> Vec<ImuSample> {
 }
 
 fn run(params: &PreintParams, samples: &[ImuSample]) -> PreintegratedImu {
-    let mut pi = Preintegrator::with_capacity(params.clone(), bias_hat(), samples.len()).unwrap();
-    pi.integrate_slice(samples).unwrap();
-    pi.finish().unwrap()
+    integrate_all(params, &bias_hat(), samples)
 }
 
 fn nees<const N: usize>(e: &SVector<f64, N>, cov: &SMatrix<f64, N, N>) -> f64 {

@@ -24,11 +24,11 @@
 //!
 //! Output: `target/evidence/truncation.json`.
 
-use evidence::{Gauss, mean, noisy_stream, write_json};
+use evidence::{Gauss, mean, noisy_stream, true_state, write_json};
 use nalgebra::Vector3;
 use preint::truncation::{estimate, inflate};
 use preint::{
-    ImuBias, ImuFactor, ImuNoise, ImuSample, Level, NavState, PreintParams, ResidualMode, Scheme,
+    ImuBias, ImuFactor, ImuNoise, ImuSample, Level, PreintParams, ResidualMode, Scheme,
     preintegrate,
 };
 use preint_sim::{SCENE_NAMES, exact_deltas, scene_by_name, t_s};
@@ -106,11 +106,10 @@ fn inflated_covariance_puts_the_factor_chi2_at_the_truth_back_to_its_dof() {
     let dt = 0.05;
     let (sg, sa) = (noise.gyro_sample_std(dt), noise.acc_sample_std(dt));
     let scene = scene_by_name("aggressive").unwrap();
-    let truth = |t: i64| {
-        let st = scene.state(t_s(t));
-        NavState::new(st.r_wb, st.p, st.v)
-    };
-    let (xi, xj) = (truth(T_I), truth(T_J));
+    let (xi, xj) = (
+        true_state(scene.as_ref(), T_I),
+        true_state(scene.as_ref(), T_J),
+    );
     let b0 = ImuBias::zero();
     for scheme in [Scheme::Euler, Scheme::Midpoint] {
         let params = PreintParams::from_noise(&noise)
