@@ -156,19 +156,7 @@ pub(super) fn to_logmap<const R: usize>(
         let g = -jli * (q_block(&rho, &phi) - hat(&u) * jlp);
         let jq = jli * q;
         let bias_term = jli * hat(&u) * jr_db * j_rg;
-        let blocks = [
-            &mut jac.phi_i,
-            &mut jac.p_i,
-            &mut jac.v_i,
-            &mut jac.phi_j,
-            &mut jac.p_j,
-            &mut jac.v_j,
-            &mut jac.bg_i,
-            &mut jac.ba_i,
-            &mut jac.bg_j,
-            &mut jac.ba_j,
-        ];
-        for (k, b) in blocks.into_iter().enumerate() {
+        for (k, b) in jac.blocks_mut().into_iter().enumerate() {
             let bk: Matrix3<f64> = b.fixed_view::<3, 3>(row, 0).into();
             let mut m = jq * bk + g * rows_phi(b);
             if k == 6 {

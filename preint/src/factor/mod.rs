@@ -270,18 +270,28 @@ impl<const R: usize> FactorJacobians<R> {
 
     /// Every block left-multiplied by `w` (e.g. the square-root information `U`).
     pub fn left_mul(&self, w: &SMatrix<f64, R, R>) -> Self {
-        Self {
-            phi_i: w * self.phi_i,
-            p_i: w * self.p_i,
-            v_i: w * self.v_i,
-            phi_j: w * self.phi_j,
-            p_j: w * self.p_j,
-            v_j: w * self.v_j,
-            bg_i: w * self.bg_i,
-            ba_i: w * self.ba_i,
-            bg_j: w * self.bg_j,
-            ba_j: w * self.ba_j,
+        let mut out = *self;
+        for b in out.blocks_mut() {
+            *b = w * *b;
         }
+        out
+    }
+
+    /// The ten blocks in the order of the variables: [φ_i, p_i, v_i, φ_j, p_j, v_j, b_g,i,
+    /// b_a,i, b_g,j, b_a,j].
+    pub(crate) fn blocks_mut(&mut self) -> [&mut SMatrix<f64, R, 3>; 10] {
+        [
+            &mut self.phi_i,
+            &mut self.p_i,
+            &mut self.v_i,
+            &mut self.phi_j,
+            &mut self.p_j,
+            &mut self.v_j,
+            &mut self.bg_i,
+            &mut self.ba_i,
+            &mut self.bg_j,
+            &mut self.ba_j,
+        ]
     }
 }
 

@@ -189,15 +189,8 @@ pub(super) fn residual9_rotating(
     r.fixed_rows_mut::<3>(6).copy_from(&(imp.wp - dp));
 
     let mut jac = ImuFactorJacobians::zeros();
-    let blocks = [
-        &mut jac.phi_i,
-        &mut jac.p_i,
-        &mut jac.v_i,
-        &mut jac.phi_j,
-        &mut jac.p_j,
-        &mut jac.v_j,
-    ];
-    for (k, blk) in blocks.into_iter().enumerate() {
+    // The state blocks [φ_i, p_i, v_i, φ_j, p_j, v_j].
+    for (k, blk) in jac.blocks_mut().into_iter().take(6).enumerate() {
         blk.fixed_view_mut::<3, 3>(0, 0)
             .copy_from(&(jr_inv_e * imp.dy[k]));
         blk.fixed_view_mut::<3, 3>(3, 0).copy_from(&imp.dv[k]);
