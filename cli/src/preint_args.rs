@@ -27,17 +27,13 @@ pub struct PreintArgs {
     /// How the lever arm of --body-p-sensor is removed: exact (closed form from the window's
     /// end rates, whatever the angular acceleration) or centripetal (GTSAM's per-sample
     /// ω×(ω×r), exact only at a constant rate; for GTSAM's numbers).
-    #[arg(long, value_enum, default_value = "exact")]
-    pub lever_arm: LeverArmArg,
+    #[arg(long, value_parser = parse_lever_arm, default_value = preint::LeverArm::default().name())]
+    pub lever_arm: preint::LeverArm,
 }
 
-/// `--lever-arm`.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum LeverArmArg {
-    /// Closed form (`preint::LeverArm::Exact`).
-    Exact,
-    /// GTSAM's per-sample centripetal correction (`preint::LeverArm::Centripetal`).
-    Centripetal,
+fn parse_lever_arm(s: &str) -> Result<preint::LeverArm, String> {
+    preint::LeverArm::parse(s)
+        .ok_or_else(|| format!("unknown lever-arm model {s:?}: use exact or centripetal"))
 }
 
 impl PreintArgs {
@@ -52,10 +48,7 @@ impl PreintArgs {
             .with_gravity(Vector3::new(0.0, 0.0, -self.gravity));
         let params = PreintParams {
             body_p_sensor: self.body_p_sensor,
-            lever_arm: match self.lever_arm {
-                LeverArmArg::Exact => preint::LeverArm::Exact,
-                LeverArmArg::Centripetal => preint::LeverArm::Centripetal,
-            },
+            lever_arm: self.lever_arm,
             ..params
         };
         Ok((noise, params))

@@ -83,6 +83,23 @@ pub enum LeverArm {
     Centripetal,
 }
 
+impl LeverArm {
+    /// The model's name on the command line and in printed output: `exact` or `centripetal`.
+    pub fn name(self) -> &'static str {
+        match self {
+            LeverArm::Exact => "exact",
+            LeverArm::Centripetal => "centripetal",
+        }
+    }
+
+    /// The model called `name` ([`LeverArm::name`]).
+    pub fn parse(name: &str) -> Option<Self> {
+        [LeverArm::Exact, LeverArm::Centripetal]
+            .into_iter()
+            .find(|m| m.name() == name)
+    }
+}
+
 /// Pose of the IMU in the body frame, GTSAM's `body_P_sensor`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SensorPose {

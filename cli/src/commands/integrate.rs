@@ -287,10 +287,7 @@ pub fn to_json(r: &Integration) -> Value {
         "body_p_sensor": r.body_p_sensor.map(|p| json!({
             "translation": list(&p.translation),
             "rotation": rows(p.rotation.matrix()),
-            "lever_arm": match r.lever_arm {
-                preint::LeverArm::Exact => "exact",
-                preint::LeverArm::Centripetal => "centripetal",
-            },
+            "lever_arm": r.lever_arm.name(),
             "note": "IMU pose in the body: translation = IMU origin in body coordinates [m], \
                 rotation = sensor-to-body; delta_R, delta_v, delta_p and their covariances are \
                 the body's, biases the IMU's (its own axes)",
