@@ -1,0 +1,56 @@
+"""preint: on-manifold IMU preintegration (Rust) from numpy.
+
+Conventions (as in the Rust library):
+
+- timestamps are integer nanoseconds (``int64``); gyro [rad/s], accelerometer [m/s²], sensor
+  frame; world frame z up, gravity ``(0, 0, -9.81)`` m/s² by default;
+- rotations are perturbed on the right (``R <- R Exp(dphi)``); tangent order of a
+  preintegrated measurement **[dphi, dv, dp]** (``PreintegratedImu.TANGENT_ORDER``), of the
+  combined one **[dphi, dv, dp, dbg, dba]``; bias order **[b_g, b_a]**;
+- noise densities continuous-time (Kalibr's ``gyroscope_noise_density`` etc.; covariances are
+  their squares, GTSAM's ``gyroscopeCovariance`` semantics).
+
+Arrays in: ``t_ns`` int64[N], ``gyro`` float64[N, 3], ``acc`` float64[N, 3]; one call integrates
+them all in Rust (no per-sample Python loop). Errors raise the typed exceptions of
+:mod:`preint._errors` (all derive from :class:`preint.Error`) with the Rust message.
+"""
+
+from ._errors import (
+    CalibrationError,
+    Error,
+    FactorError,
+    InputError,
+    MergeError,
+    PreintError,
+    ShapeError,
+)
+from ._native import (
+    SCHEMES,
+    ImuBias,
+    Noise,
+    Params,
+    PreintegratedImu,
+    Preintegrator,
+    merge,
+    preintegrate,
+    preintegrate_windows,
+)
+
+__all__ = [
+    "SCHEMES",
+    "CalibrationError",
+    "Error",
+    "FactorError",
+    "ImuBias",
+    "InputError",
+    "MergeError",
+    "Noise",
+    "Params",
+    "PreintError",
+    "PreintegratedImu",
+    "Preintegrator",
+    "ShapeError",
+    "merge",
+    "preintegrate",
+    "preintegrate_windows",
+]
