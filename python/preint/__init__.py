@@ -31,9 +31,12 @@ from ._native import (
     Params,
     PreintegratedImu,
     Preintegrator,
+    deltas_at,
+    inflate,
     merge,
     preintegrate,
     preintegrate_windows,
+    truncation_estimate,
 )
 
 __all__ = [
@@ -50,7 +53,10 @@ __all__ = [
     "PreintegratedImu",
     "Preintegrator",
     "ShapeError",
+    "deltas_at",
+    "inflate",
     "merge",
     "preintegrate",
     "preintegrate_windows",
+    "truncation_estimate",
 ]

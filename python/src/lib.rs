@@ -8,6 +8,7 @@ mod measurement;
 mod params;
 mod preintegration;
 mod state;
+mod window;
 
 use pyo3::prelude::*;
 
@@ -21,6 +22,9 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(preintegration::preintegrate, m)?)?;
     m.add_function(wrap_pyfunction!(preintegration::preintegrate_windows, m)?)?;
     m.add_function(wrap_pyfunction!(preintegration::merge, m)?)?;
+    m.add_function(wrap_pyfunction!(window::deltas_at, m)?)?;
+    m.add_function(wrap_pyfunction!(window::truncation_estimate, m)?)?;
+    m.add_function(wrap_pyfunction!(window::inflate, m)?)?;
     m.add(
         "SCHEMES",
         preint::Scheme::ALL

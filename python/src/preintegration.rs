@@ -55,10 +55,9 @@ impl PyPreintegrator {
         acc: &Bound<'_, PyAny>,
     ) -> PyResult<()> {
         let s = samples(t_ns, gyro, acc)?;
-        let base = self.0.len();
         let inner = &mut self.0;
-        py.detach(|| inner.integrate_slice(&s))
-            .map_err(|e| preint_err(reindex(e, base)))
+        // Error indices count every sample this preintegrator has received.
+        py.detach(|| inner.integrate_slice(&s)).map_err(preint_err)
     }
 
     /// The measurement over [first sample, last sample] (more samples may be added after).
@@ -105,12 +104,6 @@ impl PyPreintegrator {
     fn __len__(&self) -> usize {
         self.0.len()
     }
-}
-
-/// The error's sample index counted from the first sample this preintegrator received (the
-/// Rust slice path counts from the start of the slice it was given).
-fn reindex(e: preint::PreintError, _base: usize) -> preint::PreintError {
-    e
 }
 
 /// The measurement over the keyframe window `[t_i_ns, t_j_ns]` of a time-ordered stream

@@ -1,0 +1,118 @@
+//! Inside a window: the deltas at any times between the keyframes (`deltas_at`, what lidar
+//! deskewing needs) and the embedded truncation-error estimate of a window
+//! (`truncation_estimate`, `inflate`).
+
+use crate::convert::{samples, svec_py};
+use crate::errors::{preint_err, shape_err};
+use crate::measurement::PyMeasurement;
+use crate::params::{PyBias, PyParams, bias_or_zero};
+use nalgebra::SVector;
+use numpy::ndarray::{Array1, Array2, Array3};
+use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyUntypedArrayMethods};
+use preint::TruncationEstimate;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+/// The deltas from `t_i_ns` to each of `times_ns` (int64[K], non-decreasing, inside
+/// `[t_i_ns, t_j_ns]`): those `preintegrate` gives over `[t_i_ns, t]` (equal to round-off),
+/// in one pass over the samples.
+/// Returns a dict of numpy arrays: `t_ns` int64[K], `delta_t` [s] float64[K], `delta_R`
+/// float64[K, 3, 3] (body at t → body at t_i), `delta_v` [m/s] and `delta_p` [m] float64[K, 3]
+/// (body frame i, gravity excluded).
+#[pyfunction]
+#[pyo3(signature = (params, t_ns, gyro, acc, t_i_ns, t_j_ns, times_ns, bias=None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn deltas_at<'py>(
+    py: Python<'py>,
+    params: PyRef<'_, PyParams>,
+    t_ns: &Bound<'py, PyAny>,
+    gyro: &Bound<'py, PyAny>,
+    acc: &Bound<'py, PyAny>,
+    t_i_ns: i64,
+    t_j_ns: i64,
+    times_ns: &Bound<'py, PyAny>,
+    bias: Option<PyRef<'_, PyBias>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let s = samples(t_ns, gyro, acc)?;
+    let q = times_ns
+        .cast::<PyArray1<i64>>()
+        .map_err(|_| shape_err("times_ns: expected a 1-D numpy array of dtype int64"))?
+        .readonly();
+    let _ = q.len();
+    let q = q.as_array().to_vec();
+    let (p, b) = (&params.0, bias_or_zero(bias));
+    let d = py
+        .detach(|| preint::deskew::deltas_at(p, &b, &s, (t_i_ns, t_j_ns), &q))
+        .map_err(preint_err)?;
+    let k = d.len();
+    let out = PyDict::new(py);
+    out.set_item(
+        "t_ns",
+        Array1::from_iter(d.iter().map(|x| x.t_ns)).into_pyarray(py),
+    )?;
+    out.set_item(
+        "delta_t",
+        Array1::from_iter(d.iter().map(|x| x.delta_t)).into_pyarray(py),
+    )?;
+    out.set_item(
+        "delta_R",
+        Array3::from_shape_fn((k, 3, 3), |(n, i, j)| d[n].delta_r.matrix()[(i, j)])
+            .into_pyarray(py),
+    )?;
+    out.set_item(
+        "delta_v",
+        Array2::from_shape_fn((k, 3), |(n, i)| d[n].delta_v[i]).into_pyarray(py),
+    )?;
+    out.set_item(
+        "delta_p",
+        Array2::from_shape_fn((k, 3), |(n, i)| d[n].delta_p[i]).into_pyarray(py),
+    )?;
+    Ok(out)
+}
+
+/// The estimated truncation (discretisation) error of `pim`, the window
+/// `[pim.t_i_ns, pim.t_j_ns]` of the arrays preintegrated with `params` and `bias`:
+/// `(error, method)` with `error` = scheme ⊖ exact deltas, float64[9] in [δφ rad, δv m/s, δp m]
+/// (the chart of `PreintegratedImu.delta_error`) and `method` "hermite4 companion" (euler,
+/// midpoint) or "richardson 2h" (hermite4).
+#[pyfunction]
+#[pyo3(signature = (params, t_ns, gyro, acc, pim, bias=None))]
+pub(crate) fn truncation_estimate<'py>(
+    py: Python<'py>,
+    params: PyRef<'_, PyParams>,
+    t_ns: &Bound<'py, PyAny>,
+    gyro: &Bound<'py, PyAny>,
+    acc: &Bound<'py, PyAny>,
+    pim: PyRef<'_, PyMeasurement>,
+    bias: Option<PyRef<'_, PyBias>>,
+) -> PyResult<(Bound<'py, PyArray1<f64>>, &'static str)> {
+    let s = samples(t_ns, gyro, acc)?;
+    let (p, b, m) = (&params.0, bias_or_zero(bias), &pim.0);
+    let e = py
+        .detach(|| preint::truncation::estimate(p, &b, &s, m))
+        .map_err(preint_err)?;
+    Ok((svec_py(py, &e.error), e.method))
+}
+
+/// `pim` with `e eᵀ` added to its 9×9 covariance and to the 9×9 block of its 15×15 one, `e`
+/// float64[9] a truncation-error estimate in [δφ, δv, δp] (`truncation_estimate`): a factor
+/// weighted by it expects the discretisation error too.
+#[pyfunction]
+pub(crate) fn inflate(
+    pim: PyRef<'_, PyMeasurement>,
+    error: &Bound<'_, PyAny>,
+) -> PyResult<PyMeasurement> {
+    let e: Vec<f64> = error
+        .extract()
+        .map_err(|_| shape_err("error: expected nine numbers [dphi, dv, dp]"))?;
+    if e.len() != 9 || !e.iter().all(|x| x.is_finite()) {
+        return Err(shape_err(
+            "error: expected nine finite numbers [dphi, dv, dp]",
+        ));
+    }
+    let est = TruncationEstimate {
+        error: SVector::<f64, 9>::from_column_slice(&e),
+        method: "given",
+    };
+    Ok(PyMeasurement(preint::truncation::inflate(&pim.0, &est)))
+}

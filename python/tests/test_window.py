@@ -1,0 +1,121 @@
+"""Inside a window: deltas at query times, the truncation-error estimate and inflation.
+
+Expected values come from independent numpy closed forms (constant rate and specific force:
+ΔR = Exp(ωt), Δv = Jl(ωt) a t, Δp = N(ωt) a t² with the series of the integrals) or from
+preintegrate over the shorter window, never from the function under test.
+"""
+
+import numpy as np
+import pytest
+
+import preint
+
+
+def hat(w):
+    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
+
+
+def exp_so3(phi):
+    th = np.linalg.norm(phi)
+    k = hat(phi)
+    return np.eye(3) + np.sin(th) / th * k + (1 - np.cos(th)) / th**2 * k @ k
+
+
+def held_truth(w, a, t):
+    """Exact deltas of a constant body rate w [rad/s] and specific force a [m/s²] over t [s]:
+    Δv = ∫0^t Exp(ws) a ds, Δp = ∫0^t Δv(s) ds, integrated by a fine composite Simpson rule
+    on the closed-form Exp (independent of preint)."""
+    n = 20001
+    s = np.linspace(0.0, t, n)
+    u = np.array([exp_so3(w * si) @ a if si > 0 else a for si in s])
+    h = s[1] - s[0]
+    wts = np.ones(n)
+    wts[1:-1:2] = 4
+    wts[2:-1:2] = 2
+    dv = (wts[:, None] * u).sum(0) * h / 3
+    # Δp = ∫ (t − s) u(s) ds.
+    dp = (wts[:, None] * (t - s)[:, None] * u).sum(0) * h / 3
+    return exp_so3(w * t), dv, dp
+
+
+def stream(rate_hz, seconds, w, a):
+    n = int(round(rate_hz * seconds)) + 1
+    t = (np.arange(n, dtype=np.int64) * int(round(1e9 / rate_hz))).astype(np.int64)
+    return t, np.tile(w, (n, 1)).astype(float), np.tile(a, (n, 1)).astype(float)
+
+
+W = np.array([1.2, -0.8, 2.0])
+A = np.array([2.0, -1.0, 0.5])
+
+
+@pytest.mark.parametrize("scheme", ["euler", "midpoint", "hermite4"])
+def test_deltas_at_equal_the_shorter_windows(scheme):
+    p = preint.Params(scheme=scheme, level="deltas")
+    t, g, a = stream(200.0, 1.0, W, A)
+    q = np.array([12_345_678, 500_000_000, 777_777_777, 1_000_000_000], dtype=np.int64)
+    d = preint.deltas_at(p, t, g, a, 0, 1_000_000_000, q)
+    assert d["delta_R"].shape == (4, 3, 3) and d["delta_v"].shape == (4, 3)
+    assert np.array_equal(d["t_ns"], q)
+    for k, tq in enumerate(q):
+        m = preint.preintegrate(p, t, g, a, 0, int(tq))
+        # The same deltas, computed by a different pass over the samples: equal to round-off.
+        assert np.abs(d["delta_R"][k] - m.delta_R).max() < 1e-13
+        assert np.linalg.norm(d["delta_v"][k] - m.delta_v) < 1e-13 * np.linalg.norm(m.delta_v)
+        assert np.linalg.norm(d["delta_p"][k] - m.delta_p) < 1e-13 * np.linalg.norm(m.delta_p)
+        assert d["delta_t"][k] == m.delta_t
+
+
+def test_deltas_at_refuses_unsorted_and_outside_queries():
+    p = preint.Params(level="deltas")
+    t, g, a = stream(200.0, 1.0, W, A)
+    with pytest.raises(preint.PreintError) as e:
+        preint.deltas_at(p, t, g, a, 0, 10**9, np.array([5 * 10**8, 10**8], dtype=np.int64))
+    assert e.value.kind == "QueryNotSorted" and "query 1" in str(e.value)
+    with pytest.raises(preint.PreintError) as e:
+        preint.deltas_at(p, t, g, a, 0, 10**9, np.array([2 * 10**9], dtype=np.int64))
+    assert e.value.kind == "QueryOutsideWindow"
+
+
+@pytest.mark.parametrize("scheme", ["euler", "midpoint"])
+def test_truncation_estimate_tracks_the_true_error(scheme):
+    # 20 Hz, the held-input stress motion of GTSAM's experiment: Euler's and midpoint's
+    # discretisation error is large and the 4th-order companion nearly exact.
+    p = preint.Params(scheme=scheme, level="covariance")
+    t, g, a = stream(20.0, 1.0, W, A)
+    m = preint.preintegrate(p, t, g, a, 0, 10**9)
+    r, dv, dp = held_truth(W, A, 1.0)
+    true_err = np.concatenate(
+        [
+            # Log(Rᵀ ΔR) for small angles: vee of the skew part.
+            0.5 * np.array(
+                [
+                    (r.T @ m.delta_R)[2, 1] - (r.T @ m.delta_R)[1, 2],
+                    (r.T @ m.delta_R)[0, 2] - (r.T @ m.delta_R)[2, 0],
+                    (r.T @ m.delta_R)[1, 0] - (r.T @ m.delta_R)[0, 1],
+                ]
+            ),
+            m.delta_v - dv,
+            m.delta_p - dp,
+        ]
+    )
+    est, method = preint.truncation_estimate(p, t, g, a, m)
+    assert method == "hermite4 companion"
+    # The velocity and position errors are what matter at 20 Hz (cm/s … dm/s).
+    for blk in (slice(3, 6), slice(6, 9)):
+        assert np.linalg.norm(true_err[blk]) > 1e-3
+        assert np.linalg.norm(est[blk] - true_err[blk]) < 0.02 * np.linalg.norm(true_err[blk])
+
+
+def test_inflate_adds_the_outer_product():
+    p = preint.Params(scheme="euler")
+    t, g, a = stream(100.0, 0.5, W, A)
+    m = preint.preintegrate(p, t, g, a, 0, 5 * 10**8)
+    e = np.arange(1.0, 10.0) * 1e-3
+    m2 = preint.inflate(m, e)
+    assert np.allclose(m2.cov - m.cov, np.outer(e, e), rtol=0, atol=1e-15)
+    assert np.allclose(m2.cov15[:9, :9] - m.cov15[:9, :9], np.outer(e, e), rtol=0, atol=1e-15)
+    assert np.array_equal(m2.cov15[9:, 9:], m.cov15[9:, 9:])
+    with pytest.raises(preint.ShapeError):
+        preint.inflate(m, [1.0, 2.0])
+    with pytest.raises(preint.ShapeError):
+        preint.inflate(m, [np.nan] * 9)
