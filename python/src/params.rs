@@ -13,6 +13,9 @@ use preint::lie::SO3;
 use preint::{CoriolisMode, ImuBias, ImuNoise, Level, LeverArm, PreintParams, Scheme, SensorPose};
 use pyo3::prelude::*;
 
+/// The constructor arguments of `Noise` (its pickle state).
+type NoiseArgs = (f64, f64, f64, f64, f64);
+
 /// Kalibr-style IMU noise densities (`Noise(gyro_noise_density, gyro_random_walk,
 /// acc_noise_density, acc_random_walk, update_rate_hz=200.0)`): gyro [rad/s/√Hz], gyro bias
 /// random walk [rad/s²/√Hz], accelerometer [m/s²/√Hz], accelerometer bias random walk
@@ -89,7 +92,7 @@ impl PyNoise {
         self.0 == other.0
     }
 
-    fn __reduce__(&self, py: Python<'_>) -> PyResult<(Py<PyAny>, (f64, f64, f64, f64, f64))> {
+    fn __reduce__(&self, py: Python<'_>) -> PyResult<(Py<PyAny>, NoiseArgs)> {
         let n = &self.0;
         Ok((
             py.get_type::<Self>().into_any().unbind(),
@@ -246,7 +249,7 @@ pub(crate) fn rotation(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<SO3> {
         ))
     })?;
     let err = (m.transpose() * m - Matrix3::identity()).abs().max();
-    if !(err <= 1e-6) || m.determinant() <= 0.0 {
+    if err.is_nan() || err > 1e-6 || m.determinant() <= 0.0 {
         return Err(shape_err(format!(
             "{name}: not a rotation matrix (‖RᵀR − I‖max = {err:e}, det = {})",
             m.determinant()
@@ -254,6 +257,9 @@ pub(crate) fn rotation(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<SO3> {
     }
     Ok(SO3::from_matrix(&m))
 }
+
+/// `(R_bs 3×3, t_bs [m])` as numpy arrays.
+type PoseArrays<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<f64>>);
 
 #[pymethods]
 impl PyParams {
@@ -397,10 +403,7 @@ impl PyParams {
     /// The IMU's pose in the body frame (GTSAM's `body_P_sensor`) as `(R_bs 3×3, t_bs [m])`,
     /// or None (IMU at the body origin).
     #[getter]
-    fn body_p_sensor<'py>(
-        &self,
-        py: Python<'py>,
-    ) -> Option<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<f64>>)> {
+    fn body_p_sensor<'py>(&self, py: Python<'py>) -> Option<PoseArrays<'py>> {
         self.0
             .body_p_sensor
             .as_ref()

@@ -138,25 +138,42 @@ pub(crate) fn decode_params(b: &[u8]) -> PyResult<PreintParams> {
     if r.u8()? != VERSION {
         return Err(truncated());
     }
-    let mut p = PreintParams::default();
-    p.gravity = r.mat()?;
-    p.gyro_cov = r.mat()?;
-    p.acc_cov = r.mat()?;
-    p.gyro_bias_rw_cov = r.mat()?;
-    p.acc_bias_rw_cov = r.mat()?;
-    p.integration_cov = r.opt_mat()?;
-    p.scheme = pick(Scheme::ALL, r.u8()?)?;
-    p.level = pick(&LEVELS, r.u8()?)?;
-    p.reintegrate_gyro_threshold = r.f64()?;
-    p.reintegrate_acc_threshold = r.f64()?;
-    p.max_gap_ns = r.i64()?;
-    p.keep_samples = r.u8()? != 0;
+    let gravity = r.mat()?;
+    let gyro_cov = r.mat()?;
+    let acc_cov = r.mat()?;
+    let gyro_bias_rw_cov = r.mat()?;
+    let acc_bias_rw_cov = r.mat()?;
+    let integration_cov = r.opt_mat()?;
+    let scheme = pick(Scheme::ALL, r.u8()?)?;
+    let level = pick(&LEVELS, r.u8()?)?;
+    let reintegrate_gyro_threshold = r.f64()?;
+    let reintegrate_acc_threshold = r.f64()?;
+    let max_gap_ns = r.i64()?;
+    let keep_samples = r.u8()? != 0;
     let rot: Option<Matrix3<f64>> = r.opt_mat()?;
     let t: Vector3<f64> = r.mat()?;
-    p.body_p_sensor = rot.map(|m| SensorPose::new(SO3::from_matrix_unchecked(m), t));
-    p.lever_arm = pick(&LEVERS, r.u8()?)?;
-    p.omega_coriolis = r.opt_mat()?;
-    p.coriolis = pick(&CORIOLIS, r.u8()?)?;
+    let body_p_sensor = rot.map(|m| SensorPose::new(SO3::from_matrix_unchecked(m), t));
+    let lever_arm = pick(&LEVERS, r.u8()?)?;
+    let omega_coriolis = r.opt_mat()?;
+    let coriolis = pick(&CORIOLIS, r.u8()?)?;
+    let p = PreintParams {
+        gravity,
+        gyro_cov,
+        acc_cov,
+        gyro_bias_rw_cov,
+        acc_bias_rw_cov,
+        integration_cov,
+        scheme,
+        level,
+        reintegrate_gyro_threshold,
+        reintegrate_acc_threshold,
+        max_gap_ns,
+        keep_samples,
+        body_p_sensor,
+        lever_arm,
+        omega_coriolis,
+        coriolis,
+    };
     r.end()?;
     Ok(p)
 }
