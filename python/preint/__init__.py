@@ -26,12 +26,16 @@ from ._errors import (
 )
 from ._native import (
     SCHEMES,
+    CombinedImuFactor,
     ImuBias,
+    ImuFactor,
+    NavState,
     Noise,
     Params,
     PreintegratedImu,
     Preintegrator,
     merge,
+    predict,
     preintegrate,
     preintegrate_windows,
 )
@@ -39,11 +43,14 @@ from ._native import (
 __all__ = [
     "SCHEMES",
     "CalibrationError",
+    "CombinedImuFactor",
     "Error",
     "FactorError",
     "ImuBias",
+    "ImuFactor",
     "InputError",
     "MergeError",
+    "NavState",
     "Noise",
     "Params",
     "PreintError",
@@ -51,6 +58,7 @@ __all__ = [
     "Preintegrator",
     "ShapeError",
     "merge",
+    "predict",
     "preintegrate",
     "preintegrate_windows",
 ]

@@ -4,7 +4,9 @@
 
 mod convert;
 mod errors;
+mod factor;
 mod measurement;
+mod navstate;
 mod params;
 mod preintegration;
 mod state;
@@ -21,6 +23,10 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(preintegration::preintegrate, m)?)?;
     m.add_function(wrap_pyfunction!(preintegration::preintegrate_windows, m)?)?;
     m.add_function(wrap_pyfunction!(preintegration::merge, m)?)?;
+    m.add_class::<navstate::PyNavState>()?;
+    m.add_function(wrap_pyfunction!(navstate::predict, m)?)?;
+    m.add_class::<factor::PyImuFactor>()?;
+    m.add_class::<factor::PyCombinedImuFactor>()?;
     m.add(
         "SCHEMES",
         preint::Scheme::ALL
