@@ -371,9 +371,7 @@ impl PyCombinedImuFactor {
         bias_j: Option<PyRef<'_, PyBias>>,
     ) -> PyResult<Evaluated<'py>> {
         let (bi, bj) = self.biases(bias_i, bias_j);
-        let out = self
-            .0
-            .evaluate_whitened(&state_i.0, &state_j.0, &bi, &bj);
+        let out = self.0.evaluate_whitened(&state_i.0, &state_j.0, &bi, &bj);
         evaluated(py, out, true)
     }
 
