@@ -284,8 +284,19 @@ def numeric_jacobians(fn, xi, xj, bi, bj, h=1e-6):
     }
 
 
+@pytest.fixture(scope="module")
+def pim_rotating():
+    """The scene's measurement in a navigation frame rotating at ω_n (Coriolis mode "exact")."""
+    p = params()
+    p.omega_coriolis = [0.0, 0.02, 0.05]
+    t_ns, gyro, acc = scene_samples()
+    return preint.preintegrate(p, t_ns, gyro, acc, int(t_ns[0]), int(t_ns[-1]), TRUE_BIAS)
+
+
+@pytest.mark.parametrize("frame", ["inertial", "rotating"])
 @pytest.mark.parametrize("mode", MODES)
-def test_imu_factor_jacobians_match_central_differences(pim, states, mode):
+def test_imu_factor_jacobians_match_central_differences(request, states, mode, frame):
+    pim = request.getfixturevalue("pim" if frame == "inertial" else "pim_rotating")
     xi, xj, bi, bj = states
     f = preint.ImuFactor(pim, mode)
     r, jac = f.evaluate(xi, xj, bi)
@@ -297,8 +308,10 @@ def test_imu_factor_jacobians_match_central_differences(pim, states, mode):
         assert_close(jac[name], num[name], 1e-7, f"{mode} {name}")
 
 
+@pytest.mark.parametrize("frame", ["inertial", "rotating"])
 @pytest.mark.parametrize("mode", MODES)
-def test_combined_factor_jacobians_match_central_differences(pim, states, mode):
+def test_combined_factor_jacobians_match_central_differences(request, states, mode, frame):
+    pim = request.getfixturevalue("pim" if frame == "inertial" else "pim_rotating")
     xi, xj, bi, bj = states
     f = preint.CombinedImuFactor(pim, mode)
     _, jac = f.evaluate(xi, xj, bi, bj)
@@ -405,3 +418,17 @@ def test_navstate_errors_are_typed():
         preint.NavState(np.eye(3), [1.0, 2.0])
     with pytest.raises(preint.ShapeError, match="nine"):
         preint.NavState().retract(np.zeros(6))
+
+
+def test_bias_defaults_and_non_finite_states(pim, states):
+    xi, xj, _, _ = states
+    f = preint.ImuFactor(pim)
+    assert np.array_equal(f.residual(xi, xj), f.residual(xi, xj, pim.bias_hat))
+    c = preint.CombinedImuFactor(pim)
+    b = preint.ImuBias([0.01, 0, 0], [0, 0.1, 0])
+    assert np.array_equal(c.residual(xi, xj, b), c.residual(xi, xj, b, b))
+    assert np.abs(c.residual(xi, xj, b)[9:]).max() == 0.0
+    # a non-finite state gives a non-finite residual, not an exception
+    bad = preint.NavState(xj.rotation, [np.nan, 0.0, 0.0], xj.velocity)
+    assert not np.isfinite(f.residual(xi, bad)).all()
+    assert not np.isfinite(f.chi2(xi, bad))
