@@ -4,7 +4,9 @@
 
 mod convert;
 mod errors;
+mod factor;
 mod measurement;
+mod navstate;
 mod params;
 mod preintegration;
 mod state;
@@ -25,6 +27,10 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(window::deltas_at, m)?)?;
     m.add_function(wrap_pyfunction!(window::truncation_estimate, m)?)?;
     m.add_function(wrap_pyfunction!(window::inflate, m)?)?;
+    m.add_class::<navstate::PyNavState>()?;
+    m.add_function(wrap_pyfunction!(navstate::predict, m)?)?;
+    m.add_class::<factor::PyImuFactor>()?;
+    m.add_class::<factor::PyCombinedImuFactor>()?;
     m.add(
         "SCHEMES",
         preint::Scheme::ALL

@@ -1,0 +1,438 @@
+//! `ImuFactor` and `CombinedImuFactor` (Rust `preint::ImuFactor`, `preint::CombinedImuFactor`):
+//! residual, analytic Jacobians, whitening, χ² and prediction from numpy.
+//!
+//! Residual order **[r_φ, r_v, r_p]** (rad, m/s, m) and, for the combined factor,
+//! **[r_φ, r_v, r_p, r_bg, r_ba]** (+ rad/s, m/s²), the order of the measurement's covariance.
+//! Jacobians are a dict of one numpy block per variable: `"state_i"`, `"state_j"` (R×9, columns
+//! in the `NavState` tangent order [δφ, δp, δv]), `"bias_i"` (and `"bias_j"` for the combined
+//! factor; R×6, columns [δb_g, δb_a]).
+
+use crate::convert::{mat_py, svec_py};
+use crate::errors::{Class, raise, shape_err};
+use crate::measurement::PyMeasurement;
+use crate::navstate::{PyNavState, bias_or_hat};
+use crate::params::PyBias;
+use nalgebra::SVector;
+use numpy::{PyArray1, PyArray2};
+use preint::{CombinedImuFactor, FactorJacobians, ImuFactor, ResidualMode};
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
+
+/// The residual mode named `name` (Rust `ResidualMode::parse`: "logmap", "component").
+fn mode_from(name: &str) -> PyResult<ResidualMode> {
+    ResidualMode::parse(name).ok_or_else(|| {
+        shape_err(format!(
+            "unknown residual {name:?}: use \"logmap\" or \"component\""
+        ))
+    })
+}
+
+/// The Jacobians as the dict `{"state_i": R×9, "state_j": R×9, "bias_i": R×6[, "bias_j":
+/// R×6]}` (`bias_j` only when `with_bias_j`).
+fn jac_dict<'py, const R: usize>(
+    py: Python<'py>,
+    j: &FactorJacobians<R>,
+    with_bias_j: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("state_i", mat_py(py, &j.state_i()))?;
+    d.set_item("state_j", mat_py(py, &j.state_j()))?;
+    d.set_item("bias_i", mat_py(py, &j.bias_i()))?;
+    if with_bias_j {
+        d.set_item("bias_j", mat_py(py, &j.bias_j()))?;
+    }
+    Ok(d)
+}
+
+type Evaluated<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyDict>);
+
+fn evaluated<'py, const R: usize>(
+    py: Python<'py>,
+    (r, j): (SVector<f64, R>, FactorJacobians<R>),
+    with_bias_j: bool,
+) -> PyResult<Evaluated<'py>> {
+    Ok((svec_py(py, &r), jac_dict(py, &j, with_bias_j)?))
+}
+
+/// Pickle state of a factor: its residual mode's name and the measurement's bytes.
+fn factor_state<'py>(
+    py: Python<'py>,
+    mode: ResidualMode,
+    pim: &preint::PreintegratedImu,
+) -> (&'static str, Bound<'py, PyBytes>) {
+    (
+        mode.name(),
+        PyBytes::new(py, &crate::state::encode_measurement(pim)),
+    )
+}
+
+/// Forster's IMU factor between `(state_i, state_j, bias_i)` (Rust `ImuFactor`):
+/// `ImuFactor(pim, residual="logmap")`, weighted by the measurement's 9×9 covariance. Needs a
+/// measurement preintegrated at level "covariance" or "combined"; raises `FactorError`
+/// otherwise, or when the covariance is not positive definite (e.g. zero noise).
+///
+/// Residual **[r_φ, r_v, r_p]** (rad, m/s, m), with `ΔR(b), Δv(b), Δp(b)` the deltas corrected
+/// to first order for `bias_i` (Forster 2017 eq. 44), `g` gravity, `Δt` the window:
+///
+/// - `residual="component"` (GTSAM `ComponentWise`; Forster eq. 45):
+///   `r_φ = Log(ΔR(b)ᵀ R_iᵀ R_j)`, `r_v = R_iᵀ(v_j − v_i − gΔt) − Δv(b)`,
+///   `r_p = R_iᵀ(p_j − p_i − v_iΔt − ½gΔt²) − Δp(b)`; weighted by `cov`.
+/// - `residual="logmap"` (default; GTSAM 4.3's `Logmap`): the SE₂(3) residual
+///   `[r_φ, Jl(r_φ)⁻¹ΔR(b)ᵀ r_v, Jl(r_φ)⁻¹ΔR(b)ᵀ r_p]` = `Log(X̂_j⁻¹ X_j)`, weighted by
+///   `T cov Tᵀ`, `T = diag(I, ΔRᵀ, ΔRᵀ)`.
+///
+/// Relation to GTSAM's `ImuFactor` error `e` (order [rot, pos, vel], bias [acc, gyro]):
+/// Logmap `e = −P r` with `P` the reordering [φ, v, p] → [φ, p, v], Jacobians likewise;
+/// component-wise (`M = R_jᵀR_i`) `e = [−r_φ, −M r_p, −M r_v]` (see the Rust `preint::factor`
+/// docs for the Jacobians). `bias_i=None` means the measurement's `bias_hat`.
+#[pyclass(name = "ImuFactor", module = "preint", from_py_object)]
+#[derive(Clone)]
+pub(crate) struct PyImuFactor(pub ImuFactor);
+
+#[pymethods]
+impl PyImuFactor {
+    /// Row order of the residual, `sqrt_information` and `residual_covariance`.
+    #[classattr]
+    const RESIDUAL_ORDER: (&'static str, &'static str, &'static str) = ("r_phi", "r_v", "r_p");
+
+    #[new]
+    #[pyo3(signature = (pim, residual="logmap"))]
+    fn new(pim: PyRef<'_, PyMeasurement>, residual: &str) -> PyResult<Self> {
+        ImuFactor::with_mode(pim.0.clone(), mode_from(residual)?)
+            .map(Self)
+            .map_err(|e| raise(Class::Factor, e))
+    }
+
+    /// The residual this factor evaluates: "logmap" or "component".
+    #[getter]
+    fn residual_mode(&self) -> &'static str {
+        self.0.residual_mode().name()
+    }
+
+    /// The preintegrated measurement this factor reads (a copy).
+    #[getter]
+    fn pim(&self) -> PyMeasurement {
+        PyMeasurement(self.0.preintegrated().clone())
+    }
+
+    /// Square-root information U (9×9, upper triangular, Σ⁻¹ = UᵀU, GTSAM's
+    /// `noiseModel::Gaussian` convention) of `residual_covariance`, order [r_φ, r_v, r_p].
+    #[getter]
+    fn sqrt_information<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        mat_py(py, self.0.sqrt_information())
+    }
+
+    /// The 9×9 covariance Σ weighting the residual, order [r_φ, r_v, r_p] [rad², (m/s)², m²]:
+    /// `pim.cov` (component) or `T cov Tᵀ` (logmap). GTSAM's `residualCovariance()` is
+    /// `P Σ Pᵀ` in its order [rot, pos, vel] (logmap mode).
+    #[getter]
+    fn residual_covariance<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        mat_py(py, self.0.residual_covariance())
+    }
+
+    /// Predicted state at j (`preint.predict`) for the bias at i (default `pim.bias_hat`).
+    #[pyo3(signature = (state_i, bias_i=None))]
+    fn predict(
+        &self,
+        state_i: PyRef<'_, PyNavState>,
+        bias_i: Option<PyRef<'_, PyBias>>,
+    ) -> PyNavState {
+        let b = bias_or_hat(bias_i, self.0.preintegrated());
+        PyNavState(self.0.predict(&state_i.0, &b))
+    }
+
+    /// Residual [r_φ, r_v, r_p] (9, rad, m/s, m) in this factor's mode.
+    #[pyo3(signature = (state_i, state_j, bias_i=None))]
+    fn residual<'py>(
+        &self,
+        py: Python<'py>,
+        state_i: PyRef<'_, PyNavState>,
+        state_j: PyRef<'_, PyNavState>,
+        bias_i: Option<PyRef<'_, PyBias>>,
+    ) -> Bound<'py, PyArray1<f64>> {
+        let b = bias_or_hat(bias_i, self.0.preintegrated());
+        svec_py(py, &self.0.residual(&state_i.0, &state_j.0, &b))
+    }
+
+    /// `(residual, jacobians)`: the residual (9) and the analytic Jacobians as
+    /// `{"state_i": 9×9, "state_j": 9×9, "bias_i": 9×6}`; rows [r_φ, r_v, r_p], state columns
+    /// [δφ, δp, δv] (`NavState.retract` perturbations), bias columns [δb_g, δb_a] (additive).
+    #[pyo3(signature = (state_i, state_j, bias_i=None))]
+    fn evaluate<'py>(
+        &self,
+        py: Python<'py>,
+        state_i: PyRef<'_, PyNavState>,
+        state_j: PyRef<'_, PyNavState>,
+        bias_i: Option<PyRef<'_, PyBias>>,
+    ) -> PyResult<Evaluated<'py>> {
+        let b = bias_or_hat(bias_i, self.0.preintegrated());
+        evaluated(py, self.0.evaluate(&state_i.0, &state_j.0, &b), false)
+    }
+
+    /// `evaluate` whitened: `(U r, {name: U J})` with U = `sqrt_information`.
+    #[pyo3(signature = (state_i, state_j, bias_i=None))]
+    fn evaluate_whitened<'py>(
+        &self,
+        py: Python<'py>,
+        state_i: PyRef<'_, PyNavState>,
+        state_j: PyRef<'_, PyNavState>,
+        bias_i: Option<PyRef<'_, PyBias>>,
+    ) -> PyResult<Evaluated<'py>> {
+        let b = bias_or_hat(bias_i, self.0.preintegrated());
+        evaluated(
+            py,
+            self.0.evaluate_whitened(&state_i.0, &state_j.0, &b),
+            false,
+        )
+    }
+
+    /// Squared Mahalanobis norm `rᵀ Σ⁻¹ r = ‖U r‖²` (χ² with 9 dof).
+    #[pyo3(signature = (state_i, state_j, bias_i=None))]
+    fn chi2(
+        &self,
+        state_i: PyRef<'_, PyNavState>,
+        state_j: PyRef<'_, PyNavState>,
+        bias_i: Option<PyRef<'_, PyBias>>,
+    ) -> f64 {
+        let b = bias_or_hat(bias_i, self.0.preintegrated());
+        self.0.chi2(&state_i.0, &state_j.0, &b)
+    }
+
+    /// Least-squares cost `½ chi2` (GTSAM's `NonlinearFactor.error`).
+    #[pyo3(signature = (state_i, state_j, bias_i=None))]
+    fn cost(
+        &self,
+        state_i: PyRef<'_, PyNavState>,
+        state_j: PyRef<'_, PyNavState>,
+        bias_i: Option<PyRef<'_, PyBias>>,
+    ) -> f64 {
+        let b = bias_or_hat(bias_i, self.0.preintegrated());
+        self.0.cost(&state_i.0, &state_j.0, &b)
+    }
+
+    fn __repr__(&self) -> String {
+        let m = self.0.preintegrated();
+        format!(
+            "ImuFactor(residual={:?}, t_i_ns={}, t_j_ns={})",
+            self.residual_mode(),
+            m.t_i_ns,
+            m.t_j_ns
+        )
+    }
+
+    fn __eq__(&self, other: &Self) -> bool {
+        self.0 == other.0
+    }
+
+    #[allow(clippy::type_complexity)]
+    fn __reduce__<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Py<PyAny>, (&'static str, Bound<'py, PyBytes>))> {
+        let ctor = py.get_type::<Self>().getattr("_from_state")?.unbind();
+        Ok((
+            ctor,
+            factor_state(py, self.0.residual_mode(), self.0.preintegrated()),
+        ))
+    }
+
+    /// Inverse of `__reduce__`'s state (pickle).
+    #[staticmethod]
+    fn _from_state(mode: &str, state: &[u8]) -> PyResult<Self> {
+        let pim = crate::state::decode_measurement(state)?;
+        ImuFactor::with_mode(pim, mode_from(mode)?)
+            .map(Self)
+            .map_err(|e| raise(Class::Factor, e))
+    }
+}
+
+/// The combined IMU factor between `(state_i, state_j, bias_i, bias_j)` (Rust
+/// `CombinedImuFactor`): `CombinedImuFactor(pim, residual="logmap")`. Needs a measurement
+/// preintegrated at level "combined" with a non-zero bias random walk; raises `FactorError`
+/// otherwise.
+///
+/// Residual **[r_φ, r_v, r_p, r_bg, r_ba]** (rad, m/s, m, rad/s, m/s²): the first nine as in
+/// `ImuFactor` (same mode) evaluated with `bias_i`, then `b_g,j − b_g,i`, `b_a,j − b_a,i`;
+/// weighted by `pim.residual_cov15()` (component) or `diag(T, I₆) residual_cov15()
+/// diag(T, I₆)ᵀ` (logmap), GTSAM 4.3's `CombinedImuFactor` weighting. GTSAM's error is
+/// `[e_9, b_i − b_j]` in its orders ([rot, pos, vel], bias [acc, gyro]). `bias_i=None` means
+/// `pim.bias_hat`; `bias_j=None` means `bias_i`.
+#[pyclass(name = "CombinedImuFactor", module = "preint", from_py_object)]
+#[derive(Clone)]
+pub(crate) struct PyCombinedImuFactor(pub CombinedImuFactor);
+
+impl PyCombinedImuFactor {
+    fn biases(
+        &self,
+        bias_i: Option<PyRef<'_, PyBias>>,
+        bias_j: Option<PyRef<'_, PyBias>>,
+    ) -> (preint::ImuBias, preint::ImuBias) {
+        let bi = bias_or_hat(bias_i, self.0.preintegrated());
+        (bi, bias_j.map(|b| b.0).unwrap_or(bi))
+    }
+}
+
+#[pymethods]
+impl PyCombinedImuFactor {
+    /// Row order of the residual, `sqrt_information` and `residual_covariance`.
+    #[classattr]
+    const RESIDUAL_ORDER: (
+        &'static str,
+        &'static str,
+        &'static str,
+        &'static str,
+        &'static str,
+    ) = ("r_phi", "r_v", "r_p", "r_bg", "r_ba");
+
+    #[new]
+    #[pyo3(signature = (pim, residual="logmap"))]
+    fn new(pim: PyRef<'_, PyMeasurement>, residual: &str) -> PyResult<Self> {
+        CombinedImuFactor::with_mode(pim.0.clone(), mode_from(residual)?)
+            .map(Self)
+            .map_err(|e| raise(Class::Factor, e))
+    }
+
+    /// The residual this factor evaluates: "logmap" or "component".
+    #[getter]
+    fn residual_mode(&self) -> &'static str {
+        self.0.residual_mode().name()
+    }
+
+    /// The preintegrated measurement this factor reads (a copy).
+    #[getter]
+    fn pim(&self) -> PyMeasurement {
+        PyMeasurement(self.0.preintegrated().clone())
+    }
+
+    /// Square-root information U (15×15, upper triangular, Σ⁻¹ = UᵀU) of
+    /// `residual_covariance`, order [r_φ, r_v, r_p, r_bg, r_ba].
+    #[getter]
+    fn sqrt_information<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        mat_py(py, self.0.sqrt_information())
+    }
+
+    /// The 15×15 covariance weighting the residual, order [r_φ, r_v, r_p, r_bg, r_ba]:
+    /// `pim.residual_cov15()` (component) or `diag(T, I₆) residual_cov15() diag(T, I₆)ᵀ`
+    /// (logmap).
+    #[getter]
+    fn residual_covariance<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        mat_py(py, self.0.residual_covariance())
+    }
+
+    /// Predicted state at j (`preint.predict`) for the bias at i (default `pim.bias_hat`).
+    #[pyo3(signature = (state_i, bias_i=None))]
+    fn predict(
+        &self,
+        state_i: PyRef<'_, PyNavState>,
+        bias_i: Option<PyRef<'_, PyBias>>,
+    ) -> PyNavState {
+        let b = bias_or_hat(bias_i, self.0.preintegrated());
+        PyNavState(preint::predict(self.0.preintegrated(), &state_i.0, &b))
+    }
+
+    /// Residual [r_φ, r_v, r_p, r_bg, r_ba] (15) in this factor's mode.
+    #[pyo3(signature = (state_i, state_j, bias_i=None, bias_j=None))]
+    fn residual<'py>(
+        &self,
+        py: Python<'py>,
+        state_i: PyRef<'_, PyNavState>,
+        state_j: PyRef<'_, PyNavState>,
+        bias_i: Option<PyRef<'_, PyBias>>,
+        bias_j: Option<PyRef<'_, PyBias>>,
+    ) -> Bound<'py, PyArray1<f64>> {
+        let (bi, bj) = self.biases(bias_i, bias_j);
+        svec_py(py, &self.0.residual(&state_i.0, &state_j.0, &bi, &bj))
+    }
+
+    /// `(residual, jacobians)`: the residual (15) and the analytic Jacobians as
+    /// `{"state_i": 15×9, "state_j": 15×9, "bias_i": 15×6, "bias_j": 15×6}`; rows
+    /// [r_φ, r_v, r_p, r_bg, r_ba], state columns [δφ, δp, δv], bias columns [δb_g, δb_a].
+    #[pyo3(signature = (state_i, state_j, bias_i=None, bias_j=None))]
+    fn evaluate<'py>(
+        &self,
+        py: Python<'py>,
+        state_i: PyRef<'_, PyNavState>,
+        state_j: PyRef<'_, PyNavState>,
+        bias_i: Option<PyRef<'_, PyBias>>,
+        bias_j: Option<PyRef<'_, PyBias>>,
+    ) -> PyResult<Evaluated<'py>> {
+        let (bi, bj) = self.biases(bias_i, bias_j);
+        evaluated(py, self.0.evaluate(&state_i.0, &state_j.0, &bi, &bj), true)
+    }
+
+    /// `evaluate` whitened: `(U r, {name: U J})` with U = `sqrt_information`.
+    #[pyo3(signature = (state_i, state_j, bias_i=None, bias_j=None))]
+    fn evaluate_whitened<'py>(
+        &self,
+        py: Python<'py>,
+        state_i: PyRef<'_, PyNavState>,
+        state_j: PyRef<'_, PyNavState>,
+        bias_i: Option<PyRef<'_, PyBias>>,
+        bias_j: Option<PyRef<'_, PyBias>>,
+    ) -> PyResult<Evaluated<'py>> {
+        let (bi, bj) = self.biases(bias_i, bias_j);
+        let out = self.0.evaluate_whitened(&state_i.0, &state_j.0, &bi, &bj);
+        evaluated(py, out, true)
+    }
+
+    /// `rᵀ Σ⁻¹ r = ‖U r‖²` (χ² with 15 dof).
+    #[pyo3(signature = (state_i, state_j, bias_i=None, bias_j=None))]
+    fn chi2(
+        &self,
+        state_i: PyRef<'_, PyNavState>,
+        state_j: PyRef<'_, PyNavState>,
+        bias_i: Option<PyRef<'_, PyBias>>,
+        bias_j: Option<PyRef<'_, PyBias>>,
+    ) -> f64 {
+        let (bi, bj) = self.biases(bias_i, bias_j);
+        self.0.chi2(&state_i.0, &state_j.0, &bi, &bj)
+    }
+
+    /// `½ chi2` (GTSAM's `NonlinearFactor.error`).
+    #[pyo3(signature = (state_i, state_j, bias_i=None, bias_j=None))]
+    fn cost(
+        &self,
+        state_i: PyRef<'_, PyNavState>,
+        state_j: PyRef<'_, PyNavState>,
+        bias_i: Option<PyRef<'_, PyBias>>,
+        bias_j: Option<PyRef<'_, PyBias>>,
+    ) -> f64 {
+        let (bi, bj) = self.biases(bias_i, bias_j);
+        self.0.cost(&state_i.0, &state_j.0, &bi, &bj)
+    }
+
+    fn __repr__(&self) -> String {
+        let m = self.0.preintegrated();
+        format!(
+            "CombinedImuFactor(residual={:?}, t_i_ns={}, t_j_ns={})",
+            self.residual_mode(),
+            m.t_i_ns,
+            m.t_j_ns
+        )
+    }
+
+    fn __eq__(&self, other: &Self) -> bool {
+        self.0 == other.0
+    }
+
+    #[allow(clippy::type_complexity)]
+    fn __reduce__<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Py<PyAny>, (&'static str, Bound<'py, PyBytes>))> {
+        let ctor = py.get_type::<Self>().getattr("_from_state")?.unbind();
+        Ok((
+            ctor,
+            factor_state(py, self.0.residual_mode(), self.0.preintegrated()),
+        ))
+    }
+
+    /// Inverse of `__reduce__`'s state (pickle).
+    #[staticmethod]
+    fn _from_state(mode: &str, state: &[u8]) -> PyResult<Self> {
+        let pim = crate::state::decode_measurement(state)?;
+        CombinedImuFactor::with_mode(pim, mode_from(mode)?)
+            .map(Self)
+            .map_err(|e| raise(Class::Factor, e))
+    }
+}
