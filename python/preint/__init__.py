@@ -35,11 +35,13 @@ from ._native import (
     PreintegratedImu,
     Preintegrator,
     deltas_at,
+    deskew_points,
     inflate,
     merge,
     predict,
     preintegrate,
     preintegrate_windows,
+    states_at,
     truncation_estimate,
 )
 
@@ -61,10 +63,12 @@ __all__ = [
     "Preintegrator",
     "ShapeError",
     "deltas_at",
+    "deskew_points",
     "inflate",
     "merge",
     "predict",
     "preintegrate",
     "preintegrate_windows",
+    "states_at",
     "truncation_estimate",
 ]

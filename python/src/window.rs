@@ -1,15 +1,16 @@
-//! Inside a window: the deltas at any times between the keyframes (`deltas_at`, what lidar
-//! deskewing needs) and the embedded truncation-error estimate of a window
+//! Inside a window: the deltas and states at any times between the keyframes (`deltas_at`,
+//! `states_at`, `deskew_points`: what lidar deskewing needs) and the embedded truncation-error estimate of a window
 //! (`truncation_estimate`, `inflate`).
 
 use crate::convert::{samples, svec_py};
 use crate::errors::{preint_err, shape_err};
 use crate::measurement::PyMeasurement;
+use crate::navstate::PyNavState;
 use crate::params::{PyBias, PyParams, bias_or_zero};
-use nalgebra::SVector;
+use nalgebra::{SVector, Vector3};
 use numpy::ndarray::{Array1, Array2, Array3};
-use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyUntypedArrayMethods};
-use preint::TruncationEstimate;
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
+use preint::{DeltasAt, DeskewTarget, TruncationEstimate};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -34,18 +35,19 @@ pub(crate) fn deltas_at<'py>(
     bias: Option<PyRef<'_, PyBias>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let s = samples(t_ns, gyro, acc)?;
-    let q = times_ns
-        .cast::<PyArray1<i64>>()
-        .map_err(|_| shape_err("times_ns: expected a 1-D numpy array of dtype int64"))?
-        .readonly();
-    let _ = q.len();
-    let q = q.as_array().to_vec();
+    let q = times("times_ns", times_ns)?;
     let (p, b) = (&params.0, bias_or_zero(bias));
     let d = py
         .detach(|| preint::deskew::deltas_at(p, &b, &s, (t_i_ns, t_j_ns), &q))
         .map_err(preint_err)?;
-    let k = d.len();
     let out = PyDict::new(py);
+    put_deltas(py, &out, &d)?;
+    Ok(out)
+}
+
+/// Fills `out` with the arrays of `d` (`t_ns`, `delta_t`, `delta_R`, `delta_v`, `delta_p`).
+fn put_deltas<'py>(py: Python<'py>, out: &Bound<'py, PyDict>, d: &[DeltasAt]) -> PyResult<()> {
+    let k = d.len();
     out.set_item(
         "t_ns",
         Array1::from_iter(d.iter().map(|x| x.t_ns)).into_pyarray(py),
@@ -67,7 +69,7 @@ pub(crate) fn deltas_at<'py>(
         "delta_p",
         Array2::from_shape_fn((k, 3), |(n, i)| d[n].delta_p[i]).into_pyarray(py),
     )?;
-    Ok(out)
+    Ok(())
 }
 
 /// The estimated truncation (discretisation) error of `pim`, the window
@@ -115,4 +117,117 @@ pub(crate) fn inflate(
         method: "given",
     };
     Ok(PyMeasurement(preint::truncation::inflate(&pim.0, &est)))
+}
+
+/// The int64 query times argument `name` as a vector.
+fn times(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<i64>> {
+    let a = obj
+        .cast::<PyArray1<i64>>()
+        .map_err(|_| shape_err(format!("{name}: expected a 1-D numpy array of dtype int64")))?
+        .readonly();
+    Ok(a.as_array().to_vec())
+}
+
+/// The deltas and the predicted body state (world frame; gravity and `omega_coriolis`
+/// applied as in `predict`) at each of `times_ns` (int64[K], non-decreasing, inside the
+/// window), from `state_i`, the state at `t_i_ns`. Returns the dict of `deltas_at` plus
+/// `rotation` float64[K, 3, 3] (body → world), `position` [m] and `velocity` [m/s]
+/// float64[K, 3].
+#[pyfunction]
+#[pyo3(signature = (params, t_ns, gyro, acc, t_i_ns, t_j_ns, state_i, times_ns, bias=None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn states_at<'py>(
+    py: Python<'py>,
+    params: PyRef<'_, PyParams>,
+    t_ns: &Bound<'py, PyAny>,
+    gyro: &Bound<'py, PyAny>,
+    acc: &Bound<'py, PyAny>,
+    t_i_ns: i64,
+    t_j_ns: i64,
+    state_i: PyRef<'_, PyNavState>,
+    times_ns: &Bound<'py, PyAny>,
+    bias: Option<PyRef<'_, PyBias>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let s = samples(t_ns, gyro, acc)?;
+    let q = times("times_ns", times_ns)?;
+    let (p, b, x) = (&params.0, bias_or_zero(bias), state_i.0);
+    let at = py
+        .detach(|| preint::deskew::states_at(p, &b, &s, (t_i_ns, t_j_ns), &x, &q))
+        .map_err(preint_err)?;
+    let k = at.len();
+    let out = PyDict::new(py);
+    let d: Vec<_> = at.iter().map(|a| a.deltas).collect();
+    put_deltas(py, &out, &d)?;
+    out.set_item(
+        "rotation",
+        Array3::from_shape_fn((k, 3, 3), |(n, i, j)| at[n].state.r.matrix()[(i, j)])
+            .into_pyarray(py),
+    )?;
+    out.set_item(
+        "position",
+        Array2::from_shape_fn((k, 3), |(n, i)| at[n].state.p[i]).into_pyarray(py),
+    )?;
+    out.set_item(
+        "velocity",
+        Array2::from_shape_fn((k, 3), |(n, i)| at[n].state.v[i]).into_pyarray(py),
+    )?;
+    Ok(out)
+}
+
+/// Deskews a lidar sweep: each point `points[m]` [m], in the body frame at its own time
+/// `points_t_ns[m]` (non-decreasing, inside the window), expressed in the body frame at
+/// `t_i_ns` (`target="start"`) or `t_j_ns` (`target="end"`), with the states of `states_at`
+/// from `state_i` (its attitude and velocity matter, its position does not). Returns
+/// float64[M, 3] [m].
+#[pyfunction]
+#[pyo3(signature = (params, t_ns, gyro, acc, t_i_ns, t_j_ns, state_i, points_t_ns, points, target="start", bias=None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn deskew_points<'py>(
+    py: Python<'py>,
+    params: PyRef<'_, PyParams>,
+    t_ns: &Bound<'py, PyAny>,
+    gyro: &Bound<'py, PyAny>,
+    acc: &Bound<'py, PyAny>,
+    t_i_ns: i64,
+    t_j_ns: i64,
+    state_i: PyRef<'_, PyNavState>,
+    points_t_ns: &Bound<'py, PyAny>,
+    points: &Bound<'py, PyAny>,
+    target: &str,
+    bias: Option<PyRef<'_, PyBias>>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let s = samples(t_ns, gyro, acc)?;
+    let tq = times("points_t_ns", points_t_ns)?;
+    let pts = points
+        .cast::<PyArray2<f64>>()
+        .map_err(|_| shape_err("points: expected a numpy array of dtype float64 and shape (M, 3)"))?
+        .readonly();
+    if pts.shape()[1] != 3 || pts.shape()[0] != tq.len() {
+        return Err(shape_err(format!(
+            "points: expected shape ({}, 3), got ({}, {})",
+            tq.len(),
+            pts.shape()[0],
+            pts.shape()[1]
+        )));
+    }
+    let pts = pts.as_array();
+    let pairs: Vec<(i64, Vector3<f64>)> = tq
+        .iter()
+        .enumerate()
+        .map(|(m, &t)| (t, Vector3::new(pts[(m, 0)], pts[(m, 1)], pts[(m, 2)])))
+        .collect();
+    let target = match target {
+        "start" => DeskewTarget::Start,
+        "end" => DeskewTarget::End,
+        _ => {
+            return Err(shape_err(format!(
+                "target {target:?}: use \"start\" or \"end\""
+            )));
+        }
+    };
+    let (p, b, x) = (&params.0, bias_or_zero(bias), state_i.0);
+    let out = py
+        .detach(|| preint::deskew::deskew_points(p, &b, &s, (t_i_ns, t_j_ns), &x, &pairs, target))
+        .map_err(preint_err)?;
+    Ok(Array2::from_shape_fn((out.len(), 3), |(n, i)| out[n][i]).into_pyarray(py))
 }

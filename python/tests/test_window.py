@@ -17,6 +17,8 @@ def hat(w):
 
 def exp_so3(phi):
     th = np.linalg.norm(phi)
+    if th == 0.0:
+        return np.eye(3)
     k = hat(phi)
     return np.eye(3) + np.sin(th) / th * k + (1 - np.cos(th)) / th**2 * k @ k
 
@@ -119,3 +121,46 @@ def test_inflate_adds_the_outer_product():
         preint.inflate(m, [1.0, 2.0])
     with pytest.raises(preint.ShapeError):
         preint.inflate(m, [np.nan] * 9)
+
+
+def test_states_at_start_and_end():
+    p = preint.Params(scheme="hermite4")
+    t, g, a = stream(200.0, 1.0, W, A + np.array([0.0, 0.0, 9.81]))
+    x0 = preint.NavState([1.0, 0.0, 0.0, 0.0], [1.0, 2.0, 3.0], [0.5, -0.2, 0.1])
+    q = np.array([0, 400_000_000, 10**9], dtype=np.int64)
+    s = preint.states_at(p, t, g, a, 0, 10**9, x0, q)
+    assert s["rotation"].shape == (3, 3, 3) and s["position"].shape == (3, 3)
+    # At t_i: the initial state itself.
+    assert np.array_equal(s["rotation"][0], x0.rotation)
+    assert np.array_equal(s["position"][0], x0.position)
+    assert np.array_equal(s["velocity"][0], x0.velocity)
+    # At t_j: the prediction of the whole window, to round-off.
+    xj = preint.predict(preint.preintegrate(p, t, g, a, 0, 10**9), x0)
+    assert np.abs(s["rotation"][2] - xj.rotation).max() < 1e-13
+    assert np.linalg.norm(s["position"][2] - xj.position) < 1e-12
+    assert np.linalg.norm(s["velocity"][2] - xj.velocity) < 1e-12
+
+
+@pytest.mark.parametrize("target", ["start", "end"])
+def test_deskew_points_of_a_spinning_sensor(target):
+    # A body spinning at a constant rate in place (no gravity, no specific force): a point
+    # fixed in the world, seen at time t in the body frame at t, is x(t) = Exp(ωt)ᵀ R_iᵀ (P − p_i);
+    # deskewed to the start it is R_iᵀ (P − p_i) for every t, to the end Exp(ωT)ᵀ of that.
+    p = preint.Params(scheme="hermite4")
+    p.gravity = [0.0, 0.0, 0.0]
+    t, g, a = stream(200.0, 0.1, W, np.zeros(3))
+    x0 = preint.NavState(exp_so3(np.array([0.3, -0.1, 0.2])), [1.0, 2.0, 3.0], [0.0, 0.0, 0.0])
+    world = np.array([4.0, -1.0, 2.5])
+    local = x0.rotation.T @ (world - x0.position)
+    tp = np.linspace(0, 100_000_000, 37).astype(np.int64)
+    pts = np.array([exp_so3(W * (k * 1e-9)).T @ local for k in tp])
+    out = preint.deskew_points(p, t, g, a, 0, 100_000_000, x0, tp, pts, target=target)
+    want = local if target == "start" else exp_so3(W * 0.1).T @ local
+    assert np.abs(out - want).max() < 1e-12
+    with pytest.raises(preint.ShapeError):
+        preint.deskew_points(p, t, g, a, 0, 100_000_000, x0, tp, pts[:3], target=target)
+    bad = pts.copy()
+    bad[4, 1] = np.nan
+    with pytest.raises(preint.PreintError) as e:
+        preint.deskew_points(p, t, g, a, 0, 100_000_000, x0, tp, bad, target=target)
+    assert e.value.kind == "NonFinitePoint" and "point 4" in str(e.value)
