@@ -35,6 +35,19 @@ from ._native import (
     preintegrate,
     preintegrate_windows,
 )
+from ._native import (  # io and calibration
+    advise,
+    advise_file,
+    allan_variance,
+    allan_variance_file,
+    audit,
+    calibrate_file,
+    calibrate_multi_pose,
+    calibrate_static,
+    detect_still_intervals,
+    read_groundtruth,
+    read_imu,
+)
 
 __all__ = [
     "SCHEMES",
@@ -53,4 +66,16 @@ __all__ = [
     "merge",
     "preintegrate",
     "preintegrate_windows",
+    # io and calibration
+    "advise",
+    "advise_file",
+    "allan_variance",
+    "allan_variance_file",
+    "audit",
+    "calibrate_file",
+    "calibrate_multi_pose",
+    "calibrate_static",
+    "detect_still_intervals",
+    "read_groundtruth",
+    "read_imu",
 ]

@@ -2,8 +2,11 @@
 //! `preint` re-exports it). One file per area: parameters, preintegration, the measurement,
 //! factors and prediction, readers, Allan variance and calibration.
 
+mod allan;
+mod calib;
 mod convert;
 mod errors;
+mod io;
 mod measurement;
 mod params;
 mod preintegration;
@@ -21,6 +24,18 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(preintegration::preintegrate, m)?)?;
     m.add_function(wrap_pyfunction!(preintegration::preintegrate_windows, m)?)?;
     m.add_function(wrap_pyfunction!(preintegration::merge, m)?)?;
+    // io and calibration: readers, Allan variance, calibration, advise
+    m.add_function(wrap_pyfunction!(io::read_imu, m)?)?;
+    m.add_function(wrap_pyfunction!(io::read_groundtruth, m)?)?;
+    m.add_function(wrap_pyfunction!(io::audit, m)?)?;
+    m.add_function(wrap_pyfunction!(allan::allan_variance, m)?)?;
+    m.add_function(wrap_pyfunction!(allan::allan_variance_file, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::detect_still_intervals_py, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::calibrate_static_py, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::calibrate_multi_pose_py, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::calibrate_file, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::advise_py, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::advise_file, m)?)?;
     m.add(
         "SCHEMES",
         preint::Scheme::ALL
