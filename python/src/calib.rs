@@ -55,6 +55,23 @@ fn noise_arg(obj: Option<&Bound<'_, PyAny>>, default_euroc: bool) -> PyResult<Im
     }
 }
 
+/// `latitude` [deg] finite within [−90, 90] (the command line's check), `heading` [deg] finite
+/// and only with a latitude; otherwise `ShapeError` (kind `"Usage"`).
+fn earth_args(latitude: Option<f64>, heading: Option<f64>) -> PyResult<()> {
+    let usage = |m: String| new_err(Class::Shape, "Usage", m);
+    if let Some(lat) = latitude {
+        preint_cli::earth_args::latitude(&lat.to_string())
+            .map_err(|m| usage(format!("latitude: {m}")))?;
+    }
+    match heading {
+        Some(_) if latitude.is_none() => Err(usage("heading needs latitude".into())),
+        Some(h) if !h.is_finite() => Err(usage(format!(
+            "heading {h} is not a finite angle in degrees"
+        ))),
+        _ => Ok(()),
+    }
+}
+
 /// At least two samples, finite, strictly increasing (the messages of `BiasError`).
 fn check(s: &[ImuSample]) -> PyResult<()> {
     let err = |e: BiasError| raise(Class::Calibration, e);
@@ -177,13 +194,7 @@ pub(crate) fn calibrate_static_py<'py>(
             })
         })
         .transpose()?;
-    if heading.is_some() && latitude.is_none() {
-        return Err(new_err(
-            Class::Shape,
-            "Usage",
-            "heading needs latitude".into(),
-        ));
-    }
+    earth_args(latitude, heading)?;
     let s = samples(t_ns, gyro, acc)?;
     check(&s)?;
     let opts = StaticOptions {
@@ -363,13 +374,7 @@ pub(crate) fn calibrate_file<'py>(
         check_units,
     }
     .imu_args()?;
-    if heading.is_some() && latitude.is_none() {
-        return Err(new_err(
-            Class::Shape,
-            "Usage",
-            "heading needs latitude".into(),
-        ));
-    }
+    earth_args(latitude, heading)?;
     let args = calibrate::Args {
         input,
         poses,

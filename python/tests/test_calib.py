@@ -167,6 +167,22 @@ def test_static_calibration_of_a_file_equals_the_arrays(tmp_path):
     assert f["interval_ns"] == [c["interval"]["t_start_ns"], c["interval"]["t_end_ns"]]
 
 
+def test_latitude_removes_the_vertical_earth_rate():
+    t, g, a = static_recording(8, np.zeros(3), np.zeros(3), np.eye(3), seconds=5.0)
+    c0 = preint.calibrate_static(t, g, a)
+    c = preint.calibrate_static(t, g, a, latitude=47.4)
+    omega_e = 7.292115e-5  # rad/s (WGS-84)
+    # Ω_E sin φ along the measured up direction (≈ +z for this level sensor) comes off b_g.
+    assert np.linalg.norm(c0["up_body"] - [0.0, 0.0, 1.0]) < 1e-3
+    np.testing.assert_allclose(c0["gyro_bias"] - c["gyro_bias"],
+                               omega_e * math.sin(math.radians(47.4)) * c0["up_body"],
+                               rtol=0, atol=omega_e * 1e-6)
+    with pytest.raises(preint.ShapeError, match="latitude"):
+        preint.calibrate_static(t, g, a, latitude=95.0)
+    with pytest.raises(preint.ShapeError, match="heading needs latitude"):
+        preint.calibrate_static(t, g, a, heading=10.0)
+
+
 def test_calibration_refuses_moving_data():
     d = preint.read_imu(BROAD)
     moving = d["t_ns"] >= 37_000_000_000
