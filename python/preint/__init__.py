@@ -47,6 +47,9 @@ from ._native import (  # io and calibration
     detect_still_intervals,
     read_groundtruth,
     read_imu,
+    read_kalibr_yaml,
+    write_euroc_imu,
+    write_kalibr_yaml,
 )
 
 __all__ = [
@@ -78,4 +81,7 @@ __all__ = [
     "detect_still_intervals",
     "read_groundtruth",
     "read_imu",
+    "read_kalibr_yaml",
+    "write_euroc_imu",
+    "write_kalibr_yaml",
 ]

@@ -80,6 +80,22 @@ def read_groundtruth(path: str | os.PathLike[str]) -> dict[str, Any]:
     ``source``. Raises InputError naming file, line and column.
     """
 
+def read_kalibr_yaml(path: str | os.PathLike[str]) -> Noise:
+    """The noise densities of a Kalibr imu.yaml (gyroscope_noise_density [rad/s/√Hz],
+    gyroscope_random_walk [rad/s²/√Hz], accelerometer_noise_density [m/s²/√Hz],
+    accelerometer_random_walk [m/s³/√Hz], update_rate [Hz]; continuous-time densities).
+    Raises InputError naming the file and the missing key or bad line."""
+
+def write_kalibr_yaml(path: str | os.PathLike[str], noise: Noise) -> None:
+    """Writes ``noise`` as a Kalibr imu.yaml (shortest round-trip floats: reading it back gives
+    the same numbers). Raises InputError when the file cannot be written."""
+
+def write_euroc_imu(path: str | os.PathLike[str], t_ns: I64, gyro: F64, acc: F64) -> None:
+    """Writes arrays (t_ns int64[N] ns, gyro float64[N, 3] rad/s, acc float64[N, 3] m/s²) as a
+    EuRoC imu0 CSV with shortest round-trip floats, so that :func:`read_imu` gives back the
+    same arrays bit for bit. ShapeError for wrong shapes or dtypes; InputError when the file
+    cannot be written."""
+
 def audit(
     path: str | os.PathLike[str] | None = None,
     *,

@@ -11,6 +11,7 @@
 //! released while Rust reads.
 
 use crate::errors::{Class, new_err, raise};
+use crate::params::PyNoise;
 use numpy::IntoPyArray;
 use numpy::ndarray::{Array1, Array2};
 use preint::ImuSample;
@@ -299,4 +300,38 @@ pub(crate) fn audit<'py>(
         .detach(|| audit_cmd::run(&args).map(|o| o.json))
         .map_err(|e| cli_err(e, Class::Input))?;
     json_py(py, &json)
+}
+
+/// read_kalibr_yaml(path)
+///
+/// The noise densities of a Kalibr `imu.yaml` as a `Noise` (docs in `_native.pyi`).
+#[pyfunction]
+pub(crate) fn read_kalibr_yaml(path: PathBuf) -> PyResult<PyNoise> {
+    preint_io::read_kalibr_yaml(&path)
+        .map(PyNoise)
+        .map_err(|e| raise(Class::Input, e))
+}
+
+/// write_kalibr_yaml(path, noise)
+///
+/// Writes a `Noise` as a Kalibr `imu.yaml` (docs in `_native.pyi`).
+#[pyfunction]
+pub(crate) fn write_kalibr_yaml(path: PathBuf, noise: PyRef<'_, PyNoise>) -> PyResult<()> {
+    preint_io::write_kalibr_yaml(&path, &noise.0).map_err(|e| raise(Class::Input, e))
+}
+
+/// write_euroc_imu(path, t_ns, gyro, acc)
+///
+/// Writes arrays as a EuRoC imu0 CSV (docs in `_native.pyi`).
+#[pyfunction]
+pub(crate) fn write_euroc_imu(
+    py: Python<'_>,
+    path: PathBuf,
+    t_ns: &Bound<'_, PyAny>,
+    gyro: &Bound<'_, PyAny>,
+    acc: &Bound<'_, PyAny>,
+) -> PyResult<()> {
+    let s = crate::convert::samples(t_ns, gyro, acc)?;
+    py.detach(|| preint_io::write_euroc_imu(&path, &s))
+        .map_err(|e| raise(Class::Input, e))
 }

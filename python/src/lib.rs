@@ -28,6 +28,9 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(io::read_imu, m)?)?;
     m.add_function(wrap_pyfunction!(io::read_groundtruth, m)?)?;
     m.add_function(wrap_pyfunction!(io::audit, m)?)?;
+    m.add_function(wrap_pyfunction!(io::read_kalibr_yaml, m)?)?;
+    m.add_function(wrap_pyfunction!(io::write_kalibr_yaml, m)?)?;
+    m.add_function(wrap_pyfunction!(io::write_euroc_imu, m)?)?;
     m.add_function(wrap_pyfunction!(allan::allan_variance, m)?)?;
     m.add_function(wrap_pyfunction!(allan::allan_variance_file, m)?)?;
     m.add_function(wrap_pyfunction!(calib::detect_still_intervals_py, m)?)?;

@@ -176,3 +176,48 @@ def test_audit_reports_a_duplicate_and_passes_a_clean_bag(tmp_path):
     assert any(f["kind"] == "duplicates" for f in r["findings"])
     clean = preint.audit(DATA / "ros" / "euroc_imu.bag")
     assert clean["clean"] is True and clean["samples"] == 500
+
+
+def test_euroc_writer_round_trips_bit_for_bit(tmp_path):
+    rng = np.random.default_rng(11)
+    n = 1000
+    t = 1_403_715_273_262_142_976 + np.cumsum(rng.integers(1, 10_000_000, n)).astype(np.int64)
+    g = rng.standard_normal((n, 3)) * 10.0 ** rng.integers(-12, 3, (n, 3))
+    a = rng.standard_normal((n, 3)) * 10.0 ** rng.integers(-12, 3, (n, 3))
+    p = tmp_path / "out.csv"
+    preint.write_euroc_imu(p, t, g, a)
+    t2, g2, a2 = parse_euroc(p)  # Python's own parse of the text
+    np.testing.assert_array_equal(t2, t)
+    np.testing.assert_array_equal(g2, g)
+    np.testing.assert_array_equal(a2, a)
+    d = preint.read_imu(p, check_units=False)
+    np.testing.assert_array_equal(d["gyro"], g)
+    np.testing.assert_array_equal(d["acc"], a)
+
+
+def test_kalibr_yaml_read_and_written():
+    path = DATA / "euroc" / "imu.yaml"
+    values = {}
+    for line in path.read_text().splitlines():
+        key, _, rest = line.partition(":")
+        if rest and not line.startswith("#"):
+            values[key.strip()] = rest.split("#")[0].strip()
+    n = preint.read_kalibr_yaml(path)
+    assert n.gyro_noise_density == float(values["gyroscope_noise_density"])
+    assert n.gyro_random_walk == float(values["gyroscope_random_walk"])
+    assert n.acc_noise_density == float(values["accelerometer_noise_density"])
+    assert n.acc_random_walk == float(values["accelerometer_random_walk"])
+    assert n.update_rate_hz == float(values["update_rate"])
+
+
+def test_kalibr_yaml_round_trip_and_missing_key(tmp_path):
+    n = preint.Noise(1.234567890123e-4, 2e-5, 3.3e-3, 4e-4, 400.0)
+    p = tmp_path / "imu.yaml"
+    preint.write_kalibr_yaml(p, n)
+    m = preint.read_kalibr_yaml(p)
+    assert (m.gyro_noise_density, m.gyro_random_walk, m.acc_noise_density, m.acc_random_walk,
+            m.update_rate_hz) == (1.234567890123e-4, 2e-5, 3.3e-3, 4e-4, 400.0)
+    p.write_text("gyroscope_noise_density: 1e-4\n")
+    with pytest.raises(preint.InputError, match="imu.yaml: missing key") as e:
+        preint.read_kalibr_yaml(p)
+    assert e.value.kind == "MissingKey"
