@@ -1,6 +1,6 @@
-//! Calibration and advice from Python: static (one attitude) and multi-position bias
-//! calibration from numpy arrays (`preint_calib::bias`), `preint calibrate` on a recording, the
-//! still-interval detector, and `preint advise` (scheme and rate) from arrays or a recording.
+//! Calibration from Python: static (one attitude) and multi-position bias calibration from
+//! numpy arrays (`preint_calib::bias`), `preint calibrate` on a recording, and the
+//! still-interval detector.
 //!
 //! Conventions (`preint_calib::bias`): world z up, gravity `(0, 0, −gravity)` m/s²; the
 //! accelerometer measures specific force (+gravity on the up axis at rest); biases in the
@@ -22,16 +22,14 @@ use preint_calib::bias::{
     StaticOptions, StillInterval, StillOptions, calibrate_multi_pose, calibrate_static,
     detect_still_intervals, earth_rate_in_body, remove_earth_rate,
 };
-use preint_cli::analysis::advise::{evaluate, recommend};
-use preint_cli::analysis::denoise::denoise;
-use preint_cli::commands::{advise, calibrate};
+use preint_cli::commands::calibrate;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// The noise densities of `obj`: a `Noise`, a path to a Kalibr `imu.yaml`, or `None` (the
 /// EuRoC ADIS16448 figures when `default_euroc`, otherwise an error).
-fn noise_arg(obj: Option<&Bound<'_, PyAny>>, default_euroc: bool) -> PyResult<ImuNoise> {
+pub(crate) fn noise_arg(obj: Option<&Bound<'_, PyAny>>, default_euroc: bool) -> PyResult<ImuNoise> {
     match obj {
         None if default_euroc => Ok(ImuNoise::euroc()),
         None => Err(new_err(
@@ -73,7 +71,7 @@ fn earth_args(latitude: Option<f64>, heading: Option<f64>) -> PyResult<()> {
 }
 
 /// At least two samples, finite, strictly increasing (the messages of `BiasError`).
-fn check(s: &[ImuSample]) -> PyResult<()> {
+pub(crate) fn check(s: &[ImuSample]) -> PyResult<()> {
     let err = |e: BiasError| raise(Class::Calibration, e);
     if s.len() < 2 {
         return Err(err(BiasError::TooFew {
@@ -390,120 +388,6 @@ pub(crate) fn calibrate_file<'py>(
     };
     let json = py
         .detach(|| calibrate::run(&args).map(|o| o.json))
-        .map_err(|e| cli_err(e, Class::Calibration))?;
-    json_py(py, &json)
-}
-
-/// advise(t_ns, gyro, acc, noise, *, window=1.0, fraction=0.1)
-///
-/// `preint advise` on arrays (docs in `_native.pyi`).
-#[pyfunction]
-#[pyo3(name = "advise", signature = (t_ns, gyro, acc, noise, *, window=1.0, fraction=0.1))]
-pub(crate) fn advise_py<'py>(
-    py: Python<'py>,
-    t_ns: &Bound<'py, PyAny>,
-    gyro: &Bound<'py, PyAny>,
-    acc: &Bound<'py, PyAny>,
-    noise: &Bound<'py, PyAny>,
-    window: f64,
-    fraction: f64,
-) -> PyResult<Bound<'py, PyAny>> {
-    let noise = noise_arg(Some(noise), false)?;
-    let s = samples(t_ns, gyro, acc)?;
-    check(&s)?;
-    let label = Path::new("samples");
-    let args = advise::Args {
-        input: crate::io::ReadArgs {
-            path: Some(label.into()),
-            check_units: false,
-            ..Default::default()
-        }
-        .imu_args()?,
-        noise: PathBuf::from("(given)"),
-        window,
-        fraction,
-        from: None,
-        to: None,
-    };
-    let json = py
-        .detach(|| {
-            preint_cli::checks::positive("fraction", fraction)?;
-            preint_cli::checks::no_gaps(&s, label, preint::params::DEFAULT_MAX_GAP_NS)?;
-            let (signal, cutoffs) = denoise(&s, noise.gyro_noise_density, noise.acc_noise_density);
-            let candidates = evaluate(&signal, &noise, 9.81, window, fraction)?;
-            let recommended = recommend(&candidates)
-                .and_then(|r| candidates.iter().position(|c| std::ptr::eq(c, r)));
-            let a = advise::Advice {
-                args,
-                samples: s.len(),
-                cutoffs,
-                candidates,
-                recommended,
-            };
-            Ok(advise::to_json(&a))
-        })
-        .map_err(|e| cli_err(e, Class::Calibration))?;
-    json_py(py, &json)
-}
-
-/// advise_file(path=None, *, ..., noise, window=1.0, fraction=0.1, from_ns=None, to_ns=None)
-///
-/// `preint advise --json` on a recording (docs in `_native.pyi`).
-#[pyfunction]
-#[pyo3(signature = (path=None, *, noise, gyro=None, accel=None, format=None, columns=None,
-    delimiter=None, time_unit=None, gyro_unit=None, accel_unit=None, topic=None,
-    gyro_topic=None, accel_topic=None, stamp=None, check_units=true, window=1.0,
-    fraction=0.1, from_ns=None, to_ns=None))]
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn advise_file<'py>(
-    py: Python<'py>,
-    path: Option<PathBuf>,
-    noise: PathBuf,
-    gyro: Option<PathBuf>,
-    accel: Option<PathBuf>,
-    format: Option<String>,
-    columns: Option<String>,
-    delimiter: Option<String>,
-    time_unit: Option<String>,
-    gyro_unit: Option<String>,
-    accel_unit: Option<String>,
-    topic: Option<String>,
-    gyro_topic: Option<String>,
-    accel_topic: Option<String>,
-    stamp: Option<String>,
-    check_units: bool,
-    window: f64,
-    fraction: f64,
-    from_ns: Option<i64>,
-    to_ns: Option<i64>,
-) -> PyResult<Bound<'py, PyAny>> {
-    let input = ReadArgs {
-        path,
-        gyro,
-        accel,
-        format,
-        columns,
-        delimiter,
-        time_unit,
-        gyro_unit,
-        accel_unit,
-        topic,
-        gyro_topic,
-        accel_topic,
-        stamp,
-        check_units,
-    }
-    .imu_args()?;
-    let args = advise::Args {
-        input,
-        noise,
-        window,
-        fraction,
-        from: from_ns,
-        to: to_ns,
-    };
-    let json = py
-        .detach(|| advise::run(&args).map(|o| o.json))
         .map_err(|e| cli_err(e, Class::Calibration))?;
     json_py(py, &json)
 }

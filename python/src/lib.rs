@@ -2,6 +2,7 @@
 //! `preint` re-exports it). One file per area: parameters, preintegration, the measurement,
 //! factors and prediction, readers, Allan variance and calibration.
 
+mod advise;
 mod allan;
 mod calib;
 mod convert;
@@ -37,8 +38,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(calib::calibrate_static_py, m)?)?;
     m.add_function(wrap_pyfunction!(calib::calibrate_multi_pose_py, m)?)?;
     m.add_function(wrap_pyfunction!(calib::calibrate_file, m)?)?;
-    m.add_function(wrap_pyfunction!(calib::advise_py, m)?)?;
-    m.add_function(wrap_pyfunction!(calib::advise_file, m)?)?;
+    m.add_function(wrap_pyfunction!(advise::advise_py, m)?)?;
+    m.add_function(wrap_pyfunction!(advise::advise_file, m)?)?;
     m.add(
         "SCHEMES",
         preint::Scheme::ALL
