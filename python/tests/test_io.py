@@ -21,16 +21,17 @@ GT = DATA / "euroc" / "V1_01_easy_groundtruth_vicon2gt.csv"
 
 def parse_euroc(path: Path, rows: int | None = None):
     """EuRoC imu0 rows parsed with Python's int/float (both exact / correctly rounded)."""
-    t, v = [], []
+    t: list[int] = []
+    vals: list[list[float]] = []
     for line in path.read_text().splitlines():
         if not line.strip() or line.startswith("#"):
             continue
         f = line.split(",")
         t.append(int(f[0]))
-        v.append([float(x) for x in f[1:7]])
+        vals.append([float(x) for x in f[1:7]])
         if rows is not None and len(t) == rows:
             break
-    v = np.array(v)
+    v = np.array(vals)
     return np.array(t, dtype=np.int64), v[:, 0:3], v[:, 3:6]
 
 
