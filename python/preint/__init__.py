@@ -44,6 +44,22 @@ from ._native import (
     states_at,
     truncation_estimate,
 )
+from ._native import (  # io and calibration
+    advise,
+    advise_file,
+    allan_variance,
+    allan_variance_file,
+    audit,
+    calibrate_file,
+    calibrate_multi_pose,
+    calibrate_static,
+    detect_still_intervals,
+    read_groundtruth,
+    read_imu,
+    read_kalibr_yaml,
+    write_euroc_imu,
+    write_kalibr_yaml,
+)
 
 __all__ = [
     "SCHEMES",
@@ -71,4 +87,19 @@ __all__ = [
     "preintegrate_windows",
     "states_at",
     "truncation_estimate",
+    # io and calibration
+    "advise",
+    "advise_file",
+    "allan_variance",
+    "allan_variance_file",
+    "audit",
+    "calibrate_file",
+    "calibrate_multi_pose",
+    "calibrate_static",
+    "detect_still_intervals",
+    "read_groundtruth",
+    "read_imu",
+    "read_kalibr_yaml",
+    "write_euroc_imu",
+    "write_kalibr_yaml",
 ]

@@ -168,3 +168,301 @@ class CombinedImuFactor:
 
 
 # --- io and calibration: readers, Allan variance, calibration, advise ---
+
+import os
+from typing import Any
+
+from numpy.typing import ArrayLike
+
+# Reader options shared by read_imu, audit, allan_variance_file, calibrate_file, advise_file
+# (the command line's --imu / --gyro --accel, --format, --columns, ... flags): ``path`` one
+# recording, or ``gyro`` and ``accel`` the two files of a split recording; ``format`` one of
+# euroc, tum-vi, uzh-fpv, kitti, delimited, bag, mcap, db3 (default: detected from the
+# extension and the first lines); ``columns`` e.g. "t,ax,ay,az,wx,wy,wz" (skip for unused
+# columns; default: from the header's names); ``delimiter`` comma, semicolon, tab or whitespace;
+# ``time_unit`` s, ms, us or ns (decimals converted to integer ns exactly); ``gyro_unit`` rad/s or
+# deg/s; ``accel_unit`` m/s2 or g (9.80665 m/s²); ``topic`` the sensor_msgs/Imu topic of a bag,
+# MCAP or db3 file (default: its only one); ``gyro_topic`` + ``accel_topic`` a split recording in
+# a container; ``stamp`` "header" (header.stamp, default) or "record" (receive time);
+# ``check_units`` the check that the values look like rad/s, m/s² and the stated time unit.
+# An unknown option value raises ShapeError (kind "Usage"); a file that cannot be read raises
+# InputError naming the file and the line (text) or message (containers).
+
+def read_imu(
+    path: str | os.PathLike[str] | None = None,
+    *,
+    gyro: str | os.PathLike[str] | None = None,
+    accel: str | os.PathLike[str] | None = None,
+    format: str | None = None,
+    columns: str | None = None,
+    delimiter: str | None = None,
+    time_unit: str | None = None,
+    gyro_unit: str | None = None,
+    accel_unit: str | None = None,
+    topic: str | None = None,
+    gyro_topic: str | None = None,
+    accel_topic: str | None = None,
+    stamp: str | None = None,
+    check_units: bool = True,
+) -> dict[str, Any]:
+    """Reads an IMU recording (EuRoC/TUM-VI CSV, UZH-FPV imu.txt, KITTI text, any delimited
+    text in any units, ROS 1 bag, MCAP, ROS 2 db3; options above) with the Rust readers.
+
+    Returns a dict: ``t_ns`` int64[N] (nanoseconds, strictly increasing), ``gyro`` float64[N, 3]
+    [rad/s], ``acc`` float64[N, 3] [m/s², specific force], sensor frame, converted from the
+    file's units; and what was detected: ``source``, ``format``, ``read_as`` (one line),
+    ``units`` {``time``, ``gyro``, ``accel``} (the file's units), ``columns`` and ``delimiter``
+    (text files, else None), ``notes`` (how format, topic, columns and units were decided),
+    ``split`` (two streams merged onto the gyro stamps) and ``accel_white_ratio`` (the merged
+    accelerometer's white-noise variance factor ρ, or None).
+
+    Memory: at most 50 million samples (the Rust reader's bound, refused before allocating;
+    ~112 bytes per sample at the peak). Raises InputError (bad file, duplicate or decreasing
+    timestamp, non-finite value, implausible units: the message names file and line).
+    """
+
+def read_groundtruth(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """Reads an EuRoC ground-truth CSV (17 columns: t [ns], p, q w,x,y,z, v, b_g, b_a).
+
+    Returns a dict: ``t_ns`` int64[M]; ``p`` float64[M, 3] body position in the world frame
+    [m]; ``q_wxyz`` float64[M, 4] body→world attitude, Hamilton, order **(w, x, y, z)**
+    (``v_world = q v_body q*``; scipy's ``Rotation.from_quat`` wants (x, y, z, w)); ``v``
+    float64[M, 3] world velocity [m/s]; ``bias_gyro`` [rad/s] and ``bias_acc`` [m/s²] float64[M, 3];
+    ``source``. Raises InputError naming file, line and column.
+    """
+
+def read_kalibr_yaml(path: str | os.PathLike[str]) -> Noise:
+    """The noise densities of a Kalibr imu.yaml (gyroscope_noise_density [rad/s/√Hz],
+    gyroscope_random_walk [rad/s²/√Hz], accelerometer_noise_density [m/s²/√Hz],
+    accelerometer_random_walk [m/s³/√Hz], update_rate [Hz]; continuous-time densities).
+    Raises InputError naming the file and the missing key or bad line."""
+
+def write_kalibr_yaml(path: str | os.PathLike[str], noise: Noise) -> None:
+    """Writes ``noise`` as a Kalibr imu.yaml (shortest round-trip floats: reading it back gives
+    the same numbers). Raises InputError when the file cannot be written."""
+
+def write_euroc_imu(path: str | os.PathLike[str], t_ns: I64, gyro: F64, acc: F64) -> None:
+    """Writes arrays (t_ns int64[N] ns, gyro float64[N, 3] rad/s, acc float64[N, 3] m/s²) as a
+    EuRoC imu0 CSV with shortest round-trip floats, so that :func:`read_imu` gives back the
+    same arrays bit for bit. ShapeError for wrong shapes or dtypes; InputError when the file
+    cannot be written."""
+
+def audit(
+    path: str | os.PathLike[str] | None = None,
+    *,
+    gyro: str | os.PathLike[str] | None = None,
+    accel: str | os.PathLike[str] | None = None,
+    format: str | None = None,
+    columns: str | None = None,
+    delimiter: str | None = None,
+    time_unit: str | None = None,
+    gyro_unit: str | None = None,
+    accel_unit: str | None = None,
+    topic: str | None = None,
+    gyro_topic: str | None = None,
+    accel_topic: str | None = None,
+    stamp: str | None = None,
+    check_units: bool = True,
+) -> dict[str, Any]:
+    """What is wrong with a recording (timing, gaps, duplicates, clipping, units, stillness), in
+    one streaming pass in bounded memory: the ``preint audit --json`` report as a dict (keys
+    ``clean``, ``defects``, ``warnings``, ``findings`` [{severity, kind, message}], ``rate``,
+    ``jitter``, ``gaps``, ``axes``, ...; see the command's documentation)."""
+
+def allan_variance(
+    t_ns: I64,
+    gyro: F64,
+    acc: F64,
+    *,
+    per_decade: int = 10,
+    check_still: bool = True,
+) -> dict[str, Any]:
+    """Overlapping Allan deviation (IEEE Std 952-1997, Annex C) of the six channels
+    [ω_x, ω_y, ω_z, a_x, a_y, a_z] of a static recording (t_ns int64[N], gyro float64[N, 3]
+    rad/s, acc float64[N, 3] m/s²; uniform sampling within ±10 %), with the Kalibr noise fits.
+
+    Bounded memory as ``preint allan``: up to 2²⁰ samples the curves use every sample
+    (τ₀ = Δt); longer recordings are reduced to 2²⁰ block means (τ₀ = bΔt, b a power of two).
+
+    Returns a dict (channel axis last, order ``channels``): ``tau`` float64[M] [s], ``clusters``
+    float64[M] (N/m), ``adev`` and ``adev_err`` float64[M, 6] (σ(τ) and its 1-σ error,
+    rad/s resp. m/s²); per channel float64[6]: ``white_density`` N (slope −½ line read at τ = 1 s)
+    [rad/s/√Hz | m/s²/√Hz] and its 1-σ ``white_density_err``, ``random_walk`` K (slope +½ line read
+    at τ = 3 s) [rad/s²/√Hz | m/s³/√Hz] and ``random_walk_err``, ``bias_instability`` B
+    (floor / 0.664) [rad/s | m/s²] at ``bias_instability_tau`` [s]; bool[6]
+    ``white_density_is_bound`` / ``random_walk_is_bound`` (no region of that slope: the value
+    is an upper bound, its error NaN); ``white_tau_range`` / ``random_walk_tau_range``
+    float64[6, 2]; ``noise``: a Noise with the Kalibr imu.yaml figures (maximum over the three
+    axes of each sensor, update rate 1/Δt); ``dt``, ``tau0`` [s], ``block_len``, ``samples``;
+    ``stillness`` {windows, still_windows, still_fraction, first_motion_s, max_tilt_deg,
+    max_tilt_at_s}; ``units``.
+
+    Raises CalibrationError: kind ``NotStatic`` for a moving recording (fewer than 90 % of the
+    1 s windows still, or gravity turning by more than 2°; ``check_still=False`` skips the
+    check), ``Timestamps`` for gaps or irregular sampling, ``TooFewSamples``; ShapeError for
+    arrays of the wrong shape or dtype.
+    """
+
+def allan_variance_file(
+    path: str | os.PathLike[str] | None = None,
+    *,
+    gyro: str | os.PathLike[str] | None = None,
+    accel: str | os.PathLike[str] | None = None,
+    format: str | None = None,
+    columns: str | None = None,
+    delimiter: str | None = None,
+    time_unit: str | None = None,
+    gyro_unit: str | None = None,
+    accel_unit: str | None = None,
+    topic: str | None = None,
+    gyro_topic: str | None = None,
+    accel_topic: str | None = None,
+    stamp: str | None = None,
+    check_units: bool = True,
+    check_still: bool = True,
+) -> dict[str, Any]:
+    """``preint allan`` on a recording, streamed in bounded memory (the file is read once; the
+    units are checked on its first 60 s): the dict of :func:`allan_variance` plus ``source`` and
+    ``units_checked``. A moving recording raises CalibrationError (kind ``Failed``, the
+    command's message); a bad file InputError."""
+
+def detect_still_intervals(
+    t_ns: I64, gyro: F64, acc: F64, noise: Noise | str | os.PathLike[str] | None = None
+) -> list[dict[str, Any]]:
+    """The still intervals of a recording (moving variances of gyro and accelerometer within
+    4× the white-noise variances of ``noise``, at least 1 s; ``noise`` a Noise, a Kalibr
+    imu.yaml path, or None for the EuRoC ADIS16448 figures): [{``start``, ``end`` (sample
+    indices, end exclusive), ``t_start_ns``, ``t_end_ns``, ``duration_s``}]."""
+
+def calibrate_static(
+    t_ns: I64,
+    gyro: F64,
+    acc: F64,
+    noise: Noise | str | os.PathLike[str] | None = None,
+    *,
+    gravity: float = 9.81,
+    acc_bias_prior: tuple[ArrayLike, ArrayLike] | None = None,
+    latitude: float | None = None,
+    heading: float | None = None,
+    still_check: bool = True,
+) -> dict[str, Any]:
+    """Single-attitude static calibration (Gauss-Newton, as ``preint calibrate`` without
+    --poses at one attitude): gyro bias and roll/pitch on the longest still interval (the whole
+    input with ``still_check=False``). World z up, gravity (0, 0, −gravity) m/s².
+
+    Returns a dict: ``gyro_bias``, ``gyro_bias_std`` float64[3] [rad/s, sensor frame];
+    ``acc_bias``, ``acc_bias_std`` float64[3] [m/s²] only with ``acc_bias_prior=(mean, std)``,
+    else None (not separable from tilt; ``acc_bias_note`` says so); ``roll``, ``pitch``,
+    ``roll_std``, ``pitch_std`` [rad], ``roll_pitch_cov`` 2×2, ``up_body`` float64[3] (unit up
+    in sensor axes), ``R_wb`` 3×3 (yaw 0), ``unobservable``; ``measured_gyro_density`` /
+    ``measured_acc_density`` float64[3] [rad/s/√Hz, m/s²/√Hz]; ``chi2``, ``dof``,
+    ``iterations``; ``interval`` (the still interval used), ``still_s``, ``recording_s``.
+    ``latitude`` [deg] removes the Earth rate's vertical part from b_g (the whole of it with
+    ``heading`` [deg, body x clockwise from north]). Standard deviations are predicted from
+    ``noise`` (default EuRoC ADIS16448); chi2/dof ≈ 1 when the densities are right.
+
+    Raises CalibrationError: kind ``NotStatic`` when no still interval exists (moving data),
+    ``TooFew``, ``NonFinite``, ``NotIncreasing``, ``Solver``.
+    """
+
+def calibrate_multi_pose(
+    t_ns: I64,
+    gyro: F64,
+    acc: F64,
+    noise: Noise | str | os.PathLike[str] | None = None,
+    *,
+    gravity: float = 9.81,
+) -> dict[str, Any]:
+    """Multi-position calibration (Tedaldi, Pretto, Menegatti, ICRA 2014): still intervals at
+    ≥ 3 attitudes linked by gyro preintegration → both biases, the attitudes, and scale factors
+    and misalignments when BIC supports them (the bias random walk marginalised).
+
+    Returns a dict: ``model`` (``multi-pose/<name>``), ``reason``, ``gyro_bias``,
+    ``gyro_bias_std`` [rad/s], ``acc_bias``, ``acc_bias_std`` [m/s²] float64[3] (sensor frame, at
+    ``bias_reference_time_ns``); ``acc_scale``, ``acc_misalignment``, ``gyro_scale`` float64[3]
+    and ``gyro_misalignment`` float64[6] with their ``_std`` (None when the model lacks them),
+    ``acc_scale_matrix`` / ``gyro_scale_matrix`` 3×3; ``intervals``, ``R_wb`` float64[K, 3, 3];
+    ``model_selection`` [{model, chi2, params, residuals, bic, identifiable, converged}],
+    ``dof``, ``iterations``, ``random_walk_marginalised``.
+
+    Raises CalibrationError (kind ``TooFew`` with fewer than 3 still intervals, ...).
+    """
+
+def calibrate_file(
+    path: str | os.PathLike[str] | None = None,
+    *,
+    gyro: str | os.PathLike[str] | None = None,
+    accel: str | os.PathLike[str] | None = None,
+    format: str | None = None,
+    columns: str | None = None,
+    delimiter: str | None = None,
+    time_unit: str | None = None,
+    gyro_unit: str | None = None,
+    accel_unit: str | None = None,
+    topic: str | None = None,
+    gyro_topic: str | None = None,
+    accel_topic: str | None = None,
+    stamp: str | None = None,
+    check_units: bool = True,
+    noise: str | os.PathLike[str] | None = None,
+    poses: str | os.PathLike[str] | None = None,
+    gravity: float = 9.81,
+    from_ns: int | None = None,
+    to_ns: int | None = None,
+    pose_rot_std: float = 0.0,
+    pose_pos_std: float = 0.0,
+    latitude: float | None = None,
+    heading: float | None = None,
+) -> dict[str, Any]:
+    """``preint calibrate --json`` on a recording, as a dict: the model is chosen as the
+    command does (known poses with ``poses``, a EuRoC ground-truth file; multi-position with
+    ≥ 3 distinct still attitudes; otherwise single-attitude static on the longest still
+    interval), ``model`` names it. ``noise``: a Kalibr imu.yaml (default EuRoC figures).
+    Raises CalibrationError (kind ``Failed``) when nothing can be answered, e.g. no still
+    interval; InputError for a bad file."""
+
+def advise(
+    t_ns: I64,
+    gyro: F64,
+    acc: F64,
+    noise: Noise | str | os.PathLike[str],
+    *,
+    window: float = 1.0,
+    fraction: float = 0.1,
+) -> dict[str, Any]:
+    """``preint advise`` on arrays: the cheapest scheme and lowest rate whose discretisation
+    error stays below ``fraction`` × the noise σ on ``window``-second preintegrations, with the
+    noise separated from the motion by a zero-phase low-pass (gravity 9.81 m/s²).
+
+    Returns the command's JSON as a dict: ``recommended_scheme`` (euler, midpoint, hermite4)
+    and ``recommended_rate`` [Hz] (None when no candidate is acceptable), ``candidates``
+    [{scheme, rate, decimation, disc_err {rot_rad, vel_m_s, pos_m}, noise_sigma {...},
+    cost_ns_per_s (measured on this machine), acceptable}], ``denoise_cutoff_hz`` {gyro, acc},
+    ``fraction``, ``window_s``, ``samples``, ``method``. Raises CalibrationError (gap, too short
+    a recording), ShapeError (bad window/fraction).
+    """
+
+def advise_file(
+    path: str | os.PathLike[str] | None = None,
+    *,
+    noise: str | os.PathLike[str],
+    gyro: str | os.PathLike[str] | None = None,
+    accel: str | os.PathLike[str] | None = None,
+    format: str | None = None,
+    columns: str | None = None,
+    delimiter: str | None = None,
+    time_unit: str | None = None,
+    gyro_unit: str | None = None,
+    accel_unit: str | None = None,
+    topic: str | None = None,
+    gyro_topic: str | None = None,
+    accel_topic: str | None = None,
+    stamp: str | None = None,
+    check_units: bool = True,
+    window: float = 1.0,
+    fraction: float = 0.1,
+    from_ns: int | None = None,
+    to_ns: int | None = None,
+) -> dict[str, Any]:
+    """``preint advise --json`` on a recording (samples with ``from_ns ≤ t ≤ to_ns``), as a
+    dict (keys as :func:`advise`); ``noise`` a Kalibr imu.yaml."""

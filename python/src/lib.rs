@@ -2,9 +2,13 @@
 //! `preint` re-exports it). One file per area: parameters, preintegration, the measurement,
 //! factors and prediction, readers, Allan variance and calibration.
 
+mod advise;
+mod allan;
+mod calib;
 mod convert;
 mod errors;
 mod factor;
+mod io;
 mod measurement;
 mod navstate;
 mod params;
@@ -33,6 +37,21 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(navstate::predict, m)?)?;
     m.add_class::<factor::PyImuFactor>()?;
     m.add_class::<factor::PyCombinedImuFactor>()?;
+    // io and calibration: readers, Allan variance, calibration, advise
+    m.add_function(wrap_pyfunction!(io::read_imu, m)?)?;
+    m.add_function(wrap_pyfunction!(io::read_groundtruth, m)?)?;
+    m.add_function(wrap_pyfunction!(io::audit, m)?)?;
+    m.add_function(wrap_pyfunction!(io::read_kalibr_yaml, m)?)?;
+    m.add_function(wrap_pyfunction!(io::write_kalibr_yaml, m)?)?;
+    m.add_function(wrap_pyfunction!(io::write_euroc_imu, m)?)?;
+    m.add_function(wrap_pyfunction!(allan::allan_variance, m)?)?;
+    m.add_function(wrap_pyfunction!(allan::allan_variance_file, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::detect_still_intervals_py, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::calibrate_static_py, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::calibrate_multi_pose_py, m)?)?;
+    m.add_function(wrap_pyfunction!(calib::calibrate_file, m)?)?;
+    m.add_function(wrap_pyfunction!(advise::advise_py, m)?)?;
+    m.add_function(wrap_pyfunction!(advise::advise_file, m)?)?;
     m.add(
         "SCHEMES",
         preint::Scheme::ALL

@@ -1,0 +1,128 @@
+//! `preint advise` from Python: the cheapest scheme and lowest rate whose discretisation error
+//! stays below a fraction of the noise σ, from numpy arrays or a recording. The computation and
+//! the result are the command line's (`preint_cli::analysis::{denoise, advise}`,
+//! `preint_cli::commands::advise::to_json`), so the dict equals `preint advise --json`.
+
+use crate::calib::{check, noise_arg};
+use crate::convert::samples;
+use crate::errors::Class;
+use crate::io::{ReadArgs, cli_err, json_py};
+use preint_cli::analysis::advise::{evaluate, recommend};
+use preint_cli::analysis::denoise::denoise;
+use preint_cli::commands::advise;
+use pyo3::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// advise(t_ns, gyro, acc, noise, *, window=1.0, fraction=0.1)
+///
+/// `preint advise` on arrays (docs in `_native.pyi`).
+#[pyfunction]
+#[pyo3(name = "advise", signature = (t_ns, gyro, acc, noise, *, window=1.0, fraction=0.1))]
+pub(crate) fn advise_py<'py>(
+    py: Python<'py>,
+    t_ns: &Bound<'py, PyAny>,
+    gyro: &Bound<'py, PyAny>,
+    acc: &Bound<'py, PyAny>,
+    noise: &Bound<'py, PyAny>,
+    window: f64,
+    fraction: f64,
+) -> PyResult<Bound<'py, PyAny>> {
+    let noise = noise_arg(Some(noise), false)?;
+    let s = samples(t_ns, gyro, acc)?;
+    check(&s)?;
+    let label = Path::new("samples");
+    let args = advise::Args {
+        input: ReadArgs {
+            path: Some(label.into()),
+            check_units: false,
+            ..Default::default()
+        }
+        .imu_args()?,
+        noise: PathBuf::from("(given)"),
+        window,
+        fraction,
+        from: None,
+        to: None,
+    };
+    let json = py
+        .detach(|| {
+            preint_cli::checks::positive("fraction", fraction)?;
+            preint_cli::checks::no_gaps(&s, label, preint::params::DEFAULT_MAX_GAP_NS)?;
+            let (signal, cutoffs) = denoise(&s, noise.gyro_noise_density, noise.acc_noise_density);
+            let candidates = evaluate(&signal, &noise, 9.81, window, fraction)?;
+            let recommended = recommend(&candidates)
+                .and_then(|r| candidates.iter().position(|c| std::ptr::eq(c, r)));
+            let a = advise::Advice {
+                args,
+                samples: s.len(),
+                cutoffs,
+                candidates,
+                recommended,
+            };
+            Ok(advise::to_json(&a))
+        })
+        .map_err(|e| cli_err(e, Class::Calibration))?;
+    json_py(py, &json)
+}
+
+/// advise_file(path=None, *, ..., noise, window=1.0, fraction=0.1, from_ns=None, to_ns=None)
+///
+/// `preint advise --json` on a recording (docs in `_native.pyi`).
+#[pyfunction]
+#[pyo3(signature = (path=None, *, noise, gyro=None, accel=None, format=None, columns=None,
+    delimiter=None, time_unit=None, gyro_unit=None, accel_unit=None, topic=None,
+    gyro_topic=None, accel_topic=None, stamp=None, check_units=true, window=1.0,
+    fraction=0.1, from_ns=None, to_ns=None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn advise_file<'py>(
+    py: Python<'py>,
+    path: Option<PathBuf>,
+    noise: PathBuf,
+    gyro: Option<PathBuf>,
+    accel: Option<PathBuf>,
+    format: Option<String>,
+    columns: Option<String>,
+    delimiter: Option<String>,
+    time_unit: Option<String>,
+    gyro_unit: Option<String>,
+    accel_unit: Option<String>,
+    topic: Option<String>,
+    gyro_topic: Option<String>,
+    accel_topic: Option<String>,
+    stamp: Option<String>,
+    check_units: bool,
+    window: f64,
+    fraction: f64,
+    from_ns: Option<i64>,
+    to_ns: Option<i64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let input = ReadArgs {
+        path,
+        gyro,
+        accel,
+        format,
+        columns,
+        delimiter,
+        time_unit,
+        gyro_unit,
+        accel_unit,
+        topic,
+        gyro_topic,
+        accel_topic,
+        stamp,
+        check_units,
+    }
+    .imu_args()?;
+    let args = advise::Args {
+        input,
+        noise,
+        window,
+        fraction,
+        from: from_ns,
+        to: to_ns,
+    };
+    let json = py
+        .detach(|| advise::run(&args).map(|o| o.json))
+        .map_err(|e| cli_err(e, Class::Calibration))?;
+    json_py(py, &json)
+}

@@ -1,0 +1,284 @@
+"""Allan variance, calibration and advice from Python, checked against independent numpy
+computations on synthetic data of known noise and bias, and against the recordings' published
+figures; refusals raise CalibrationError with the Rust message.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import preint
+
+DATA = Path(__file__).resolve().parents[2] / "tests" / "data"
+EUROC = DATA / "euroc" / "V1_01_easy_imu0.csv"
+EUROC_NOISE = DATA / "euroc" / "imu.yaml"
+BROAD = DATA / "broad" / "broad_10_undisturbed_slow_translation_A_30s_45s.csv"
+ADIS = DATA / "adis16405" / "adis16405_run1_first3600s_10Hz_blockmean.csv"
+SIGMA_G, SIGMA_A = 1.6968e-4, 2.0e-3  # EuRoC densities (tests/data/euroc/imu.yaml)
+
+
+def stamps(n: int, dt: float) -> np.ndarray:
+    return (np.arange(n) * round(dt * 1e9)).astype(np.int64)
+
+
+def white(seed: int, n: int, dt: float, densities) -> np.ndarray:
+    """Discrete white noise of continuous densities `densities` (σ = N/√Δt per sample)."""
+    return np.random.default_rng(seed).standard_normal((n, len(densities))) * (
+        np.asarray(densities) / math.sqrt(dt)
+    )
+
+
+# --- Allan variance ---------------------------------------------------------------------------
+
+
+def overlapping_adev(y: np.ndarray, m: int) -> float:
+    """IEEE 952 overlapping Allan deviation at τ = mΔt from the cumulative sum (numpy)."""
+    theta = np.concatenate([[0.0], np.cumsum(y - y.mean())])
+    d = theta[2 * m:] - 2 * theta[m:-m] + theta[:-2 * m]
+    return math.sqrt(np.sum(d * d) / (2.0 * m * m * d.size))
+
+
+def test_allan_of_white_noise_recovers_the_density():
+    dt, n = 0.01, 60_000  # 10 min at 100 Hz
+    dens = np.array([1e-3, 1e-3, 1e-3, 2e-2, 2e-2, 2e-2])
+    x = white(7, n, dt, dens)
+    r = preint.allan_variance(stamps(n, dt), x[:, :3], x[:, 3:] + [0.0, 0.0, 9.81])
+    # N from ~60 000 samples: relative σ ≈ 1 % (white_density_err); 5 % is > 4σ.
+    np.testing.assert_allclose(r["white_density"], dens, rtol=0.05)
+    assert np.all(np.abs(r["white_density"] - dens) < 4 * r["white_density_err"])
+    assert not r["white_density_is_bound"].any()
+    # The curve itself against an independent numpy estimator at τ = Δt and τ = 10Δt.
+    for m in (1, 10):
+        k = int(np.argmin(np.abs(r["tau"] - m * dt)))
+        assert r["tau"][k] == pytest.approx(m * dt)
+        for c in range(6):
+            assert r["adev"][k, c] == pytest.approx(overlapping_adev(x[:, c], m), rel=1e-9)
+    assert r["adev"].shape == (r["tau"].size, 6) and r["adev_err"].shape == r["adev"].shape
+    # Kalibr figures: the maximum over the axes.
+    assert r["noise"].gyro_noise_density == pytest.approx(r["white_density"][:3].max())
+    assert r["noise"].acc_noise_density == pytest.approx(r["white_density"][3:].max())
+    assert r["noise"].update_rate_hz == pytest.approx(100.0)
+
+
+def test_allan_random_walk_within_its_stated_error():
+    dt, n = 0.01, 360_000  # 1 h at 100 Hz, white noise + bias random walk
+    dens = np.array([1e-3] * 3 + [2e-2] * 3)
+    walk = np.array([2e-5] * 3 + [4e-4] * 3)
+    rng = np.random.default_rng(0)
+    x = rng.standard_normal((n, 6)) * dens / math.sqrt(dt)
+    x += np.cumsum(rng.standard_normal((n, 6)) * walk * math.sqrt(dt), axis=0)
+    r = preint.allan_variance(stamps(n, dt), x[:, :3], x[:, 3:] + [0.0, 0.0, 9.81])
+    fitted = ~r["random_walk_is_bound"]
+    assert fitted.sum() >= 2
+    err = np.abs(r["random_walk"] - walk)[fitted]
+    assert np.all(err < 3 * r["random_walk_err"][fitted])
+
+
+def test_allan_file_matches_the_published_adis16405_figure_and_the_arrays():
+    r = preint.allan_variance_file(ADIS)
+    # The curators' figure (tests/data/README.md): gyro σ(1 s) ≈ 0.041 deg/s.
+    k = int(np.argmin(np.abs(r["tau"] - 1.0)))
+    assert r["tau"][k] == pytest.approx(1.0)
+    np.testing.assert_allclose(np.rad2deg(r["adev"][k, :3]), 0.041, rtol=0.15)
+    assert r["stillness"]["still_fraction"] == 1.0
+    d = preint.read_imu(ADIS)
+    a = preint.allan_variance(d["t_ns"], d["gyro"], d["acc"])
+    np.testing.assert_array_equal(a["adev"], r["adev"])
+    np.testing.assert_array_equal(a["white_density"], r["white_density"])
+
+
+def test_allan_refuses_a_moving_recording():
+    d = preint.read_imu(BROAD)  # at rest until 36.8 s, then moving
+    with pytest.raises(preint.CalibrationError, match="not static") as e:
+        preint.allan_variance(d["t_ns"], d["gyro"], d["acc"])
+    assert e.value.kind == "NotStatic"
+    with pytest.raises(preint.CalibrationError, match="not static"):
+        preint.allan_variance_file(BROAD)
+    r = preint.allan_variance(d["t_ns"], d["gyro"], d["acc"], check_still=False)
+    assert r["stillness"]["still_fraction"] < 0.9
+
+
+def test_allan_refuses_a_gap():
+    dt, n = 0.01, 2000
+    x = white(1, n, dt, [1e-3] * 6)
+    t = stamps(n, dt)
+    t[1000:] += 50_000_000  # a 50 ms gap
+    with pytest.raises(preint.CalibrationError) as e:
+        preint.allan_variance(t, x[:, :3], x[:, 3:] + [0, 0, 9.81], check_still=False)
+    assert e.value.kind == "Timestamps" and "interval 999" in str(e.value)
+
+
+# --- calibration --------------------------------------------------------------------------------
+
+
+def expm(v: np.ndarray) -> np.ndarray:
+    """Rodrigues' formula."""
+    th = float(np.linalg.norm(v))
+    if th < 1e-15:
+        return np.eye(3)
+    k = v / th
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + math.sin(th) * K + (1 - math.cos(th)) * K @ K
+
+
+def static_recording(seed, bg, ba, r_wb, seconds=20.0, rate=200.0, g=9.81):
+    dt = 1.0 / rate
+    n = int(seconds * rate)
+    noise = white(seed, n, dt, [SIGMA_G] * 3 + [SIGMA_A] * 3)
+    gyro = bg + noise[:, :3]
+    acc = r_wb.T @ np.array([0.0, 0.0, g]) + ba + noise[:, 3:]
+    return stamps(n, dt), gyro, acc
+
+
+def test_static_calibration_recovers_the_gyro_bias_with_the_predicted_sigma():
+    bg = np.array([0.01, -0.02, 0.005])
+    r_wb = expm(np.array([0.1, -0.05, 0.3]))
+    t, g, a = static_recording(3, bg, np.zeros(3), r_wb)
+    noise = preint.Noise(SIGMA_G, 0.0, SIGMA_A, 0.0, 200.0)
+    c = preint.calibrate_static(t, g, a, noise)
+    iv = c["interval"]
+    # σ of the mean of white noise over the interval: σ_g / √T (T = samples · Δt).
+    T = (iv["end"] - iv["start"]) * 0.005
+    sd = SIGMA_G / math.sqrt(T)
+    np.testing.assert_allclose(c["gyro_bias_std"], sd, rtol=0.02)
+    assert np.all(np.abs(c["gyro_bias"] - bg) < 4 * sd)
+    # Up direction: the mean specific force's, σ ≈ σ_a/√T / g per axis.
+    up = r_wb.T @ np.array([0.0, 0.0, 1.0])
+    assert np.linalg.norm(c["up_body"] - up) < 4 * math.sqrt(3) * SIGMA_A / math.sqrt(T) / 9.81
+    assert c["acc_bias"] is None and "acc_bias" in c["unobservable"]
+    assert iv["duration_s"] > 15.0
+
+
+def test_static_calibration_of_a_file_equals_the_arrays(tmp_path):
+    t, g, a = static_recording(4, np.array([0.002, 0.001, -0.003]), np.zeros(3), np.eye(3))
+    p = tmp_path / "static.csv"
+    rows = [",".join([str(int(t[k]))] + [repr(float(v)) for v in (*g[k], *a[k])])
+            for k in range(t.size)]
+    p.write_text("#timestamp [ns],w_x,w_y,w_z,a_x,a_y,a_z\n" + "\n".join(rows) + "\n")
+    f = preint.calibrate_file(p)  # default noise: EuRoC, as the arrays below
+    c = preint.calibrate_static(t, g, a)
+    assert f["model"] == "static-single-attitude"
+    np.testing.assert_array_equal(np.array(f["gyro_bias"]), c["gyro_bias"])
+    np.testing.assert_array_equal(np.array(f["gyro_bias_std"]), c["gyro_bias_std"])
+    assert f["interval_ns"] == [c["interval"]["t_start_ns"], c["interval"]["t_end_ns"]]
+
+
+def test_latitude_removes_the_vertical_earth_rate():
+    t, g, a = static_recording(8, np.zeros(3), np.zeros(3), np.eye(3), seconds=5.0)
+    c0 = preint.calibrate_static(t, g, a)
+    c = preint.calibrate_static(t, g, a, latitude=47.4)
+    omega_e = 7.292115e-5  # rad/s (WGS-84)
+    # Ω_E sin φ along the measured up direction (≈ +z for this level sensor) comes off b_g.
+    assert np.linalg.norm(c0["up_body"] - [0.0, 0.0, 1.0]) < 1e-3
+    np.testing.assert_allclose(c0["gyro_bias"] - c["gyro_bias"],
+                               omega_e * math.sin(math.radians(47.4)) * c0["up_body"],
+                               rtol=0, atol=omega_e * 1e-6)
+    with pytest.raises(preint.ShapeError, match="latitude"):
+        preint.calibrate_static(t, g, a, latitude=95.0)
+    with pytest.raises(preint.ShapeError, match="heading needs latitude"):
+        preint.calibrate_static(t, g, a, heading=10.0)
+
+
+def test_calibration_refuses_moving_data():
+    d = preint.read_imu(BROAD)
+    moving = d["t_ns"] >= 37_000_000_000
+    with pytest.raises(preint.CalibrationError, match="no still interval") as e:
+        preint.calibrate_static(d["t_ns"][moving], d["gyro"][moving], d["acc"][moving])
+    assert e.value.kind == "NotStatic"
+    with pytest.raises(preint.CalibrationError, match="no still interval") as e:
+        preint.calibrate_file(BROAD, from_ns=37_000_000_000)
+    assert str(BROAD) in str(e.value)
+    # One attitude is not a multi-position calibration.
+    t, g, a = static_recording(5, np.zeros(3), np.zeros(3), np.eye(3))
+    with pytest.raises(preint.CalibrationError, match="too few still intervals") as e:
+        preint.calibrate_multi_pose(t, g, a)
+    assert e.value.kind == "TooFew"
+
+
+def test_calibration_rejects_bad_samples():
+    t, g, a = static_recording(6, np.zeros(3), np.zeros(3), np.eye(3), seconds=2.0)
+    g[100, 1] = np.nan
+    with pytest.raises(preint.CalibrationError, match="sample 100") as e:
+        preint.calibrate_static(t, g, a)
+    assert e.value.kind == "NonFinite"
+    with pytest.raises(preint.ShapeError):
+        preint.calibrate_static(t.astype(np.float64), g, a)
+
+
+def multi_pose_recording(seed, bg, ba, rate=200.0, still_s=6.0, turn_s=2.0, g=9.81):
+    """Seven still attitudes linked by 90° turns at constant rate about axes perpendicular to
+    gravity (a turn about the vertical would look still)."""
+    dt = 1.0 / rate
+    r = np.eye(3)
+    gyro, acc = [], []
+
+    def still(r):
+        k = int(still_s * rate)
+        gyro.extend([np.zeros(3)] * k)
+        acc.extend([r.T @ np.array([0.0, 0.0, g])] * k)
+
+    still(r)
+    for h in ([1, 0, 0], [0, 1, 0], [1, 1, 0], [0, 1, 1], [1, 0, 1], [1, -1, 0]):
+        k = int(turn_s * rate)
+        e = np.cross(r.T @ np.array([0.0, 0.0, 1.0]), np.asarray(h, float))
+        w = e / np.linalg.norm(e) * (math.pi / 2) / turn_s
+        for i in range(k):
+            gyro.append(w.copy())
+            acc.append((r @ expm(w * i * dt)).T @ np.array([0.0, 0.0, g]))
+        r = r @ expm(w * k * dt)
+        still(r)
+    n = len(gyro)
+    noise = white(seed, n, dt, [SIGMA_G] * 3 + [SIGMA_A] * 3)
+    return stamps(n, dt), np.array(gyro) + bg + noise[:, :3], np.array(acc) + ba + noise[:, 3:]
+
+
+def test_multi_pose_calibration_recovers_both_biases():
+    bg = np.array([0.003, -0.002, 0.004])
+    ba = np.array([0.05, -0.04, 0.08])
+    t, g, a = multi_pose_recording(0, bg, ba)
+    c = preint.calibrate_multi_pose(t, g, a, EUROC_NOISE)
+    assert len(c["intervals"]) == 7
+    assert c["model"] == "multi-pose/bias-only"  # the truth has no scale errors
+    assert np.all(np.abs(c["gyro_bias"] - bg) < 4 * c["gyro_bias_std"])
+    assert np.all(np.abs(c["acc_bias"] - ba) < 4 * c["acc_bias_std"])
+    assert c["R_wb"].shape == (7, 3, 3)
+
+
+# --- advise -------------------------------------------------------------------------------------
+
+
+def test_advise_on_arrays_equals_the_command_and_predicts_the_noise_sigma():
+    d = preint.read_imu(EUROC)
+    end = int(d["t_ns"][0]) + 4_000_000_000
+    m = d["t_ns"] <= end
+    a = preint.advise(d["t_ns"][m], d["gyro"][m], d["acc"][m], EUROC_NOISE, window=1.0)
+    f = preint.advise_file(EUROC, noise=EUROC_NOISE, to_ns=end, window=1.0)
+    assert a["samples"] == f["samples"] == int(m.sum())
+    assert len(a["candidates"]) == len(f["candidates"]) > 0
+    for x, y in zip(a["candidates"], f["candidates"]):
+        assert (x["scheme"], x["rate"]) == (y["scheme"], y["rate"])
+        assert x["disc_err"] == y["disc_err"] and x["noise_sigma"] == y["noise_sigma"]
+        # Rotation σ over a window of T ≥ 1 s of white gyro noise (the window ends at the first
+        # sample at or after 1 s, T ≤ 1 s + 1/rate): √trace = σ_g √(3 T) for Euler's
+        # propagation; the other schemes weight the samples differently (within a few %).
+        ratio = x["noise_sigma"]["rot_rad"] / (SIGMA_G * math.sqrt(3.0))
+        hi = math.sqrt(1.0 + 1.0 / x["rate"])
+        if x["scheme"] == "euler":
+            assert 1.0 - 1e-6 <= ratio <= hi + 1e-6
+        else:
+            assert 0.95 <= ratio <= hi * 1.05
+    assert a["recommended_scheme"] in (None, "euler", "midpoint", "hermite4")
+
+
+def test_advise_refusals_are_typed():
+    d = preint.read_imu(EUROC)
+    m = slice(0, 100)  # 0.5 s: shorter than the window
+    with pytest.raises(preint.ShapeError):
+        preint.advise(d["t_ns"][m], d["gyro"][m], d["acc"][m], EUROC_NOISE, window=1.0)
+    with pytest.raises(preint.ShapeError):
+        preint.advise(d["t_ns"][:800], d["gyro"][:800], d["acc"][:800], EUROC_NOISE,
+                      fraction=-1.0)
