@@ -10,11 +10,16 @@ state (preint/tests/merge.rs: deltas to round-off, covariances to 1e-10 relative
 from __future__ import annotations
 
 import pickle
+import re
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 
 import preint
+
+from conftest import REPO
 
 SCHEMES = ("euler", "midpoint", "hermite4")
 T0 = 1_403_636_579_758_555_392  # a EuRoC-like start time [ns]
@@ -402,3 +407,28 @@ def test_constant_rate_deltas_converge_to_the_closed_form_at_the_schemes_order(s
     assert np.all(np.abs(np.log2(ratio) - order) < 0.33), f"{scheme}: ratios {ratio}"
     bound = {"euler": 0.1, "midpoint": 1e-4, "hermite4": 1e-9}[scheme]
     assert np.all(e200[1:] < bound) and np.all(e200[1:] > 0.0), f"{scheme}: {e200}"
+
+
+# ---------------------------------------------------------------- the example script
+
+
+def test_euroc_example_runs_and_its_median_errors_are_within_the_datas_limits():
+    out = subprocess.run([sys.executable, str(REPO / "python" / "examples" / "euroc.py")], capture_output=True,
+                         text=True, timeout=600)
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.splitlines()
+    head = re.fullmatch(r"EuRoC V1_01_easy: 29120 IMU samples, (\d+) windows of 1 s, scheme midpoint", lines[0])
+    assert head, lines[0]
+    rows = [ln.split() for ln in lines[2:-1]]
+    assert len(rows) == int(head.group(1)) >= 140  # 145 s of ground truth
+    errors = np.array([[float(x) for x in r[2:]] for r in rows])
+    assert [int(r[0]) for r in rows] == list(range(len(rows)))
+    assert np.allclose([float(r[1]) for r in rows], np.arange(len(rows)), atol=1e-3)  # 1 s apart
+    med = re.fullmatch(r"median rotation \[deg\] (\S+) velocity \[m/s\] (\S+) position \[m\] (\S+)", lines[-1])
+    assert med, lines[-1]
+    medians = np.array([float(x) for x in med.groups()])
+    assert np.allclose(medians, np.median(errors, axis=0), atol=1e-4)
+    # The data's limits (tests/data/README.md, midpoint, 1 s windows from the ground truth):
+    # 0.10°, 0.045 m/s, 0.024 m; bounds with margin.
+    assert medians[0] < 0.15 and medians[1] < 0.06 and medians[2] < 0.035, medians
+    assert np.all(errors[:, 0] < 1.0) and np.all(errors[:, 1] < 0.3) and np.all(errors[:, 2] < 0.2)
