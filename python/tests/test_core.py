@@ -287,6 +287,46 @@ def test_gap_names_the_sample_and_the_limit():
         assert "405000000" in str(e) and "250000000" in str(e)
 
 
+def test_errors_inside_a_window_of_a_long_stream_name_the_sample_of_the_whole_arrays():
+    t, g, a = clean(10_000)
+    p = params("hermite4")
+    g[5_550, 0] = np.nan
+    with pytest.raises(preint.PreintError, match="sample 5550 "):
+        preint.preintegrate(p, t, g, a, int(t[5_000]) + 1, int(t[6_000]) - 1)
+    keys = np.array([t[10], t[3_000], t[5_500], t[9_000]], dtype=np.int64)
+    with pytest.raises(preint.PreintError, match="sample 5550 "):
+        preint.preintegrate_windows(p, t, g, a, keys)
+    # A defect far outside a window does not fail it (the stream is checked around the window).
+    m = preint.preintegrate(p, t, g, a, int(t[100]), int(t[200]))
+    assert m.t_j_ns == t[200]
+    t2 = t.copy()
+    t2[7_001] = t2[7_000]
+    with pytest.raises(preint.PreintError, match="sample 7001 ") as e:
+        preint.preintegrate(params("midpoint"), t2, g, a, int(t[6_500]), int(t[7_500]))
+    assert e.value.kind == "DuplicateTimestamp"
+    # integrate_arrays converts in chunks: the index still counts from the first sample, and the
+    # samples before the bad one are integrated.
+    x = preint.Preintegrator(params("euler"))
+    with pytest.raises(preint.PreintError, match="sample 5550 "):
+        x.integrate_arrays(t, g, a)
+    assert len(x) == 5_550
+
+
+def test_non_contiguous_arrays_give_the_same_result():
+    t, g, a = stream(500, seed=7)
+    p = params("hermite4")
+    wide_t = np.repeat(t, 2)[::2]  # a strided view of the same values
+    wide_g, wide_a = np.hstack([g, a])[:, :3], np.hstack([a, g])[:, :3]  # rows with a stride of 6
+    assert not (wide_t.flags.c_contiguous or wide_g.flags.c_contiguous or wide_a.flags.c_contiguous)
+    x = preint.preintegrate(p, wide_t, wide_g, wide_a, int(t[3]) + 5, int(t[490]))
+    assert_bitwise_equal(x, preint.preintegrate(p, t, g, a, int(t[3]) + 5, int(t[490])), "strided")
+    y = preint.Preintegrator(p)
+    y.integrate_arrays(wide_t, wide_g, wide_a)
+    z = preint.Preintegrator(p)
+    z.integrate_arrays(t, g, a)
+    assert_bitwise_equal(y.finish(), z.finish(), "strided integrate_arrays")
+
+
 def test_a_preintegrator_keeps_its_state_after_a_rejected_sample():
     t, g, a = clean()
     p = params("euler")
