@@ -176,8 +176,8 @@ def main() -> None:
         ("1 000 windows × 200 samples, one call", "py_windows", "rust_windows"),
     ]
     print(f"{'case':<56} {'Python':>8} {'Rust':>8} {'ratio':>6}")
-    for label, p, r in rows:
-        print(f"{label:<56} {med[p]:>8.1f} {med[r]:>8.1f} {med[p] / med[r]:>6.3f}")
+    for label, py_key, rust_key in rows:
+        print(f"{label:<56} {med[py_key]:>8.1f} {med[rust_key]:>8.1f} {med[py_key] / med[rust_key]:>6.3f}")
     for name, ours, label in (("gtsam_tangent", "py_one_call", "midpoint"), ("gtsam_manifold", "py_euler_one_call", "euler")):
         if name in gt:
             print(f"GTSAM {name[6:]:<8} per-sample Python loop: {gt[name]:8.1f} ns/sample = "
