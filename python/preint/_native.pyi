@@ -9,12 +9,363 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-F64 = npt.NDArray[np.float64]
-I64 = npt.NDArray[np.int64]
+_F64 = npt.NDArray[np.float64]
+_I64 = npt.NDArray[np.int64]
 
 # --- core: parameters, preintegration, measurement ---
 
-# --- factor: NavState, prediction, factors, deskew ---
+from collections.abc import Sequence
+from typing import ClassVar, Literal, final
+
+_Vec3Like = Sequence[float] | npt.NDArray[np.floating]
+"""Three numbers: a list, tuple or numpy array."""
+_Mat3Like = Sequence[Sequence[float]] | npt.NDArray[np.floating]
+"""A 3×3 matrix: nested sequences (rows) or a 2-D numpy array."""
+_Cov3Like = float | _Mat3Like
+"""A 3×3 covariance, or a number s meaning s·I."""
+_RotationLike = Sequence[float] | _Mat3Like
+"""A 3×3 rotation matrix or a unit quaternion (w, x, y, z)."""
+_SchemeName = Literal["euler", "midpoint", "hermite4"]
+_LevelName = Literal["deltas", "covariance", "combined"]
+_CoriolisName = Literal["exact", "first", "second"]
+
+# The other sections extend it with `__all__ += [...]` (the module's runtime __all__ lists
+# every class and function it registers).
+__all__ = [
+    "SCHEMES",
+    "ImuBias",
+    "Noise",
+    "Params",
+    "PreintegratedImu",
+    "Preintegrator",
+    "merge",
+    "preintegrate",
+    "preintegrate_windows",
+]
+
+SCHEMES: list[str]
+"""The scheme names: ["euler", "midpoint", "hermite4"]."""
+
+@final
+class Noise:
+    """Kalibr-style continuous-time IMU noise densities."""
+
+    def __new__(
+        cls,
+        gyro_noise_density: float,
+        gyro_random_walk: float,
+        acc_noise_density: float,
+        acc_random_walk: float,
+        update_rate_hz: float = 200.0,
+    ) -> Noise: ...
+    @staticmethod
+    def euroc() -> Noise:
+        """The EuRoC MAV dataset's ADIS16448 densities."""
+    @property
+    def gyro_noise_density(self) -> float:
+        """Gyro white-noise density [rad/s/√Hz]."""
+    @property
+    def gyro_random_walk(self) -> float:
+        """Gyro bias random walk [rad/s²/√Hz]."""
+    @property
+    def acc_noise_density(self) -> float:
+        """Accelerometer white-noise density [m/s²/√Hz]."""
+    @property
+    def acc_random_walk(self) -> float:
+        """Accelerometer bias random walk [m/s³/√Hz]."""
+    @property
+    def update_rate_hz(self) -> float:
+        """Sample rate [Hz]."""
+    def __eq__(self, value: object, /) -> bool: ...
+    __hash__: ClassVar[None]  # type: ignore[assignment]
+    def __reduce__(self) -> tuple[object, tuple[float, float, float, float, float]]: ...
+
+@final
+class ImuBias:
+    """A bias estimate: gyro [rad/s], accelerometer [m/s²], sensor frame; order [b_g, b_a]."""
+
+    def __new__(cls, gyro: _Vec3Like | None = None, acc: _Vec3Like | None = None) -> ImuBias: ...
+    @property
+    def gyro(self) -> _F64:
+        """Gyro bias [rad/s], shape (3,)."""
+    @property
+    def acc(self) -> _F64:
+        """Accelerometer bias [m/s²], shape (3,)."""
+    def vector(self) -> _F64:
+        """[b_g, b_a], shape (6,)."""
+    def __eq__(self, value: object, /) -> bool: ...
+    __hash__: ClassVar[None]  # type: ignore[assignment]
+    def __reduce__(self) -> tuple[object, tuple[list[float], list[float]]]: ...
+
+@final
+class Params:
+    """Preintegration parameters (Rust PreintParams); covariances continuous-time."""
+
+    def __new__(cls, noise: Noise | None = None, *, scheme: str = "midpoint", level: str = "combined") -> Params: ...
+    @property
+    def gravity(self) -> _F64:
+        """Gravity in the world frame [m/s²], shape (3,)."""
+    @gravity.setter
+    def gravity(self, v: _Vec3Like) -> None: ...
+    @property
+    def gyroscope_covariance(self) -> _F64:
+        """Gyro white-noise covariance [rad²/s], 3×3."""
+    @gyroscope_covariance.setter
+    def gyroscope_covariance(self, v: _Cov3Like) -> None: ...
+    @property
+    def accelerometer_covariance(self) -> _F64:
+        """Accelerometer white-noise covariance [m²/s³], 3×3."""
+    @accelerometer_covariance.setter
+    def accelerometer_covariance(self, v: _Cov3Like) -> None: ...
+    @property
+    def bias_gyro_covariance(self) -> _F64:
+        """Gyro bias random-walk covariance [rad²/s³], 3×3."""
+    @bias_gyro_covariance.setter
+    def bias_gyro_covariance(self, v: _Cov3Like) -> None: ...
+    @property
+    def bias_acc_covariance(self) -> _F64:
+        """Accelerometer bias random-walk covariance [m²/s⁵], 3×3."""
+    @bias_acc_covariance.setter
+    def bias_acc_covariance(self, v: _Cov3Like) -> None: ...
+    @property
+    def integration_covariance(self) -> _F64 | None:
+        """Integration covariance [m²/s³] added to Δp per unit time, 3×3, or None."""
+    @integration_covariance.setter
+    def integration_covariance(self, v: _Cov3Like | None) -> None: ...
+    @property
+    def scheme(self) -> _SchemeName:
+        """"euler", "midpoint" or "hermite4"."""
+    @scheme.setter
+    def scheme(self, v: str) -> None: ...
+    @property
+    def level(self) -> _LevelName:
+        """"deltas", "covariance" or "combined"."""
+    @level.setter
+    def level(self, v: str) -> None: ...
+    @property
+    def reintegrate_gyro_threshold(self) -> float:
+        """Gyro-bias change [rad/s] above which measurement_for_bias re-integrates."""
+    @reintegrate_gyro_threshold.setter
+    def reintegrate_gyro_threshold(self, v: float) -> None: ...
+    @property
+    def reintegrate_acc_threshold(self) -> float:
+        """Accelerometer-bias change [m/s²] above which measurement_for_bias re-integrates."""
+    @reintegrate_acc_threshold.setter
+    def reintegrate_acc_threshold(self, v: float) -> None: ...
+    @property
+    def max_gap_ns(self) -> int:
+        """Largest allowed gap between samples [ns]."""
+    @max_gap_ns.setter
+    def max_gap_ns(self, v: int) -> None: ...
+    @property
+    def keep_samples(self) -> bool:
+        """Whether a Preintegrator stores its samples (needed to re-integrate)."""
+    @keep_samples.setter
+    def keep_samples(self, v: bool) -> None: ...
+    @property
+    def body_p_sensor(self) -> tuple[_F64, _F64] | None:
+        """(R_bs 3×3, t_bs [m] in the body frame), or None."""
+    def set_body_p_sensor(self, rotation: _RotationLike | None, translation: _Vec3Like | None = None) -> None:
+        """Sets (or with None clears) the IMU's pose in the body frame."""
+    @property
+    def lever_arm(self) -> Literal["exact", "centripetal"]:
+        """"exact" or "centripetal" (GTSAM's)."""
+    @lever_arm.setter
+    def lever_arm(self, v: str) -> None: ...
+    @property
+    def omega_coriolis(self) -> _F64 | None:
+        """Navigation-frame rotation rate [rad/s], shape (3,), or None."""
+    @omega_coriolis.setter
+    def omega_coriolis(self, v: _Vec3Like | None) -> None: ...
+    @property
+    def coriolis(self) -> _CoriolisName:
+        """"exact", "first" or "second"."""
+    @coriolis.setter
+    def coriolis(self, v: str) -> None: ...
+    def validate(self) -> None:
+        """Raises PreintError if a parameter is invalid."""
+    def __eq__(self, value: object, /) -> bool: ...
+    __hash__: ClassVar[None]  # type: ignore[assignment]
+    def __reduce__(self) -> tuple[object, tuple[list[int]]]: ...
+    @staticmethod
+    def _from_state(state: bytes) -> Params: ...
+
+@final
+class PreintegratedImu:
+    """A preintegrated measurement between keyframes i and j; tangent order [dphi, dv, dp]."""
+
+    TANGENT_ORDER: ClassVar[tuple[str, str, str]]
+    TANGENT_ORDER_15: ClassVar[tuple[str, str, str, str, str]]
+    @property
+    def t_i_ns(self) -> int:
+        """Keyframe i time [ns]."""
+    @property
+    def t_j_ns(self) -> int:
+        """Keyframe j time [ns]."""
+    @property
+    def delta_t(self) -> float:
+        """t_j − t_i [s]."""
+    @property
+    def delta_R(self) -> _F64:
+        """ΔR_ij, 3×3 rotation (body j → body i)."""
+    @property
+    def delta_rotvec(self) -> _F64:
+        """Log(ΔR_ij) [rad], shape (3,)."""
+    @property
+    def delta_v(self) -> _F64:
+        """Δv_ij [m/s] in body frame i, gravity excluded, shape (3,)."""
+    @property
+    def delta_p(self) -> _F64:
+        """Δp_ij [m] in body frame i, gravity excluded, shape (3,)."""
+    @property
+    def cov(self) -> _F64:
+        """9×9 covariance of [dphi, dv, dp]."""
+    @property
+    def cov15(self) -> _F64:
+        """15×15 covariance of [dphi, dv, dp, dbg, dba]."""
+    def residual_cov15(self) -> _F64:
+        """15×15 covariance of the combined factor's residual (cov15, delta–bias blocks negated)."""
+    @property
+    def bias_jacobians(self) -> _F64:
+        """9×6: rows [dphi, dv, dp], columns [b_g, b_a]."""
+    @property
+    def bias_hat(self) -> ImuBias:
+        """The bias estimate the samples were integrated with."""
+    @property
+    def gravity(self) -> _F64:
+        """Gravity [m/s²] in the world frame, shape (3,)."""
+    @property
+    def omega_coriolis(self) -> _F64 | None:
+        """Navigation-frame rotation rate [rad/s], or None."""
+    @property
+    def coriolis(self) -> _CoriolisName:
+        """"exact", "first" or "second"."""
+    @property
+    def level(self) -> _LevelName:
+        """"deltas", "covariance" or "combined"."""
+    def corrected(self, bias: ImuBias) -> tuple[_F64, _F64, _F64]:
+        """First-order bias-corrected (ΔR 3×3, Δv [m/s], Δp [m])."""
+    def delta_error(self, reference: PreintegratedImu) -> _F64:
+        """[Log(ΔR_refᵀ ΔR), Δv − Δv_ref, Δp − Δp_ref], shape (9,)."""
+    def __eq__(self, value: object, /) -> bool: ...
+    __hash__: ClassVar[None]  # type: ignore[assignment]
+    def __reduce__(self) -> tuple[object, tuple[bytes]]: ...
+    @staticmethod
+    def _from_state(state: bytes) -> PreintegratedImu: ...
+
+@final
+class Preintegrator:
+    """Accumulates samples (one at a time or from arrays) into a PreintegratedImu."""
+
+    def __new__(cls, params: Params, bias: ImuBias | None = None, capacity: int = 0) -> Preintegrator: ...
+    def integrate(self, t_ns: int, gyro: _Vec3Like, acc: _Vec3Like) -> None:
+        """Adds one sample: time [ns], gyro [rad/s], accelerometer [m/s²]."""
+    def integrate_arrays(self, t_ns: _I64, gyro: _F64, acc: _F64) -> None:
+        """Adds int64[N] times [ns], float64[N, 3] gyro [rad/s] and accelerometer [m/s²]."""
+    def finish(self) -> PreintegratedImu:
+        """The measurement over [first sample, last sample]."""
+    def measurement_for_bias(self, bias: ImuBias) -> tuple[PreintegratedImu, bool]:
+        """(measurement for `bias`, whether it was re-integrated)."""
+    def reintegrate(self, bias: ImuBias) -> None:
+        """Re-integrates the stored samples with `bias`."""
+    @property
+    def params(self) -> Params:
+        """The parameters (a copy)."""
+    @property
+    def bias_hat(self) -> ImuBias:
+        """The bias estimate samples are integrated with."""
+    def __len__(self) -> int: ...
+
+def preintegrate(
+    params: Params,
+    t_ns: _I64,
+    gyro: _F64,
+    acc: _F64,
+    t_i_ns: int,
+    t_j_ns: int,
+    bias: ImuBias | None = None,
+) -> PreintegratedImu:
+    """The measurement over the keyframe window [t_i_ns, t_j_ns] of a time-ordered stream."""
+
+def preintegrate_windows(
+    params: Params,
+    t_ns: _I64,
+    gyro: _F64,
+    acc: _F64,
+    keyframes_ns: _I64,
+    bias: ImuBias | None = None,
+) -> list[PreintegratedImu]:
+    """One measurement per pair of consecutive keyframes (int64[K]): K − 1 results."""
+
+def merge(a: PreintegratedImu, b: PreintegratedImu) -> PreintegratedImu:
+    """The measurement over [a.t_i, b.t_j] from two consecutive measurements."""
+
+
+# --- inside a window: deltas and states at query times, deskewing, truncation error ---
+
+__all__ += ["deltas_at", "deskew_points", "inflate", "states_at", "truncation_estimate"]
+
+def deltas_at(
+    params: Params,
+    t_ns: _I64,
+    gyro: _F64,
+    acc: _F64,
+    t_i_ns: int,
+    t_j_ns: int,
+    times_ns: _I64,
+    bias: ImuBias | None = None,
+) -> dict[str, npt.NDArray[Any]]:
+    """Deltas from t_i_ns to each query time (int64[K], non-decreasing, inside the window):
+    keys t_ns, delta_t [s], delta_R [K,3,3], delta_v [m/s] and delta_p [m] [K,3] (frame i,
+    gravity excluded). Raises PreintError (QueryNotSorted, QueryOutsideWindow, …)."""
+
+def states_at(
+    params: Params,
+    t_ns: _I64,
+    gyro: _F64,
+    acc: _F64,
+    t_i_ns: int,
+    t_j_ns: int,
+    state_i: NavState,
+    times_ns: _I64,
+    bias: ImuBias | None = None,
+) -> dict[str, npt.NDArray[Any]]:
+    """deltas_at's arrays plus the predicted body state at each query time, world frame:
+    rotation [K,3,3] (body → world), position [m] and velocity [m/s] [K,3]."""
+
+def deskew_points(
+    params: Params,
+    t_ns: _I64,
+    gyro: _F64,
+    acc: _F64,
+    t_i_ns: int,
+    t_j_ns: int,
+    state_i: NavState,
+    points_t_ns: _I64,
+    points: _F64,
+    target: Literal["start", "end"] = "start",
+    bias: ImuBias | None = None,
+) -> _F64:
+    """Lidar points [M,3] [m], each in the body frame at its own time, expressed in the body
+    frame at t_i_ns ("start") or t_j_ns ("end")."""
+
+def truncation_estimate(
+    params: Params,
+    t_ns: _I64,
+    gyro: _F64,
+    acc: _F64,
+    pim: PreintegratedImu,
+    bias: ImuBias | None = None,
+) -> tuple[_F64, str]:
+    """(error float64[9] = scheme ⊖ exact deltas in [dphi rad, dv m/s, dp m], method)."""
+
+def inflate(pim: PreintegratedImu, error: _Vec3Like | Sequence[float] | _F64) -> PreintegratedImu:
+    """pim with e eᵀ added to cov and to the 9×9 block of cov15 (e: nine numbers
+    [dphi, dv, dp])."""
+
+# --- factor: NavState, prediction, factors ---
+
+__all__ += ["CombinedImuFactor", "ImuFactor", "NavState", "predict"]
 
 from typing import final
 
@@ -41,17 +392,17 @@ class NavState:
     def identity() -> NavState:
         """Identity attitude, zero position and velocity."""
     @property
-    def rotation(self) -> F64:
+    def rotation(self) -> _F64:
         """Attitude R_wb (3×3, body → world)."""
     @property
-    def position(self) -> F64:
+    def position(self) -> _F64:
         """Position [m], world frame."""
     @property
-    def velocity(self) -> F64:
+    def velocity(self) -> _F64:
         """Velocity [m/s], world frame."""
     def retract(self, delta: npt.ArrayLike) -> NavState:
         """self ⊕ [δφ, δp, δv] = (R Exp(δφ), p + R δp, v + δv)."""
-    def local(self, other: NavState) -> F64:
+    def local(self, other: NavState) -> _F64:
         """other ⊖ self = [Log(Rᵀ R_o), Rᵀ(p_o − p), v_o − v] (9), inverse of retract."""
     def __eq__(self, value: object, /) -> bool: ...
 
@@ -81,23 +432,23 @@ class ImuFactor:
     def pim(self) -> PreintegratedImu:
         """The measurement (a copy)."""
     @property
-    def sqrt_information(self) -> F64:
+    def sqrt_information(self) -> _F64:
         """U (9×9 upper triangular), Σ⁻¹ = UᵀU, order [r_φ, r_v, r_p]."""
     @property
-    def residual_covariance(self) -> F64:
+    def residual_covariance(self) -> _F64:
         """Σ (9×9): pim.cov (component) or T cov Tᵀ, T = diag(I, ΔRᵀ, ΔRᵀ) (logmap)."""
     def predict(self, state_i: NavState, bias_i: ImuBias | None = None) -> NavState: ...
     def residual(
         self, state_i: NavState, state_j: NavState, bias_i: ImuBias | None = None
-    ) -> F64:
+    ) -> _F64:
         """[r_φ, r_v, r_p] (9)."""
     def evaluate(
         self, state_i: NavState, state_j: NavState, bias_i: ImuBias | None = None
-    ) -> tuple[F64, dict[str, F64]]:
+    ) -> tuple[_F64, dict[str, _F64]]:
         """(residual, {"state_i", "state_j", "bias_i"} Jacobians)."""
     def evaluate_whitened(
         self, state_i: NavState, state_j: NavState, bias_i: ImuBias | None = None
-    ) -> tuple[F64, dict[str, F64]]:
+    ) -> tuple[_F64, dict[str, _F64]]:
         """(U r, {name: U J})."""
     def chi2(self, state_i: NavState, state_j: NavState, bias_i: ImuBias | None = None) -> float:
         """rᵀ Σ⁻¹ r (9 dof)."""
@@ -123,10 +474,10 @@ class CombinedImuFactor:
     @property
     def pim(self) -> PreintegratedImu: ...
     @property
-    def sqrt_information(self) -> F64:
+    def sqrt_information(self) -> _F64:
         """U (15×15 upper triangular), Σ⁻¹ = UᵀU."""
     @property
-    def residual_covariance(self) -> F64:
+    def residual_covariance(self) -> _F64:
         """Σ (15×15), order [r_φ, r_v, r_p, r_bg, r_ba]."""
     def predict(self, state_i: NavState, bias_i: ImuBias | None = None) -> NavState: ...
     def residual(
@@ -135,21 +486,21 @@ class CombinedImuFactor:
         state_j: NavState,
         bias_i: ImuBias | None = None,
         bias_j: ImuBias | None = None,
-    ) -> F64: ...
+    ) -> _F64: ...
     def evaluate(
         self,
         state_i: NavState,
         state_j: NavState,
         bias_i: ImuBias | None = None,
         bias_j: ImuBias | None = None,
-    ) -> tuple[F64, dict[str, F64]]: ...
+    ) -> tuple[_F64, dict[str, _F64]]: ...
     def evaluate_whitened(
         self,
         state_i: NavState,
         state_j: NavState,
         bias_i: ImuBias | None = None,
         bias_j: ImuBias | None = None,
-    ) -> tuple[F64, dict[str, F64]]: ...
+    ) -> tuple[_F64, dict[str, _F64]]: ...
     def chi2(
         self,
         state_i: NavState,
@@ -168,6 +519,24 @@ class CombinedImuFactor:
 
 
 # --- io and calibration: readers, Allan variance, calibration, advise ---
+
+
+__all__ += [
+    "advise",
+    "advise_file",
+    "allan_variance",
+    "allan_variance_file",
+    "audit",
+    "calibrate_file",
+    "calibrate_multi_pose",
+    "calibrate_static",
+    "detect_still_intervals",
+    "read_groundtruth",
+    "read_imu",
+    "read_kalibr_yaml",
+    "write_euroc_imu",
+    "write_kalibr_yaml",
+]
 
 import os
 from typing import Any
@@ -241,7 +610,7 @@ def write_kalibr_yaml(path: str | os.PathLike[str], noise: Noise) -> None:
     """Writes ``noise`` as a Kalibr imu.yaml (shortest round-trip floats: reading it back gives
     the same numbers). Raises InputError when the file cannot be written."""
 
-def write_euroc_imu(path: str | os.PathLike[str], t_ns: I64, gyro: F64, acc: F64) -> None:
+def write_euroc_imu(path: str | os.PathLike[str], t_ns: _I64, gyro: _F64, acc: _F64) -> None:
     """Writes arrays (t_ns int64[N] ns, gyro float64[N, 3] rad/s, acc float64[N, 3] m/s²) as a
     EuRoC imu0 CSV with shortest round-trip floats, so that :func:`read_imu` gives back the
     same arrays bit for bit. ShapeError for wrong shapes or dtypes; InputError when the file
@@ -270,9 +639,9 @@ def audit(
     ``jitter``, ``gaps``, ``axes``, ...; see the command's documentation)."""
 
 def allan_variance(
-    t_ns: I64,
-    gyro: F64,
-    acc: F64,
+    t_ns: _I64,
+    gyro: _F64,
+    acc: _F64,
     *,
     per_decade: int = 10,
     check_still: bool = True,
@@ -327,7 +696,7 @@ def allan_variance_file(
     command's message); a bad file InputError."""
 
 def detect_still_intervals(
-    t_ns: I64, gyro: F64, acc: F64, noise: Noise | str | os.PathLike[str] | None = None
+    t_ns: _I64, gyro: _F64, acc: _F64, noise: Noise | str | os.PathLike[str] | None = None
 ) -> list[dict[str, Any]]:
     """The still intervals of a recording (moving variances of gyro and accelerometer within
     4× the white-noise variances of ``noise``, at least 1 s; ``noise`` a Noise, a Kalibr
@@ -335,9 +704,9 @@ def detect_still_intervals(
     indices, end exclusive), ``t_start_ns``, ``t_end_ns``, ``duration_s``}]."""
 
 def calibrate_static(
-    t_ns: I64,
-    gyro: F64,
-    acc: F64,
+    t_ns: _I64,
+    gyro: _F64,
+    acc: _F64,
     noise: Noise | str | os.PathLike[str] | None = None,
     *,
     gravity: float = 9.81,
@@ -366,9 +735,9 @@ def calibrate_static(
     """
 
 def calibrate_multi_pose(
-    t_ns: I64,
-    gyro: F64,
-    acc: F64,
+    t_ns: _I64,
+    gyro: _F64,
+    acc: _F64,
     noise: Noise | str | os.PathLike[str] | None = None,
     *,
     gravity: float = 9.81,
@@ -422,9 +791,9 @@ def calibrate_file(
     interval; InputError for a bad file."""
 
 def advise(
-    t_ns: I64,
-    gyro: F64,
-    acc: F64,
+    t_ns: _I64,
+    gyro: _F64,
+    acc: _F64,
     noise: Noise | str | os.PathLike[str],
     *,
     window: float = 1.0,

@@ -3,10 +3,15 @@
 
 use crate::errors::shape_err;
 use nalgebra::{Matrix3, SMatrix, Vector3};
-use numpy::ndarray::{Array1, Array2};
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
+use numpy::ndarray::{Array1, Array2, ArrayView1, ArrayView2};
+use numpy::{
+    IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2,
+    PyUntypedArrayMethods,
+};
 use preint::ImuSample;
 use pyo3::prelude::*;
+use std::cell::RefCell;
+use std::ops::Range;
 
 /// A 3-vector from any sequence of three numbers (list, tuple, numpy array).
 pub(crate) fn vec3(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vector3<f64>> {
@@ -66,38 +71,154 @@ pub(crate) fn svec_py<'py, const N: usize>(
 }
 
 /// The samples of the arrays `t_ns` (int64[N], nanoseconds), `gyro` (float64[N, 3], rad/s)
-/// and `acc` (float64[N, 3], m/s²). Shapes and dtypes are checked here, values (finite,
-/// increasing timestamps) by the preintegrator, which names the sample.
+/// and `acc` (float64[N, 3], m/s²) as one vector. Shapes and dtypes are checked here, values
+/// (finite, increasing timestamps) by the preintegrator, which names the sample. (For bindings
+/// that need a whole stream at once; the preintegration functions convert window by window.)
+#[allow(dead_code)]
 pub(crate) fn samples(
     t_ns: &Bound<'_, PyAny>,
     gyro: &Bound<'_, PyAny>,
     acc: &Bound<'_, PyAny>,
 ) -> PyResult<Vec<ImuSample>> {
-    let t = t_ns
-        .cast::<PyArray1<i64>>()
-        .map_err(|_| shape_err("t_ns: expected a 1-D numpy array of dtype int64 (nanoseconds)"))?;
-    let g = rows3("gyro", gyro)?;
-    let a = rows3("acc", acc)?;
-    let t = t.readonly();
-    let (g, a) = (g.readonly(), a.readonly());
-    let n = t.len();
-    if g.shape()[0] != n || a.shape()[0] != n {
-        return Err(shape_err(format!(
-            "t_ns, gyro and acc must have the same length: {n}, {}, {}",
-            g.shape()[0],
-            a.shape()[0]
-        )));
+    let arrays = SampleArrays::new(t_ns, gyro, acc)?;
+    let v = arrays.views();
+    let mut out = Vec::with_capacity(v.len());
+    v.fill(0..v.len(), &mut out);
+    Ok(out)
+}
+
+/// The three sample arrays, checked and borrowed read-only (numpy's borrow flags keep Rust
+/// from writing them while they are read here).
+pub(crate) struct SampleArrays<'py> {
+    t: PyReadonlyArray1<'py, i64>,
+    g: PyReadonlyArray2<'py, f64>,
+    a: PyReadonlyArray2<'py, f64>,
+}
+
+impl<'py> SampleArrays<'py> {
+    /// Checks dtypes, shapes and lengths (a typed `ShapeError` naming the argument).
+    pub(crate) fn new(
+        t_ns: &Bound<'py, PyAny>,
+        gyro: &Bound<'py, PyAny>,
+        acc: &Bound<'py, PyAny>,
+    ) -> PyResult<Self> {
+        let t = t_ns.cast::<PyArray1<i64>>().map_err(|_| {
+            shape_err("t_ns: expected a 1-D numpy array of dtype int64 (nanoseconds)")
+        })?;
+        let g = rows3("gyro", gyro)?;
+        let a = rows3("acc", acc)?;
+        let (t, g, a) = (t.readonly(), g.readonly(), a.readonly());
+        let n = t.len();
+        if g.shape()[0] != n || a.shape()[0] != n {
+            return Err(shape_err(format!(
+                "t_ns, gyro and acc must have the same length: {n}, {}, {}",
+                g.shape()[0],
+                a.shape()[0]
+            )));
+        }
+        Ok(Self { t, g, a })
     }
-    let (t, g, a) = (t.as_array(), g.as_array(), a.as_array());
-    Ok((0..n)
-        .map(|k| {
-            ImuSample::new(
-                t[k],
-                Vector3::new(g[(k, 0)], g[(k, 1)], g[(k, 2)]),
-                Vector3::new(a[(k, 0)], a[(k, 1)], a[(k, 2)]),
-            )
-        })
-        .collect())
+
+    /// Views of the arrays that can be read with the GIL released.
+    pub(crate) fn views(&self) -> SampleViews<'_> {
+        SampleViews {
+            t: self.t.as_array(),
+            g: self.g.as_array(),
+            a: self.a.as_array(),
+        }
+    }
+}
+
+/// Read-only views of the sample arrays (`Send`: used inside `py.detach`).
+pub(crate) struct SampleViews<'a> {
+    t: ArrayView1<'a, i64>,
+    g: ArrayView2<'a, f64>,
+    a: ArrayView2<'a, f64>,
+}
+
+impl SampleViews<'_> {
+    /// Number of samples.
+    pub(crate) fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    /// Appends samples `range` to `out` (contiguous arrays are read as slices, others element
+    /// by element).
+    pub(crate) fn fill(&self, range: Range<usize>, out: &mut Vec<ImuSample>) {
+        let (t, g, a) = (&self.t, &self.g, &self.a);
+        if let (Some(ts), Some(gs), Some(as_)) = (t.as_slice(), g.as_slice(), a.as_slice()) {
+            let (gs, as_) = (
+                &gs[3 * range.start..3 * range.end],
+                &as_[3 * range.start..3 * range.end],
+            );
+            out.extend(
+                ts[range]
+                    .iter()
+                    .zip(gs.chunks_exact(3).zip(as_.chunks_exact(3)))
+                    .map(|(&t, (g, a))| {
+                        ImuSample::new(
+                            t,
+                            Vector3::new(g[0], g[1], g[2]),
+                            Vector3::new(a[0], a[1], a[2]),
+                        )
+                    }),
+            );
+        } else {
+            out.extend(range.map(|k| {
+                ImuSample::new(
+                    t[k],
+                    Vector3::new(g[(k, 0)], g[(k, 1)], g[(k, 2)]),
+                    Vector3::new(a[(k, 0)], a[(k, 1)], a[(k, 2)]),
+                )
+            }));
+        }
+    }
+
+    /// The samples a keyframe window `[t_i_ns, t_j_ns]` reads, with a margin: the preintegration
+    /// of a window uses and checks at most 4 samples beyond the last sample before `t_i` and the
+    /// first after `t_j` (`preint::window`: checks from 3 before to 3 after, a stencil reach of
+    /// 1), so the window of the range equals the window of the whole stream. Binary search, as
+    /// in `preint::preintegrate` (an unsorted stream is reported there).
+    pub(crate) fn window_range(&self, t_i_ns: i64, t_j_ns: i64) -> Range<usize> {
+        const MARGIN: usize = 8;
+        let n = self.len();
+        let lo = self.partition_point(|t| t < t_i_ns);
+        let hi = self.partition_point(|t| t <= t_j_ns);
+        lo.saturating_sub(MARGIN)..(hi.max(lo) + MARGIN).min(n)
+    }
+
+    fn partition_point(&self, pred: impl Fn(i64) -> bool) -> usize {
+        let (mut lo, mut hi) = (0, self.len());
+        while lo < hi {
+            let mid = lo + (hi - lo) / 2;
+            if pred(self.t[mid]) {
+                lo = mid + 1;
+            } else {
+                hi = mid;
+            }
+        }
+        lo
+    }
+}
+
+/// Samples kept per thread between calls in [`with_scratch`]: a window of up to 2²⁰ samples
+/// (56 MiB) reuses the buffer instead of allocating (and page-faulting) a new one per call.
+const SCRATCH_KEEP: usize = 1 << 20;
+
+thread_local! {
+    static SCRATCH: RefCell<Vec<ImuSample>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Runs `f` with an empty sample buffer: this thread's scratch buffer, kept for the next call
+/// when its capacity is at most [`SCRATCH_KEEP`] samples.
+pub(crate) fn with_scratch<R>(f: impl FnOnce(&mut Vec<ImuSample>) -> R) -> R {
+    let mut buf = SCRATCH.with(|s| s.take());
+    buf.clear();
+    let r = f(&mut buf);
+    if buf.capacity() <= SCRATCH_KEEP {
+        SCRATCH.with(|s| *s.borrow_mut() = buf);
+    }
+    r
 }
 
 /// An `N×3` float64 array argument.

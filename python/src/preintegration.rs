@@ -4,12 +4,12 @@
 //! Arrays: `t_ns` int64[N] (nanoseconds), `gyro` float64[N, 3] [rad/s], `acc` float64[N, 3]
 //! [m/s²], sensor frame. The GIL is released while Rust integrates.
 
-use crate::convert::{samples, vec3};
+use crate::convert::{SampleArrays, SampleViews, vec3, with_scratch};
 use crate::errors::{Class, preint_err, raise, shape_err};
 use crate::measurement::PyMeasurement;
 use crate::params::{PyBias, PyParams, bias_or_zero};
 use numpy::{PyArray1, PyArrayMethods, PyUntypedArrayMethods};
-use preint::{ImuSample, Preintegrator};
+use preint::{ImuBias, ImuSample, PreintError, PreintParams, PreintegratedImu, Preintegrator};
 use pyo3::prelude::*;
 
 /// Accumulates samples into a measurement (Rust `Preintegrator`):
@@ -54,10 +54,23 @@ impl PyPreintegrator {
         gyro: &Bound<'_, PyAny>,
         acc: &Bound<'_, PyAny>,
     ) -> PyResult<()> {
-        let s = samples(t_ns, gyro, acc)?;
-        let inner = &mut self.0;
-        // Error indices count every sample this preintegrator has received.
-        py.detach(|| inner.integrate_slice(&s)).map_err(preint_err)
+        let arrays = SampleArrays::new(t_ns, gyro, acc)?;
+        let (v, inner) = (arrays.views(), &mut self.0);
+        // Converted in cache-sized chunks: no copy of the whole stream is made.
+        py.detach(|| {
+            with_scratch(|buf| {
+                let mut start = 0;
+                while start < v.len() {
+                    let end = (start + CHUNK).min(v.len());
+                    buf.clear();
+                    v.fill(start..end, buf);
+                    inner.integrate_slice(buf)?;
+                    start = end;
+                }
+                Ok(())
+            })
+        })
+        .map_err(preint_err)
     }
 
     /// The measurement over [first sample, last sample] (more samples may be added after).
@@ -106,6 +119,38 @@ impl PyPreintegrator {
     }
 }
 
+/// Samples converted per `integrate_slice` call of `integrate_arrays` (229 KiB).
+const CHUNK: usize = 4096;
+
+/// `e` with its sample index counted from the start of the caller's arrays, for an error of a
+/// window integrated from the sub-range starting at sample `offset`.
+fn shift(mut e: PreintError, offset: usize) -> PreintError {
+    match &mut e {
+        PreintError::NonFinite { index, .. }
+        | PreintError::DuplicateTimestamp { index, .. }
+        | PreintError::DecreasingTimestamp { index, .. }
+        | PreintError::GapTooLarge { index, .. } => *index += offset,
+        _ => {}
+    }
+    e
+}
+
+/// The window `[t_i_ns, t_j_ns]` of the arrays: its samples (with the margin of
+/// `SampleViews::window_range`) converted into `buf`, then `preint::preintegrate`.
+fn window(
+    p: &PreintParams,
+    b: &ImuBias,
+    v: &SampleViews<'_>,
+    (t_i_ns, t_j_ns): (i64, i64),
+    buf: &mut Vec<ImuSample>,
+) -> Result<PreintegratedImu, PreintError> {
+    let range = v.window_range(t_i_ns, t_j_ns);
+    let offset = range.start;
+    buf.clear();
+    v.fill(range, buf);
+    preint::preintegrate(p, b, buf, t_i_ns, t_j_ns).map_err(|e| shift(e, offset))
+}
+
 /// The measurement over the keyframe window `[t_i_ns, t_j_ns]` of a time-ordered stream
 /// (boundary samples interpolated when a keyframe falls between samples).
 #[pyfunction]
@@ -121,9 +166,9 @@ pub(crate) fn preintegrate(
     t_j_ns: i64,
     bias: Option<PyRef<'_, PyBias>>,
 ) -> PyResult<PyMeasurement> {
-    let s = samples(t_ns, gyro, acc)?;
-    let (p, b) = (&params.0, bias_or_zero(bias));
-    py.detach(|| preint::preintegrate(p, &b, &s, t_i_ns, t_j_ns))
+    let arrays = SampleArrays::new(t_ns, gyro, acc)?;
+    let (v, p, b) = (arrays.views(), &params.0, bias_or_zero(bias));
+    py.detach(|| with_scratch(|buf| window(p, &b, &v, (t_i_ns, t_j_ns), buf)))
         .map(PyMeasurement)
         .map_err(preint_err)
 }
@@ -141,7 +186,7 @@ pub(crate) fn preintegrate_windows(
     keyframes_ns: &Bound<'_, PyAny>,
     bias: Option<PyRef<'_, PyBias>>,
 ) -> PyResult<Vec<PyMeasurement>> {
-    let s = samples(t_ns, gyro, acc)?;
+    let arrays = SampleArrays::new(t_ns, gyro, acc)?;
     let k = keyframes_ns
         .cast::<PyArray1<i64>>()
         .map_err(|_| shape_err("keyframes_ns: expected a 1-D numpy array of dtype int64"))?
@@ -150,11 +195,14 @@ pub(crate) fn preintegrate_windows(
         return Err(shape_err("keyframes_ns: at least two keyframes are needed"));
     }
     let k = k.as_array().to_vec();
-    let (p, b) = (&params.0, bias_or_zero(bias));
+    let (v, p, b) = (arrays.views(), &params.0, bias_or_zero(bias));
+    // Each window converts only its own samples, into one reused buffer.
     let out = py.detach(|| {
-        k.windows(2)
-            .map(|w| preint::preintegrate(p, &b, &s, w[0], w[1]))
-            .collect::<Result<Vec<_>, _>>()
+        with_scratch(|buf| {
+            k.windows(2)
+                .map(|w| window(p, &b, &v, (w[0], w[1]), buf))
+                .collect::<Result<Vec<_>, _>>()
+        })
     });
     Ok(out
         .map_err(preint_err)?
