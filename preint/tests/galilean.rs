@@ -37,7 +37,10 @@ fn exact(t: f64) -> (SO3, V3, V3) {
     let i = Matrix3::identity();
     let r = i + k * s + k2 * (1.0 - c);
     let v = (i * t + k * ((1.0 - c) / wn) + k2 * (t - s / wn)) * a;
-    let p = (i * (t * t / 2.0) + k * (t / wn - s / (wn * wn)) + k2 * (t * t / 2.0 - (1.0 - c) / (wn * wn))) * a;
+    let p = (i * (t * t / 2.0)
+        + k * (t / wn - s / (wn * wn))
+        + k2 * (t * t / 2.0 - (1.0 - c) / (wn * wn)))
+        * a;
     (SO3::from_matrix(&r), v, p)
 }
 
@@ -86,7 +89,10 @@ fn held_input_is_exact_for_galilean_at_every_rate() {
             );
             match scheme {
                 Scheme::Galilean => {
-                    assert!(er < 1e-12 && ev < 1e-12 && ep < 1e-12, "{rate} Hz: {er} {ev} {ep}");
+                    assert!(
+                        er < 1e-12 && ev < 1e-12 && ep < 1e-12,
+                        "{rate} Hz: {er} {ev} {ep}"
+                    );
                 }
                 Scheme::Euler => {
                     let (v, p) = manifold[i];

@@ -117,7 +117,10 @@ fn galilean_matches_gtsam_g_on_every_fixture() {
 /// through `PreintegratedImuMeasurementsManifold` give other Δv, far above the tolerance.
 #[test]
 fn galilean_fixtures_are_not_eulers() {
-    for (case, euler) in [("galilean_fastspin", "fastspin"), ("galilean_example", "example")] {
+    for (case, euler) in [
+        ("galilean_fastspin", "fastspin"),
+        ("galilean_example", "example"),
+    ] {
         let g = json(dir().join(format!("{case}.gtsam.json")));
         let e = json(dir().join(format!("{euler}.gtsam.json")));
         let d = (v3(&g["delta_v"]) - v3(&e["delta_v"])).norm();

@@ -35,7 +35,12 @@ type M96 = SMatrix<f64, 9, 6>;
 
 const TOL: f64 = 1e-9;
 const EPS: f64 = 1e-3;
-const SCHEMES: [Scheme; 4] = [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4, Scheme::Galilean];
+const SCHEMES: [Scheme; 4] = [
+    Scheme::Euler,
+    Scheme::Midpoint,
+    Scheme::Hermite4,
+    Scheme::Galilean,
+];
 
 /// Smooth motion sampled from t = 1 s every 5 ms (± 1.5 ms uniform jitter if asked).
 fn stream(n: usize, jitter: bool) -> Vec<ImuSample> {

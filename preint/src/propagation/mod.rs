@@ -289,7 +289,11 @@ impl ErrorState {
             if let Some((w, r)) = lever {
                 // `Γ_a,k D_k`: sample k's accelerometer gain through its centripetal term.
                 let mut extra = Gain96::default();
-                add_acc_through(&mut extra.g, &g.a, &crate::extrinsics::centripetal_d(&w[0], r));
+                add_acc_through(
+                    &mut extra.g,
+                    &g.a,
+                    &crate::extrinsics::centripetal_d(&w[0], r),
+                );
                 let fwd = pb.forward().apply(&extra);
                 add_cols(&mut gsum.g, &extra.g);
                 add_cols(&mut rot.g, &fwd.g);

@@ -124,9 +124,15 @@ pub(crate) fn derivs(t2: f64, f: [f64; 4]) -> (f64, f64, f64) {
 }
 
 /// `∂(M(θ)a)/∂θ` for `M(θ) = sI + α[θ]× + β[θ]×²` with `(α'/t, β'/t) = (da, db)` (module
-/// docs), given `θ × a` and `θ × (θ × a)`.
+/// docs), given `(θ × a, θ × (θ × a)) = (ta, tta)`.
 #[inline(always)]
-pub(crate) fn d_m_a(th: &V3, a: &V3, ta: &V3, tta: &V3, alpha: f64, beta: f64, da: f64, db: f64) -> M3 {
+pub(crate) fn d_m_a(
+    th: &V3,
+    a: &V3,
+    (ta, tta): (&V3, &V3),
+    (alpha, beta): (f64, f64),
+    (da, db): (f64, f64),
+) -> M3 {
     let dot = th.dot(a) * beta;
     let w = ta * da + tta * db;
     let (ab, ta_b) = (a * beta, th * beta);
@@ -216,8 +222,8 @@ impl IntervalScheme for Galilean {
         let (d2, d3, d4) = derivs(t2, [k.a, k.b, k.c, s.f4]);
         let jl = s_plus_hat_hat2(&s.th, h, h * k.b, h * k.c);
         let n = s_plus_hat_hat2(&s.th, 0.5 * h * h, h * h * k.c, h * h * s.f4);
-        let dj = d_m_a(&s.th, &s.a, &s.ta, &s.tta, k.b, k.c, d2, d3);
-        let dn = d_m_a(&s.th, &s.a, &s.ta, &s.tta, k.c, s.f4, d3, d4);
+        let dj = d_m_a(&s.th, &s.a, (&s.ta, &s.tta), (k.b, k.c), (d2, d3));
+        let dn = d_m_a(&s.th, &s.a, (&s.ta, &s.tta), (k.c, s.f4), (d3, d4));
         let f = s.r0 * jl;
         let (fv, fp) = (s.r0 * (dj * (h * h)), s.r0 * (dn * (h * h * h)));
         let np = s.r0 * n;
@@ -280,8 +286,8 @@ mod tests {
         let ta = th.cross(a);
         let tta = th.cross(&ta);
         (
-            d_m_a(th, a, &ta, &tta, k.b, k.c, d2, d3),
-            d_m_a(th, a, &ta, &tta, k.c, f4, d3, d4),
+            d_m_a(th, a, (&ta, &tta), (k.b, k.c), (d2, d3)),
+            d_m_a(th, a, (&ta, &tta), (k.c, f4), (d3, d4)),
         )
     }
 
