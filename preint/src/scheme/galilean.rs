@@ -52,6 +52,11 @@ pub(crate) struct Galilean;
 const TERMS: usize = 14;
 /// Where the coefficients switch from their series to the closed forms \[rad²\] (t = 2).
 const SERIES_BELOW: f64 = 4.0;
+/// Terms of the short series below [`SHORT_BELOW`] (every per-sample angle of an IMU): the
+/// first omitted relative term is below `10⁻¹⁰·12/14!` ≈ 1.4e-20.
+const SHORT: usize = 5;
+/// Where the short series ends \[rad²\] (t = 0.1).
+const SHORT_BELOW: f64 = 0.01;
 
 /// `1/n!` for `n ≤ 35`.
 const fn inv_factorial(n: usize) -> f64 {
@@ -64,11 +69,12 @@ const fn inv_factorial(n: usize) -> f64 {
     1.0 / f
 }
 
-/// The series of `f_m` (`deriv = false`) or of `f_m'(t)/t` (`deriv = true`) in powers of t².
-const fn series(m: usize, deriv: bool) -> [f64; TERMS] {
-    let mut out = [0.0; TERMS];
+/// The first `N` terms of the series of `f_m` (`deriv = false`) or of `f_m'(t)/t`
+/// (`deriv = true`) in powers of t².
+const fn series<const N: usize>(m: usize, deriv: bool) -> [f64; N] {
+    let mut out = [0.0; N];
     let mut j = 0;
-    while j < TERMS {
+    while j < N {
         out[j] = if deriv {
             // (−1)^(j+1) 2(j+1) / (2j+2+m)!
             let s = if j % 2 == 0 { -1.0 } else { 1.0 };
@@ -82,15 +88,24 @@ const fn series(m: usize, deriv: bool) -> [f64; TERMS] {
     out
 }
 
-const F4: [f64; TERMS] = series(4, false);
-const D2: [f64; TERMS] = series(2, true);
-const D3: [f64; TERMS] = series(3, true);
-const D4: [f64; TERMS] = series(4, true);
+/// `f₄`, `f₂'/t`, `f₃'/t`, `f₄'/t`: long and short series.
+const LONG: [[f64; TERMS]; 4] = [
+    series(4, false),
+    series(2, true),
+    series(3, true),
+    series(4, true),
+];
+const SHORT_SERIES: [[f64; SHORT]; 4] = [
+    series(4, false),
+    series(2, true),
+    series(3, true),
+    series(4, true),
+];
 
 #[inline(always)]
-fn horner(x: f64, c: &[f64; TERMS]) -> f64 {
-    let mut acc = c[TERMS - 1];
-    for &ck in c[..TERMS - 1].iter().rev() {
+fn horner<const N: usize>(x: f64, c: &[f64; N]) -> f64 {
+    let mut acc = c[N - 1];
+    for &ck in c[..N - 1].iter().rev() {
         acc = acc * x + ck;
     }
     acc
@@ -100,8 +115,10 @@ fn horner(x: f64, c: &[f64; TERMS]) -> f64 {
 /// above the series).
 #[inline(always)]
 pub(crate) fn f4(t2: f64, f2: f64) -> f64 {
-    if t2 < SERIES_BELOW {
-        horner(t2, &F4)
+    if t2 < SHORT_BELOW {
+        horner(t2, &SHORT_SERIES[0])
+    } else if t2 < SERIES_BELOW {
+        horner(t2, &LONG[0])
     } else {
         (0.5 - f2) / t2
     }
@@ -111,8 +128,15 @@ pub(crate) fn f4(t2: f64, f2: f64) -> f64 {
 /// series).
 #[inline(always)]
 pub(crate) fn derivs(t2: f64, f: [f64; 4]) -> (f64, f64, f64) {
-    if t2 < SERIES_BELOW {
-        (horner(t2, &D2), horner(t2, &D3), horner(t2, &D4))
+    if t2 < SHORT_BELOW {
+        let c = &SHORT_SERIES;
+        (horner(t2, &c[1]), horner(t2, &c[2]), horner(t2, &c[3]))
+    } else if t2 < SERIES_BELOW {
+        (
+            horner(t2, &LONG[1]),
+            horner(t2, &LONG[2]),
+            horner(t2, &LONG[3]),
+        )
     } else {
         let [f1, f2, f3, f4] = f;
         (
@@ -155,6 +179,7 @@ pub(crate) fn d_m_a(
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct GalileanStep {
     th: V3,
+    t2: f64,
     k: RodriguesCoeffs,
     f4: f64,
     a: V3,
@@ -203,6 +228,7 @@ impl IntervalScheme for Galilean {
         d.r = r0 * e;
         GalileanStep {
             th,
+            t2,
             k,
             f4,
             a,
@@ -218,8 +244,7 @@ impl IntervalScheme for Galilean {
     #[inline(always)]
     fn linearise(s: &GalileanStep, _: &Stencil) -> Linearisation<HeldGain> {
         let (h, k) = (s.h, &s.k);
-        let t2 = s.th.norm_squared();
-        let (d2, d3, d4) = derivs(t2, [k.a, k.b, k.c, s.f4]);
+        let (d2, d3, d4) = derivs(s.t2, [k.a, k.b, k.c, s.f4]);
         let jl = s_plus_hat_hat2(&s.th, h, h * k.b, h * k.c);
         let n = s_plus_hat_hat2(&s.th, 0.5 * h * h, h * h * k.c, h * h * s.f4);
         let dj = d_m_a(&s.th, &s.a, (&s.ta, &s.tta), (k.b, k.c), (d2, d3));
@@ -362,6 +387,16 @@ mod tests {
             assert!((dn - nn).amax() < 1e-9, "{th:?}: {:e}", (dn - nn).amax());
             let q = preint_lie::se3::q_block(&a, &th) - hat(&(jl_of(&th) * a)) * jl_of(&th);
             assert!((dj - q).amax() < 1e-14, "{th:?}: {:e}", (dj - q).amax());
+        }
+    }
+
+    /// At t = 0.1 the short and the long series agree to round-off.
+    #[test]
+    fn short_and_long_series_agree_at_the_switch() {
+        let t2 = SHORT_BELOW * (1.0 - 1e-12);
+        for i in 0..4 {
+            let (s, l) = (horner(t2, &SHORT_SERIES[i]), horner(t2, &LONG[i]));
+            assert!((s - l).abs() <= 1e-16 * l.abs(), "{i}: {s} {l}");
         }
     }
 
