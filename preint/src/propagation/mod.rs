@@ -36,7 +36,9 @@
 //! `P' += G'_j Q_j G'_jᵀ`, `Q_j = diag(Σ_g, Σ_a)·white_scale(c_j)` ([`crate::noise`]). The
 //! result is the exact first-order covariance `Φ_N (Σ_j G'_j Q_j G'_jᵀ) Φ_Nᵀ`. A scheme whose
 //! stencil is `{k, k+1}` retires sample k in interval k (its gain is then complete) and keeps
-//! one pending sample; a wider stencil keeps up to four, retired when the next interval's
+//! one pending sample (none when sample k+1's noise does not enter interval k; a held scheme
+//! that gives sample k's whole gain, `HeldGain`, has it pulled back by [`PullBack::apply`] and
+//! retired as general columns); a wider stencil keeps up to four, retired when the next interval's
 //! stencil has moved past them (at the end of a window the stencil stops moving, so that is
 //! only known then).
 //!

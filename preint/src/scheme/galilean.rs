@@ -24,7 +24,7 @@
 //! accel: v ← ΔR_k Jl(θ) h,   p ← ΔR_k N(θ) h²
 //! ```
 //!
-//! (`Exp(θ) Jr(θ) = Jl(θ)`), handed to the propagator whole ([`HeldGain`]). With
+//! (`Exp(θ) Jr(θ) = Jl(θ)`), handed to the propagator whole (`HeldGain`). With
 //! `M(θ) = sI + α[θ]× + β[θ]×²`, `[θ]× a = θ × a`, `[θ]×² a = θ(θ·a) − a|θ|²` and
 //! `∂α/∂θ = α'(t)/t θᵀ`:
 //!
