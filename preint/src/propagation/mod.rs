@@ -38,9 +38,9 @@
 //! stencil is `{k, k+1}` retires sample k in interval k (its gain is then complete) and keeps
 //! one pending sample (none when sample k+1's noise does not enter interval k; a held scheme
 //! that gives sample k's whole gain, `HeldGain`, has it pulled back by [`PullBack::apply`] and
-//! retired as general columns); a wider stencil keeps up to four, retired when the next interval's
-//! stencil has moved past them (at the end of a window the stencil stops moving, so that is
-//! only known then).
+//! retired as general columns); a wider stencil keeps up to four, retired when the next
+//! interval's stencil has moved past them (at the end of a window the stencil stops moving, so
+//! that is only known then).
 //!
 //! # Bias Jacobians and the combined covariance
 //!
@@ -274,6 +274,13 @@ impl ErrorState {
         lever: Option<&([V3; crate::scheme::MAX_STENCIL], V3)>,
         mut retire: impl Retire,
     ) {
+        // A whole gain is sample k's only: no end-node noise, no wider stencil.
+        const {
+            assert!(
+                !S::NodeTerms::HELD
+                    || (!S::END_NODE_NOISE && S::NODES_BEFORE + S::NODES_AFTER == 0)
+            )
+        };
         let rot = lin.node.held();
         let g = pb.apply(rot);
         sub_cols(&mut self.j.g, &g.g);
