@@ -16,7 +16,9 @@ Noise file (Kalibr imu.yaml): continuous-time densities, not per-sample standard
   gyroscope_noise_density [rad/s/sqrt(Hz)], gyroscope_random_walk [rad/s^2/sqrt(Hz)],
   accelerometer_noise_density [m/s^2/sqrt(Hz)], accelerometer_random_walk [m/s^3/sqrt(Hz)], update_rate [Hz].
 Schemes: euler (1st order), midpoint (2nd order), hermite4 (4th-order Hermite-Magnus, uses the \
-neighbouring samples; printed as hermite4, also accepted as rk4 or high-order).";
+neighbouring samples; printed as hermite4, also accepted as rk4 or high-order), galilean (the \
+held sample through the exact Gal(3) exponential: exact for input held over each interval, 1st \
+order on smooth input; GTSAM 4.3's PreintegratedImuMeasurementsG).";
 
 /// On-manifold IMU preintegration: simulate, integrate, calibrate, measure noise, and chart
 /// accuracy against cost.

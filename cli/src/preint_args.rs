@@ -9,8 +9,8 @@ use std::path::PathBuf;
 /// Scheme, noise file and gravity of a preintegration.
 #[derive(clap::Args, Clone, Debug)]
 pub struct PreintArgs {
-    /// Integration scheme: euler, midpoint or hermite4 (printed as hermite4; rk4 and
-    /// high-order are accepted for it).
+    /// Integration scheme: euler, midpoint, hermite4 or galilean (printed as hermite4; rk4
+    /// and high-order are accepted for it).
     #[arg(long, value_parser = SchemeParser, default_value = "midpoint")]
     pub scheme: Scheme,
     /// Kalibr imu.yaml with the noise densities (default: EuRoC figures).

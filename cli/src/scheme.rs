@@ -14,6 +14,10 @@ pub enum Scheme {
     /// high-order.
     #[value(name = "hermite4", alias = "rk4", alias = "high-order")]
     Hermite4,
+    /// First order on smooth input, exact when the input is constant over each interval (the
+    /// sample at the start held, composed with the exact Gal(3) exponential; GTSAM 4.3's
+    /// PreintegratedImuMeasurementsG).
+    Galilean,
 }
 
 impl From<Scheme> for preint::Scheme {
@@ -22,23 +26,28 @@ impl From<Scheme> for preint::Scheme {
             Scheme::Euler => preint::Scheme::Euler,
             Scheme::Midpoint => preint::Scheme::Midpoint,
             Scheme::Hermite4 => preint::Scheme::Hermite4,
+            Scheme::Galilean => preint::Scheme::Galilean,
         }
     }
 }
 
-/// Every scheme, simplest first (the order of every table and chart).
-pub const ALL: [preint::Scheme; 3] = [
+/// Every scheme, in the order of every table and chart: the three Forster-chart schemes by
+/// order, then the Lie-group one.
+pub const ALL: [preint::Scheme; 4] = [
     preint::Scheme::Euler,
     preint::Scheme::Midpoint,
     preint::Scheme::Hermite4,
+    preint::Scheme::Galilean,
 ];
 
-/// The scheme's name as printed in JSON and text: `euler`, `midpoint` or `hermite4`.
+/// The scheme's name as printed in JSON and text: `euler`, `midpoint`, `hermite4` or
+/// `galilean`.
 pub fn label(s: preint::Scheme) -> &'static str {
     match s {
         preint::Scheme::Euler => "euler",
         preint::Scheme::Midpoint => "midpoint",
         preint::Scheme::Hermite4 => "hermite4",
+        preint::Scheme::Galilean => "galilean",
     }
 }
 
@@ -62,8 +71,8 @@ impl TypedValueParser for SchemeParser {
                 clap::Error::raw(
                     ErrorKind::InvalidValue,
                     format!(
-                        "unknown scheme `{}`: expected euler, midpoint or hermite4 (also \
-                         accepted: rk4, high-order)\n",
+                        "unknown scheme `{}`: expected euler, midpoint, hermite4 or galilean \
+                         (also accepted: rk4, high-order)\n",
                         value.to_string_lossy()
                     ),
                 )
@@ -93,6 +102,7 @@ mod tests {
             ("hermite4", Scheme::Hermite4),
             ("rk4", Scheme::Hermite4),
             ("high-order", Scheme::Hermite4),
+            ("galilean", Scheme::Galilean),
         ] {
             assert_eq!(Scheme::from_str(input, false).unwrap(), want, "{input}");
         }
@@ -101,6 +111,13 @@ mod tests {
             let name = s.to_possible_value().unwrap().get_name().to_string();
             assert_eq!(label((*s).into()), name);
         }
-        assert_eq!(ALL.map(label), ["euler", "midpoint", "hermite4"]);
+        assert_eq!(
+            ALL.map(label),
+            ["euler", "midpoint", "hermite4", "galilean"]
+        );
+        for s in preint::Scheme::ALL {
+            assert!(ALL.contains(s), "{s:?}");
+            assert_eq!(label(*s), s.name());
+        }
     }
 }

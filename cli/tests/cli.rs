@@ -233,11 +233,13 @@ fn bench_steps_orders_and_charts() {
         "--out",
         d.to_str().unwrap(),
     ]);
-    assert_eq!(out["rows"].as_array().unwrap().len(), 12);
+    assert_eq!(out["rows"].as_array().unwrap().len(), 16);
     let ord = |s: &str| out["fitted_order"][s]["rot"].as_f64().unwrap();
     assert!((ord("euler") - 1.0).abs() < 0.15, "{}", ord("euler"));
     assert!((ord("midpoint") - 2.0).abs() < 0.2, "{}", ord("midpoint"));
     assert!(ord("hermite4") > 3.5, "{}", ord("hermite4"));
+    // Galilean holds the sample as Euler does: first order on smooth input.
+    assert!((ord("galilean") - 1.0).abs() < 0.15, "{}", ord("galilean"));
     for f in out["files"].as_array().unwrap() {
         let svg = std::fs::read_to_string(f.as_str().unwrap()).unwrap();
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
@@ -364,7 +366,7 @@ fn integrate_covariance15_and_residual_covariance15_match_gtsam() {
     );
 }
 
-/// `--scheme` takes euler, midpoint and hermite4, and rk4 and high-order for hermite4; the
+/// `--scheme` takes euler, midpoint, hermite4 and galilean, and rk4 and high-order for hermite4; the
 /// output names the scheme hermite4 (JSON and text); `-h` lists the values; an unknown name is a
 /// usage error naming the accepted ones.
 #[test]
@@ -378,7 +380,7 @@ fn scheme_names_and_aliases() {
         assert_eq!(o["scheme"], "hermite4");
         assert_eq!(o["delta_p"], outs[0]["delta_p"]);
     }
-    for s in ["euler", "midpoint"] {
+    for s in ["euler", "midpoint", "galilean"] {
         assert_eq!(
             json(&["integrate", "--imu", &imu, "--no-unit-check", "--scheme", s])["scheme"],
             s
@@ -396,7 +398,8 @@ fn scheme_names_and_aliases() {
     for sub in ["integrate", "factor"] {
         let h = String::from_utf8_lossy(&run(&[sub, "-h"]).stdout).to_string();
         assert!(
-            h.contains("[possible values: euler, midpoint, hermite4]") && h.contains("rk4"),
+            h.contains("[possible values: euler, midpoint, hermite4, galilean]")
+                && h.contains("rk4"),
             "{h}"
         );
     }

@@ -183,7 +183,7 @@ fn speed_reports_every_scheme_and_level() {
         .iter()
         .map(|s| s["scheme"].as_str().unwrap())
         .collect();
-    assert_eq!(names, ["euler", "midpoint", "hermite4"]);
+    assert_eq!(names, ["euler", "midpoint", "hermite4", "galilean"]);
     for s in schemes {
         for level in ["deltas", "covariance", "combined"] {
             let v = s["ns_per_sample"][level].as_f64().unwrap();

@@ -17,7 +17,7 @@ fn bench(c: &mut Criterion) {
     let (t_i, t_j) = (s[3].t_ns + 1_234, s[20_003].t_ns - 4_321);
     let mut g = c.benchmark_group("deskew");
     g.sample_size(10);
-    for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4] {
+    for &scheme in Scheme::ALL {
         let prm = PreintParams::default()
             .with_scheme(scheme)
             .with_level(Level::Deltas);

@@ -3,7 +3,7 @@
 //! (`preint::sample::synthetic_stream`, 200 Hz, EuRoC densities, `keep_samples` off).
 //!
 //! `cargo bench -p preint --bench instructions -- SCHEME LEVEL N [push]` runs it once (SCHEME:
-//! euler | midpoint | hermite4, LEVEL: deltas | covariance | combined; `push`: one sample at a
+//! euler | midpoint | hermite4 | galilean, LEVEL: deltas | covariance | combined; `push`: one sample at a
 //! time through `integrate` instead of one slice); it prints nothing but a checksum, so that
 //! the work is not optimised away. Without arguments (as `cargo bench` runs every bench) it
 //! does nothing. With the environment variable `BODY=1` the IMU is mounted away from the body
@@ -22,12 +22,8 @@ fn main() {
     if args.len() < 3 {
         return;
     }
-    let scheme = match args[0].as_str() {
-        "euler" => Scheme::Euler,
-        "midpoint" => Scheme::Midpoint,
-        "hermite4" => Scheme::Hermite4,
-        s => panic!("unknown scheme {s}"),
-    };
+    let scheme =
+        Scheme::from_name(&args[0]).unwrap_or_else(|| panic!("unknown scheme {}", args[0]));
     let level = match args[1].as_str() {
         "deltas" => Level::Deltas,
         "covariance" => Level::Covariance,

@@ -18,7 +18,7 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("preint");
     g.throughput(Throughput::Elements(n as u64));
     g.sample_size(10);
-    for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4] {
+    for &scheme in Scheme::ALL {
         for level in [Level::Deltas, Level::Covariance, Level::Combined] {
             let mut prm = PreintParams::from_noise(&ImuNoise::euroc())
                 .with_scheme(scheme)

@@ -7,8 +7,8 @@
 //! truncation error `e = D_h ⊖ D ≈ C hᑫ`. A companion integration of the same window estimates
 //! it ([`estimate`]):
 //!
-//! - **euler** (order 1) and **midpoint** (order 2): the 4th-order `hermite4` scheme on the same
-//!   samples, itself corrected by its Richardson estimate (below):
+//! - **euler** and **galilean** (order 1 on smooth input) and **midpoint** (order 2): the
+//!   4th-order `hermite4` scheme on the same samples, itself corrected by its Richardson estimate (below):
 //!   `e ≈ (D_h ⊖ D_hermite4) + ê_hermite4`. The companion cuts the window itself, so a keyframe
 //!   between samples is interpolated by a cubic there and by a line in the scheme's window: the
 //!   estimate includes the error of that line, as it should.
@@ -63,7 +63,7 @@ pub fn estimate(
     };
     let (t_i, t_j) = (m.t_i_ns, m.t_j_ns);
     match params.scheme {
-        Scheme::Euler | Scheme::Midpoint => {
+        Scheme::Euler | Scheme::Midpoint | Scheme::Galilean => {
             let h4 = deltas.with_scheme(Scheme::Hermite4);
             let companion = preintegrate(&h4, bias, samples, t_i, t_j)?;
             // The companion's own error, by Richardson, so that at low rates the estimate is

@@ -54,7 +54,12 @@ fn one_by_one(pi: &mut Preintegrator, s: &[ImuSample]) -> Result<(), PreintError
 /// Makes sample `s` invalid, given the sample before it.
 type Spoil = fn(&mut ImuSample, &ImuSample);
 
-const SCHEMES: [Scheme; 3] = [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4];
+const SCHEMES: [Scheme; 4] = [
+    Scheme::Euler,
+    Scheme::Midpoint,
+    Scheme::Hermite4,
+    Scheme::Galilean,
+];
 
 #[test]
 fn slice_equals_one_by_one_bit_for_bit() {

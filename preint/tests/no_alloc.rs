@@ -76,7 +76,7 @@ fn sample(k: i64) -> ImuSample {
 fn integrate_does_not_allocate() {
     let n = 10_000;
     let samples: Vec<_> = (0..n).map(sample).collect();
-    for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4] {
+    for &scheme in Scheme::ALL {
         for level in [Level::Deltas, Level::Covariance, Level::Combined] {
             for (keep, slice) in [(false, false), (true, false), (false, true), (true, true)] {
                 let mut prm = PreintParams::default()
@@ -120,7 +120,7 @@ fn integrate_does_not_allocate() {
 fn new_allocates_only_for_stored_samples_and_only_amortised() {
     let n = 10_000usize;
     let samples: Vec<_> = (0..n as i64).map(sample).collect();
-    for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4] {
+    for &scheme in Scheme::ALL {
         for keep in [false, true] {
             let mut prm = PreintParams::default()
                 .with_scheme(scheme)
@@ -152,7 +152,7 @@ fn new_allocates_only_for_stored_samples_and_only_amortised() {
 #[test]
 fn queries_inside_a_window_do_not_allocate() {
     let samples: Vec<_> = (0..2000).map(sample).collect();
-    for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4] {
+    for &scheme in Scheme::ALL {
         let prm = PreintParams::default().with_scheme(scheme);
         let (t_i, t_j) = (12_345_678, 9_000_000_000);
         let mut w = preint::WindowDeltas::new(&prm, &ImuBias::zero(), &samples, t_i, t_j).unwrap();

@@ -96,7 +96,7 @@ fn crossing(lo: f64, hi: f64, n: impl Fn(f64) -> f64) -> f64 {
 #[test]
 fn first_order_gyro_error_against_noise_sigma() {
     let dir = V3::new(1.0, -2.0, 0.5).normalize();
-    for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4] {
+    for &scheme in Scheme::ALL {
         let pi = setup(scheme);
         let n = |db: f64| first_order_error(&pi, &ImuBias::new(dir * db, V3::zeros())).0;
         for db in [0.003, 0.01, 0.03] {
@@ -132,7 +132,7 @@ fn first_order_acc_error_against_noise_sigma() {
     let dg = V3::new(1.0, -2.0, 0.5).normalize();
     let da = V3::new(-0.3, 0.8, 1.0).normalize();
     let bg = preint::params::DEFAULT_REINTEGRATE_GYRO;
-    for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4] {
+    for &scheme in Scheme::ALL {
         let pi = setup(scheme);
         let n = |g: f64, a: f64| first_order_error(&pi, &ImuBias::new(dg * g, da * a)).0;
         let c = crossing(0.05, 5.0, |a| n(bg, a));

@@ -8,7 +8,12 @@ use nalgebra::{Cholesky, DMatrix, DVector, Matrix3, SMatrix};
 use preint::{ImuBias, ImuSample, Level, PreintParams, PreintegratedImu, Preintegrator, Scheme};
 use preint_lie::SO3;
 
-const SCHEMES: [Scheme; 3] = [Scheme::Euler, Scheme::Midpoint, Scheme::Hermite4];
+const SCHEMES: [Scheme; 4] = [
+    Scheme::Euler,
+    Scheme::Midpoint,
+    Scheme::Hermite4,
+    Scheme::Galilean,
+];
 
 fn run(params: &PreintParams, bias: &ImuBias, s: &[ImuSample]) -> PreintegratedImu {
     let mut pi = Preintegrator::new(params.clone(), *bias).unwrap();
@@ -31,6 +36,12 @@ fn convergence_orders_on_analytic_motion() {
         (Scheme::Euler, &[100.0, 200.0, 400.0, 800.0][..], 0.9, 1.1),
         (Scheme::Midpoint, &[50.0, 100.0, 200.0, 400.0][..], 1.9, 2.1),
         (Scheme::Hermite4, &[25.0, 50.0, 100.0, 200.0][..], 3.7, 4.5),
+        (
+            Scheme::Galilean,
+            &[100.0, 200.0, 400.0, 800.0][..],
+            0.9,
+            1.1,
+        ),
     ] {
         let prm = params(scheme, Level::Deltas);
         let mut hs = vec![];
@@ -205,6 +216,8 @@ fn covariance_matches_monte_carlo() {
         (Scheme::Midpoint, false),
         (Scheme::Midpoint, true),
         (Scheme::Hermite4, false),
+        (Scheme::Galilean, false),
+        (Scheme::Galilean, true),
     ] {
         let mut prm = params(scheme, Level::Covariance);
         prm.gyro_cov *= 100.0;

@@ -141,7 +141,10 @@ pub fn evaluate(
         }
         let dec: Vec<ImuSample> = samples.iter().step_by(d).copied().collect();
         // Per scheme, the maxima over the windows.
-        let (mut err, mut sig) = ([[0.0f64; 3]; 3], [[0.0f64; 3]; 3]);
+        let (mut err, mut sig) = (
+            [[0.0f64; 3]; scheme::ALL.len()],
+            [[0.0f64; 3]; scheme::ALL.len()],
+        );
         for &t0 in &starts {
             if let Some(pb) = &pb {
                 pb.inc(1);
@@ -191,15 +194,18 @@ pub fn evaluate(
 pub const COST_TIE: f64 = 1.15;
 
 /// The cheapest acceptable candidate, if any; among those within [`COST_TIE`] of the cheapest,
-/// the simplest scheme (euler, then midpoint, then hermite4), then the cheapest: model no more than
-/// the scene needs, and do not let timing noise decide between near-equal costs.
+/// the simplest scheme (euler, then midpoint, then galilean, then hermite4), then the cheapest:
+/// model no more than the scene needs, and do not let timing noise decide between near-equal
+/// costs. Galilean ranks after midpoint: it is first order on smooth input and exact only when
+/// the input is held over each interval, which the distance to the reference already measures.
 pub fn recommend(c: &[Candidate]) -> Option<&Candidate> {
     let ok = || c.iter().filter(|c| c.acceptable);
     let best = ok().map(|c| c.cost_ns_per_s).min_by(f64::total_cmp)?;
     let rank = |s: Scheme| match s {
         Scheme::Euler => 0,
         Scheme::Midpoint => 1,
-        Scheme::Hermite4 => 2,
+        Scheme::Galilean => 2,
+        Scheme::Hermite4 => 3,
     };
     ok().filter(|c| c.cost_ns_per_s <= COST_TIE * best)
         .min_by(|a, b| {
@@ -234,8 +240,21 @@ mod tests {
             cand(Scheme::Euler, 12.5, 3356.0, true),
             cand(Scheme::Midpoint, 12.5, 3260.0, true),
             cand(Scheme::Hermite4, 12.5, 13895.0, true),
+            cand(Scheme::Galilean, 12.5, 3300.0, true),
         ];
         assert_eq!(recommend(&c).unwrap().scheme, Scheme::Euler);
+        // Galilean within 15 % of midpoint: midpoint is the simpler model; 30 % cheaper, it wins.
+        let c = [
+            cand(Scheme::Galilean, 50.0, 30_000.0, true),
+            cand(Scheme::Midpoint, 50.0, 29_000.0, true),
+        ];
+        assert_eq!(recommend(&c).unwrap().scheme, Scheme::Midpoint);
+        let c = [
+            cand(Scheme::Galilean, 50.0, 20_000.0, true),
+            cand(Scheme::Midpoint, 100.0, 29_000.0, true),
+            cand(Scheme::Hermite4, 25.0, 21_000.0, true),
+        ];
+        assert_eq!(recommend(&c).unwrap().scheme, Scheme::Galilean);
         // Midpoint 30 % cheaper: it wins.
         let c = [
             cand(Scheme::Euler, 400.0, 50_000.0, true),

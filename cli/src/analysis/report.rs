@@ -394,11 +394,13 @@ mod tests {
         }
     }
 
-    /// Euler's cheapest point, then midpoint at two rates, then hermite4.
+    /// Euler's cheapest point, then midpoint at two rates, then hermite4; galilean never.
     pub(super) fn rows() -> Vec<Row> {
         vec![
             row(Scheme::Euler, 25.0, 10.0, 1e-1),
             row(Scheme::Euler, 50.0, 10.0, 5e-2),
+            row(Scheme::Galilean, 25.0, 14.0, 1e-1),
+            row(Scheme::Galilean, 50.0, 14.0, 5e-2),
             row(Scheme::Midpoint, 25.0, 12.0, 1e-2),
             row(Scheme::Midpoint, 50.0, 12.0, 2.5e-3),
             row(Scheme::Hermite4, 25.0, 40.0, 1e-4),

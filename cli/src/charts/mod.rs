@@ -25,16 +25,21 @@ impl Color {
 }
 
 /// The colour of each scheme, in the order of [`crate::scheme::ALL`] (euler, midpoint,
-/// hermite4): vermilion, blue, bluish green (Okabe–Ito, distinguishable with the common colour
-/// vision deficiencies).
-pub const SCHEME_COLORS: [Color; 3] = [Color(213, 94, 0), Color(0, 114, 178), Color(0, 158, 115)];
+/// hermite4, galilean): vermilion, blue, bluish green, reddish purple (Okabe–Ito,
+/// distinguishable with the common colour vision deficiencies).
+pub const SCHEME_COLORS: [Color; 4] = [
+    Color(213, 94, 0),
+    Color(0, 114, 178),
+    Color(0, 158, 115),
+    Color(204, 121, 167),
+];
 
 /// Colours of curves that are not schemes (sensor axes, attitude representations): orange, sky
-/// blue, reddish purple, near-black; none of them is a scheme's colour.
+/// blue, yellow, near-black; none of them is a scheme's colour.
 pub const OTHER_COLORS: [Color; 4] = [
     Color(230, 159, 0),
     Color(86, 180, 233),
-    Color(204, 121, 167),
+    Color(240, 228, 66),
     Color(40, 40, 40),
 ];
 
@@ -47,6 +52,7 @@ pub fn scheme_color(s: Scheme) -> Color {
         Scheme::Euler => SCHEME_COLORS[0],
         Scheme::Midpoint => SCHEME_COLORS[1],
         Scheme::Hermite4 => SCHEME_COLORS[2],
+        Scheme::Galilean => SCHEME_COLORS[3],
     }
 }
 

@@ -84,7 +84,8 @@ pub fn write_page(
         "Every figure below is computed on this machine by `preint report` from built-in \
             simulated scenes (no input files); costs are this machine's timings. Schemes: `euler` \
             (1st order), `midpoint` (2nd order), `hermite4` (4th order, uses the neighbouring \
-            samples). Conventions: z-up world, g = (0, 0, −9.81) m/s², right perturbations, \
+            samples), `galilean` (1st order on smooth input, exact for input held over each \
+            interval). Conventions: z-up world, g = (0, 0, −9.81) m/s², right perturbations, \
             tangent order [δφ, δv, δp], bias order [b_g, b_a].",
     );
     page.conclusions(conclusions).toc();

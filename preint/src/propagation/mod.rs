@@ -36,9 +36,11 @@
 //! `P' += G'_j Q_j G'_jᵀ`, `Q_j = diag(Σ_g, Σ_a)·white_scale(c_j)` ([`crate::noise`]). The
 //! result is the exact first-order covariance `Φ_N (Σ_j G'_j Q_j G'_jᵀ) Φ_Nᵀ`. A scheme whose
 //! stencil is `{k, k+1}` retires sample k in interval k (its gain is then complete) and keeps
-//! one pending sample; a wider stencil keeps up to four, retired when the next interval's
-//! stencil has moved past them (at the end of a window the stencil stops moving, so that is
-//! only known then).
+//! one pending sample (none when sample k+1's noise does not enter interval k; a held scheme
+//! that gives sample k's whole gain, `HeldGain`, has it pulled back by [`PullBack::apply`] and
+//! retired as general columns); a wider stencil keeps up to four, retired when the next
+//! interval's stencil has moved past them (at the end of a window the stencil stops moving, so
+//! that is only known then).
 //!
 //! # Bias Jacobians and the combined covariance
 //!
@@ -66,7 +68,7 @@ use crate::scheme::{GainCoef, IntervalScheme, Linearisation, NodeTermsOf};
 use blocks::{
     Cols6, Cols9, Gain96, M3, PackedSym9, V3, add_cols, mul_cols, rot_cols, scale_cols, sub_cols,
 };
-use transition::{PullBack, rotated_sym};
+use transition::{PullBack, Transition, rotated_sym};
 
 /// Per-sample white-noise covariance `Q_j = s_j · diag(Σ_g, Σ_a)` with
 /// `s_j = white_scale(c_j)` [1/s] ([`crate::noise`]). Monomorphised once per noise shape.
@@ -240,6 +242,10 @@ impl ErrorState {
         lever: Option<&([V3; crate::scheme::MAX_STENCIL], V3)>,
         retire: impl Retire,
     ) {
+        if S::NodeTerms::HELD {
+            self.held::<S>(lin, pb, first_id, walk, lever, retire);
+            return;
+        }
         let form = S::GAIN_FORM;
         let f = lin.basis.gyro_columns(form, Some(pb));
         let node = S::NodeTerms::PRESENT
@@ -251,6 +257,57 @@ impl ErrorState {
         }
         if walk.combined {
             self.walk_step::<S>(lin, &f, node.as_ref(), pb, (k_pos, len), walk, lever);
+        }
+        self.walk_t += crate::noise::walk_scale(lin.tr.h);
+    }
+
+    /// A held scheme's interval ([`NodeTermsOf::HELD`]): sample k's whole gain, pulled back,
+    /// is complete and retired now (the interval reads no other sample's noise); with the
+    /// combined terms, it is also the interval's total gain `Γ_Σ`.
+    #[inline(always)]
+    fn held<S: IntervalScheme>(
+        &mut self,
+        lin: &Linearisation<S::NodeTerms>,
+        pb: &PullBack,
+        id: usize,
+        walk: &BiasWalk,
+        lever: Option<&([V3; crate::scheme::MAX_STENCIL], V3)>,
+        mut retire: impl Retire,
+    ) {
+        // A whole gain is sample k's only: no end-node noise, no wider stencil.
+        const {
+            assert!(
+                !S::NodeTerms::HELD
+                    || (!S::END_NODE_NOISE && S::NODES_BEFORE + S::NODES_AFTER == 0)
+            )
+        };
+        let rot = lin.node.held();
+        let g = pb.apply(rot);
+        sub_cols(&mut self.j.g, &g.g);
+        sub_cols(&mut self.j.a, &g.a);
+        retire(
+            &mut self.p,
+            id,
+            &SampleGain {
+                g: &g.g,
+                acc: AccGain::Full(&g.a),
+            },
+        );
+        if walk.combined {
+            let (mut gsum, mut rot) = (g, *rot);
+            if let Some((w, r)) = lever {
+                // `Γ_a,k D_k`: sample k's accelerometer gain through its centripetal term.
+                let mut extra = Gain96::default();
+                add_acc_through(
+                    &mut extra.g,
+                    &g.a,
+                    &crate::extrinsics::centripetal_d(&w[0], r),
+                );
+                let fwd = pb.forward().apply(&extra);
+                add_cols(&mut gsum.g, &extra.g);
+                add_cols(&mut rot.g, &fwd.g);
+            }
+            self.walk_tail(&lin.tr, pb, &gsum, &rot, walk);
         }
         self.walk_t += crate::noise::walk_scale(lin.tr.h);
     }
@@ -487,6 +544,20 @@ impl ErrorState {
             }
             None => (gsum, rot),
         };
+        self.walk_tail(&lin.tr, pb, &gsum, &rot, walk);
+    }
+
+    /// The combined terms of an interval with transition `tr` from its total gain `Γ_Σ`,
+    /// pulled back (`gsum`) and in rotated coordinates at node k+1 (`rot`).
+    #[inline(always)]
+    fn walk_tail(
+        &mut self,
+        tr: &Transition,
+        pb: &PullBack,
+        gsum: &Gain96,
+        rot: &Gain96,
+        walk: &BiasWalk,
+    ) {
         // `C` is kept in rotated coordinates, where its zero blocks (e.g. Euler's first
         // intervals) are exact: `V = A C + ½ Γ_Σ P_bb`, `C ← V + ½ Γ_Σ P_bb`; `P_walk` is
         // pulled back, `P'_walk += V' Γ'_Σᵀ + Γ'_Σ V'ᵀ` with `V' = Φ_k+1⁻¹ V`.
@@ -498,8 +569,8 @@ impl ErrorState {
             },
             None => rot.mul_diag(&(walk.g * t), &(walk.a * t)),
         };
-        let v = lin.tr.apply(&self.c).add(&half);
-        self.p_walk.add_sym(&pb.apply(&v), &gsum);
+        let v = tr.apply(&self.c).add(&half);
+        self.p_walk.add_sym(&pb.apply(&v), gsum);
         self.c = v.add(&half);
     }
 }

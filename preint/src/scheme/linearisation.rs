@@ -18,8 +18,13 @@
 //! `W_k`, …) exist for schemes that read the rates' derivatives at the nodes (the Hermite
 //! scheme); [`GainForm`] says which parts a scheme has, so the propagator never multiplies an
 //! exact zero.
+//!
+//! A scheme that holds sample k over interval k and whose gain has no such structure (the
+//! Galilean scheme: its v and p rows are general 3×3 matrices) hands sample k's whole 9×6 gain
+//! instead ([`HeldGain`] as its node terms, [`NodeTermsOf::HELD`]); the basis and scalars are
+//! then unused.
 
-use crate::propagation::blocks::{Cols6, Cols9, M3, V3, psi_cols, rot_cols, skew_cols};
+use crate::propagation::blocks::{Cols6, Cols9, Gain96, M3, V3, psi_cols, rot_cols, skew_cols};
 use crate::propagation::transition::{PullBack, Transition};
 
 /// Which parts of the [`GainBasis`] a scheme uses (the others are exact zeros).
@@ -60,12 +65,43 @@ pub(crate) struct GainBasis {
 }
 
 /// The node terms of an interval: `[NodeTerms; 2]` (nodes k and k+1) for schemes that have
-/// them, `()` for the others.
+/// them, `()` for the others, [`HeldGain`] for a held scheme that gives its whole gain.
 pub(crate) trait NodeTermsOf: Copy + std::fmt::Debug {
     /// Whether there are node terms.
     const PRESENT: bool;
+    /// Whether the interval's gain is [`NodeTermsOf::held`]: the whole 9×6 gain of its only
+    /// noise source, sample k (a scheme with a stencil `{k, k+1}` and no end-node noise).
+    const HELD: bool = false;
     /// The terms of nodes k and k+1 (only called when [`NodeTermsOf::PRESENT`]).
     fn terms(&self) -> [NodeTerms; 2];
+    /// Sample k's whole gain, rotated coordinates at node k+1 (only called when
+    /// [`NodeTermsOf::HELD`]).
+    #[inline(always)]
+    fn held(&self) -> &Gain96 {
+        &ZERO_GAIN
+    }
+}
+
+const ZERO_GAIN: Gain96 = Gain96 {
+    g: [[0.0; 9]; 3],
+    a: [[0.0; 6]; 3],
+};
+
+/// Sample k's whole 9×6 gain over interval k, in rotated coordinates at node k+1: gyro
+/// columns rows `[ψ, v, p]`, accelerometer columns rows `[v, p]` (module docs).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct HeldGain(pub Gain96);
+
+impl NodeTermsOf for HeldGain {
+    const PRESENT: bool = false;
+    const HELD: bool = true;
+    fn terms(&self) -> [NodeTerms; 2] {
+        [NodeTerms::default(); 2]
+    }
+    #[inline(always)]
+    fn held(&self) -> &Gain96 {
+        &self.0
+    }
 }
 
 impl NodeTermsOf for () {

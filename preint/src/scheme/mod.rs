@@ -19,8 +19,10 @@
 //! | [`Scheme::Euler`] | k (held over the interval) | 1 | [`euler`] |
 //! | [`Scheme::Midpoint`] | k, k+1 | 2 | [`midpoint`] |
 //! | [`Scheme::Hermite4`] | k−1 … k+2 | 4 | [`hermite4`] |
+//! | [`Scheme::Galilean`] | k (held, exact Gal(3) exponential) | 1 (exact for held input) | [`galilean`] |
 
 pub mod euler;
+pub mod galilean;
 pub mod hermite4;
 pub(crate) mod linearisation;
 pub mod midpoint;
@@ -86,7 +88,7 @@ macro_rules! registry {
             /// Every scheme, in the order of the registry.
             pub const ALL: &'static [Scheme] = &[$(Scheme::$variant),*];
 
-            /// The scheme's name (`euler`, `midpoint`, `hermite4`).
+            /// The scheme's name (`euler`, `midpoint`, `hermite4`, `galilean`).
             pub fn name(self) -> &'static str {
                 match self { $(Scheme::$variant => $name,)* }
             }
@@ -134,17 +136,24 @@ registry! { $
     /// corrected trapezoid on `u = ΔR a` with `u̇ = ΔR(ω×a + ȧ)`, Δp by the corrected trapezoid
     /// on `v`. One Exp per interval. Global error O(h⁴). See [`hermite4`].
     Hermite4 => crate::scheme::hermite4::Hermite4, "hermite4" | "rk4" | "high-order";
+    /// Delama et al., RA-L 2025 (= GTSAM 4.3 `PreintegratedImuMeasurementsG`): sample k held
+    /// over interval k, composed with the exact Gal(3) exponential of `(ω_k, a_k)`;
+    /// `ΔR_k+1 = ΔR_k Exp(θ)`, `Δv_k+1 = Δv_k + ΔR_k Jl(θ) a_k h`,
+    /// `Δp_k+1 = Δp_k + Δv_k h + ΔR_k N(θ) a_k h²`, `θ = ω_k h`. Exact when the input is
+    /// constant over each interval; global error O(h) on smooth input. See [`galilean`].
+    Galilean => crate::scheme::galilean::Galilean, "galilean";
 }
 
 impl Scheme {
     /// How a sample's noise cell follows from its neighbours in this scheme (see
-    /// [`crate::noise`]): [`CellRule::Held`] for Euler, [`CellRule::Centered`] otherwise.
+    /// [`crate::noise`]): [`CellRule::Held`] for Euler and Galilean, [`CellRule::Centered`]
+    /// otherwise.
     pub fn cell_rule(self) -> CellRule {
         with_scheme!(self, S => S::CELL_RULE)
     }
 
-    /// Samples interval k reads before node k and after node k+1 (`(0, 0)` for Euler and
-    /// midpoint, `(1, 1)` for the Hermite scheme).
+    /// Samples interval k reads before node k and after node k+1 (`(0, 0)` for Euler,
+    /// midpoint and Galilean, `(1, 1)` for the Hermite scheme).
     pub fn stencil_reach(self) -> (usize, usize) {
         with_scheme!(self, S => (S::NODES_BEFORE, S::NODES_AFTER))
     }

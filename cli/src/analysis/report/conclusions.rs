@@ -312,6 +312,7 @@ mod tests {
             s.contains("Euler is on the front only at its cheapest point (25 Hz)"),
             "{s}"
         );
+        assert!(s.contains("galilean is never the cheapest"), "{s}");
         let s = budget_statement("x", &rows[2..]);
         assert!(s.contains("Euler is never the cheapest"), "{s}");
     }
