@@ -25,7 +25,7 @@ _Cov3Like = float | _Mat3Like
 """A 3×3 covariance, or a number s meaning s·I."""
 _RotationLike = Sequence[float] | _Mat3Like
 """A 3×3 rotation matrix or a unit quaternion (w, x, y, z)."""
-_SchemeName = Literal["euler", "midpoint", "hermite4"]
+_SchemeName = Literal["euler", "midpoint", "hermite4", "galilean"]
 _LevelName = Literal["deltas", "covariance", "combined"]
 _CoriolisName = Literal["exact", "first", "second"]
 
@@ -44,7 +44,7 @@ __all__ = [
 ]
 
 SCHEMES: list[str]
-"""The scheme names: ["euler", "midpoint", "hermite4"]."""
+"""The scheme names: ["euler", "midpoint", "hermite4", "galilean"]."""
 
 @final
 class Noise:
@@ -134,7 +134,7 @@ class Params:
     def integration_covariance(self, v: _Cov3Like | None) -> None: ...
     @property
     def scheme(self) -> _SchemeName:
-        """"euler", "midpoint" or "hermite4"."""
+        """"euler" (GTSAM Manifold), "midpoint", "hermite4" or "galilean" (GTSAM PreintegratedImuMeasurementsG)."""
     @scheme.setter
     def scheme(self, v: str) -> None: ...
     @property
@@ -803,7 +803,7 @@ def advise(
     error stays below ``fraction`` × the noise σ on ``window``-second preintegrations, with the
     noise separated from the motion by a zero-phase low-pass (gravity 9.81 m/s²).
 
-    Returns the command's JSON as a dict: ``recommended_scheme`` (euler, midpoint, hermite4)
+    Returns the command's JSON as a dict: ``recommended_scheme`` (euler, midpoint, hermite4, galilean)
     and ``recommended_rate`` [Hz] (None when no candidate is acceptable), ``candidates``
     [{scheme, rate, decimation, disc_err {rot_rad, vel_m_s, pos_m}, noise_sigma {...},
     cost_ns_per_s (measured on this machine), acceptable}], ``denoise_cutoff_hz`` {gyro, acc},

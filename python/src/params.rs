@@ -337,7 +337,8 @@ impl PyParams {
         Ok(())
     }
 
-    /// Integration scheme: `"euler"` (GTSAM's Manifold), `"midpoint"` or `"hermite4"`.
+    /// Integration scheme: `"euler"` (GTSAM's Manifold), `"midpoint"`, `"hermite4"` or `"galilean"`
+    /// (GTSAM's `PreintegratedImuMeasurementsG`, exact for held input).
     #[getter]
     fn scheme(&self) -> &'static str {
         self.0.scheme.name()

@@ -76,7 +76,7 @@ fn put_deltas<'py>(py: Python<'py>, out: &Bound<'py, PyDict>, d: &[DeltasAt]) ->
 /// `[pim.t_i_ns, pim.t_j_ns]` of the arrays preintegrated with `params` and `bias`:
 /// `(error, method)` with `error` = scheme ⊖ exact deltas, float64[9] in [δφ rad, δv m/s, δp m]
 /// (the chart of `PreintegratedImu.delta_error`) and `method` "hermite4 companion" (euler,
-/// midpoint) or "richardson 2h" (hermite4).
+/// midpoint, galilean) or "richardson 2h" (hermite4).
 #[pyfunction]
 #[pyo3(signature = (params, t_ns, gyro, acc, pim, bias=None))]
 pub(crate) fn truncation_estimate<'py>(
