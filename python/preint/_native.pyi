@@ -543,6 +543,23 @@ from typing import Any
 
 from numpy.typing import ArrayLike
 
+from typing_extensions import TypedDict, Unpack
+
+class _ReaderOptions(TypedDict, total=False):
+    """The reader options (keyword arguments) of every function that reads a recording."""
+
+    format: str | None
+    columns: str | None
+    delimiter: str | None
+    time_unit: str | None
+    gyro_unit: str | None
+    accel_unit: str | None
+    topic: str | None
+    gyro_topic: str | None
+    accel_topic: str | None
+    stamp: str | None
+    check_units: bool
+
 # Reader options shared by read_imu, audit, allan_variance_file, calibrate_file, advise_file
 # (the command line's --imu / --gyro --accel, --format, --columns, ... flags): ``path`` one
 # recording, or ``gyro`` and ``accel`` the two files of a split recording; ``format`` one of
@@ -562,17 +579,7 @@ def read_imu(
     *,
     gyro: str | os.PathLike[str] | None = None,
     accel: str | os.PathLike[str] | None = None,
-    format: str | None = None,
-    columns: str | None = None,
-    delimiter: str | None = None,
-    time_unit: str | None = None,
-    gyro_unit: str | None = None,
-    accel_unit: str | None = None,
-    topic: str | None = None,
-    gyro_topic: str | None = None,
-    accel_topic: str | None = None,
-    stamp: str | None = None,
-    check_units: bool = True,
+    **options: Unpack[_ReaderOptions],
 ) -> dict[str, Any]:
     """Reads an IMU recording (EuRoC/TUM-VI CSV, UZH-FPV imu.txt, KITTI text, any delimited
     text in any units, ROS 1 bag, MCAP, ROS 2 db3; options above) with the Rust readers.
@@ -621,17 +628,7 @@ def audit(
     *,
     gyro: str | os.PathLike[str] | None = None,
     accel: str | os.PathLike[str] | None = None,
-    format: str | None = None,
-    columns: str | None = None,
-    delimiter: str | None = None,
-    time_unit: str | None = None,
-    gyro_unit: str | None = None,
-    accel_unit: str | None = None,
-    topic: str | None = None,
-    gyro_topic: str | None = None,
-    accel_topic: str | None = None,
-    stamp: str | None = None,
-    check_units: bool = True,
+    **options: Unpack[_ReaderOptions],
 ) -> dict[str, Any]:
     """What is wrong with a recording (timing, gaps, duplicates, clipping, units, stillness), in
     one streaming pass in bounded memory: the ``preint audit --json`` report as a dict (keys
@@ -677,18 +674,8 @@ def allan_variance_file(
     *,
     gyro: str | os.PathLike[str] | None = None,
     accel: str | os.PathLike[str] | None = None,
-    format: str | None = None,
-    columns: str | None = None,
-    delimiter: str | None = None,
-    time_unit: str | None = None,
-    gyro_unit: str | None = None,
-    accel_unit: str | None = None,
-    topic: str | None = None,
-    gyro_topic: str | None = None,
-    accel_topic: str | None = None,
-    stamp: str | None = None,
-    check_units: bool = True,
     check_still: bool = True,
+    **options: Unpack[_ReaderOptions],
 ) -> dict[str, Any]:
     """``preint allan`` on a recording, streamed in bounded memory (the file is read once; the
     units are checked on its first 60 s): the dict of :func:`allan_variance` plus ``source`` and
@@ -762,17 +749,6 @@ def calibrate_file(
     *,
     gyro: str | os.PathLike[str] | None = None,
     accel: str | os.PathLike[str] | None = None,
-    format: str | None = None,
-    columns: str | None = None,
-    delimiter: str | None = None,
-    time_unit: str | None = None,
-    gyro_unit: str | None = None,
-    accel_unit: str | None = None,
-    topic: str | None = None,
-    gyro_topic: str | None = None,
-    accel_topic: str | None = None,
-    stamp: str | None = None,
-    check_units: bool = True,
     noise: str | os.PathLike[str] | None = None,
     poses: str | os.PathLike[str] | None = None,
     gravity: float = 9.81,
@@ -782,6 +758,7 @@ def calibrate_file(
     pose_pos_std: float = 0.0,
     latitude: float | None = None,
     heading: float | None = None,
+    **options: Unpack[_ReaderOptions],
 ) -> dict[str, Any]:
     """``preint calibrate --json`` on a recording, as a dict: the model is chosen as the
     command does (known poses with ``poses``, a EuRoC ground-truth file; multi-position with
@@ -817,21 +794,11 @@ def advise_file(
     noise: str | os.PathLike[str],
     gyro: str | os.PathLike[str] | None = None,
     accel: str | os.PathLike[str] | None = None,
-    format: str | None = None,
-    columns: str | None = None,
-    delimiter: str | None = None,
-    time_unit: str | None = None,
-    gyro_unit: str | None = None,
-    accel_unit: str | None = None,
-    topic: str | None = None,
-    gyro_topic: str | None = None,
-    accel_topic: str | None = None,
-    stamp: str | None = None,
-    check_units: bool = True,
     window: float = 1.0,
     fraction: float = 0.1,
     from_ns: int | None = None,
     to_ns: int | None = None,
+    **options: Unpack[_ReaderOptions],
 ) -> dict[str, Any]:
     """``preint advise --json`` on a recording (samples with ``from_ns ≤ t ≤ to_ns``), as a
     dict (keys as :func:`advise`); ``noise`` a Kalibr imu.yaml."""

@@ -11,6 +11,7 @@ use preint_cli::analysis::advise::{evaluate, recommend};
 use preint_cli::analysis::denoise::denoise;
 use preint_cli::commands::advise;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 use std::path::{Path, PathBuf};
 
 /// advise(t_ns, gyro, acc, noise, *, window=1.0, fraction=0.1)
@@ -69,10 +70,8 @@ pub(crate) fn advise_py<'py>(
 ///
 /// `preint advise --json` on a recording (docs in `_native.pyi`).
 #[pyfunction]
-#[pyo3(signature = (path=None, *, noise, gyro=None, accel=None, format=None, columns=None,
-    delimiter=None, time_unit=None, gyro_unit=None, accel_unit=None, topic=None,
-    gyro_topic=None, accel_topic=None, stamp=None, check_units=true, window=1.0,
-    fraction=0.1, from_ns=None, to_ns=None))]
+#[pyo3(signature = (path=None, *, noise, gyro=None, accel=None, window=1.0,
+    fraction=0.1, from_ns=None, to_ns=None, **options))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn advise_file<'py>(
     py: Python<'py>,
@@ -80,39 +79,13 @@ pub(crate) fn advise_file<'py>(
     noise: PathBuf,
     gyro: Option<PathBuf>,
     accel: Option<PathBuf>,
-    format: Option<String>,
-    columns: Option<String>,
-    delimiter: Option<String>,
-    time_unit: Option<String>,
-    gyro_unit: Option<String>,
-    accel_unit: Option<String>,
-    topic: Option<String>,
-    gyro_topic: Option<String>,
-    accel_topic: Option<String>,
-    stamp: Option<String>,
-    check_units: bool,
     window: f64,
     fraction: f64,
     from_ns: Option<i64>,
     to_ns: Option<i64>,
+    options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let input = ReadArgs {
-        path,
-        gyro,
-        accel,
-        format,
-        columns,
-        delimiter,
-        time_unit,
-        gyro_unit,
-        accel_unit,
-        topic,
-        gyro_topic,
-        accel_topic,
-        stamp,
-        check_units,
-    }
-    .imu_args()?;
+    let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_args()?;
     let args = advise::Args {
         input,
         noise,

@@ -145,45 +145,17 @@ pub(crate) fn allan_variance<'py>(
 ///
 /// `preint allan` on a recording (docs in `_native.pyi`).
 #[pyfunction]
-#[pyo3(signature = (path=None, *, gyro=None, accel=None, format=None, columns=None,
-    delimiter=None, time_unit=None, gyro_unit=None, accel_unit=None, topic=None,
-    gyro_topic=None, accel_topic=None, stamp=None, check_units=true, check_still=true))]
+#[pyo3(signature = (path=None, *, gyro=None, accel=None, check_still=true, **options))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn allan_variance_file<'py>(
     py: Python<'py>,
     path: Option<PathBuf>,
     gyro: Option<PathBuf>,
     accel: Option<PathBuf>,
-    format: Option<String>,
-    columns: Option<String>,
-    delimiter: Option<String>,
-    time_unit: Option<String>,
-    gyro_unit: Option<String>,
-    accel_unit: Option<String>,
-    topic: Option<String>,
-    gyro_topic: Option<String>,
-    accel_topic: Option<String>,
-    stamp: Option<String>,
-    check_units: bool,
     check_still: bool,
+    options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let input = ReadArgs {
-        path,
-        gyro,
-        accel,
-        format,
-        columns,
-        delimiter,
-        time_unit,
-        gyro_unit,
-        accel_unit,
-        topic,
-        gyro_topic,
-        accel_topic,
-        stamp,
-        check_units,
-    }
-    .imu_args()?;
+    let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_args()?;
     let args = allan::Args {
         input,
         out: None,

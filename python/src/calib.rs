@@ -323,28 +323,15 @@ pub(crate) fn calibrate_multi_pose_py<'py>(
 ///
 /// `preint calibrate --json` on a recording, as a dict (docs in `_native.pyi`).
 #[pyfunction]
-#[pyo3(signature = (path=None, *, gyro=None, accel=None, format=None, columns=None,
-    delimiter=None, time_unit=None, gyro_unit=None, accel_unit=None, topic=None,
-    gyro_topic=None, accel_topic=None, stamp=None, check_units=true, noise=None, poses=None,
+#[pyo3(signature = (path=None, *, gyro=None, accel=None, noise=None, poses=None,
     gravity=9.81, from_ns=None, to_ns=None, pose_rot_std=0.0, pose_pos_std=0.0, latitude=None,
-    heading=None))]
+    heading=None, **options))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn calibrate_file<'py>(
     py: Python<'py>,
     path: Option<PathBuf>,
     gyro: Option<PathBuf>,
     accel: Option<PathBuf>,
-    format: Option<String>,
-    columns: Option<String>,
-    delimiter: Option<String>,
-    time_unit: Option<String>,
-    gyro_unit: Option<String>,
-    accel_unit: Option<String>,
-    topic: Option<String>,
-    gyro_topic: Option<String>,
-    accel_topic: Option<String>,
-    stamp: Option<String>,
-    check_units: bool,
     noise: Option<PathBuf>,
     poses: Option<PathBuf>,
     gravity: f64,
@@ -354,24 +341,9 @@ pub(crate) fn calibrate_file<'py>(
     pose_pos_std: f64,
     latitude: Option<f64>,
     heading: Option<f64>,
+    options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let input = ReadArgs {
-        path,
-        gyro,
-        accel,
-        format,
-        columns,
-        delimiter,
-        time_unit,
-        gyro_unit,
-        accel_unit,
-        topic,
-        gyro_topic,
-        accel_topic,
-        stamp,
-        check_units,
-    }
-    .imu_args()?;
+    let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_args()?;
     earth_args(latitude, heading)?;
     let args = calibrate::Args {
         input,

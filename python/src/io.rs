@@ -79,7 +79,86 @@ fn parse_opt<T: std::str::FromStr<Err = String>>(
         .transpose()
 }
 
+/// The reader options a function taking a recording accepts as keyword arguments besides
+/// `path`, `gyro` and `accel` (the command line's reader flags; documented in `_native.pyi`).
+const READER_OPTIONS: [&str; 11] = [
+    "format",
+    "columns",
+    "delimiter",
+    "time_unit",
+    "gyro_unit",
+    "accel_unit",
+    "topic",
+    "gyro_topic",
+    "accel_topic",
+    "stamp",
+    "check_units",
+];
+
 impl ReadArgs {
+    /// The recording `path` (or the split pair `gyro`, `accel`) and the keyword options
+    /// `options` (names in [`READER_OPTIONS`]; an unknown name or a value of the wrong type
+    /// raises `ShapeError` of kind "Usage").
+    pub(crate) fn from_options(
+        path: Option<PathBuf>,
+        gyro: Option<PathBuf>,
+        accel: Option<PathBuf>,
+        options: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
+        let usage = |m: String| new_err(Class::Shape, "Usage", m);
+        let mut a = ReadArgs {
+            path,
+            gyro,
+            accel,
+            format: None,
+            columns: None,
+            delimiter: None,
+            time_unit: None,
+            gyro_unit: None,
+            accel_unit: None,
+            topic: None,
+            gyro_topic: None,
+            accel_topic: None,
+            stamp: None,
+            check_units: true,
+        };
+        let Some(options) = options else {
+            return Ok(a);
+        };
+        for (k, v) in options.iter() {
+            let key: String = k.extract()?;
+            if key == "check_units" {
+                a.check_units = v
+                    .extract()
+                    .map_err(|_| usage("check_units: expected True or False".into()))?;
+                continue;
+            }
+            let value: Option<String> = v
+                .extract()
+                .map_err(|_| usage(format!("{key}: expected a string or None")))?;
+            let slot = match key.as_str() {
+                "format" => &mut a.format,
+                "columns" => &mut a.columns,
+                "delimiter" => &mut a.delimiter,
+                "time_unit" => &mut a.time_unit,
+                "gyro_unit" => &mut a.gyro_unit,
+                "accel_unit" => &mut a.accel_unit,
+                "topic" => &mut a.topic,
+                "gyro_topic" => &mut a.gyro_topic,
+                "accel_topic" => &mut a.accel_topic,
+                "stamp" => &mut a.stamp,
+                _ => {
+                    return Err(usage(format!(
+                        "unknown keyword argument {key:?}; the reader options are {}",
+                        READER_OPTIONS.join(", ")
+                    )));
+                }
+            };
+            *slot = value;
+        }
+        Ok(a)
+    }
+
     /// The command line's `ImuArgs` for these options (the same checks as its flags).
     pub(crate) fn imu_args(&self) -> PyResult<ImuArgs> {
         let usage = |m: &str| new_err(Class::Shape, "Usage", m.to_string());
@@ -165,44 +244,16 @@ fn info_into(d: &Bound<'_, PyDict>, label: &str, info: &SourceInfo) -> PyResult<
 ///
 /// Reads an IMU recording into numpy arrays (docs in `_native.pyi`).
 #[pyfunction]
-#[pyo3(signature = (path=None, *, gyro=None, accel=None, format=None, columns=None,
-    delimiter=None, time_unit=None, gyro_unit=None, accel_unit=None, topic=None,
-    gyro_topic=None, accel_topic=None, stamp=None, check_units=true))]
+#[pyo3(signature = (path=None, *, gyro=None, accel=None, **options))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn read_imu<'py>(
     py: Python<'py>,
     path: Option<PathBuf>,
     gyro: Option<PathBuf>,
     accel: Option<PathBuf>,
-    format: Option<String>,
-    columns: Option<String>,
-    delimiter: Option<String>,
-    time_unit: Option<String>,
-    gyro_unit: Option<String>,
-    accel_unit: Option<String>,
-    topic: Option<String>,
-    gyro_topic: Option<String>,
-    accel_topic: Option<String>,
-    stamp: Option<String>,
-    check_units: bool,
+    options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let args = ReadArgs {
-        path,
-        gyro,
-        accel,
-        format,
-        columns,
-        delimiter,
-        time_unit,
-        gyro_unit,
-        accel_unit,
-        topic,
-        gyro_topic,
-        accel_topic,
-        stamp,
-        check_units,
-    }
-    .imu_args()?;
+    let args = ReadArgs::from_options(path, gyro, accel, options)?.imu_args()?;
     let (samples, info, report) = py
         .detach(|| args.read_all_split())
         .map_err(|e| cli_err(e, Class::Input))?;
@@ -254,44 +305,16 @@ pub(crate) fn read_groundtruth<'py>(
 ///
 /// The `preint audit --json` report as a dict (docs in `_native.pyi`).
 #[pyfunction]
-#[pyo3(signature = (path=None, *, gyro=None, accel=None, format=None, columns=None,
-    delimiter=None, time_unit=None, gyro_unit=None, accel_unit=None, topic=None,
-    gyro_topic=None, accel_topic=None, stamp=None, check_units=true))]
+#[pyo3(signature = (path=None, *, gyro=None, accel=None, **options))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn audit<'py>(
     py: Python<'py>,
     path: Option<PathBuf>,
     gyro: Option<PathBuf>,
     accel: Option<PathBuf>,
-    format: Option<String>,
-    columns: Option<String>,
-    delimiter: Option<String>,
-    time_unit: Option<String>,
-    gyro_unit: Option<String>,
-    accel_unit: Option<String>,
-    topic: Option<String>,
-    gyro_topic: Option<String>,
-    accel_topic: Option<String>,
-    stamp: Option<String>,
-    check_units: bool,
+    options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let input = ReadArgs {
-        path,
-        gyro,
-        accel,
-        format,
-        columns,
-        delimiter,
-        time_unit,
-        gyro_unit,
-        accel_unit,
-        topic,
-        gyro_topic,
-        accel_topic,
-        stamp,
-        check_units,
-    }
-    .imu_args()?;
+    let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_args()?;
     let args = audit_cmd::Args {
         input,
         strict: false,

@@ -222,3 +222,24 @@ def test_kalibr_yaml_round_trip_and_missing_key(tmp_path):
     with pytest.raises(preint.InputError, match="imu.yaml: missing key") as e:
         preint.read_kalibr_yaml(p)
     assert e.value.kind == "MissingKey"
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda p, **kw: preint.read_imu(p, **kw),
+        lambda p, **kw: preint.audit(p, **kw),
+        lambda p, **kw: preint.allan_variance_file(p, **kw),
+    ],
+)
+def test_reader_options_are_checked_by_name_and_type(call):
+    path = str(EUROC)
+    with pytest.raises(preint.ShapeError) as e:
+        call(path, time_units="s")  # a misspelt option is refused, not ignored
+    assert e.value.kind == "Usage" and "time_units" in str(e.value) and "time_unit" in str(e.value)
+    with pytest.raises(preint.ShapeError) as e:
+        call(path, format=3)
+    assert e.value.kind == "Usage" and "format" in str(e.value)
+    with pytest.raises(preint.ShapeError) as e:
+        call(path, check_units="yes")
+    assert "check_units" in str(e.value)
