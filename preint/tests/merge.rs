@@ -157,6 +157,7 @@ fn euler(s: &[ImuSample], bias: &ImuBias) -> PreintegratedImu {
         coriolis: preint::CoriolisMode::Exact,
         level: Level::Combined,
         edge_noise: EdgeNoise::default(),
+        bias_correction: preint::BiasCorrection::Additive,
     }
 }
 
