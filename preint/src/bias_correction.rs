@@ -149,3 +149,28 @@ pub(crate) fn correct(pim: &PreintegratedImu, bias: &ImuBias) -> Corrected {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_parse_and_scheme_defaults() {
+        for c in BiasCorrection::ALL {
+            assert_eq!(BiasCorrection::parse(c.name()), Some(c));
+        }
+        assert_eq!(BiasCorrection::parse("Group"), None);
+        for s in Scheme::ALL {
+            let want = if *s == Scheme::Galilean {
+                BiasCorrection::Group
+            } else {
+                BiasCorrection::Additive
+            };
+            assert_eq!(BiasCorrection::default_for(*s), want);
+            let p = crate::PreintParams::default().with_scheme(*s);
+            assert_eq!(p.resolved_bias_correction(), want);
+            let p = p.with_bias_correction(Some(BiasCorrection::Additive));
+            assert_eq!(p.resolved_bias_correction(), BiasCorrection::Additive);
+        }
+    }
+}

@@ -488,7 +488,7 @@ fn factors_check_the_level() {
 /// blocks follow the group form's derivative (`preint::bias_correction`).
 #[test]
 fn jacobians_match_central_differences_with_group_bias_correction() {
-    let mut rng = Rng(0x6A0B_1A5);
+    let mut rng = Rng(0x06A0_B1A5);
     for case in 0..20 {
         let mut pim = {
             let r = rng.rot();

@@ -192,7 +192,7 @@ fn the_default_is_logmap_and_the_modes_share_rotation_and_bias_rows() {
 /// Earth rate.
 #[test]
 fn logmap_jacobians_with_group_bias_correction() {
-    let mut rng = Rng(0x6B0B_1A5);
+    let mut rng = Rng(0x06B0_B1A5);
     let omegas = [
         None,
         None,

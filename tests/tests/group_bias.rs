@@ -132,8 +132,8 @@ fn medians(scheme: Scheme, corr: BiasCorrection, s: &[ImuSample]) -> Vec<([f64; 
                 let corrected = predict(&base, &x0, &b);
                 let reint = preintegrate(&p, &b, s, 0, t_j).unwrap();
                 let err = se23_error(&predict(&reint, &x0, &b), &corrected);
-                for c in 0..3 {
-                    e[c].push(err[c]);
+                for (ec, x) in e.iter_mut().zip(err) {
+                    ec.push(x);
                 }
             }
             let ms = [0, 1, 2].map(|c| median_and_spread(&e[c]));
@@ -174,8 +174,8 @@ fn group_bias_correction_on_gtsams_experiment() {
             );
         }
         // Second order: the error at 0.2 is about 4× that at 0.1.
-        for c in 0..3 {
-            let ratio = med[2][c] / med[1][c];
+        for (c, (hi, lo)) in med[2].iter().zip(&med[1]).enumerate() {
+            let ratio = hi / lo;
             assert!(
                 (3.0..5.0).contains(&ratio),
                 "{name} part {c}: ratio {ratio}"
