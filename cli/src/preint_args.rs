@@ -1,4 +1,5 @@
-//! The flags every preintegrating subcommand shares: scheme, noise densities, gravity.
+//! The flags every preintegrating subcommand shares: scheme, noise densities, gravity, sensor
+//! pose, bias correction.
 
 use crate::scheme::{Scheme, SchemeParser};
 use crate::{CliError, checks, noise};
@@ -29,6 +30,16 @@ pub struct PreintArgs {
     /// ω×(ω×r), exact only at a constant rate; for GTSAM's numbers).
     #[arg(long, value_parser = parse_lever_arm, default_value = preint::LeverArm::default().name())]
     pub lever_arm: preint::LeverArm,
+    /// How the deltas are corrected for a bias change (prediction and factors): additive
+    /// (Forster eq. 44, GTSAM's Manifold/Tangent backends) or group (right-applied on the
+    /// group, GTSAM's Galilean backend). Default: group for galilean, additive otherwise.
+    #[arg(long, value_parser = parse_bias_correction)]
+    pub bias_correction: Option<preint::BiasCorrection>,
+}
+
+fn parse_bias_correction(s: &str) -> Result<preint::BiasCorrection, String> {
+    preint::BiasCorrection::parse(s)
+        .ok_or_else(|| format!("unknown bias correction {s:?}: use additive or group"))
 }
 
 fn parse_lever_arm(s: &str) -> Result<preint::LeverArm, String> {
@@ -49,6 +60,7 @@ impl PreintArgs {
         let params = PreintParams {
             body_p_sensor: self.body_p_sensor,
             lever_arm: self.lever_arm,
+            bias_correction: self.bias_correction,
             ..params
         };
         Ok((noise, params))

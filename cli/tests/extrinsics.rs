@@ -225,3 +225,51 @@ fn lever_arm_and_earth_rotation_together_predict_the_body_state() {
     println!("predicted body state at t_j: |δp| {ep:.2e} m, |δv| {ev:.2e} m/s");
     assert!(ep < 1e-5 && ev < 1e-5, "{ep:e} {ev:e}");
 }
+
+/// `--bias-correction` is read by the preintegrating subcommands: `additive` and `group` are
+/// accepted (the window's deltas do not depend on it: the correction applies at another bias),
+/// anything else is refused with a message naming the flag's values.
+#[test]
+fn bias_correction_flag_is_parsed() {
+    let dir = tmp("bias-correction-flag");
+    simulate(
+        &dir,
+        &[
+            "--scene",
+            "aggressive",
+            "--noise",
+            "none",
+            "--duration",
+            "2",
+        ],
+    );
+    let imu = dir.join("imu.csv");
+    let imu = imu.to_str().unwrap();
+    let base = [
+        "integrate",
+        "--imu",
+        imu,
+        "--scheme",
+        "galilean",
+        "--from",
+        "500000000",
+        "--to",
+        "1500000000",
+    ];
+    let with = |extra: &[&'static str]| -> Vec<&str> {
+        let mut a = base.to_vec();
+        a.extend_from_slice(extra);
+        a
+    };
+    let plain = json(&base);
+    for c in ["additive", "group"] {
+        let out = json(&with(&["--bias-correction", c]));
+        assert_eq!(out["delta_v"], plain["delta_v"], "{c}");
+    }
+    let bad = run(&with(&["--bias-correction", "multiplicative"]));
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        !bad.status.success() && err.contains("use additive or group"),
+        "{err}"
+    );
+}

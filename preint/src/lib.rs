@@ -27,6 +27,7 @@
 
 #![deny(missing_docs)]
 
+pub mod bias_correction;
 pub mod deskew;
 pub mod earth;
 pub mod factor;
@@ -52,6 +53,7 @@ pub mod scheme;
 pub mod truncation;
 pub mod window;
 
+pub use bias_correction::BiasCorrection;
 pub use deskew::{DeltasAt, DeskewTarget, StateAt, WindowDeltas};
 pub use earth::CoriolisMode;
 pub use error::PreintError;

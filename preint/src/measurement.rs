@@ -10,6 +10,7 @@
 //! `ΔR(b) ≈ ΔR·Exp(∂ΔR/∂b_g·δb_g)`, `Δv(b) ≈ Δv + ∂Δv/∂b_g·δb_g + ∂Δv/∂b_a·δb_a`, and
 //! `Δp(b)` likewise (Forster eq. 44).
 
+use crate::bias_correction::BiasCorrection;
 use crate::earth::CoriolisMode;
 use crate::noise::{CellRule, white_scale};
 use crate::params::Level;
@@ -287,6 +288,10 @@ pub struct PreintegratedImu {
     pub level: Level,
     /// The noise sources near the window edges and their gains (for exact merging).
     pub edge_noise: EdgeNoise,
+    /// How [`corrected`](Self::corrected) (and so [`predict`](crate::predict) and the factors)
+    /// applies the first-order bias correction: the resolved
+    /// [`PreintParams::bias_correction`](crate::PreintParams::bias_correction).
+    pub bias_correction: BiasCorrection,
 }
 
 impl PreintegratedImu {
@@ -316,17 +321,14 @@ impl PreintegratedImu {
         negate_delta_bias_blocks(&self.cov15)
     }
 
-    /// Deltas corrected to first order for a new bias estimate `bias` (Forster eq. 44):
-    /// `ΔR·Exp(∂ΔR/∂b_g δb_g)`, `Δv + ∂Δv/∂b_g δb_g + ∂Δv/∂b_a δb_a`, `Δp + …`, with
-    /// `δb = bias − bias_hat`. Returns `(ΔR(b), Δv(b) [m/s], Δp(b) [m])`.
+    /// Deltas corrected to first order for a new bias estimate `bias`, `δb = bias − bias_hat`,
+    /// as [`bias_correction`](Self::bias_correction) says ([`crate::bias_correction`]):
+    /// [`BiasCorrection::Additive`] (Forster eq. 44) `ΔR·Exp(c_φ)`, `Δv + c_v`, `Δp + c_p` with
+    /// `c_φ = ∂ΔR/∂b_g δb_g`, `c_v = ∂Δv/∂b_g δb_g + ∂Δv/∂b_a δb_a`, `c_p` likewise;
+    /// [`BiasCorrection::Group`] `ΔR·Exp(c_φ)`, `Δv + ΔR Jl(c_φ) ΔRᵀ c_v`, `Δp + ΔR Jl(c_φ) ΔRᵀ c_p`
+    /// (GTSAM 4.3's Galilean `biasCorrectedDelta`). Returns `(ΔR(b), Δv(b) [m/s], Δp(b) [m])`.
     pub fn corrected(&self, bias: &ImuBias) -> (SO3, Vector3<f64>, Vector3<f64>) {
-        let dbg = bias.gyro - self.bias_hat.gyro;
-        let dba = bias.acc - self.bias_hat.acc;
-        let j = &self.jac;
-        (
-            self.delta_r.plus(&(j.d_r_d_bg * dbg)),
-            self.delta_v + j.d_v_d_bg * dbg + j.d_v_d_ba * dba,
-            self.delta_p + j.d_p_d_bg * dbg + j.d_p_d_ba * dba,
-        )
+        let c = crate::bias_correction::correct(self, bias);
+        (c.r, c.v, c.p)
     }
 }

@@ -97,6 +97,15 @@ pub enum MergeError {
     /// (`omega_coriolis`, `coriolis`, compared exactly).
     #[error("windows use different Earth rotation rates or Coriolis modes")]
     EarthRateMismatch,
+    /// The two windows correct their deltas for a bias change differently
+    /// ([`PreintegratedImu::bias_correction`]).
+    #[error("windows use different bias corrections ({a:?} and {b:?})")]
+    BiasCorrectionMismatch {
+        /// Correction of the first window.
+        a: crate::BiasCorrection,
+        /// Correction of the second window.
+        b: crate::BiasCorrection,
+    },
     /// The two windows were computed at different [`Level`]s (e.g. one without the combined
     /// covariance): the merged `cov15` would mix models.
     #[error("windows were computed at different levels ({a:?} and {b:?})")]
@@ -136,7 +145,9 @@ type M96 = SMatrix<f64, 9, 6>;
 /// Errors: [`MergeError::NotConsecutive`] if `a.t_j_ns != b.t_i_ns`,
 /// [`MergeError::BiasMismatch`] / [`MergeError::GravityMismatch`] if `bias_hat` / `gravity`
 /// differ (exact comparison), [`MergeError::EarthRateMismatch`] if `omega_coriolis` or (with
-/// a rate) `coriolis` differ, [`MergeError::LevelMismatch`] if `level` differs.
+/// a rate) `coriolis` differ, [`MergeError::BiasCorrectionMismatch`] if `bias_correction`
+/// differs, [`MergeError::LevelMismatch`] if `level` differs. The merged measurement keeps the
+/// two windows' `bias_correction`.
 pub fn merge(a: &PreintegratedImu, b: &PreintegratedImu) -> Result<PreintegratedImu, MergeError> {
     check_mergeable(a, b)?;
     let ra = *a.delta_r.matrix();
@@ -167,6 +178,7 @@ pub fn merge(a: &PreintegratedImu, b: &PreintegratedImu) -> Result<Preintegrated
         coriolis: a.coriolis,
         level: a.level,
         edge_noise,
+        bias_correction: a.bias_correction,
     })
 }
 
@@ -188,6 +200,12 @@ fn check_mergeable(a: &PreintegratedImu, b: &PreintegratedImu) -> Result<(), Mer
         || (a.omega_coriolis.is_some() && a.coriolis != b.coriolis)
     {
         return Err(MergeError::EarthRateMismatch);
+    }
+    if a.bias_correction != b.bias_correction {
+        return Err(MergeError::BiasCorrectionMismatch {
+            a: a.bias_correction,
+            b: b.bias_correction,
+        });
     }
     if a.level != b.level {
         return Err(MergeError::LevelMismatch {

@@ -1,6 +1,7 @@
 //! Preintegration parameters: gravity, continuous-time noise covariances, integration scheme,
 //! what to compute, bias re-integration thresholds and the largest allowed sample gap.
 
+use crate::bias_correction::BiasCorrection;
 use crate::earth::CoriolisMode;
 use crate::error::PreintError;
 use crate::extrinsics::{LeverArm, SensorPose};
@@ -102,6 +103,15 @@ pub struct PreintParams {
     /// How `omega_coriolis` enters prediction and the factors; default
     /// [`CoriolisMode::Exact`].
     pub coriolis: CoriolisMode,
+    /// How the measurement's deltas are corrected for a new bias estimate
+    /// ([`PreintegratedImu::corrected`](crate::PreintegratedImu::corrected), used by
+    /// [`predict`](crate::predict) and both factors). `None` (the default) = the scheme's:
+    /// [`BiasCorrection::Group`] for [`Scheme::Galilean`], as its reference GTSAM 4.3
+    /// `GalileanPreintegration` does (its bias-corrected deltas then equal GTSAM's, and the
+    /// correction is more accurate at large bias changes, `docs/EVIDENCE.md`),
+    /// [`BiasCorrection::Additive`] (Forster eq. 44, GTSAM's Manifold/Tangent backends)
+    /// otherwise; see [`BiasCorrection::default_for`].
+    pub bias_correction: Option<BiasCorrection>,
 }
 
 /// Default gyro-bias change [rad/s] above which the first-order correction is replaced by
@@ -146,6 +156,7 @@ impl PreintParams {
             lever_arm: LeverArm::Exact,
             omega_coriolis: None,
             coriolis: CoriolisMode::Exact,
+            bias_correction: None,
         }
     }
 
@@ -177,6 +188,19 @@ impl PreintParams {
     pub fn with_omega_coriolis(mut self, omega: Vector3<f64>) -> Self {
         self.omega_coriolis = Some(omega);
         self
+    }
+
+    /// Same parameters with the bias correction `correction` (`None`: the scheme's default).
+    pub fn with_bias_correction(mut self, correction: Option<BiasCorrection>) -> Self {
+        self.bias_correction = correction;
+        self
+    }
+
+    /// The bias correction the measurements carry: `bias_correction`, or the scheme's default
+    /// ([`BiasCorrection::default_for`]).
+    pub fn resolved_bias_correction(&self) -> BiasCorrection {
+        self.bias_correction
+            .unwrap_or_else(|| BiasCorrection::default_for(self.scheme))
     }
 
     /// Same parameters with another [`CoriolisMode`].

@@ -83,6 +83,7 @@ fn pim(out: &Value) -> PreintegratedImu {
         coriolis: preint::CoriolisMode::Exact,
         level: Level::Combined,
         edge_noise: EdgeNoise::default(),
+        bias_correction: preint::BiasCorrection::Additive,
     }
 }
 

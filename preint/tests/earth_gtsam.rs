@@ -91,6 +91,7 @@ fn case(name: &str) -> Case {
         coriolis: CoriolisMode::Exact,
         level: Level::Combined,
         edge_noise: EdgeNoise::default(),
+        bias_correction: preint::BiasCorrection::Additive,
     };
     Case {
         pim,

@@ -227,6 +227,7 @@ fn load_case(name: &str) -> Case {
         coriolis: preint::CoriolisMode::Exact,
         level: Level::Covariance,
         edge_noise: EdgeNoise::default(),
+        bias_correction: preint::BiasCorrection::Additive,
     };
     let f = params.at("factor");
     Case {

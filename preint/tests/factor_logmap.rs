@@ -186,3 +186,24 @@ fn the_default_is_logmap_and_the_modes_share_rotation_and_bias_rows() {
     );
     assert_eq!(ResidualMode::parse("tangent"), None);
 }
+
+/// The Logmap residual with the bias correction on the group ([`preint::BiasCorrection::Group`]):
+/// every block of both factors against central differences at `δb ≠ 0`, without and with an
+/// Earth rate.
+#[test]
+fn logmap_jacobians_with_group_bias_correction() {
+    let mut rng = Rng(0x06B0_B1A5);
+    let omegas = [
+        None,
+        None,
+        None,
+        Some((Vector3::new(0.1, -0.2, 0.25), CoriolisMode::Exact)),
+        Some((Vector3::new(-0.2, 0.1, 0.3), CoriolisMode::SecondOrder)),
+    ];
+    for (case, omega) in omegas.into_iter().enumerate() {
+        let mut pim = random_pim(&mut rng, omega);
+        pim.bias_correction = preint::BiasCorrection::Group;
+        let v = random_vars(&mut rng, &pim, 0.5);
+        check(&pim, &v, &format!("group case {case}"));
+    }
+}

@@ -157,6 +157,7 @@ fn euler(s: &[ImuSample], bias: &ImuBias) -> PreintegratedImu {
         coriolis: preint::CoriolisMode::Exact,
         level: Level::Combined,
         edge_noise: EdgeNoise::default(),
+        bias_correction: preint::BiasCorrection::Additive,
     }
 }
 
@@ -309,6 +310,24 @@ fn merge_rejects_inconsistent_windows() {
         ..b.clone()
     };
     assert_eq!(merge(&a, &other_g), Err(MergeError::GravityMismatch));
+    let group = PreintegratedImu {
+        bias_correction: preint::BiasCorrection::Group,
+        ..b.clone()
+    };
+    assert_eq!(
+        merge(&a, &group),
+        Err(MergeError::BiasCorrectionMismatch {
+            a: preint::BiasCorrection::Additive,
+            b: preint::BiasCorrection::Group
+        })
+    );
+    // Equal corrections merge and keep it.
+    let a_group = PreintegratedImu {
+        bias_correction: preint::BiasCorrection::Group,
+        ..a.clone()
+    };
+    let m = merge(&a_group, &group).unwrap();
+    assert_eq!(m.bias_correction, preint::BiasCorrection::Group);
 }
 
 /// Every scheme, windows cut by `preintegrate` at a stream sample of a jittered stream: the

@@ -173,6 +173,11 @@ class Params:
     @lever_arm.setter
     def lever_arm(self, v: str) -> None: ...
     @property
+    def bias_correction(self) -> Literal["additive", "group"] | None:
+        """"additive", "group" or None (the scheme's: group for galilean, additive otherwise)."""
+    @bias_correction.setter
+    def bias_correction(self, v: str | None) -> None: ...
+    @property
     def omega_coriolis(self) -> _F64 | None:
         """Navigation-frame rotation rate [rad/s], shape (3,), or None."""
     @omega_coriolis.setter

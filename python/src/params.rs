@@ -10,7 +10,10 @@ use crate::errors::{preint_err, shape_err};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 use numpy::{PyArray1, PyArray2};
 use preint::lie::SO3;
-use preint::{CoriolisMode, ImuBias, ImuNoise, Level, LeverArm, PreintParams, Scheme, SensorPose};
+use preint::{
+    BiasCorrection, CoriolisMode, ImuBias, ImuNoise, Level, LeverArm, PreintParams, Scheme,
+    SensorPose,
+};
 use pyo3::prelude::*;
 
 /// The constructor arguments of `Noise` (its pickle state).
@@ -444,6 +447,27 @@ impl PyParams {
                 "unknown lever-arm model {v:?}: use exact or centripetal"
             ))
         })?;
+        Ok(())
+    }
+
+    /// How the deltas are corrected for a bias change: `"additive"` (Forster eq. 44, GTSAM's
+    /// Manifold/Tangent backends), `"group"` (right-applied on the group, GTSAM's Galilean
+    /// backend) or None (default: the scheme's, `"group"` for galilean, `"additive"` otherwise).
+    #[getter]
+    fn bias_correction(&self) -> Option<&'static str> {
+        self.0.bias_correction.map(|c| c.name())
+    }
+    #[setter]
+    fn set_bias_correction(&mut self, v: Option<&str>) -> PyResult<()> {
+        self.0.bias_correction = v
+            .map(|v| {
+                BiasCorrection::parse(v).ok_or_else(|| {
+                    shape_err(format!(
+                        "unknown bias correction {v:?}: use additive or group"
+                    ))
+                })
+            })
+            .transpose()?;
         Ok(())
     }
 

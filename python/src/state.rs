@@ -6,13 +6,13 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 use preint::lie::SO3;
 use preint::measurement::EdgeSource;
 use preint::{
-    BiasJacobians, CellRule, CoriolisMode, EdgeNoise, ImuBias, Level, LeverArm, PreintParams,
-    PreintegratedImu, Scheme, SensorPose,
+    BiasCorrection, BiasJacobians, CellRule, CoriolisMode, EdgeNoise, ImuBias, Level, LeverArm,
+    PreintParams, PreintegratedImu, Scheme, SensorPose,
 };
 use pyo3::PyResult;
 
 /// Format version written first.
-const VERSION: u8 = 1;
+const VERSION: u8 = 2;
 
 #[derive(Default)]
 struct Writer(Vec<u8>);
@@ -103,6 +103,7 @@ const CORIOLIS: [CoriolisMode; 3] = [
 ];
 const LEVERS: [LeverArm; 2] = [LeverArm::Exact, LeverArm::Centripetal];
 const CELLS: [CellRule; 2] = [CellRule::Held, CellRule::Centered];
+const CORRECTIONS: [BiasCorrection; 2] = BiasCorrection::ALL;
 
 /// The bytes of `p`.
 pub(crate) fn encode_params(p: &PreintParams) -> Vec<u8> {
@@ -129,6 +130,10 @@ pub(crate) fn encode_params(p: &PreintParams) -> Vec<u8> {
     w.u8(index_of(&LEVERS, p.lever_arm));
     w.opt_mat(&p.omega_coriolis);
     w.u8(index_of(&CORIOLIS, p.coriolis));
+    // 0 = None (the scheme's default), 1 + index otherwise.
+    w.u8(p
+        .bias_correction
+        .map_or(0, |c| 1 + index_of(&CORRECTIONS, c)));
     w.0
 }
 
@@ -156,6 +161,10 @@ pub(crate) fn decode_params(b: &[u8]) -> PyResult<PreintParams> {
     let lever_arm = pick(&LEVERS, r.u8()?)?;
     let omega_coriolis = r.opt_mat()?;
     let coriolis = pick(&CORIOLIS, r.u8()?)?;
+    let bias_correction = match r.u8()? {
+        0 => None,
+        i => Some(pick(&CORRECTIONS, i - 1)?),
+    };
     let p = PreintParams {
         gravity,
         gyro_cov,
@@ -173,6 +182,7 @@ pub(crate) fn decode_params(b: &[u8]) -> PyResult<PreintParams> {
         lever_arm,
         omega_coriolis,
         coriolis,
+        bias_correction,
     };
     r.end()?;
     Ok(p)
@@ -197,6 +207,7 @@ pub(crate) fn encode_measurement(m: &PreintegratedImu) -> Vec<u8> {
     w.opt_mat(&m.omega_coriolis);
     w.u8(index_of(&CORIOLIS, m.coriolis));
     w.u8(index_of(&LEVELS, m.level));
+    w.u8(index_of(&CORRECTIONS, m.bias_correction));
     let e = &m.edge_noise;
     w.mat(&e.gyro_cov);
     w.mat(&e.acc_cov);
@@ -233,6 +244,7 @@ pub(crate) fn decode_measurement(b: &[u8]) -> PyResult<PreintegratedImu> {
     let omega_coriolis = r.opt_mat()?;
     let coriolis = pick(&CORIOLIS, r.u8()?)?;
     let level = pick(&LEVELS, r.u8()?)?;
+    let bias_correction = pick(&CORRECTIONS, r.u8()?)?;
     let (gc, ac) = (r.mat()?, r.mat()?);
     let mut edge_noise = EdgeNoise::new(gc, ac, pick(&CELLS, r.u8()?)?);
     for _ in 0..r.u8()? {
@@ -265,5 +277,6 @@ pub(crate) fn decode_measurement(b: &[u8]) -> PyResult<PreintegratedImu> {
         coriolis,
         level,
         edge_noise,
+        bias_correction,
     })
 }

@@ -205,11 +205,12 @@ def test_pickle_round_trips_are_exact():
     p.set_body_p_sensor([np.cos(0.2), 0.0, np.sin(0.2), 0.0], [0.1 / 3, -0.2, 0.05])
     p.omega_coriolis = [0.0, 4.8e-5, 5.4e-5]
     p.coriolis = "second"
+    p.bias_correction = "group"
     back = pickle.loads(pickle.dumps(p))
     assert back == p
     for f in ("gravity", "gyroscope_covariance", "accelerometer_covariance", "integration_covariance", "omega_coriolis"):
         assert getattr(back, f).tobytes() == getattr(p, f).tobytes(), f
-    for f in ("scheme", "level", "max_gap_ns", "keep_samples", "coriolis", "lever_arm"):
+    for f in ("scheme", "level", "max_gap_ns", "keep_samples", "coriolis", "lever_arm", "bias_correction"):
         assert getattr(back, f) == getattr(p, f), f
     (rb, tb), (rp, tp) = back.body_p_sensor, p.body_p_sensor
     assert rb.tobytes() == rp.tobytes() and tb.tobytes() == tp.tobytes()
@@ -472,3 +473,14 @@ def test_euroc_example_runs_and_its_median_errors_are_within_the_datas_limits():
     # 0.10°, 0.045 m/s, 0.024 m; bounds with margin.
     assert medians[0] < 0.15 and medians[1] < 0.06 and medians[2] < 0.035, medians
     assert np.all(errors[:, 0] < 1.0) and np.all(errors[:, 1] < 0.3) and np.all(errors[:, 2] < 0.2)
+
+
+def test_params_bias_correction_property():
+    p = preint.Params()
+    assert p.bias_correction is None
+    p.bias_correction = "group"
+    assert p.bias_correction == "group"
+    p.bias_correction = None
+    assert p.bias_correction is None
+    with pytest.raises(preint.ShapeError, match="bias correction"):
+        p.bias_correction = "multiplicative"

@@ -309,6 +309,7 @@ fn template(params: &PreintParams, bias: &ImuBias, t_i_ns: i64) -> Preintegrated
         coriolis: params.coriolis,
         level: params.level,
         edge_noise: EdgeNoise::default(),
+        bias_correction: params.resolved_bias_correction(),
     }
 }
 

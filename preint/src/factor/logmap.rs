@@ -144,7 +144,7 @@ pub(super) fn to_logmap<const R: usize>(
     jac: &mut FactorJacobians<R>,
 ) {
     let j_rg = pim.jac.d_r_d_bg;
-    let (dr, jr_db, _, _) = super::residual::corrected(pim, bias_i);
+    let (dr, jr_db, _, _, _) = super::residual::corrected(pim, bias_i);
     let q = dr.matrix().transpose();
     let phi: Vector3<f64> = r.fixed_rows::<3>(0).into_owned();
     let jli = jl_inv(&phi);

@@ -9,7 +9,9 @@
 //! # Residual (Forster et al. 2017, T-RO, eq. 45)
 //!
 //! With `ΔR(b), Δv(b), Δp(b)` the deltas corrected to first order for the bias `b` at keyframe i
-//! (eq. 44, [`PreintegratedImu::corrected`]), `g` the world gravity and `Δt = t_j − t_i`:
+//! ([`PreintegratedImu::corrected`]: eq. 44, or on the group for
+//! [`BiasCorrection::Group`](crate::BiasCorrection::Group)), `g` the world gravity and
+//! `Δt = t_j − t_i`:
 //!
 //! ```text
 //! r_φ = Log(ΔR(b)ᵀ R_iᵀ R_j)                                   [rad]
@@ -46,8 +48,10 @@
 //! ∂r_p/∂δb_g = −J_p^g   ∂r_p/∂δb_a = −J_p^a
 //! ```
 //!
-//! all other blocks are zero. Every block is checked against central differences on the
-//! manifold in `preint/tests/factor.rs`. With an Earth rate (`pim.omega_coriolis`) the residual
+//! (with [`BiasCorrection::Group`](crate::BiasCorrection::Group), `J_v`, `J_p` in the velocity
+//! and position rows are the derivatives of the group-corrected `Δv(b)`, `Δp(b)`,
+//! [`crate::bias_correction`]); all other blocks are zero. Every block is checked against central differences on the
+//! manifold in `preint/tests/factor.rs` (both bias corrections). With an Earth rate (`pim.omega_coriolis`) the residual
 //! compares the deltas the states imply in the rotating frame instead (`rotating.rs`, each
 //! [`CoriolisMode`](crate::CoriolisMode); Jacobians checked in `preint/tests/earth.rs`); its
 //! covariance is the same.

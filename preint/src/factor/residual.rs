@@ -1,7 +1,7 @@
 //! Forster's 9-dim residual and its analytic Jacobians (formulas in the parent module's docs).
 
 use super::ImuFactorJacobians;
-use crate::measurement::PreintegratedImu;
+use crate::measurement::{BiasJacobians, PreintegratedImu};
 use crate::navstate::NavState;
 use crate::sample::ImuBias;
 use nalgebra::{Matrix3, SVector, Vector3};
@@ -17,8 +17,8 @@ pub(super) fn residual9(
     if let Some(w) = &pim.omega_coriolis {
         return super::rotating::residual9_rotating(pim, xi, xj, bias_i, w);
     }
-    let jb = &pim.jac;
-    let (dr, jr_db, dv, dp) = corrected(pim, bias_i);
+    let (dr, jr_db, dv, dp, jb) = corrected(pim, bias_i);
+    let jb = &jb;
 
     let dt = pim.delta_t;
     let g = pim.gravity;
@@ -60,31 +60,23 @@ pub(super) fn residual9(
     (r, jac)
 }
 
-/// The deltas corrected to first order for the bias `bias_i` (Forster eq. 44, as
-/// [`PreintegratedImu::corrected`]): `(ΔR(b), Jr(∂ΔR/∂b_g δb_g), Δv(b) [m/s], Δp(b) [m])`, the
-/// right Jacobian of the rotation correction for the bias Jacobians.
+/// The deltas corrected to first order for the bias `bias_i` (as
+/// [`PreintegratedImu::corrected`], in its [`BiasCorrection`](crate::BiasCorrection)):
+/// `(ΔR(b), Jr(∂ΔR/∂b_g δb_g), Δv(b) [m/s], Δp(b) [m], J)`, the right Jacobian of the rotation
+/// correction and `J` the derivatives of `Δv(b)`, `Δp(b)` with respect to `δb`
+/// ([`crate::bias_correction`]; its rotation block is `∂ΔR/∂b_g`) for the bias Jacobians.
 pub(super) fn corrected(
     pim: &PreintegratedImu,
     bias_i: &ImuBias,
-) -> (SO3, Matrix3<f64>, Vector3<f64>, Vector3<f64>) {
-    let dbg = bias_i.gyro - pim.bias_hat.gyro;
-    let dba = bias_i.acc - pim.bias_hat.acc;
-    let jb = &pim.jac;
-    let (exp_db, jr_db) = SO3::exp_jr(&(jb.d_r_d_bg * dbg));
-    let dr = pim.delta_r.compose(&exp_db);
-    let dv = pim.delta_v + jb.d_v_d_bg * dbg + jb.d_v_d_ba * dba;
-    let dp = pim.delta_p + jb.d_p_d_bg * dbg + jb.d_p_d_ba * dba;
-    (dr, jr_db, dv, dp)
+) -> (SO3, Matrix3<f64>, Vector3<f64>, Vector3<f64>, BiasJacobians) {
+    let c = crate::bias_correction::correct(pim, bias_i);
+    (c.r, c.jr, c.v, c.p, c.jac)
 }
 
 /// The bias-i blocks of a 9-dim residual's Jacobian: the rotation row through the first-order
 /// bias correction, `−(∂r_φ/∂ΔR(b)) ∂ΔR/∂b_g` with `rot = ∂r_φ/∂ΔR(b)` (3×3), and the velocity
 /// and position rows `−∂Δv/∂b`, `−∂Δp/∂b`.
-pub(super) fn bias_blocks(
-    jac: &mut ImuFactorJacobians,
-    rot: &Matrix3<f64>,
-    jb: &crate::measurement::BiasJacobians,
-) {
+pub(super) fn bias_blocks(jac: &mut ImuFactorJacobians, rot: &Matrix3<f64>, jb: &BiasJacobians) {
     for (row, m) in [
         (0, -rot * jb.d_r_d_bg),
         (3, -jb.d_v_d_bg),

@@ -178,8 +178,8 @@ pub(super) fn residual9_rotating(
         CoriolisMode::Exact => implied_exact(pim, xi, xj, w),
         mode => implied_approx(pim, xi, xj, w, mode),
     };
-    let jb = &pim.jac;
-    let (dr, jr_db, dv, dp) = super::residual::corrected(pim, bias_i);
+    let (dr, jr_db, dv, dp, jb) = super::residual::corrected(pim, bias_i);
+    let jb = &jb;
     let e = dr.inverse().compose(&imp.y);
     let (r_phi, jr_inv_e) = e.log_jac();
 

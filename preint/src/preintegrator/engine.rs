@@ -49,6 +49,7 @@ pub(crate) struct Fixed {
     pub gravity: Vector3<f64>,
     pub omega_coriolis: Option<Vector3<f64>>,
     pub coriolis: crate::earth::CoriolisMode,
+    pub bias_correction: crate::BiasCorrection,
     pub level: Level,
     pub gyro_cov: Matrix3<f64>,
     pub acc_cov: Matrix3<f64>,
@@ -421,6 +422,7 @@ impl<S: IntervalScheme> Core<S> {
             coriolis: fixed.coriolis,
             level: fixed.level,
             edge_noise,
+            bias_correction: fixed.bias_correction,
         }
     }
 }

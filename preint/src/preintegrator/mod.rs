@@ -509,6 +509,7 @@ fn fixed(params: &PreintParams, bias_hat: ImuBias, spec: WindowSpec) -> Fixed {
         gravity: params.gravity,
         omega_coriolis: params.omega_coriolis,
         coriolis: params.coriolis,
+        bias_correction: params.resolved_bias_correction(),
         level: params.level,
         gyro_cov: params.gyro_cov,
         acc_cov: params.acc_cov,

@@ -69,6 +69,7 @@ pub fn random_pim(
         coriolis: omega.map_or(CoriolisMode::Exact, |o| o.1),
         level: Level::Combined,
         edge_noise: EdgeNoise::default(),
+        bias_correction: preint::BiasCorrection::Additive,
     }
 }
 
