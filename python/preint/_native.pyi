@@ -248,8 +248,13 @@ class PreintegratedImu:
     @property
     def level(self) -> _LevelName:
         """"deltas", "covariance" or "combined"."""
+    @property
+    def bias_correction(self) -> Literal["additive", "group"]:
+        """How corrected/predict/the factors apply a new bias: "additive" (Forster eq. 44) or
+        "group" (right-applied on SE₂(3), GTSAM's Galilean backend; galilean's default)."""
     def corrected(self, bias: ImuBias) -> tuple[_F64, _F64, _F64]:
-        """First-order bias-corrected (ΔR 3×3, Δv [m/s], Δp [m])."""
+        """First-order bias-corrected (ΔR 3×3, Δv [m/s], Δp [m]), additively or on the group
+        (bias_correction)."""
     def delta_error(self, reference: PreintegratedImu) -> _F64:
         """[Log(ΔR_refᵀ ΔR), Δv − Δv_ref, Δp − Δp_ref], shape (9,)."""
     def __eq__(self, value: object, /) -> bool: ...

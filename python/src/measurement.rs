@@ -112,6 +112,12 @@ impl PyMeasurement {
     fn coriolis(&self) -> &'static str {
         coriolis_name(self.0.coriolis)
     }
+    /// How `corrected` (and so `predict` and the factors) applies a new bias: "additive"
+    /// (Forster eq. 44) or "group" (right-applied on SE₂(3), GTSAM's Galilean backend).
+    #[getter]
+    fn bias_correction(&self) -> &'static str {
+        self.0.bias_correction.name()
+    }
     /// What was computed: "deltas", "covariance" or "combined".
     #[getter]
     fn level(&self) -> &'static str {
@@ -122,8 +128,8 @@ impl PyMeasurement {
         }
     }
 
-    /// Deltas corrected to first order for the bias `bias` (Forster eq. 44):
-    /// `(ΔR 3×3, Δv [m/s], Δp [m])`.
+    /// Deltas corrected to first order for the bias `bias`, additively (Forster eq. 44) or on
+    /// the group (`bias_correction`): `(ΔR 3×3, Δv [m/s], Δp [m])`.
     #[allow(clippy::type_complexity)]
     fn corrected<'py>(
         &self,
