@@ -18,16 +18,13 @@
 //! Norm: for each item X (ΔR as a matrix, Δv, Δp, the 9×9 covariance, each bias Jacobian),
 //! `‖X_ours − X_gtsam‖_F ≤ 1e-12 · ‖X_gtsam‖_F`.
 
-use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
-use preint::{
-    BiasCorrection, ImuBias, Level, NavState, PreintParams, PreintegratedImu, Preintegrator,
-    Scheme, predict,
-};
+use nalgebra::DMatrix;
+use preint::{BiasCorrection, ImuBias, NavState, PreintegratedImu, Preintegrator, Scheme, predict};
 use preint_io::parse_euroc_imu;
 use serde_json::Value;
 
 mod common;
-use common::gtsam_fixture::{dir, m3, mat, v3};
+use common::gtsam_fixture::{dir, dm, json, mat, params_of, rel, v3};
 
 const CASES: &[&str] = &[
     "galilean_example",
@@ -36,56 +33,18 @@ const CASES: &[&str] = &[
     "galilean_aniso",
 ];
 
-fn json(path: std::path::PathBuf) -> Value {
-    serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap()
-}
-
-/// Scalar `s` → `s I`, else the 3×3 matrix.
-fn cov3(v: &Value) -> Matrix3<f64> {
-    match v.as_f64() {
-        Some(s) => Matrix3::identity() * s,
-        None => m3(v),
-    }
-}
-
-/// The parameters and bias estimate of a `NAME.params.json` (as `gtsam_preint.py` reads them).
-fn params_of(cfg: &Value) -> (PreintParams, ImuBias) {
-    let mut p = PreintParams::default()
-        .with_scheme(Scheme::Galilean)
-        .with_level(Level::Covariance);
-    p.gravity = Vector3::new(0.0, 0.0, -cfg["gravity"].as_f64().unwrap_or(9.81));
-    p.gyro_cov = match cfg.get("gyro_covariance") {
-        Some(c) => cov3(c),
-        None => Matrix3::identity() * cfg["gyro_noise_density"].as_f64().unwrap().powi(2),
-    };
-    p.acc_cov = match cfg.get("accel_covariance") {
-        Some(c) => cov3(c),
-        None => Matrix3::identity() * cfg["accel_noise_density"].as_f64().unwrap().powi(2),
-    };
-    p.integration_cov = cfg.get("integration_covariance").map(cov3);
-    (p, ImuBias::new(v3(&cfg["bg"]), v3(&cfg["ba"])))
-}
-
-fn rel(ours: &DMatrix<f64>, theirs: &DMatrix<f64>) -> f64 {
-    (ours - theirs).norm() / theirs.norm()
-}
-
-fn dm<const R: usize, const C: usize>(m: &SMatrix<f64, R, C>) -> DMatrix<f64> {
-    DMatrix::from_fn(R, C, |i, j| m[(i, j)])
-}
-
 #[test]
 fn galilean_matches_gtsam_g_on_every_fixture() {
     for case in CASES {
-        let out = json(dir().join(format!("{case}.gtsam.json")));
+        let out = json(&format!("{case}.gtsam.json"));
         assert_eq!(out["backend_class"], "PreintegratedImuMeasurementsG");
         assert_eq!(out["hold"], "left");
         let input = out["input"].as_str().unwrap();
-        let cfg = json(dir().join(out["params"].as_str().unwrap()));
+        let cfg = json(out["params"].as_str().unwrap());
         let text = std::fs::read_to_string(dir().join(input)).unwrap();
         let samples = parse_euroc_imu(&text, input).unwrap();
         assert_eq!(samples.len() as u64, out["n_samples"].as_u64().unwrap());
-        let (params, bias) = params_of(&cfg);
+        let (params, bias) = params_of(&cfg, Scheme::Galilean);
         let mut pi = Preintegrator::new(params, bias).unwrap();
         pi.integrate_slice(&samples).unwrap();
         let m = pi.finish().unwrap();
@@ -174,8 +133,8 @@ fn galilean_fixtures_are_not_eulers() {
         ("galilean_fastspin", "fastspin"),
         ("galilean_example", "example"),
     ] {
-        let g = json(dir().join(format!("{case}.gtsam.json")));
-        let e = json(dir().join(format!("{euler}.gtsam.json")));
+        let g = json(&format!("{case}.gtsam.json"));
+        let e = json(&format!("{euler}.gtsam.json"));
         let d = (v3(&g["delta_v"]) - v3(&e["delta_v"])).norm();
         assert!(d > 1e-6 * v3(&e["delta_v"]).norm(), "{case}: {d}");
     }

@@ -6,18 +6,12 @@
 //! `‖X_ours − X_gtsam‖_F ≤ 1e-12 · ‖X_gtsam‖_F`. The fixture covariance is in [φ, p, v] order
 //! (Forster chart); it is reordered to our [φ, v, p].
 
-use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
-use preint::{ImuBias, Level, PreintParams, Preintegrator, Scheme};
+use nalgebra::DMatrix;
+use preint::{Preintegrator, Scheme};
 use preint_io::parse_euroc_imu;
-use serde_json::Value;
 
 mod common;
-use common::gtsam_fixture::{dir, m3, mat, v3};
-
-/// The JSON file at `path`.
-fn json(path: std::path::PathBuf) -> Value {
-    serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap()
-}
+use common::gtsam_fixture::{dir, dm, json, mat, params_of, rel, v3};
 
 const CASES: &[&str] = &[
     "example",
@@ -31,48 +25,11 @@ const CASES: &[&str] = &[
     "intcov",
 ];
 
-/// Scalar `s` → `s I`, else the 3×3 matrix.
-fn cov3(v: &Value) -> Matrix3<f64> {
-    match v.as_f64() {
-        Some(s) => Matrix3::identity() * s,
-        None => m3(v),
-    }
-}
-
-fn params_of(cfg: &Value) -> (PreintParams, ImuBias) {
-    let mut p = PreintParams::default()
-        .with_scheme(Scheme::Euler)
-        .with_level(Level::Covariance);
-    p.gravity = match cfg.get("n_gravity") {
-        Some(g) => v3(g),
-        None => Vector3::new(0.0, 0.0, -cfg["gravity"].as_f64().unwrap_or(9.81)),
-    };
-    p.gyro_cov = match cfg.get("gyro_covariance") {
-        Some(c) => cov3(c),
-        None => Matrix3::identity() * cfg["gyro_noise_density"].as_f64().unwrap().powi(2),
-    };
-    p.acc_cov = match cfg.get("accel_covariance") {
-        Some(c) => cov3(c),
-        None => Matrix3::identity() * cfg["accel_noise_density"].as_f64().unwrap().powi(2),
-    };
-    p.integration_cov = cfg.get("integration_covariance").map(cov3);
-    let bias = ImuBias::new(v3(&cfg["bg"]), v3(&cfg["ba"]));
-    (p, bias)
-}
-
-fn rel(ours: &DMatrix<f64>, theirs: &DMatrix<f64>) -> f64 {
-    (ours - theirs).norm() / theirs.norm()
-}
-
-fn dm<const R: usize, const C: usize>(m: &SMatrix<f64, R, C>) -> DMatrix<f64> {
-    DMatrix::from_fn(R, C, |i, j| m[(i, j)])
-}
-
 #[test]
 fn euler_matches_gtsam_manifold_on_every_fixture() {
     for case in CASES {
-        let cfg = json(dir().join(format!("{case}.params.json")));
-        let out = json(dir().join(format!("{case}.gtsam.json")));
+        let cfg = json(&format!("{case}.params.json"));
+        let out = json(&format!("{case}.gtsam.json"));
         assert_eq!(out["backend"], "manifold");
         assert_eq!(out["hold"], "left");
         let csv = if case.starts_with("example") {
@@ -83,7 +40,7 @@ fn euler_matches_gtsam_manifold_on_every_fixture() {
         let text = std::fs::read_to_string(dir().join(format!("{csv}.csv"))).unwrap();
         let samples = parse_euroc_imu(&text, csv).unwrap();
         assert_eq!(samples.len() as u64, out["n_samples"].as_u64().unwrap());
-        let (params, bias) = params_of(&cfg);
+        let (params, bias) = params_of(&cfg, Scheme::Euler);
         let mut pi = Preintegrator::new(params, bias).unwrap();
         pi.integrate_slice(&samples).unwrap();
         let m = pi.finish().unwrap();
@@ -122,7 +79,7 @@ fn fixtures_are_varied() {
     // The fixture set covers 50–1000 Hz, irregular Δt, non-zero bias
     // estimates, fast rotation, anisotropic noise and integration covariance.
     let rate = |case: &str| {
-        let out = json(dir().join(format!("{case}.gtsam.json")));
+        let out = json(&format!("{case}.gtsam.json"));
         out["n_intervals"].as_f64().unwrap() / out["delta_t"].as_f64().unwrap()
     };
     assert!((rate("rate50") - 50.0).abs() < 1e-6);
@@ -134,12 +91,8 @@ fn fixtures_are_varied() {
     let text = std::fs::read_to_string(dir().join("fastspin.csv")).unwrap();
     let s = parse_euroc_imu(&text, "fastspin").unwrap();
     assert!(s.iter().map(|x| x.gyro.norm()).fold(0.0, f64::max) > 9.0);
-    let cfg = json(dir().join("bias.params.json"));
+    let cfg = json("bias.params.json");
     assert!(v3(&cfg["bg"]).norm() > 0.01 && v3(&cfg["ba"]).norm() > 0.1);
-    assert!(
-        json(dir().join("aniso.params.json"))
-            .get("gyro_covariance")
-            .is_some()
-    );
-    assert!(json(dir().join("intcov.params.json"))["integration_covariance"].is_array());
+    assert!(json("aniso.params.json").get("gyro_covariance").is_some());
+    assert!(json("intcov.params.json")["integration_covariance"].is_array());
 }
