@@ -8,7 +8,7 @@ use numpy::{
     IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2,
     PyUntypedArrayMethods,
 };
-use preint::ImuSample;
+use preint::{ImuSample, PreintError};
 use pyo3::prelude::*;
 use std::cell::RefCell;
 use std::ops::Range;
@@ -73,8 +73,7 @@ pub(crate) fn svec_py<'py, const N: usize>(
 /// The samples of the arrays `t_ns` (int64[N], nanoseconds), `gyro` (float64[N, 3], rad/s)
 /// and `acc` (float64[N, 3], m/s²) as one vector. Shapes and dtypes are checked here, values
 /// (finite, increasing timestamps) by the preintegrator, which names the sample. (For bindings
-/// that need a whole stream at once; the preintegration functions convert window by window.)
-#[allow(dead_code)]
+/// that need a whole stream at once; the window functions convert window by window.)
 pub(crate) fn samples(
     t_ns: &Bound<'_, PyAny>,
     gyro: &Bound<'_, PyAny>,
@@ -174,17 +173,31 @@ impl SampleViews<'_> {
         }
     }
 
-    /// The samples a keyframe window `[t_i_ns, t_j_ns]` reads, with a margin: the preintegration
-    /// of a window uses and checks at most 4 samples beyond the last sample before `t_i` and the
-    /// first after `t_j` (`preint::window`: checks from 3 before to 3 after, a stencil reach of
-    /// 1), so the window of the range equals the window of the whole stream. Binary search, as
-    /// in `preint::preintegrate` (an unsorted stream is reported there).
-    pub(crate) fn window_range(&self, t_i_ns: i64, t_j_ns: i64) -> Range<usize> {
-        const MARGIN: usize = 8;
+    /// The samples a keyframe window `[t_i_ns, t_j_ns]` reads, with `margin` samples beyond the
+    /// last sample before `t_i` and the first after `t_j`. Binary search, as in
+    /// `preint::preintegrate` (an unsorted stream is reported there).
+    pub(crate) fn window_range(&self, t_i_ns: i64, t_j_ns: i64, margin: usize) -> Range<usize> {
         let n = self.len();
         let lo = self.partition_point(|t| t < t_i_ns);
         let hi = self.partition_point(|t| t <= t_j_ns);
-        lo.saturating_sub(MARGIN)..(hi.max(lo) + MARGIN).min(n)
+        lo.saturating_sub(margin)..(hi.max(lo) + margin).min(n)
+    }
+
+    /// `f` on the samples of the keyframe window `[t_i_ns, t_j_ns]` and `margin` samples either
+    /// side ([`SampleViews::window_range`]), converted into this thread's scratch buffer; a
+    /// sample index in `f`'s error is counted from the start of the caller's arrays.
+    pub(crate) fn in_window<T>(
+        &self,
+        (t_i_ns, t_j_ns): (i64, i64),
+        margin: usize,
+        f: impl FnOnce(&[ImuSample]) -> Result<T, PreintError>,
+    ) -> Result<T, PreintError> {
+        let range = self.window_range(t_i_ns, t_j_ns, margin);
+        let offset = range.start;
+        with_scratch(|buf| {
+            self.fill(range, buf);
+            f(buf).map_err(|e| shift(e, offset))
+        })
     }
 
     fn partition_point(&self, pred: impl Fn(i64) -> bool) -> usize {
@@ -207,6 +220,25 @@ const SCRATCH_KEEP: usize = 1 << 20;
 
 thread_local! {
     static SCRATCH: RefCell<Vec<ImuSample>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Samples either side of a keyframe window that its preintegration (and the deltas inside
+/// it) may read: `preint::window` uses and checks at most 4 samples beyond the last sample
+/// before `t_i` and the first after `t_j` (checks from 3 before to 3 after, a stencil reach of
+/// 1), so the window of the range equals the window of the whole stream.
+pub(crate) const WINDOW_MARGIN: usize = 8;
+
+/// `e` with its sample index counted from the start of the caller's arrays, for an error of a
+/// window integrated from the sub-range starting at sample `offset`.
+fn shift(mut e: PreintError, offset: usize) -> PreintError {
+    match &mut e {
+        PreintError::NonFinite { index, .. }
+        | PreintError::DuplicateTimestamp { index, .. }
+        | PreintError::DecreasingTimestamp { index, .. }
+        | PreintError::GapTooLarge { index, .. } => *index += offset,
+        _ => {}
+    }
+    e
 }
 
 /// Runs `f` with an empty sample buffer: this thread's scratch buffer, kept for the next call

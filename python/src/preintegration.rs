@@ -4,7 +4,7 @@
 //! Arrays: `t_ns` int64[N] (nanoseconds), `gyro` float64[N, 3] [rad/s], `acc` float64[N, 3]
 //! [m/s²], sensor frame. The GIL is released while Rust integrates.
 
-use crate::convert::{SampleArrays, SampleViews, vec3, with_scratch};
+use crate::convert::{SampleArrays, SampleViews, WINDOW_MARGIN, vec3, with_scratch};
 use crate::errors::{Class, preint_err, raise, shape_err};
 use crate::measurement::PyMeasurement;
 use crate::params::{PyBias, PyParams, bias_or_zero};
@@ -122,33 +122,17 @@ impl PyPreintegrator {
 /// Samples converted per `integrate_slice` call of `integrate_arrays` (229 KiB).
 const CHUNK: usize = 4096;
 
-/// `e` with its sample index counted from the start of the caller's arrays, for an error of a
-/// window integrated from the sub-range starting at sample `offset`.
-fn shift(mut e: PreintError, offset: usize) -> PreintError {
-    match &mut e {
-        PreintError::NonFinite { index, .. }
-        | PreintError::DuplicateTimestamp { index, .. }
-        | PreintError::DecreasingTimestamp { index, .. }
-        | PreintError::GapTooLarge { index, .. } => *index += offset,
-        _ => {}
-    }
-    e
-}
-
-/// The window `[t_i_ns, t_j_ns]` of the arrays: its samples (with the margin of
-/// `SampleViews::window_range`) converted into `buf`, then `preint::preintegrate`.
+/// The window `[t_i_ns, t_j_ns]` of the arrays: `preint::preintegrate` on its samples
+/// ([`SampleViews::in_window`]).
 fn window(
     p: &PreintParams,
     b: &ImuBias,
     v: &SampleViews<'_>,
     (t_i_ns, t_j_ns): (i64, i64),
-    buf: &mut Vec<ImuSample>,
 ) -> Result<PreintegratedImu, PreintError> {
-    let range = v.window_range(t_i_ns, t_j_ns);
-    let offset = range.start;
-    buf.clear();
-    v.fill(range, buf);
-    preint::preintegrate(p, b, buf, t_i_ns, t_j_ns).map_err(|e| shift(e, offset))
+    v.in_window((t_i_ns, t_j_ns), WINDOW_MARGIN, |s| {
+        preint::preintegrate(p, b, s, t_i_ns, t_j_ns)
+    })
 }
 
 /// The measurement over the keyframe window `[t_i_ns, t_j_ns]` of a time-ordered stream
@@ -168,7 +152,7 @@ pub(crate) fn preintegrate(
 ) -> PyResult<PyMeasurement> {
     let arrays = SampleArrays::new(t_ns, gyro, acc)?;
     let (v, p, b) = (arrays.views(), &params.0, bias_or_zero(bias));
-    py.detach(|| with_scratch(|buf| window(p, &b, &v, (t_i_ns, t_j_ns), buf)))
+    py.detach(|| window(p, &b, &v, (t_i_ns, t_j_ns)))
         .map(PyMeasurement)
         .map_err(preint_err)
 }
@@ -198,11 +182,9 @@ pub(crate) fn preintegrate_windows(
     let (v, p, b) = (arrays.views(), &params.0, bias_or_zero(bias));
     // Each window converts only its own samples, into one reused buffer.
     let out = py.detach(|| {
-        with_scratch(|buf| {
-            k.windows(2)
-                .map(|w| window(p, &b, &v, (w[0], w[1]), buf))
-                .collect::<Result<Vec<_>, _>>()
-        })
+        k.windows(2)
+            .map(|w| window(p, &b, &v, (w[0], w[1])))
+            .collect::<Result<Vec<_>, _>>()
     });
     Ok(out
         .map_err(preint_err)?

@@ -2,7 +2,7 @@
 //! `states_at`, `deskew_points`: what lidar deskewing needs) and the embedded truncation-error estimate of a window
 //! (`truncation_estimate`, `inflate`).
 
-use crate::convert::{samples, svec_py};
+use crate::convert::{SampleArrays, WINDOW_MARGIN, svec_py};
 use crate::errors::{preint_err, shape_err};
 use crate::measurement::PyMeasurement;
 use crate::navstate::PyNavState;
@@ -34,11 +34,20 @@ pub(crate) fn deltas_at<'py>(
     times_ns: &Bound<'py, PyAny>,
     bias: Option<PyRef<'_, PyBias>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let s = samples(t_ns, gyro, acc)?;
+    let arrays = SampleArrays::new(t_ns, gyro, acc)?;
     let q = times("times_ns", times_ns)?;
-    let (p, b) = (&params.0, bias_or_zero(bias));
+    let (v, p, b, w) = (
+        arrays.views(),
+        &params.0,
+        bias_or_zero(bias),
+        (t_i_ns, t_j_ns),
+    );
     let d = py
-        .detach(|| preint::deskew::deltas_at(p, &b, &s, (t_i_ns, t_j_ns), &q))
+        .detach(|| {
+            v.in_window(w, WINDOW_MARGIN, |s| {
+                preint::deskew::deltas_at(p, &b, s, w, &q)
+            })
+        })
         .map_err(preint_err)?;
     let out = PyDict::new(py);
     put_deltas(py, &out, &d)?;
@@ -88,10 +97,16 @@ pub(crate) fn truncation_estimate<'py>(
     pim: PyRef<'_, PyMeasurement>,
     bias: Option<PyRef<'_, PyBias>>,
 ) -> PyResult<(Bound<'py, PyArray1<f64>>, &'static str)> {
-    let s = samples(t_ns, gyro, acc)?;
-    let (p, b, m) = (&params.0, bias_or_zero(bias), &pim.0);
+    let arrays = SampleArrays::new(t_ns, gyro, acc)?;
+    let (v, p, b, m) = (arrays.views(), &params.0, bias_or_zero(bias), &pim.0);
+    // Twice the margin: the Richardson companion integrates every other sample, whose window
+    // reads as many samples of its own beyond the edges.
     let e = py
-        .detach(|| preint::truncation::estimate(p, &b, &s, m))
+        .detach(|| {
+            v.in_window((m.t_i_ns, m.t_j_ns), 2 * WINDOW_MARGIN, |s| {
+                preint::truncation::estimate(p, &b, s, m)
+            })
+        })
         .map_err(preint_err)?;
     Ok((svec_py(py, &e.error), e.method))
 }
@@ -148,11 +163,21 @@ pub(crate) fn states_at<'py>(
     times_ns: &Bound<'py, PyAny>,
     bias: Option<PyRef<'_, PyBias>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let s = samples(t_ns, gyro, acc)?;
+    let arrays = SampleArrays::new(t_ns, gyro, acc)?;
     let q = times("times_ns", times_ns)?;
-    let (p, b, x) = (&params.0, bias_or_zero(bias), state_i.0);
+    let (v, p, b, x, w) = (
+        arrays.views(),
+        &params.0,
+        bias_or_zero(bias),
+        state_i.0,
+        (t_i_ns, t_j_ns),
+    );
     let at = py
-        .detach(|| preint::deskew::states_at(p, &b, &s, (t_i_ns, t_j_ns), &x, &q))
+        .detach(|| {
+            v.in_window(w, WINDOW_MARGIN, |s| {
+                preint::deskew::states_at(p, &b, s, w, &x, &q)
+            })
+        })
         .map_err(preint_err)?;
     let k = at.len();
     let out = PyDict::new(py);
@@ -196,7 +221,7 @@ pub(crate) fn deskew_points<'py>(
     target: &str,
     bias: Option<PyRef<'_, PyBias>>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let s = samples(t_ns, gyro, acc)?;
+    let arrays = SampleArrays::new(t_ns, gyro, acc)?;
     let tq = times("points_t_ns", points_t_ns)?;
     let pts = points
         .cast::<PyArray2<f64>>()
@@ -225,9 +250,19 @@ pub(crate) fn deskew_points<'py>(
             )));
         }
     };
-    let (p, b, x) = (&params.0, bias_or_zero(bias), state_i.0);
+    let (v, p, b, x, w) = (
+        arrays.views(),
+        &params.0,
+        bias_or_zero(bias),
+        state_i.0,
+        (t_i_ns, t_j_ns),
+    );
     let out = py
-        .detach(|| preint::deskew::deskew_points(p, &b, &s, (t_i_ns, t_j_ns), &x, &pairs, target))
+        .detach(|| {
+            v.in_window(w, WINDOW_MARGIN, |s| {
+                preint::deskew::deskew_points(p, &b, s, w, &x, &pairs, target)
+            })
+        })
         .map_err(preint_err)?;
     Ok(Array2::from_shape_fn((out.len(), 3), |(n, i)| out[n][i]).into_pyarray(py))
 }
