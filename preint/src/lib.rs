@@ -50,6 +50,7 @@ pub mod params;
 pub mod preintegrator;
 pub(crate) mod propagation;
 pub mod scheme;
+pub mod second_order;
 pub mod truncation;
 pub mod window;
 

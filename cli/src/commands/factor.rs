@@ -13,7 +13,8 @@
 //!
 //! `--residual component|logmap` picks the factor's [`ResidualMode`] (default: the library's,
 //! [`ResidualMode::default`]); the weight is then the covariance of that residual
-//! (`ImuFactor::residual_covariance`).
+//! (`ImuFactor::residual_covariance`). `--second-order` adds the second-order covariance term
+//! of `preint::second_order` to the measurement's covariance first.
 //!
 //! Printed: the residual (order [r_φ, r_v, r_p] or [r_φ, r_v, r_p, r_bg, r_ba]), the whitened
 //! residual `U r` (`UᵀU = Σ⁻¹`, `U` upper triangular), `χ² = ‖U r‖²` with its χ² quantiles, and
@@ -72,6 +73,10 @@ pub struct Args {
     /// Standard deviation of the ground truth's velocities (m/s), added to the weight.
     #[arg(long, default_value_t = 0.0)]
     pub vel_std: f64,
+    /// Weight the factor with the second-order covariance (`preint::second_order`: the
+    /// term the first-order covariance misses over long windows with noisy gyroscopes).
+    #[arg(long)]
+    pub second_order: bool,
 }
 
 fn parse_residual(s: &str) -> Result<ResidualMode, String> {
@@ -95,6 +100,8 @@ pub struct FactorRun {
     pub combined: bool,
     /// The factor's residual.
     pub residual: ResidualMode,
+    /// Weighted with the second-order covariance term (`--second-order`).
+    pub second_order: bool,
     /// Ground truth at keyframe i.
     pub gi: GroundTruthState,
     /// Ground truth at keyframe j.
@@ -160,8 +167,12 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
         stream::cut_window(stream, Some(gi.t_ns), Some(gj.t_ns))?
     };
     let samples = w.samples.as_slice();
-    let pim = preintegrate(&params, &gi.bias, samples, gi.t_ns, gj.t_ns)
-        .map_err(|e| CliError::failed_in(args.input.path(), w.in_stream(e)))?;
+    let in_file = |e| CliError::failed_in(args.input.path(), w.in_stream(e));
+    let mut pim = preintegrate(&params, &gi.bias, samples, gi.t_ns, gj.t_ns).map_err(in_file)?;
+    if args.second_order {
+        let term = preint::second_order::covariance(&params, samples, &pim).map_err(in_file)?;
+        pim = preint::second_order::inflate(&pim, &term);
+    }
     let failed = |e: preint::FactorError| CliError::failed_in(args.input.path(), e);
     let (xi, xj) = (nav(&gi), nav(&gj));
     let ev = if args.combined {
@@ -178,6 +189,7 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
         scheme,
         combined: args.combined,
         residual: args.residual,
+        second_order: args.second_order,
         gi,
         gj,
         requested: (args.from, args.to),
@@ -220,6 +232,7 @@ pub fn to_json(f: &FactorRun) -> Value {
         "factor": factor_name(f.combined),
         "scheme": scheme::label(f.scheme),
         "residual_mode": f.residual.name(),
+        "second_order": f.second_order,
         "requested_ns": [f.requested.0, f.requested.1],
         "t_i_ns": f.gi.t_ns,
         "t_j_ns": f.gj.t_ns,
@@ -257,11 +270,16 @@ pub fn to_text(f: &FactorRun) -> String {
     let mut h = String::new();
     let _ = writeln!(
         h,
-        "{}: {} ({} residual) at the ground truth, scheme {}, keyframes {} → {} ns (nearest rows \
+        "{}: {} ({} residual{}) at the ground truth, scheme {}, keyframes {} → {} ns (nearest rows \
          to {} and {}), Δt = {:.6} s, {} samples",
         f.imu,
         factor_name(f.combined),
         f.residual.name(),
+        if f.second_order {
+            ", second-order covariance"
+        } else {
+            ""
+        },
         scheme::label(f.scheme),
         f.gi.t_ns,
         f.gj.t_ns,

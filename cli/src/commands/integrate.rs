@@ -56,6 +56,12 @@ pub struct Args {
     /// window rather than streaming the whole recording.
     #[arg(long)]
     pub truncation: bool,
+    /// Also compute the second-order covariance term of the window's SE₂(3) error
+    /// (`preint::second_order`: what the first-order covariance misses over long windows with
+    /// noisy gyroscopes) and the increase of the mean χ² it accounts for. Reads the window
+    /// rather than streaming the whole recording.
+    #[arg(long)]
+    pub second_order: bool,
 }
 
 /// A preintegrated window.
@@ -89,6 +95,8 @@ pub struct Integration {
     pub at: Vec<(DeltasAt, Option<NavState>)>,
     /// The estimated truncation error of the deltas (`--truncation`).
     pub truncation: Option<preint::TruncationEstimate>,
+    /// The second-order covariance term, [δφ, δv, δp] (`--second-order`).
+    pub second_order: Option<preint::nalgebra::SMatrix<f64, 9, 9>>,
 }
 
 /// Reads the file once and preintegrates `[--from, --to]` at [`Level::Combined`]: the whole
@@ -117,10 +125,15 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
             .then(|| preint::truncation::estimate(params, &bias, &w.samples, &pim))
             .transpose()
             .map_err(|e| fail(w.in_stream(e)))?;
+        let second_order = args
+            .second_order
+            .then(|| preint::second_order::covariance(params, &w.samples, &pim))
+            .transpose()
+            .map_err(|e| fail(w.in_stream(e)))?;
         let count = input::count_in(&w.samples, w.t_i_ns, w.t_j_ns);
-        Ok::<_, CliError>((pim, count, at, truncation))
+        Ok::<_, CliError>((pim, count, at, truncation, second_order))
     };
-    let (source, noise, (pim, samples, at, truncation)) = if args.input.is_split() {
+    let (source, noise, (pim, samples, at, truncation, second_order)) = if args.input.is_split() {
         // The merged accelerometer's effective density is known once the files are read.
         let (w, source, split) = stream::split_window(&args.input, args.from, args.to)?;
         let noise = noise::apply_split(&noise, split.as_ref(), &mut params);
@@ -130,9 +143,9 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
         let source = stream.info().clone();
         let _bar = ReadingBar::start(stream.progress(), "integrate");
         let streamed = args.from.is_none() && args.to.is_none();
-        let result = if streamed && args.at.is_empty() && !args.truncation {
+        let result = if streamed && args.at.is_empty() && !args.truncation && !args.second_order {
             let (pim, count) = whole_recording(stream, params, &bias, fail)?;
-            (pim, count, vec![], None)
+            (pim, count, vec![], None, None)
         } else {
             window(&params, stream::cut_window(stream, args.from, args.to)?)?
         };
@@ -152,6 +165,7 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
         lever_arm,
         at,
         truncation,
+        second_order,
     })
 }
 
@@ -312,6 +326,17 @@ pub fn to_json(r: &Integration) -> Value {
             "units": {"dphi": "rad", "dv": "m/s", "dp": "m"},
         });
     }
+    if let Some(c) = &r.second_order {
+        out["second_order"] = json!({
+            "covariance": rows(c),
+            "chi2_increase": chi2_increase(&r.pim, c),
+            "order": "[dphi, dv, dp], the chart of covariance",
+            "units": "rad^2, (m/s)^2, m^2 blocks",
+            "note": "add to covariance to weight a factor with the second-order covariance; \
+                     chi2_increase = tr(covariance^-1 term), the mean chi2 at the true states \
+                     that the first-order covariance does not account for",
+        });
+    }
     if let Some(x) = &r.predicted {
         out["predicted"] = json!({
             "position": list(&x.p), "velocity": list(&x.v), "rotation": rows(x.r.matrix()),
@@ -420,6 +445,15 @@ pub fn to_text(r: &Integration) -> String {
             (m.cov[(6, 6)] + m.cov[(7, 7)] + m.cov[(8, 8)]).sqrt()
         );
     }
+    if let Some(c) = &r.second_order {
+        let _ = writeln!(
+            h,
+            "second-order covariance term [δφ, δv, δp] (add to the 9×9 covariance; the mean χ² \
+             at the true states it accounts for: +{:.3}):",
+            chi2_increase(m, c)
+        );
+        h.push_str(&text_matrix(c, "  "));
+    }
     if let Some(x) = &r.predicted {
         let _ = writeln!(
             h,
@@ -466,4 +500,12 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
         human: to_text(&r),
         json: to_json(&r),
     })
+}
+
+/// `tr(Σ⁻¹ S)`: the mean χ² at the true states a term `S` adds over the first-order `Σ`
+/// (`E[rᵀ Σ⁻¹ r] = tr(Σ⁻¹ (Σ + S))`); `NaN` when `Σ` is singular.
+fn chi2_increase(m: &PreintegratedImu, s: &preint::nalgebra::SMatrix<f64, 9, 9>) -> f64 {
+    m.cov
+        .cholesky()
+        .map_or(f64::NAN, |c| (c.inverse() * s).trace())
 }
