@@ -23,20 +23,23 @@
 //!
 //! A factor at the true states sees `r = −(e + n)`: the deterministic truncation error plus the
 //! noise. Weighting it by `Σ` alone makes the mean χ² `dof + eᵀΣ⁻¹e`, which for Euler at 20 Hz
-//! is in the thousands. [`inflate`] adds `ê êᵀ` to the 9×9 block of both covariances: by the
-//! Sherman–Morrison identity the mean χ² is then `dof + (eᵀΣ⁻¹e − (êᵀΣ⁻¹e)²/(1 + êᵀΣ⁻¹ê))`,
-//! exactly `dof` when the estimate `ê` equals `e`, and never more than `dof + 1` for an
-//! estimate along `e` of any size. The factor then states how much it can be trusted in the
-//! direction its own discretisation moves it. This holds for a residual linear in the deltas'
-//! error, as the component-wise one is; the Logmap residual is so to first order, and an offset
-//! as large as Euler's at 20 Hz leaves second-order terms (`docs/EVIDENCE.md`).
+//! is in the hundreds of thousands. [`inflate`] adds `u uᵀ` to the 9×9 block of both
+//! covariances, `u` the estimate as the factor's residual chart sees it ([`offset_in_chart`]):
+//! by the Sherman–Morrison identity the mean χ² is then
+//! `dof + (eᵀΣ⁻¹e − (uᵀΣ⁻¹e)²/(1 + uᵀΣ⁻¹u))`, exactly `dof` when `u` equals the true offset
+//! `e`, and never more than `dof + 1` for an estimate along `e` of any size. The factor then
+//! states how much it can be trusted in the direction its own discretisation moves it. For the
+//! Logmap residual `u` is the exact image of the offset in its chart (not its first-order image
+//! `ê`): an offset as large as Euler's at 20 Hz has second-order terms of several σ.
 
 use crate::error::PreintError;
+use crate::factor::ResidualMode;
 use crate::measurement::PreintegratedImu;
 use crate::params::{Level, PreintParams, Scheme};
 use crate::sample::{ImuBias, ImuSample};
 use crate::window::preintegrate;
-use nalgebra::SVector;
+use nalgebra::{SVector, Vector3};
+use preint_lie::jl_inv;
 
 /// The estimated truncation error of a window's deltas.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -107,15 +110,53 @@ fn every_other(samples: &[ImuSample], t_i_ns: i64, t_j_ns: i64) -> Vec<ImuSample
         .collect()
 }
 
-/// `m` with `ê êᵀ` added to its 9×9 covariance and to the 9×9 block of its 15×15 one (module
-/// docs): weighting a factor with it makes the truncation error part of what the factor
-/// expects.
-pub fn inflate(m: &PreintegratedImu, e: &TruncationEstimate) -> PreintegratedImu {
+/// `m` with `u uᵀ` added to its 9×9 covariance and to the 9×9 block of its 15×15 one, `u` the
+/// estimate as a factor of `mode` sees it ([`offset_in_chart`]): weighting that factor with it
+/// makes the truncation error part of what the factor expects (module docs).
+pub fn inflate(
+    m: &PreintegratedImu,
+    e: &TruncationEstimate,
+    mode: ResidualMode,
+) -> PreintegratedImu {
+    let u = offset_in_chart(m, e, mode);
     let mut out = m.clone();
-    let outer = e.error * e.error.transpose();
+    let outer = u * u.transpose();
     out.cov += outer;
     out.cov15
         .fixed_view_mut::<9, 9>(0, 0)
         .zip_apply(&outer, |x, y| *x += y);
     out
+}
+
+/// The estimate `ê` in the covariance's chart [δφ, δv, δp] such that the factor of `mode`,
+/// whose weight is that covariance mapped linearly into its residual's chart, sees exactly the
+/// residual the truncation error alone gives at the true states:
+///
+/// - [`ResidualMode::ComponentWise`]: `ê` itself (the component-wise residual is linear in
+///   the deltas' error: `r = −ê` at the truth);
+/// - [`ResidualMode::Logmap`]: with the exact deltas estimated as `ΔR_e = ΔR Exp(−ê_φ)`,
+///   `Δv_e = Δv − ê_v`, `Δp_e = Δp − ê_p`, the residual at the truth is
+///   `r_L = Log(D⁻¹ D_e) = [−ê_φ, −Jl(−ê_φ)⁻¹ ΔRᵀ ê_v, −Jl(−ê_φ)⁻¹ ΔRᵀ ê_p]`, and the weight is
+///   `T cov Tᵀ` with `T = diag(I, ΔRᵀ, ΔRᵀ)` ([`crate::factor::logmap`]), so
+///   `u = −T⁻¹ r_L = [ê_φ, ΔR Jl(−ê_φ)⁻¹ ΔRᵀ ê_v, ΔR Jl(−ê_φ)⁻¹ ΔRᵀ ê_p]`. It differs from `ê` at
+///   second order (`½ ê_φ × ê_v`), which for Euler at 20 Hz is several σ.
+pub fn offset_in_chart(
+    m: &PreintegratedImu,
+    e: &TruncationEstimate,
+    mode: ResidualMode,
+) -> SVector<f64, 9> {
+    match mode {
+        ResidualMode::ComponentWise => e.error,
+        ResidualMode::Logmap => {
+            let phi: Vector3<f64> = e.error.fixed_rows::<3>(0).into_owned();
+            let r = m.delta_r.matrix();
+            let shear = r * jl_inv(&-phi) * r.transpose();
+            let mut u = e.error;
+            for k in [3, 6] {
+                let x = shear * e.error.fixed_rows::<3>(k);
+                u.fixed_rows_mut::<3>(k).copy_from(&x);
+            }
+            u
+        }
+    }
 }

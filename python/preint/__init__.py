@@ -41,8 +41,10 @@ from ._native import (
     predict,
     preintegrate,
     preintegrate_windows,
+    second_order_covariance,
     states_at,
     truncation_estimate,
+    add_covariance,
 )
 from ._native import (  # io and calibration
     advise,
@@ -87,6 +89,8 @@ __all__ = [
     "preintegrate_windows",
     "states_at",
     "truncation_estimate",
+    "second_order_covariance",
+    "add_covariance",
     # io and calibration
     "advise",
     "advise_file",

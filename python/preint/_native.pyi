@@ -313,7 +313,15 @@ def merge(a: PreintegratedImu, b: PreintegratedImu) -> PreintegratedImu:
 
 # --- inside a window: deltas and states at query times, deskewing, truncation error ---
 
-__all__ += ["deltas_at", "deskew_points", "inflate", "states_at", "truncation_estimate"]
+__all__ += [
+    "add_covariance",
+    "deltas_at",
+    "deskew_points",
+    "inflate",
+    "second_order_covariance",
+    "states_at",
+    "truncation_estimate",
+]
 
 def deltas_at(
     params: Params,
@@ -369,9 +377,22 @@ def truncation_estimate(
 ) -> tuple[_F64, str]:
     """(error float64[9] = scheme ⊖ exact deltas in [dphi rad, dv m/s, dp m], method)."""
 
-def inflate(pim: PreintegratedImu, error: _Vec3Like | Sequence[float] | _F64) -> PreintegratedImu:
-    """pim with e eᵀ added to cov and to the 9×9 block of cov15 (e: nine numbers
-    [dphi, dv, dp])."""
+def inflate(
+    pim: PreintegratedImu,
+    error: _Vec3Like | Sequence[float] | _F64,
+    residual: str = "logmap",
+) -> PreintegratedImu:
+    """pim with u uᵀ added to cov and to the 9×9 block of cov15, u the estimate `error` (nine
+    numbers [dphi, dv, dp]) as a factor of mode `residual` sees it ("logmap" or "component")."""
+
+def second_order_covariance(
+    params: Params, t_ns: _I64, gyro: _F64, acc: _F64, pim: PreintegratedImu
+) -> _F64:
+    """The second-order covariance term of pim's SE₂(3) error, float64[9, 9] in
+    [dphi rad, dv m/s, dp m]."""
+
+def add_covariance(pim: PreintegratedImu, term: _F64 | Sequence[Sequence[float]]) -> PreintegratedImu:
+    """pim with the symmetric 9×9 `term` added to cov and to the 9×9 block of cov15."""
 
 # --- factor: NavState, prediction, factors ---
 

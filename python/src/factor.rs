@@ -19,7 +19,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 
 /// The residual mode named `name` (Rust `ResidualMode::parse`: "logmap", "component").
-fn mode_from(name: &str) -> PyResult<ResidualMode> {
+pub(crate) fn mode_from(name: &str) -> PyResult<ResidualMode> {
     ResidualMode::parse(name).ok_or_else(|| {
         shape_err(format!(
             "unknown residual {name:?}: use \"logmap\" or \"component\""

@@ -31,6 +31,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(window::deltas_at, m)?)?;
     m.add_function(wrap_pyfunction!(window::truncation_estimate, m)?)?;
     m.add_function(wrap_pyfunction!(window::inflate, m)?)?;
+    m.add_function(wrap_pyfunction!(window::second_order_covariance, m)?)?;
+    m.add_function(wrap_pyfunction!(window::add_covariance, m)?)?;
     m.add_function(wrap_pyfunction!(window::states_at, m)?)?;
     m.add_function(wrap_pyfunction!(window::deskew_points, m)?)?;
     m.add_class::<navstate::PyNavState>()?;

@@ -1,6 +1,7 @@
 //! Inside a window: the deltas and states at any times between the keyframes (`deltas_at`,
 //! `states_at`, `deskew_points`: what lidar deskewing needs) and the embedded truncation-error estimate of a window
-//! (`truncation_estimate`, `inflate`).
+//! (`truncation_estimate`, `inflate`), and the second-order covariance term of a long window
+//! (`second_order_covariance`, `add_covariance`).
 
 use crate::convert::{SampleArrays, WINDOW_MARGIN, svec_py};
 use crate::errors::{preint_err, shape_err};
@@ -111,14 +112,20 @@ pub(crate) fn truncation_estimate<'py>(
     Ok((svec_py(py, &e.error), e.method))
 }
 
-/// `pim` with `e eᵀ` added to its 9×9 covariance and to the 9×9 block of its 15×15 one, `e`
-/// float64[9] a truncation-error estimate in [δφ, δv, δp] (`truncation_estimate`): a factor
-/// weighted by it expects the discretisation error too.
+/// `pim` with `u uᵀ` added to its 9×9 covariance and to the 9×9 block of its 15×15 one, `u`
+/// the truncation-error estimate `error` (float64[9] in [δφ, δv, δp], `truncation_estimate`)
+/// as the factor of residual mode `residual` sees it (Rust `truncation::offset_in_chart`):
+/// `error` itself for "component", its exact image in the SE₂(3) chart for "logmap" (the
+/// default, as the factors'). A factor of that mode weighted by the result expects its
+/// discretisation error too.
 #[pyfunction]
+#[pyo3(signature = (pim, error, residual="logmap"))]
 pub(crate) fn inflate(
     pim: PyRef<'_, PyMeasurement>,
     error: &Bound<'_, PyAny>,
+    residual: &str,
 ) -> PyResult<PyMeasurement> {
+    let mode = crate::factor::mode_from(residual)?;
     let e: Vec<f64> = error
         .extract()
         .map_err(|_| shape_err("error: expected nine numbers [dphi, dv, dp]"))?;
@@ -131,7 +138,55 @@ pub(crate) fn inflate(
         error: SVector::<f64, 9>::from_column_slice(&e),
         method: "given",
     };
-    Ok(PyMeasurement(preint::truncation::inflate(&pim.0, &est)))
+    Ok(PyMeasurement(preint::truncation::inflate(
+        &pim.0, &est, mode,
+    )))
+}
+
+/// The second-order covariance term of `pim`'s SE₂(3) error (Rust `preint::second_order`),
+/// float64[9, 9] in [δφ rad, δv m/s, δp m]: what the first-order covariance misses over long
+/// windows with noisy gyroscopes. `pim` is the window `[pim.t_i_ns, pim.t_j_ns]` of the arrays
+/// preintegrated with `params`; add the term with `add_covariance`. The mean χ² at the true
+/// states it accounts for is `trace(inv(pim.cov) @ term)`.
+#[pyfunction]
+pub(crate) fn second_order_covariance<'py>(
+    py: Python<'py>,
+    params: PyRef<'_, PyParams>,
+    t_ns: &Bound<'py, PyAny>,
+    gyro: &Bound<'py, PyAny>,
+    acc: &Bound<'py, PyAny>,
+    pim: PyRef<'_, PyMeasurement>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let arrays = SampleArrays::new(t_ns, gyro, acc)?;
+    let (v, p, m) = (arrays.views(), &params.0, &pim.0);
+    let c = py
+        .detach(|| {
+            v.in_window((m.t_i_ns, m.t_j_ns), WINDOW_MARGIN, |s| {
+                preint::second_order::covariance(p, s, m)
+            })
+        })
+        .map_err(preint_err)?;
+    Ok(Array2::from_shape_fn((9, 9), |(i, j)| c[(i, j)]).into_pyarray(py))
+}
+
+/// `pim` with the symmetric float64[9, 9] `term` ([δφ, δv, δp], e.g. `second_order_covariance`)
+/// added to its 9×9 covariance and to the 9×9 block of its 15×15 one.
+#[pyfunction]
+pub(crate) fn add_covariance(
+    pim: PyRef<'_, PyMeasurement>,
+    term: &Bound<'_, PyAny>,
+) -> PyResult<PyMeasurement> {
+    let t: Vec<Vec<f64>> = term
+        .extract()
+        .map_err(|_| shape_err("term: expected a 9×9 array"))?;
+    if t.len() != 9 || t.iter().any(|r| r.len() != 9) {
+        return Err(shape_err("term: expected a 9×9 array"));
+    }
+    let m = nalgebra::SMatrix::<f64, 9, 9>::from_fn(|i, j| t[i][j]);
+    if !m.iter().all(|x| x.is_finite()) || (m - m.transpose()).amax() > 1e-12 * m.amax() {
+        return Err(shape_err("term: expected a finite symmetric 9×9 array"));
+    }
+    Ok(PyMeasurement(preint::second_order::inflate(&pim.0, &m)))
 }
 
 /// The int64 query times argument `name` as a vector.

@@ -113,7 +113,7 @@ def test_inflate_adds_the_outer_product():
     t, g, a = stream(100.0, 0.5, W, A)
     m = preint.preintegrate(p, t, g, a, 0, 5 * 10**8)
     e = np.arange(1.0, 10.0) * 1e-3
-    m2 = preint.inflate(m, e)
+    m2 = preint.inflate(m, e, residual="component")
     assert np.allclose(m2.cov - m.cov, np.outer(e, e), rtol=0, atol=1e-15)
     assert np.allclose(m2.cov15[:9, :9] - m.cov15[:9, :9], np.outer(e, e), rtol=0, atol=1e-15)
     assert np.array_equal(m2.cov15[9:, 9:], m.cov15[9:, 9:])
@@ -121,6 +121,71 @@ def test_inflate_adds_the_outer_product():
         preint.inflate(m, [1.0, 2.0])
     with pytest.raises(preint.ShapeError):
         preint.inflate(m, [np.nan] * 9)
+    with pytest.raises(preint.ShapeError):
+        preint.inflate(m, e, residual="tangent")
+
+
+def jl_inv(phi):
+    """SO(3) inverse left Jacobian, closed form (Barfoot 2017 eq. 7.45)."""
+    th = np.linalg.norm(phi)
+    k = hat(phi)
+    return np.eye(3) - 0.5 * k + (1 / th**2 - (1 + np.cos(th)) / (2 * th * np.sin(th))) * k @ k
+
+
+def test_inflate_for_the_logmap_residual_uses_the_offsets_exact_image():
+    # The Logmap factor sees r_L = Log(D⁻¹ D_e) with D_e = (ΔR Exp(−e_φ), Δv − e_v, Δp − e_p),
+    # weighted by T cov Tᵀ, T = diag(I, ΔRᵀ, ΔRᵀ): the vector added is u = −T⁻¹ r_L.
+    p = preint.Params(scheme="euler")
+    t, g, a = stream(100.0, 0.5, W, A)
+    m = preint.preintegrate(p, t, g, a, 0, 5 * 10**8)
+    e = np.array([0.02, -0.01, 0.015, 0.5, -0.3, 0.2, 0.1, 0.05, -0.08])
+    r = m.delta_R
+    shear = r @ jl_inv(-e[:3]) @ r.T
+    u = np.concatenate([e[:3], shear @ e[3:6], shear @ e[6:9]])
+    m2 = preint.inflate(m, e)  # the default residual, "logmap"
+    assert np.allclose(m2.cov - m.cov, np.outer(u, u), rtol=0, atol=1e-14)
+    # Second order: it differs from the first-order image e by about ½|e_φ||e_v|.
+    assert np.abs(u - e).max() > 1e-3
+
+
+def test_second_order_term_equals_the_command_lines(preint_cli, tmp_path):
+    import json
+    import subprocess
+
+    from conftest import REPO, read_euroc_imu
+
+    out = tmp_path / "sim"
+    noise = tmp_path / "noise.yaml"
+    noise.write_text(
+        "gyroscope_noise_density: 0.015\naccelerometer_noise_density: 0.019\n"
+        "gyroscope_random_walk: 1.9393e-05\naccelerometer_random_walk: 3.0e-03\nupdate_rate: 200.0\n"
+    )
+    sim = subprocess.run([*preint_cli, "simulate", "--scene", "aggressive", "--duration", "6",
+                          "--noise", str(noise), "--out", str(out)], cwd=REPO, capture_output=True, text=True)
+    assert sim.returncode == 0, sim.stderr
+    ti, tj = 500_000_000, 5_500_000_000
+    run = subprocess.run([*preint_cli, "integrate", "--imu", str(out / "imu.csv"), "--noise", str(noise),
+                          "--scheme", "hermite4", "--from", str(ti), "--to", str(tj), "--second-order", "--json"],
+                         cwd=REPO, capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    rust = json.loads(run.stdout)
+    t, g, a = read_euroc_imu(out / "imu.csv")
+    prm = preint.Params(preint.Noise(0.015, 1.9393e-05, 0.019, 3.0e-03), scheme="hermite4", level="combined")
+    m = preint.preintegrate(prm, t, g, a, ti, tj)
+    term = preint.second_order_covariance(prm, t, g, a, m)
+    assert term.shape == (9, 9)
+    assert term.tobytes() == np.asarray(rust["second_order"]["covariance"], dtype=np.float64).tobytes()
+    assert np.linalg.eigvalsh(term).min() > -1e-12 * np.abs(term).max()
+    inc = np.trace(np.linalg.solve(m.cov, term))
+    assert inc == pytest.approx(rust["second_order"]["chi2_increase"], rel=1e-9)
+    assert 0.02 < inc < 1.0
+    m2 = preint.add_covariance(m, term)
+    assert np.array_equal(m2.cov, m.cov + term)
+    assert np.array_equal(m2.cov15[:9, :9], m.cov15[:9, :9] + term)
+    with pytest.raises(preint.ShapeError):
+        preint.add_covariance(m, np.triu(np.ones((9, 9))))
+    with pytest.raises(preint.ShapeError):
+        preint.add_covariance(m, np.eye(3))
 
 
 def test_states_at_start_and_end():
