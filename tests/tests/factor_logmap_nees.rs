@@ -29,8 +29,8 @@
 //!
 //! Size: N = 8 000 realisations per setup at the seed and high densities (N = 8 000: the 4.42σ
 //! band is ±0.21 for 9 dof, narrower than the 0.23–0.56 excess the term removes), 1 000 at
-//! EuRoC densities (8 000 with `PREINT_FULL=1`, which adds the `high` rows); about a minute on
-//! two cores in the test profile.
+//! EuRoC densities (8 000 with `PREINT_FULL=1`, which adds the `high` rows and the seed rows of
+//! euler, midpoint and galilean); about a minute on two cores in the test profile.
 //! Output: `target/evidence/factor_logmap_nees.json`.
 
 use evidence::{Gauss, full_run, integrate_all, mean, noisy_stream, true_state, write_json};
@@ -87,6 +87,7 @@ fn noise(name: &str) -> ImuNoise {
 struct Row {
     scene: &'static str,
     noise: &'static str,
+    scheme: Scheme,
     dim: usize,
     mode: ResidualMode,
     /// Weighted with the second-order covariance term (`preint::second_order`).
@@ -153,6 +154,7 @@ fn both(
 fn rows_of(
     scene_name: &'static str,
     noise_name: &'static str,
+    scheme: Scheme,
     n_real: usize,
     seed: u64,
 ) -> Vec<Row> {
@@ -176,7 +178,7 @@ fn rows_of(
     let (sg, sa) = (nz.gyro_sample_std(dt), nz.acc_sample_std(dt));
     let (sbg, sba) = (nz.gyro_bias_step_std(dt), nz.acc_bias_step_std(dt));
     let p9 = PreintParams::from_noise(&nz)
-        .with_scheme(Scheme::Hermite4)
+        .with_scheme(scheme)
         .with_level(Level::Covariance)
         .with_gravity(gravity());
     let p15 = p9.clone().with_level(Level::Combined);
@@ -196,6 +198,7 @@ fn rows_of(
             rows.push(Row {
                 scene: scene_name,
                 noise: noise_name,
+                scheme,
                 dim,
                 mode,
                 second_order,
@@ -226,14 +229,21 @@ fn rows_of(
 
 #[test]
 fn logmap_residual_is_closer_to_its_chi2_than_the_component_wise_one() {
-    let mut setups: Vec<(&'static str, &'static str)> = vec![
-        ("aggressive", "euroc"),
-        ("seed-ellipse", "euroc"),
-        ("aggressive", "seed"),
-        ("seed-ellipse", "seed"),
+    let h4 = Scheme::Hermite4;
+    let mut setups: Vec<(&'static str, &'static str, Scheme)> = vec![
+        ("aggressive", "euroc", h4),
+        ("seed-ellipse", "euroc", h4),
+        ("aggressive", "seed", h4),
+        ("seed-ellipse", "seed", h4),
     ];
     if full_run() {
-        setups.extend([("aggressive", "high"), ("seed-ellipse", "high")]);
+        setups.extend([("aggressive", "high", h4), ("seed-ellipse", "high", h4)]);
+        for scheme in [Scheme::Euler, Scheme::Midpoint, Scheme::Galilean] {
+            setups.extend([
+                ("aggressive", "seed", scheme),
+                ("seed-ellipse", "seed", scheme),
+            ]);
+        }
     }
     let rows: Vec<Row> = std::thread::scope(|sc| {
         let handles: Vec<_> = (0..2)
@@ -244,7 +254,9 @@ fn logmap_residual_is_closer_to_its_chi2_than_the_component_wise_one() {
                         .iter()
                         .enumerate()
                         .filter(|(i, _)| i % 2 == t)
-                        .flat_map(|(i, (s, nz))| rows_of(s, nz, realisations(nz), i as u64 + 101))
+                        .flat_map(|(i, (s, nz, sc))| {
+                            rows_of(s, nz, *sc, realisations(nz), i as u64 + 101)
+                        })
                         .collect::<Vec<Row>>()
                 })
             })
@@ -256,16 +268,26 @@ fn logmap_residual_is_closer_to_its_chi2_than_the_component_wise_one() {
     });
 
     println!(
-        "{:<13} {:<6} {:>3} {:<9} {:>10} {:>9} {:>9}  {:<18} {:>7}",
-        "scene", "noise", "dim", "residual", "disc. χ²", "expected", "mean χ²", "95 % band", "z"
+        "{:<13} {:<6} {:<9} {:>3} {:<10} {:>10} {:>9} {:>9}  {:<18} {:>7}",
+        "scene",
+        "noise",
+        "scheme",
+        "dim",
+        "residual",
+        "disc. χ²",
+        "expected",
+        "mean χ²",
+        "95 % band",
+        "z"
     );
     let mut records = vec![];
     for r in &rows {
         let (m, e, sd, z) = (mean(&r.chi2), r.expected(), r.std_of_mean(), r.z());
         println!(
-            "{:<13} {:<6} {:>3} {:<9} {:>10.2e} {:>9.3} {:>9.3}  [{:.3}, {:.3}] {:>7.2}",
+            "{:<13} {:<6} {:<9} {:>3} {:<10} {:>10.2e} {:>9.3} {:>9.3}  [{:.3}, {:.3}] {:>7.2}",
             r.scene,
             r.noise,
+            r.scheme.name(),
             r.dim,
             r.label(),
             r.disc_chi2,
@@ -276,7 +298,7 @@ fn logmap_residual_is_closer_to_its_chi2_than_the_component_wise_one() {
             z
         );
         records.push(serde_json::json!({
-            "scene": r.scene, "noise": r.noise, "dim": r.dim, "residual": r.label(),
+            "scene": r.scene, "noise": r.noise, "scheme": r.scheme.name(), "dim": r.dim, "residual": r.label(),
             "discretisation_chi2": r.disc_chi2, "expected_mean": e, "mean_chi2": m,
             "band95": [e - 1.96 * sd, e + 1.96 * sd], "z": z,
         }));
@@ -295,7 +317,13 @@ fn logmap_residual_is_closer_to_its_chi2_than_the_component_wise_one() {
     let mut failures = vec![];
     for triple in rows.chunks(3) {
         let (cw, lm, lm2) = (&triple[0], &triple[1], &triple[2]);
-        let what = format!("{} {} {}-dim", cw.scene, cw.noise, cw.dim);
+        let what = format!(
+            "{} {} {} {}-dim",
+            cw.scene,
+            cw.noise,
+            cw.scheme.name(),
+            cw.dim
+        );
         match cw.noise {
             "euroc" => {
                 for r in triple {

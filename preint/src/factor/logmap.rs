@@ -83,12 +83,14 @@ pub enum ResidualMode {
 
 impl Default for ResidualMode {
     /// [`ResidualMode::Logmap`], as in GTSAM 4.3. At the true states over 10 s windows
-    /// (hermite4, 200 Hz, 4 000 realisations, `tests/tests/factor_logmap_nees.rs`) both modes
-    /// give the same mean χ² at EuRoC densities (8.95 / 14.97–15.08 for 9 / 15 dof), while at
-    /// the seed course's densities (σ_g = 0.015 rad/s/√Hz, σ_a = 0.019 m/s²/√Hz) the
-    /// component-wise residual is over-confident (9-dim 10.92 / 13.20 on `aggressive` /
-    /// `seed-ellipse`, 15-dim 16.68 / 18.83) and the Logmap one much closer (9.26 / 9.55,
-    /// 15.11 / 15.47); `docs/EVIDENCE.md`, "The Logmap residual".
+    /// (hermite4, 200 Hz, 8 000 realisations, `tests/tests/factor_logmap_nees.rs`) both modes
+    /// give the same mean χ² at EuRoC densities (8.93–8.95 / 14.99–15.06 for 9 / 15 dof), while
+    /// at the seed course's densities (σ_g = 0.015 rad/s/√Hz, σ_a = 0.019 m/s²/√Hz) the
+    /// component-wise residual is over-confident (9-dim 10.85 / 13.31 on `aggressive` /
+    /// `seed-ellipse`, 15-dim 16.71 / 18.71) and the Logmap one much closer (9.23 / 9.56,
+    /// 15.17 / 15.47), inside the band with the second-order covariance of
+    /// [`crate::second_order`] (9.04 / 9.01, 14.99 / 15.00); `docs/EVIDENCE.md`, "The Logmap
+    /// residual and the second-order covariance".
     fn default() -> Self {
         ResidualMode::Logmap
     }
