@@ -136,9 +136,11 @@ fn euler_is_exact_on_held_input_with_acceleration_along_the_rotation_axis() {
     assert!(e.iter().all(|&x| x <= 1e-12), "{e:?}");
 }
 
-/// midpoint's ΔR is exact for a rate linear between samples about a fixed axis; Δv and Δp
-/// when nothing rotates and a is constant. The closed forms: `Exp(u ∫|ω|)` with the trapezoid
-/// of the linear rate, and `a T`, `½ a T²`.
+/// midpoint's ΔR is exact for a rate linear between samples about a fixed axis; without
+/// rotation Δv is exact for a linear a and Δp for a constant one. The closed forms: `Exp(u ∫|ω|)`
+/// with the integral of the linear rate; `a T`, `½ a T²`; for `a(t) = a₀ + c t`,
+/// `Δv = a₀ T + ½ c T²` and `Δp = ½ a₀ T² + c T³/6`, which midpoint misses by `c T h²/12`
+/// (`½ ā h²` is `c h³/4` where the exact increment has `c h³/6`).
 #[test]
 fn midpoint_exactness_on_its_input_class() {
     let axis = V3::new(1.0, 2.0, -2.0) / 3.0;
@@ -153,6 +155,18 @@ fn midpoint_exactness_on_its_input_class() {
     let m = integrate(Scheme::Midpoint, &s);
     assert!((m.delta_v - V3::from(A0)).norm() <= 1e-12);
     assert!((m.delta_p - 0.5 * V3::from(A0)).norm() <= 1e-12);
+    // a(t) = a₀ + c t over T = 1 s (sample k at t = k/20 s).
+    let c = V3::new(0.4, -0.2, 0.9);
+    let s = stream(20, 50_000_000, |k| {
+        (V3::zeros(), V3::from(A0) + c * (k as f64 / 20.0))
+    });
+    let m = integrate(Scheme::Midpoint, &s);
+    assert!((m.delta_v - (V3::from(A0) + 0.5 * c)).norm() <= 1e-12);
+    let miss = m.delta_p - (0.5 * V3::from(A0) + c / 6.0);
+    assert!(
+        (miss - c * (0.05 * 0.05 / 12.0)).norm() <= 1e-12,
+        "{miss:?}"
+    );
 }
 
 /// Least-squares slope of `log y` against `log x`.

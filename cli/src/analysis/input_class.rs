@@ -90,8 +90,9 @@ pub fn exactness(s: Scheme) -> Exactness {
         ),
         Scheme::Midpoint => (
             2,
-            "ΔR exact when ω is linear between samples about a fixed axis; Δv and Δp when \
-             nothing rotates and a is constant; not exact on held input (it averages across a step)",
+            "ΔR exact when ω is linear between samples about a fixed axis; Δv when nothing \
+             rotates and a is linear between samples, Δp when a is also constant; not exact on \
+             held input (it averages across a step)",
         ),
         Scheme::Hermite4 => (
             4,
