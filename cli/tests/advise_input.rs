@@ -80,8 +80,13 @@ fn held_input_is_advised_galilean_and_smooth_input_claims_nothing_exact() {
         let c = of(&held, s)[0];
         let (e, sig) = (triple(&c["disc_err"]), triple(&c["noise_sigma"]));
         println!(
-            "held, {s} at 200 Hz: disc_err {e:.2e?}, 0.1·σ {:.2e?}, χ² {:.1}",
-            sig.map(|x| 0.1 * x),
+            "held, {s} at 200 Hz: disc_err {:.2e} rad, {:.2e} m/s, {:.2e} m; 0.1·σ {:.2e}, {:.2e}, {:.2e}; χ² {:.1}",
+            e[0],
+            e[1],
+            e[2],
+            0.1 * sig[0],
+            0.1 * sig[1],
+            0.1 * sig[2],
             num(&c["embedded_chi2"])
         );
         assert_eq!(c["acceptable"], false, "{c}");
