@@ -37,7 +37,7 @@ pub struct Args {
     /// rate. held: rate and specific force constant over each sample interval, as an
     /// integrating IMU (delta-angle/delta-velocity outputs) or a sample-and-hold stream
     /// delivers; galilean is exact for it and is the reference, lower rates average the samples.
-    #[arg(long = "input", value_enum, default_value_t = InputClass::Smooth)]
+    #[arg(long = "input", value_name = "CLASS", value_enum, default_value_t = InputClass::Smooth)]
     pub input_class: InputClass,
 }
 
