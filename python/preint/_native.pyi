@@ -806,10 +806,13 @@ def advise(
     *,
     window: float = 1.0,
     fraction: float = 0.1,
+    input: Literal["smooth", "held"] = "smooth",
 ) -> dict[str, Any]:
     """``preint advise`` on arrays: the cheapest scheme and lowest rate whose discretisation
     error stays below ``fraction`` × the noise σ on ``window``-second preintegrations, with the
-    noise separated from the motion by a zero-phase low-pass (gravity 9.81 m/s²).
+    noise separated from the motion by a zero-phase low-pass (gravity 9.81 m/s²). ``input``:
+    "smooth" (point samples of a smooth signal; reference hermite4) or "held" (rate and specific
+    force constant over each interval; reference galilean, exact for it; not low-passed).
 
     Returns the command's JSON as a dict: ``recommended_scheme`` (euler, midpoint, hermite4, galilean)
     and ``recommended_rate`` [Hz] (None when no candidate is acceptable), ``candidates``
@@ -829,6 +832,7 @@ def advise_file(
     fraction: float = 0.1,
     from_ns: int | None = None,
     to_ns: int | None = None,
+    input: Literal["smooth", "held"] = "smooth",
     **options: Unpack[_ReaderOptions],
 ) -> dict[str, Any]:
     """``preint advise --json`` on a recording (samples with ``from_ns ≤ t ≤ to_ns``), as a

@@ -7,18 +7,31 @@ use crate::calib::{check, noise_arg};
 use crate::convert::samples;
 use crate::errors::Class;
 use crate::io::{ReadArgs, cli_err, json_py};
-use preint_cli::analysis::advise::{evaluate, recommend};
+use preint_cli::analysis::advise::{evaluate_input, recommend};
 use preint_cli::analysis::denoise::denoise;
+use preint_cli::analysis::input_class::InputClass;
 use preint_cli::commands::advise;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::{Path, PathBuf};
 
-/// advise(t_ns, gyro, acc, noise, *, window=1.0, fraction=0.1)
+/// The input class named `name` ("smooth" or "held", `preint advise --input`).
+fn input_class(name: &str) -> PyResult<InputClass> {
+    match name {
+        "smooth" => Ok(InputClass::Smooth),
+        "held" => Ok(InputClass::Held),
+        _ => Err(crate::errors::shape_err(format!(
+            "unknown input {name:?}: use \"smooth\" or \"held\""
+        ))),
+    }
+}
+
+/// advise(t_ns, gyro, acc, noise, *, window=1.0, fraction=0.1, input="smooth")
 ///
 /// `preint advise` on arrays (docs in `_native.pyi`).
 #[pyfunction]
-#[pyo3(name = "advise", signature = (t_ns, gyro, acc, noise, *, window=1.0, fraction=0.1))]
+#[pyo3(name = "advise", signature = (t_ns, gyro, acc, noise, *, window=1.0, fraction=0.1, input="smooth"))]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn advise_py<'py>(
     py: Python<'py>,
     t_ns: &Bound<'py, PyAny>,
@@ -27,7 +40,9 @@ pub(crate) fn advise_py<'py>(
     noise: &Bound<'py, PyAny>,
     window: f64,
     fraction: f64,
+    input: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
+    let class = input_class(input)?;
     let noise = noise_arg(Some(noise), false)?;
     let s = samples(t_ns, gyro, acc)?;
     check(&s)?;
@@ -44,13 +59,20 @@ pub(crate) fn advise_py<'py>(
         fraction,
         from: None,
         to: None,
+        input_class: class,
     };
     let json = py
         .detach(|| {
             preint_cli::checks::positive("fraction", fraction)?;
             preint_cli::checks::no_gaps(&s, label, preint::params::DEFAULT_MAX_GAP_NS)?;
-            let (signal, cutoffs) = denoise(&s, noise.gyro_noise_density, noise.acc_noise_density);
-            let candidates = evaluate(&signal, &noise, 9.81, window, fraction)?;
+            // As the command line: held input is not low-passed.
+            let (signal, cutoffs) = match class {
+                InputClass::Smooth => {
+                    denoise(&s, noise.gyro_noise_density, noise.acc_noise_density)
+                }
+                InputClass::Held => (s.clone(), [None, None]),
+            };
+            let candidates = evaluate_input(&signal, &noise, 9.81, window, fraction, class)?;
             let recommended = recommend(&candidates)
                 .and_then(|r| candidates.iter().position(|c| std::ptr::eq(c, r)));
             let a = advise::Advice {
@@ -66,12 +88,13 @@ pub(crate) fn advise_py<'py>(
     json_py(py, &json)
 }
 
-/// advise_file(path=None, *, ..., noise, window=1.0, fraction=0.1, from_ns=None, to_ns=None)
+/// advise_file(path=None, *, ..., noise, window=1.0, fraction=0.1, from_ns=None, to_ns=None,
+/// input="smooth")
 ///
 /// `preint advise --json` on a recording (docs in `_native.pyi`).
 #[pyfunction]
 #[pyo3(signature = (path=None, *, noise, gyro=None, accel=None, window=1.0,
-    fraction=0.1, from_ns=None, to_ns=None, **options))]
+    fraction=0.1, from_ns=None, to_ns=None, input="smooth", **options))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn advise_file<'py>(
     py: Python<'py>,
@@ -83,10 +106,13 @@ pub(crate) fn advise_file<'py>(
     fraction: f64,
     from_ns: Option<i64>,
     to_ns: Option<i64>,
+    input: &str,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    let input_class = input_class(input)?;
     let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_args()?;
     let args = advise::Args {
+        input_class,
         input,
         noise,
         window,

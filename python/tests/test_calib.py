@@ -274,6 +274,23 @@ def test_advise_on_arrays_equals_the_command_and_predicts_the_noise_sigma():
     assert a["recommended_scheme"] in (None, "euler", "midpoint", "hermite4")
 
 
+def test_advise_held_input_on_arrays_equals_the_command():
+    d = preint.read_imu(EUROC)
+    end = int(d["t_ns"][0]) + 4_000_000_000
+    m = d["t_ns"] <= end
+    a = preint.advise(d["t_ns"][m], d["gyro"][m], d["acc"][m], EUROC_NOISE, window=1.0, input="held")
+    f = preint.advise_file(EUROC, noise=EUROC_NOISE, to_ns=end, window=1.0, input="held")
+    assert a["input_class"] == f["input_class"] == "held"
+    assert a["exact_scheme"] == f["exact_scheme"] == "galilean"
+    assert a["denoise_cutoff_hz"] == f["denoise_cutoff_hz"]
+    for x, y in zip(a["candidates"], f["candidates"], strict=True):
+        assert (x["scheme"], x["rate"], x["disc_err"]) == (y["scheme"], y["rate"], y["disc_err"])
+    s = preint.advise(d["t_ns"][m], d["gyro"][m], d["acc"][m], EUROC_NOISE, window=1.0)
+    assert s["input_class"] == "smooth" and s["exact_scheme"] is None
+    with pytest.raises(preint.ShapeError):
+        preint.advise(d["t_ns"][m], d["gyro"][m], d["acc"][m], EUROC_NOISE, input="stepwise")
+
+
 def test_advise_refusals_are_typed():
     d = preint.read_imu(EUROC)
     m = slice(0, 100)  # 0.5 s: shorter than the window

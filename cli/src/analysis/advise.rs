@@ -1,27 +1,45 @@
 //! The cheapest scheme and lowest rate whose discretisation error stays below a
 //! fraction of the noise-induced standard deviation of the preintegrated deltas.
 //!
-//! Method (everything estimated from the recording itself):
-//! 0. The white noise is separated from the motion (see [`super::denoise`]): discretisation
-//!    error is a property of the motion, and comparing noisy decimated samples would measure the
-//!    noise (it enters a decimated-vs-full difference at ≈ σ√(d − 1)).
+//! Method (everything estimated from the recording itself; the input class, smooth or held, is
+//! declared by the user: [`super::input_class`]):
+//! 0. Smooth input: the white noise is separated from the motion (see [`super::denoise`]):
+//!    discretisation error is a property of the motion, and comparing noisy decimated samples
+//!    would measure the noise (it enters a decimated-vs-full difference at ≈ σ√(d − 1)). Held
+//!    input is not filtered (a low-pass would smear its steps), and its lower rates average the
+//!    samples, which keeps the noise's first-order contribution out of the comparison.
 //! 1. Windows of `--window` seconds are laid over the recording (at most 24, evenly spread).
-//! 2. Reference: the 4th-order scheme (hermite4) at the recording's rate. The reference's own
-//!    error is estimated by Richardson extrapolation, `|Δ₄(h) − Δ₄(2h)| / (2⁴ − 1)`.
-//! 3. For each scheme and each decimation d ∈ {1, 2, 4, …} (every d-th sample, i.e. what an IMU
-//!    sampling the same signal at rate/d would deliver, without its internal filtering) the
-//!    discretisation error is the distance to the reference: rotation angle \[rad\], |Δv| [m/s],
-//!    |Δp| \[m\], the maximum over windows.
+//! 2. Reference: the input class's reference scheme at the recording's rate (hermite4 for
+//!    smooth input, galilean, exact, for held input).
+//! 3. For each scheme and each decimation d ∈ {1, 2, 4, …} (the stream at rate/d,
+//!    [`InputClass::decimate`]) two errors per window, each as rotation angle \[rad\], |Δv|
+//!    [m/s], |Δp| \[m\], the maximum over windows:
+//!    - the **reference distance**, to the reference's deltas (not defined for the reference
+//!      itself at d = 1);
+//!    - the **embedded estimate** `ê`, from the candidate's own samples alone: for smooth
+//!      input `preint::truncation::estimate` (a hermite4 companion on the same samples, or
+//!      Richardson for hermite4); for held input `D_scheme ⊖ D_galilean` on the same samples,
+//!      exact since galilean is. With it, its χ² `êᵀΣ⁻¹ê` (Σ the candidate's 9×9 covariance,
+//!      order [δφ, δv, δp]): the excess a factor at the true states would show on average.
 //! 4. The noise σ is from the preintegrated covariance at that rate: `√trace` of the δφ, δv and
 //!    δp blocks (the RMS norm of each error vector).
-//! 5. A (scheme, rate) is acceptable when all three errors are below `fraction·σ`; the cheapest
-//!    acceptable one (ns/sample measured on this machine × rate) is recommended, where costs
-//!    within 15 % of the cheapest count as equal and the simplest scheme among them wins.
+//! 5. The discretisation error `disc_err` is the larger of the two errors per component (the
+//!    embedded estimate alone for the reference at d = 1), and a (scheme, rate) is acceptable
+//!    when all three are below `fraction·σ`: both criteria must hold. The reference distance
+//!    sees what decimation loses, which the decimated samples alone cannot; the embedded
+//!    estimate sees the error the reference shares with a candidate (at d = 1 the distance
+//!    of every scheme is only relative to a reference that may itself be too coarse). The
+//!    cheapest acceptable one (ns/sample measured on this machine × rate) is recommended,
+//!    where costs within 15 % of the cheapest count as equal and the simplest scheme among them
+//!    wins.
 
+use super::input_class::InputClass;
 use super::speed::{best_ns_per_sample, synthetic_stream};
 use crate::{CliError, scheme};
+use nalgebra::SVector;
 use preint::{
     ImuBias, ImuNoise, ImuSample, Level, PreintParams, PreintegratedImu, Scheme, preintegrate,
+    truncation,
 };
 
 /// One (scheme, rate) evaluation.
@@ -33,8 +51,19 @@ pub struct Candidate {
     pub decimation: usize,
     /// Sample rate \[Hz\].
     pub rate_hz: f64,
-    /// Discretisation error, max over windows: [rotation rad, velocity m/s, position m].
+    /// Discretisation error used in the decision, max over windows: per component the larger
+    /// of [`ref_dist`](Self::ref_dist) and [`embedded_err`](Self::embedded_err) (the latter
+    /// alone for the reference itself): [rotation rad, velocity m/s, position m].
     pub disc_err: [f64; 3],
+    /// Distance to the reference's deltas, max over windows: [rad, m/s, m]; `None` for the
+    /// reference itself (the reference scheme at d = 1).
+    pub ref_dist: Option<[f64; 3]>,
+    /// Norms of the blocks of the embedded truncation-error estimate `ê`, max over windows:
+    /// [rad, m/s, m].
+    pub embedded_err: [f64; 3],
+    /// `êᵀΣ⁻¹ê` (Σ the 9×9 covariance, order [δφ, δv, δp]), max over windows; infinite when Σ
+    /// is singular.
+    pub embedded_chi2: f64,
     /// Noise-induced σ (RMS norm) at that rate: [rad, m/s, m].
     pub noise_sigma: [f64; 3],
     /// Cost [ns per second of IMU data] on this machine.
@@ -43,12 +72,27 @@ pub struct Candidate {
     pub acceptable: bool,
 }
 
+impl Candidate {
+    /// Whether this is the reference itself (the reference scheme at the recording's rate).
+    pub fn is_reference(&self) -> bool {
+        self.ref_dist.is_none()
+    }
+}
+
 fn errors(a: &PreintegratedImu, b: &PreintegratedImu) -> [f64; 3] {
-    [
-        a.delta_r.minus(&b.delta_r).norm(),
-        (a.delta_v - b.delta_v).norm(),
-        (a.delta_p - b.delta_p).norm(),
-    ]
+    blocks(&a.delta_error(b))
+}
+
+/// Norms of the [δφ, δv, δp] blocks of a 9-vector.
+fn blocks(e: &SVector<f64, 9>) -> [f64; 3] {
+    [0, 1, 2].map(|k| e.fixed_rows::<3>(3 * k).norm())
+}
+
+/// `eᵀ cov⁻¹ e`, infinite when `cov` is not positive definite.
+fn chi2(m: &PreintegratedImu, e: &SVector<f64, 9>) -> f64 {
+    let cov: nalgebra::SMatrix<f64, 9, 9> = nalgebra::SMatrix::from_fn(|r, c| m.cov[(r, c)]);
+    cov.cholesky()
+        .map_or(f64::INFINITY, |ch| e.dot(&ch.solve(e)))
 }
 
 fn sigma(m: &PreintegratedImu) -> [f64; 3] {
@@ -60,7 +104,6 @@ fn sigma(m: &PreintegratedImu) -> [f64; 3] {
     };
     [tr(0), tr(1), tr(2)]
 }
-
 /// Window starts \[ns\] and the window length \[ns\]: evenly spread over the recording, at
 /// most 24, leaving 64 sample periods on each side for hermite4's neighbours.
 fn windows(samples: &[ImuSample], window_s: f64) -> Result<(Vec<i64>, i64), CliError> {
@@ -101,14 +144,55 @@ fn keyframes(dec: &[ImuSample], t0: i64, w_ns: i64) -> (i64, i64) {
     (t_i, dec[j0].t_ns)
 }
 
-/// Evaluates every scheme at the recording's rate and at decimated rates (see the module docs):
-/// gravity `(0, 0, −gravity)` m/s², windows of `window_s` s, acceptable below `fraction·σ`.
+/// [`evaluate_input`] for smooth input (the default).
 pub fn evaluate(
     samples: &[ImuSample],
     noise: &ImuNoise,
     gravity: f64,
     window_s: f64,
     fraction: f64,
+) -> Result<Vec<Candidate>, CliError> {
+    evaluate_input(
+        samples,
+        noise,
+        gravity,
+        window_s,
+        fraction,
+        InputClass::Smooth,
+    )
+}
+
+/// The maxima over windows of one (scheme, rate).
+#[derive(Clone, Copy, Default)]
+struct Maxima {
+    dist: [f64; 3],
+    est: [f64; 3],
+    chi2: f64,
+    sigma: [f64; 3],
+}
+
+impl Maxima {
+    fn add(&mut self, dist: [f64; 3], est: &SVector<f64, 9>, chi2: f64, sigma: [f64; 3]) {
+        let e = blocks(est);
+        for k in 0..3 {
+            self.dist[k] = self.dist[k].max(dist[k]);
+            self.est[k] = self.est[k].max(e[k]);
+            self.sigma[k] = self.sigma[k].max(sigma[k]);
+        }
+        self.chi2 = self.chi2.max(chi2);
+    }
+}
+
+/// Evaluates every scheme at the recording's rate and at decimated rates for input of class
+/// `input` (see the module docs): gravity `(0, 0, −gravity)` m/s², windows of `window_s` s,
+/// acceptable below `fraction·σ`. `samples` are the (for smooth input, denoised) samples.
+pub fn evaluate_input(
+    samples: &[ImuSample],
+    noise: &ImuNoise,
+    gravity: f64,
+    window_s: f64,
+    fraction: f64,
+    input: InputClass,
 ) -> Result<Vec<Candidate>, CliError> {
     let fail = |e: preint::PreintError| CliError::Failed(e.to_string());
     let (starts, w_ns) = windows(samples, window_s)?;
@@ -120,7 +204,8 @@ pub fn evaluate(
             .with_level(level)
             .with_gravity(nalgebra::Vector3::new(0.0, 0.0, -gravity))
     };
-    let (reference_params, bias) = (params(Scheme::Hermite4, Level::Deltas), ImuBias::zero());
+    let reference_scheme = input.reference();
+    let (reference_params, bias) = (params(reference_scheme, Level::Deltas), ImuBias::zero());
     // Cost per sample does not depend on the rate: measured once per scheme (best of 11 runs,
     // the schemes taking turns, so that a busy machine rarely decides a tie).
     let ns = best_ns_per_sample(
@@ -129,8 +214,6 @@ pub fn evaluate(
         &synthetic_stream(20_000),
         11,
     )?;
-    // Every other sample, for the Richardson estimate of the reference's own error.
-    let half: Vec<ImuSample> = samples.iter().step_by(2).copied().collect();
     let mut out = Vec::new();
     let mut d = 1;
     let pb = crate::progress::bar(starts.len() as u64, "advise");
@@ -139,12 +222,8 @@ pub fn evaluate(
             pb.set_position(0);
             pb.set_message(format!("{:.1} Hz", 1.0 / (dt_s * d as f64)));
         }
-        let dec: Vec<ImuSample> = samples.iter().step_by(d).copied().collect();
-        // Per scheme, the maxima over the windows.
-        let (mut err, mut sig) = (
-            [[0.0f64; 3]; scheme::ALL.len()],
-            [[0.0f64; 3]; scheme::ALL.len()],
-        );
+        let dec = input.decimate(samples, d);
+        let mut max = [Maxima::default(); scheme::ALL.len()];
         for &t0 in &starts {
             if let Some(pb) = &pb {
                 pb.inc(1);
@@ -152,33 +231,48 @@ pub fn evaluate(
             let (t_i, t_j) = keyframes(&dec, t0, w_ns);
             let reference =
                 preintegrate(&reference_params, &bias, samples, t_i, t_j).map_err(fail)?;
-            for (ks, scheme) in scheme::ALL.into_iter().enumerate() {
-                let m = preintegrate(&params(scheme, Level::Covariance), &bias, &dec, t_i, t_j)
-                    .map_err(fail)?;
-                let mut e = errors(&m, &reference);
-                if d == 1 && scheme == Scheme::Hermite4 {
-                    // The reference itself: |Δ₄(h) − Δ₄(2h)| / (2⁴ − 1).
-                    if let Ok(c) = preintegrate(&reference_params, &bias, &half, t_i, t_j) {
-                        e = errors(&c, &reference).map(|x| x / 15.0);
+            let ms = scheme::ALL
+                .iter()
+                .map(|&s| preintegrate(&params(s, Level::Covariance), &bias, &dec, t_i, t_j))
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(fail)?;
+            // Held input: galilean on the candidate's own samples is exact for them.
+            let held_exact = scheme::ALL
+                .iter()
+                .position(|&s| s == Scheme::Galilean)
+                .map(|k| &ms[k]);
+            for (ks, (&s, m)) in scheme::ALL.iter().zip(&ms).enumerate() {
+                let est = match (input, held_exact) {
+                    (InputClass::Held, Some(g)) => m.delta_error(g),
+                    _ => {
+                        truncation::estimate(&params(s, Level::Covariance), &bias, &dec, m)
+                            .map_err(fail)?
+                            .error
                     }
-                }
-                let s = sigma(&m);
-                for k in 0..3 {
-                    err[ks][k] = err[ks][k].max(e[k]);
-                    sig[ks][k] = sig[ks][k].max(s[k]);
-                }
+                };
+                max[ks].add(errors(m, &reference), &est, chi2(m, &est), sigma(m));
             }
         }
         let rate = 1.0 / (dt_s * d as f64);
-        for (ks, scheme) in scheme::ALL.into_iter().enumerate() {
+        for (ks, &s) in scheme::ALL.iter().enumerate() {
+            let mx = max[ks];
+            let is_ref = d == 1 && s == reference_scheme;
+            let disc_err = if is_ref {
+                mx.est
+            } else {
+                [0, 1, 2].map(|k| mx.dist[k].max(mx.est[k]))
+            };
             out.push(Candidate {
-                scheme,
+                scheme: s,
                 decimation: d,
                 rate_hz: rate,
-                disc_err: err[ks],
-                noise_sigma: sig[ks],
+                disc_err,
+                ref_dist: (!is_ref).then_some(mx.dist),
+                embedded_err: mx.est,
+                embedded_chi2: mx.chi2,
+                noise_sigma: mx.sigma,
                 cost_ns_per_s: ns[ks] * rate,
-                acceptable: (0..3).all(|k| err[ks][k] < fraction * sig[ks][k]),
+                acceptable: (0..3).all(|k| disc_err[k] < fraction * mx.sigma[k]),
             });
         }
         d *= 2;
@@ -225,6 +319,9 @@ mod tests {
             decimation: 1,
             rate_hz,
             disc_err: [0.0; 3],
+            ref_dist: Some([0.0; 3]),
+            embedded_err: [0.0; 3],
+            embedded_chi2: 0.0,
             noise_sigma: [1.0; 3],
             cost_ns_per_s: cost,
             acceptable,

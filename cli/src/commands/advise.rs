@@ -2,8 +2,9 @@
 //! a fraction of the noise-induced standard deviation, estimated from the recording itself
 //! (method: [`crate::analysis::advise`], after [`crate::analysis::denoise`]).
 
-use crate::analysis::advise::{Candidate, evaluate, recommend};
+use crate::analysis::advise::{Candidate, evaluate_input, recommend};
 use crate::analysis::denoise::denoise;
+use crate::analysis::input_class::{InputClass, exactness};
 use crate::imu_args::ImuArgs;
 use crate::{CliError, Output, checks, noise, scheme, stream};
 use serde_json::{Value, json};
@@ -31,6 +32,13 @@ pub struct Args {
     /// Analyse only samples with timestamps <= this, in ns.
     #[arg(long, allow_hyphen_values = true)]
     pub to: Option<i64>,
+    /// What the input is between samples. smooth (default): point samples of a smooth signal,
+    /// as a MEMS IMU delivers; no scheme is exact, the reference is hermite4 at the recording's
+    /// rate. held: rate and specific force constant over each sample interval, as an
+    /// integrating IMU (delta-angle/delta-velocity outputs) or a sample-and-hold stream
+    /// delivers; galilean is exact for it and is the reference, lower rates average the samples.
+    #[arg(long = "input", value_name = "CLASS", value_enum, default_value_t = InputClass::Smooth)]
+    pub input_class: InputClass,
 }
 
 /// The evaluation and the recommendation.
@@ -60,8 +68,19 @@ pub fn compute(args: &Args) -> Result<Advice, CliError> {
     checks::positive("--fraction", args.fraction)?;
     let noise = noise::or_default(Some(&args.noise))?;
     let samples = stream::read_span(&args.input, args.from, args.to, "advise")?;
-    let (signal, cutoffs) = denoise(&samples, noise.gyro_noise_density, noise.acc_noise_density);
-    let candidates = evaluate(&signal, &noise, 9.81, args.window, args.fraction)?;
+    // Held input is not low-passed: the filter would smear its steps (analysis::advise docs).
+    let (signal, cutoffs) = match args.input_class {
+        InputClass::Smooth => denoise(&samples, noise.gyro_noise_density, noise.acc_noise_density),
+        InputClass::Held => (samples.clone(), [None, None]),
+    };
+    let candidates = evaluate_input(
+        &signal,
+        &noise,
+        9.81,
+        args.window,
+        args.fraction,
+        args.input_class,
+    )?;
     let recommended =
         recommend(&candidates).and_then(|r| candidates.iter().position(|c| std::ptr::eq(c, r)));
     Ok(Advice {
@@ -73,30 +92,80 @@ pub fn compute(args: &Args) -> Result<Advice, CliError> {
     })
 }
 
+/// `{rot_rad, vel_m_s, pos_m}`.
+fn triple(e: &[f64; 3]) -> Value {
+    json!({"rot_rad": e[0], "vel_m_s": e[1], "pos_m": e[2]})
+}
+
+/// The input class, its reference and exact scheme, and every scheme's order and exactness.
+fn input_json(input: InputClass) -> Value {
+    let schemes: serde_json::Map<String, Value> = scheme::ALL
+        .iter()
+        .map(|&s| {
+            let e = exactness(s);
+            let exact = input.exact_scheme() == Some(s);
+            (
+                scheme::label(s).to_string(),
+                json!({"order_smooth": e.order_smooth, "exact_on": e.exact_on, "exact_for_input": exact}),
+            )
+        })
+        .collect();
+    json!({
+        "input_class": input.label(),
+        "reference_scheme": scheme::label(input.reference()),
+        "exact_scheme": input.exact_scheme().map(scheme::label),
+        "schemes": schemes,
+    })
+}
+
 /// The JSON form: the recommendation, the cutoffs and every candidate.
 pub fn to_json(a: &Advice) -> Value {
     let rec = a.recommendation();
+    let input = a.args.input_class;
     let rows: Vec<_> = a
         .candidates
         .iter()
         .map(|c| json!({"scheme": scheme::label(c.scheme), "rate": c.rate_hz, "decimation": c.decimation,
-            "disc_err": {"rot_rad": c.disc_err[0], "vel_m_s": c.disc_err[1], "pos_m": c.disc_err[2]},
-            "noise_sigma": {"rot_rad": c.noise_sigma[0], "vel_m_s": c.noise_sigma[1], "pos_m": c.noise_sigma[2]},
+            "disc_err": triple(&c.disc_err),
+            "ref_dist": c.ref_dist.as_ref().map(triple),
+            "embedded_err": triple(&c.embedded_err),
+            "embedded_chi2": if c.embedded_chi2.is_finite() { json!(c.embedded_chi2) } else { Value::Null },
+            "reference": c.is_reference(),
+            "noise_sigma": triple(&c.noise_sigma),
             "cost_ns_per_s": c.cost_ns_per_s, "acceptable": c.acceptable}))
         .collect();
-    json!({
+    let mut out = json!({
         "recommended_scheme": rec.map(|c| scheme::label(c.scheme)),
         "recommended_rate": rec.map(|c| c.rate_hz),
+        "recommended_exact": rec.is_some_and(|c| input.exact_scheme() == Some(c.scheme) && c.decimation == 1),
         "fraction": a.args.fraction, "window_s": a.args.window, "samples": a.samples,
         "denoise_cutoff_hz": {"gyro": a.cutoffs[0], "acc": a.cutoffs[1]},
         "candidates": rows,
-        "method": "white noise removed by a zero-phase low-pass whose cutoff makes the residual match the noise density; reference = hermite4 at the recording's rate; disc_err = max over windows of the distance to it; noise_sigma = sqrt(trace) of each covariance block",
-    })
+        "tangent_order": ["dphi", "dv", "dp"],
+        "method": method(input),
+    });
+    if let (Value::Object(o), Value::Object(i)) = (&mut out, input_json(input)) {
+        o.extend(i);
+    }
+    out
 }
 
-/// The human summary: the cutoffs, a table of every candidate and the recommendation.
+/// The method in one sentence per input class.
+fn method(input: InputClass) -> &'static str {
+    match input {
+        InputClass::Smooth => {
+            "smooth input: white noise removed by a zero-phase low-pass whose cutoff makes the residual match the noise density; lower rates = every d-th sample; reference = hermite4 at the recording's rate; ref_dist = max over windows of the distance to it; embedded_err = max over windows of preint::truncation::estimate on the candidate's own samples, embedded_chi2 its e^T Sigma^-1 e; disc_err = the larger of the two per component (embedded_err alone for the reference); acceptable when disc_err < fraction * noise_sigma; noise_sigma = sqrt(trace) of each covariance block"
+        }
+        InputClass::Held => {
+            "held input (constant over each sample interval), not filtered; lower rates = means of d consecutive samples held over their d intervals; reference = galilean at the recording's rate, exact for held input; ref_dist = max over windows of the distance to it; embedded_err = max over windows of the distance to galilean on the candidate's own samples (exact for them), embedded_chi2 its e^T Sigma^-1 e; disc_err = the larger of the two per component (embedded_err alone for the reference); acceptable when disc_err < fraction * noise_sigma; noise_sigma = sqrt(trace) of each covariance block"
+        }
+    }
+}
+
+/// The human summary: the input class and what is exact for it, the cutoffs, a table of every
+/// candidate and the recommendation.
 pub fn to_text(a: &Advice) -> String {
-    let (window, fraction) = (a.args.window, a.args.fraction);
+    let (window, fraction, input) = (a.args.window, a.args.fraction, a.args.input_class);
     let mut h = String::new();
     let _ = writeln!(
         h,
@@ -104,36 +173,53 @@ pub fn to_text(a: &Advice) -> String {
         a.args.input.path().display(),
         a.samples
     );
-    let fmt_cut = |c: Option<f64>| {
-        c.map_or(
-            "none (residual is not white noise at any cutoff)".to_string(),
-            |c| format!("{c:.2} Hz"),
-        )
-    };
-    let _ = writeln!(
-        h,
-        "signal/noise separation: zero-phase low-pass at gyro {}, accelerometer {}",
-        fmt_cut(a.cutoffs[0]),
-        fmt_cut(a.cutoffs[1])
-    );
+    h.push_str(&input_text(input));
+    match input {
+        InputClass::Smooth => {
+            let fmt_cut = |c: Option<f64>| {
+                c.map_or(
+                    "none (residual is not white noise at any cutoff)".to_string(),
+                    |c| format!("{c:.2} Hz"),
+                )
+            };
+            let _ = writeln!(
+                h,
+                "signal/noise separation: zero-phase low-pass at gyro {}, accelerometer {}",
+                fmt_cut(a.cutoffs[0]),
+                fmt_cut(a.cutoffs[1])
+            );
+        }
+        InputClass::Held => {
+            let _ = writeln!(
+                h,
+                "held input: not low-passed; lower rates average d consecutive samples"
+            );
+        }
+    }
     h.push_str(&table(&a.candidates));
     match a.recommendation() {
         Some(c) => {
+            let exact = input.exact_scheme() == Some(c.scheme) && c.decimation == 1;
             let _ = writeln!(
                 h,
-                "recommended: {} at {:.1} Hz (cheapest whose discretisation error < {fraction}·σ on rotation, velocity and position)",
+                "recommended: {} at {:.1} Hz (cheapest whose discretisation error, reference distance and embedded estimate, < {fraction}·σ on rotation, velocity and position){}",
                 scheme::label(c.scheme),
-                c.rate_hz
+                c.rate_hz,
+                if exact { "; exact for held input" } else { "" }
             );
         }
         None => {
             let _ = writeln!(
                 h,
-                "no scheme keeps the discretisation error below {fraction}·σ at these rates: use hermite4 at the full rate, or record faster"
+                "no scheme keeps the discretisation error below {fraction}·σ at these rates: {}",
+                match input {
+                    InputClass::Smooth => "use hermite4 at the full rate, or record faster",
+                    InputClass::Held => "use galilean at the full rate (exact for held input)",
+                }
             );
         }
     }
-    if a.cutoffs.iter().any(Option::is_none) {
+    if input == InputClass::Smooth && a.cutoffs.iter().any(Option::is_none) {
         let _ = writeln!(
             h,
             "note: the signal above the motion band is not white noise of the stated density (vibration, or a \
@@ -143,38 +229,78 @@ pub fn to_text(a: &Advice) -> String {
     h
 }
 
-/// One line per candidate: errors and σ per component, cost, `ok` when acceptable.
+/// The input class, its reference, the scheme exact for it (if any) and each scheme's order.
+fn input_text(input: InputClass) -> String {
+    let mut h = String::new();
+    let _ = writeln!(
+        h,
+        "input: {} (reference {} at the recording's rate); exact for this input: {}",
+        input.label(),
+        scheme::label(input.reference()),
+        input
+            .exact_scheme()
+            .map_or("no scheme (hermite4 is 4th order)", scheme::label)
+    );
+    for &s in &scheme::ALL {
+        let e = exactness(s);
+        let _ = writeln!(
+            h,
+            "  {:<9} order {} on smooth input; {}",
+            scheme::label(s),
+            e.order_smooth,
+            e.exact_on
+        );
+    }
+    h
+}
+
+/// One line per candidate: per component the reference distance, the embedded estimate and σ;
+/// the estimate's χ²; cost; `ok` when acceptable.
 fn table(candidates: &[Candidate]) -> String {
     let mut h = String::new();
     let _ = writeln!(
         h,
-        "{:<9} {:>9} {:>11} {:>11} {:>11} {:>11} {:>11} {:>11} {:>12}",
+        "{:<9} {:>8} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>10}",
         "scheme",
         "rate Hz",
-        "rot err",
+        "rot ref",
+        "rot est",
         "rot σ",
-        "vel err",
+        "vel ref",
+        "vel est",
         "vel σ",
-        "pos err",
+        "pos ref",
+        "pos est",
         "pos σ",
+        "est χ²",
         "µs/s data"
     );
+    let e = |x: f64| format!("{x:>9.2e}");
     for c in candidates {
+        let r = |k: usize| c.ref_dist.map_or(format!("{:>9}", "(ref)"), |d| e(d[k]));
         let _ = writeln!(
             h,
-            "{:<9} {:>9.1} {:>11.2e} {:>11.2e} {:>11.2e} {:>11.2e} {:>11.2e} {:>11.2e} {:>12.1}{}",
+            "{:<9} {:>8.1} {} {} {} {} {} {} {} {} {} {} {:>10.1}{}",
             scheme::label(c.scheme),
             c.rate_hz,
-            c.disc_err[0],
-            c.noise_sigma[0],
-            c.disc_err[1],
-            c.noise_sigma[1],
-            c.disc_err[2],
-            c.noise_sigma[2],
+            r(0),
+            e(c.embedded_err[0]),
+            e(c.noise_sigma[0]),
+            r(1),
+            e(c.embedded_err[1]),
+            e(c.noise_sigma[1]),
+            r(2),
+            e(c.embedded_err[2]),
+            e(c.noise_sigma[2]),
+            e(c.embedded_chi2),
             c.cost_ns_per_s * 1e-3,
             if c.acceptable { "  ok" } else { "" }
         );
     }
+    let _ = writeln!(
+        h,
+        "ref: distance to the reference; est: embedded estimate from the candidate's own samples; est χ²: êᵀΣ⁻¹ê, tangent [δφ, δv, δp]"
+    );
     h
 }
 
