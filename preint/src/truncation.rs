@@ -23,14 +23,17 @@
 //!
 //! A factor at the true states sees `r = −(e + n)`: the deterministic truncation error plus the
 //! noise. Weighting it by `Σ` alone makes the mean χ² `dof + eᵀΣ⁻¹e`, which for Euler at 20 Hz
-//! is in the hundreds of thousands. [`inflate`] adds `u uᵀ` to the 9×9 block of both
-//! covariances, `u` the estimate as the factor's residual chart sees it ([`offset_in_chart`]):
-//! by the Sherman–Morrison identity the mean χ² is then
-//! `dof + (eᵀΣ⁻¹e − (uᵀΣ⁻¹e)²/(1 + uᵀΣ⁻¹u))`, exactly `dof` when `u` equals the true offset
-//! `e`, and never more than `dof + 1` for an estimate along `e` of any size. The factor then
-//! states how much it can be trusted in the direction its own discretisation moves it. For the
-//! Logmap residual `u` is the exact image of the offset in its chart (not its first-order image
-//! `ê`): an offset as large as Euler's at 20 Hz has second-order terms of several σ.
+//! is in the hundreds of thousands. The estimate is computed from the same noisy samples: with
+//! `n_c` the companion's response to the noise, `ê = e + n − n_c` (plus the companion's own
+//! error), so `r = −(ê + n_c)`: the residual is the estimated offset plus the companion's noise.
+//! [`inflate`] therefore weights with `Σ_c + u uᵀ`, `Σ_c` the companion's covariance and `u`
+//! the estimate as the factor's residual chart sees it ([`offset_in_chart`]): the direction of
+//! the offset is left free (by the Sherman–Morrison identity the mean χ² is `dof` when the offset
+//! is along `u`, and never more than `dof + 1` for an estimate along `e` of any size) and the
+//! rest is weighted by the noise that is really there (the scheme's own `Σ` there leaves
+//! 0.13–0.22 of χ²: its noise response differs from the companion's). Charting the estimate to
+//! first order in the Logmap residual would leave several σ for Euler at 20 Hz
+//! (`docs/EVIDENCE.md`).
 
 use crate::error::PreintError;
 use crate::factor::ResidualMode;
@@ -38,7 +41,7 @@ use crate::measurement::PreintegratedImu;
 use crate::params::{Level, PreintParams, Scheme};
 use crate::sample::{ImuBias, ImuSample};
 use crate::window::preintegrate;
-use nalgebra::{SVector, Vector3};
+use nalgebra::{SMatrix, SVector, Vector3};
 use preint_lie::jl_inv;
 
 /// The estimated truncation error of a window's deltas.
@@ -49,6 +52,10 @@ pub struct TruncationEstimate {
     pub error: SVector<f64, 9>,
     /// How it was estimated: `"hermite4 companion"` or `"richardson 2h"`.
     pub method: &'static str,
+    /// The 9×9 covariance of the companion's deltas ([δφ, δv, δp]; for hermite4 the
+    /// measurement's own): the noise a factor's residual keeps once the estimated offset is
+    /// accounted for ([`inflate`]). Zero at `Level::Deltas`.
+    pub companion_cov: SMatrix<f64, 9, 9>,
 }
 
 /// The truncation error of `m`, the window `[t_i_ns, t_j_ns]` of `samples` preintegrated with
@@ -68,18 +75,26 @@ pub fn estimate(
     match params.scheme {
         Scheme::Euler | Scheme::Midpoint | Scheme::Galilean => {
             let h4 = deltas.with_scheme(Scheme::Hermite4);
-            let companion = preintegrate(&h4, bias, samples, t_i, t_j)?;
+            // With covariance when the measurement has one: `inflate` weights with it.
+            let level = match params.level {
+                Level::Deltas => Level::Deltas,
+                _ => Level::Covariance,
+            };
+            let with_cov = h4.clone().with_level(level);
+            let companion = preintegrate(&with_cov, bias, samples, t_i, t_j)?;
             // The companion's own error, by Richardson, so that at low rates the estimate is
             // not limited by it: `D_S ⊖ D ≈ (D_S ⊖ D_h4) + (D_h4 ⊖ D)`.
             let own = richardson(&h4, bias, samples, &companion)?;
             Ok(TruncationEstimate {
                 error: m.delta_error(&companion) + own,
                 method: "hermite4 companion",
+                companion_cov: companion.cov,
             })
         }
         Scheme::Hermite4 => Ok(TruncationEstimate {
             error: richardson(&deltas, bias, samples, m)?,
             method: "richardson 2h",
+            companion_cov: m.cov,
         }),
     }
 }
@@ -110,9 +125,10 @@ fn every_other(samples: &[ImuSample], t_i_ns: i64, t_j_ns: i64) -> Vec<ImuSample
         .collect()
 }
 
-/// `m` with `u uᵀ` added to its 9×9 covariance and to the 9×9 block of its 15×15 one, `u` the
-/// estimate as a factor of `mode` sees it ([`offset_in_chart`]): weighting that factor with it
-/// makes the truncation error part of what the factor expects (module docs).
+/// `m` weighted with its estimated truncation error (module docs): its 9×9 covariance becomes
+/// `Σ_c + u uᵀ`, with `Σ_c` the companion's covariance (`e.companion_cov`) and `u` the estimate
+/// as a factor of `mode` sees it ([`offset_in_chart`]); the 9×9 block of its 15×15 covariance
+/// changes by the same amount, `Σ_c − Σ + u uᵀ` (keeping what the bias random walk adds there).
 pub fn inflate(
     m: &PreintegratedImu,
     e: &TruncationEstimate,
@@ -120,11 +136,11 @@ pub fn inflate(
 ) -> PreintegratedImu {
     let u = offset_in_chart(m, e, mode);
     let mut out = m.clone();
-    let outer = u * u.transpose();
-    out.cov += outer;
+    let change = e.companion_cov - m.cov + u * u.transpose();
+    out.cov += change;
     out.cov15
         .fixed_view_mut::<9, 9>(0, 0)
-        .zip_apply(&outer, |x, y| *x += y);
+        .zip_apply(&change, |x, y| *x += y);
     out
 }
 

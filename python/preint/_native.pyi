@@ -374,16 +374,19 @@ def truncation_estimate(
     acc: _F64,
     pim: PreintegratedImu,
     bias: ImuBias | None = None,
-) -> tuple[_F64, str]:
-    """(error float64[9] = scheme ⊖ exact deltas in [dphi rad, dv m/s, dp m], method)."""
+) -> tuple[_F64, str, _F64]:
+    """(error float64[9] = scheme ⊖ exact deltas in [dphi rad, dv m/s, dp m], method,
+    companion_cov float64[9, 9] the companion's covariance, which inflate weights with)."""
 
 def inflate(
     pim: PreintegratedImu,
     error: _Vec3Like | Sequence[float] | _F64,
     residual: str = "logmap",
+    companion_cov: _F64 | Sequence[Sequence[float]] | None = None,
 ) -> PreintegratedImu:
-    """pim with u uᵀ added to cov and to the 9×9 block of cov15, u the estimate `error` (nine
-    numbers [dphi, dv, dp]) as a factor of mode `residual` sees it ("logmap" or "component")."""
+    """pim with cov = companion_cov + u uᵀ (the 9×9 block of cov15 changed by the same amount),
+    u the estimate `error` (nine numbers [dphi, dv, dp]) as a factor of mode `residual` sees it
+    ("logmap" or "component"); companion_cov defaults to pim.cov."""
 
 def second_order_covariance(
     params: Params, t_ns: _I64, gyro: _F64, acc: _F64, pim: PreintegratedImu

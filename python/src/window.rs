@@ -82,11 +82,20 @@ fn put_deltas<'py>(py: Python<'py>, out: &Bound<'py, PyDict>, d: &[DeltasAt]) ->
     Ok(())
 }
 
+/// `(error, method, companion_cov)` as Python receives them.
+type Estimate<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    &'static str,
+    Bound<'py, PyArray2<f64>>,
+);
+
 /// The estimated truncation (discretisation) error of `pim`, the window
 /// `[pim.t_i_ns, pim.t_j_ns]` of the arrays preintegrated with `params` and `bias`:
-/// `(error, method)` with `error` = scheme ⊖ exact deltas, float64[9] in [δφ rad, δv m/s, δp m]
-/// (the chart of `PreintegratedImu.delta_error`) and `method` "hermite4 companion" (euler,
-/// midpoint, galilean) or "richardson 2h" (hermite4).
+/// `(error, method, companion_cov)` with `error` = scheme ⊖ exact deltas, float64[9] in
+/// [δφ rad, δv m/s, δp m] (the chart of `PreintegratedImu.delta_error`), `method` "hermite4
+/// companion" (euler, midpoint, galilean) or "richardson 2h" (hermite4), and `companion_cov`
+/// float64[9, 9] the companion's covariance (for hermite4 `pim.cov`), which `inflate` weights
+/// with.
 #[pyfunction]
 #[pyo3(signature = (params, t_ns, gyro, acc, pim, bias=None))]
 pub(crate) fn truncation_estimate<'py>(
@@ -97,7 +106,7 @@ pub(crate) fn truncation_estimate<'py>(
     acc: &Bound<'py, PyAny>,
     pim: PyRef<'_, PyMeasurement>,
     bias: Option<PyRef<'_, PyBias>>,
-) -> PyResult<(Bound<'py, PyArray1<f64>>, &'static str)> {
+) -> PyResult<Estimate<'py>> {
     let arrays = SampleArrays::new(t_ns, gyro, acc)?;
     let (v, p, b, m) = (arrays.views(), &params.0, bias_or_zero(bias), &pim.0);
     // Twice the margin: the Richardson companion integrates every other sample, whose window
@@ -109,21 +118,25 @@ pub(crate) fn truncation_estimate<'py>(
             })
         })
         .map_err(preint_err)?;
-    Ok((svec_py(py, &e.error), e.method))
+    let c = Array2::from_shape_fn((9, 9), |(i, j)| e.companion_cov[(i, j)]).into_pyarray(py);
+    Ok((svec_py(py, &e.error), e.method, c))
 }
 
-/// `pim` with `u uᵀ` added to its 9×9 covariance and to the 9×9 block of its 15×15 one, `u`
-/// the truncation-error estimate `error` (float64[9] in [δφ, δv, δp], `truncation_estimate`)
-/// as the factor of residual mode `residual` sees it (Rust `truncation::offset_in_chart`):
-/// `error` itself for "component", its exact image in the SE₂(3) chart for "logmap" (the
-/// default, as the factors'). A factor of that mode weighted by the result expects its
-/// discretisation error too.
+/// `pim` weighted with a truncation-error estimate (Rust `truncation::inflate`): its 9×9
+/// covariance becomes `companion_cov + u uᵀ` (the 9×9 block of its 15×15 one changes by the
+/// same amount), with `u` the
+/// estimate `error` (float64[9] in [δφ, δv, δp], `truncation_estimate`) as the factor of residual
+/// mode `residual` sees it (Rust `truncation::offset_in_chart`): `error` itself for "component",
+/// its exact image in the SE₂(3) chart for "logmap" (the default, as the factors'), and
+/// `companion_cov` the companion's covariance `truncation_estimate` returns (default
+/// `pim.cov`). A factor of that mode weighted by the result expects its discretisation error.
 #[pyfunction]
-#[pyo3(signature = (pim, error, residual="logmap"))]
+#[pyo3(signature = (pim, error, residual="logmap", companion_cov=None))]
 pub(crate) fn inflate(
     pim: PyRef<'_, PyMeasurement>,
     error: &Bound<'_, PyAny>,
     residual: &str,
+    companion_cov: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyMeasurement> {
     let mode = crate::factor::mode_from(residual)?;
     let e: Vec<f64> = error
@@ -134,13 +147,35 @@ pub(crate) fn inflate(
             "error: expected nine finite numbers [dphi, dv, dp]",
         ));
     }
+    let companion_cov = match companion_cov {
+        None => pim.0.cov,
+        Some(c) => symmetric9("companion_cov", c)?,
+    };
     let est = TruncationEstimate {
         error: SVector::<f64, 9>::from_column_slice(&e),
         method: "given",
+        companion_cov,
     };
     Ok(PyMeasurement(preint::truncation::inflate(
         &pim.0, &est, mode,
     )))
+}
+
+/// The argument `name` as a finite symmetric 9×9 matrix.
+fn symmetric9(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<nalgebra::SMatrix<f64, 9, 9>> {
+    let t: Vec<Vec<f64>> = obj
+        .extract()
+        .map_err(|_| shape_err(format!("{name}: expected a 9×9 array")))?;
+    if t.len() != 9 || t.iter().any(|r| r.len() != 9) {
+        return Err(shape_err(format!("{name}: expected a 9×9 array")));
+    }
+    let m = nalgebra::SMatrix::<f64, 9, 9>::from_fn(|i, j| t[i][j]);
+    if !m.iter().all(|x| x.is_finite()) || (m - m.transpose()).amax() > 1e-12 * m.amax() {
+        return Err(shape_err(format!(
+            "{name}: expected a finite symmetric 9×9 array"
+        )));
+    }
+    Ok(m)
 }
 
 /// The second-order covariance term of `pim`'s SE₂(3) error (Rust `preint::second_order`),
@@ -176,16 +211,7 @@ pub(crate) fn add_covariance(
     pim: PyRef<'_, PyMeasurement>,
     term: &Bound<'_, PyAny>,
 ) -> PyResult<PyMeasurement> {
-    let t: Vec<Vec<f64>> = term
-        .extract()
-        .map_err(|_| shape_err("term: expected a 9×9 array"))?;
-    if t.len() != 9 || t.iter().any(|r| r.len() != 9) {
-        return Err(shape_err("term: expected a 9×9 array"));
-    }
-    let m = nalgebra::SMatrix::<f64, 9, 9>::from_fn(|i, j| t[i][j]);
-    if !m.iter().all(|x| x.is_finite()) || (m - m.transpose()).amax() > 1e-12 * m.amax() {
-        return Err(shape_err("term: expected a finite symmetric 9×9 array"));
-    }
+    let m = symmetric9("term", term)?;
     Ok(PyMeasurement(preint::second_order::inflate(&pim.0, &m)))
 }
 

@@ -100,7 +100,8 @@ def test_truncation_estimate_tracks_the_true_error(scheme):
             m.delta_p - dp,
         ]
     )
-    est, method = preint.truncation_estimate(p, t, g, a, m)
+    est, method, cov_c = preint.truncation_estimate(p, t, g, a, m)
+    assert cov_c.shape == (9, 9) and np.all(np.diag(cov_c) > 0)
     assert method == "hermite4 companion"
     # The velocity and position errors are what matter at 20 Hz (cm/s … dm/s).
     for blk in (slice(3, 6), slice(6, 9)):
@@ -123,6 +124,13 @@ def test_inflate_adds_the_outer_product():
         preint.inflate(m, [np.nan] * 9)
     with pytest.raises(preint.ShapeError):
         preint.inflate(m, e, residual="tangent")
+    # The companion's covariance replaces the measurement's under the outer product.
+    c = 2.0 * m.cov
+    m3 = preint.inflate(m, e, residual="component", companion_cov=c)
+    assert np.allclose(m3.cov, c + np.outer(e, e), rtol=0, atol=1e-15)
+    assert np.allclose(m3.cov15[:9, :9] - m.cov15[:9, :9], m.cov + np.outer(e, e), rtol=0, atol=1e-15)
+    with pytest.raises(preint.ShapeError):
+        preint.inflate(m, e, companion_cov=np.triu(np.ones((9, 9))))
 
 
 def jl_inv(phi):
@@ -256,9 +264,10 @@ def test_a_window_of_long_arrays_equals_the_window_of_its_neighbourhood(scheme):
     for k in ("rotation", "position", "velocity"):
         assert np.array_equal(s_long[k], s_near[k])
     m = preint.preintegrate(p, t, g, a, t_i, t_j)
-    e_long, _ = preint.truncation_estimate(p, t, g, a, m)
-    e_near, _ = preint.truncation_estimate(p, *sl, m)
+    e_long, _, c_long = preint.truncation_estimate(p, t, g, a, m)
+    e_near, _, c_near = preint.truncation_estimate(p, *sl, m)
     assert np.array_equal(e_long, e_near)
+    assert np.array_equal(c_long, c_near)
     bad = g.copy()
     bad[5100, 2] = np.inf
     with pytest.raises(preint.PreintError) as e:

@@ -322,6 +322,7 @@ pub fn to_json(r: &Integration) -> Value {
     if let Some(t) = &r.truncation {
         out["truncation"] = json!({
             "error": t.error.iter().copied().collect::<Vec<f64>>(), "method": t.method,
+            "companion_covariance": rows(&t.companion_cov),
             "order": "[dphi, dv, dp]: measured minus exact deltas, the chart of covariance",
             "units": {"dphi": "rad", "dv": "m/s", "dp": "m"},
         });
