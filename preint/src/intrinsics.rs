@@ -4,10 +4,9 @@
 //! # Model (OpenVINS, "IMU Intrinsic Calibration"; Kalibr `scale-misalignment`)
 //!
 //! Frames: `I` the IMU (body) frame the deltas are expressed in, `w` the gyroscope's axes, `a`
-//! the accelerometer's. The sensors read (OpenVINS' `propagation` documentation and
-//! `ov_msckf/src/state/Propagator.cpp`; Geneva, Huang, Yang, *Observability analysis of IMU
-//! intrinsic parameters*, RSS 2020 / Yang et al. *Online IMU intrinsic calibration: is it
-//! necessary?*, RSS 2020):
+//! the accelerometer's. The sensors read (OpenVINS' documentation "IMU Intrinsic
+//! Calibration" and `ov_msckf/src/state/Propagator.cpp`; Yang, Geneva, Zuo, Eckenhoff, Liu,
+//! Huang, *Online IMU Intrinsic Calibration: Is It Necessary?*, RSS 2020):
 //!
 //! ```text
 //! ω_m = T_w R_IMUtoGYRO ω_I + T_g a_I + b_g + n_g

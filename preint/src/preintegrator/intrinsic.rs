@@ -37,7 +37,7 @@ impl<E: Engine + Clone + 'static> Engine for Corrected<E> {
     }
     /// The slice fast path on the corrected samples, a stack chunk at a time.
     fn run_slice(&mut self, samples: &[ImuSample], last_t_ns: i64, gap_limit: u64) -> usize {
-        const CHUNK: usize = 128;
+        const CHUNK: usize = 512;
         let mut buf = [ImuSample::new(0, Default::default(), Default::default()); CHUNK];
         let (mut used, mut last) = (0, last_t_ns);
         for chunk in samples.chunks(CHUNK) {
