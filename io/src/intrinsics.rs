@@ -188,7 +188,7 @@ impl Ctx<'_> {
 }
 
 /// The `imu0` mapping (or the root when there is none) and its key prefix.
-fn imu_map<'n>(root: &'n Node) -> (&'n Node, &'static str) {
+fn imu_map(root: &Node) -> (&Node, &'static str) {
     match root.get("imu0") {
         Some(m @ Node::Map(..)) => (m, "imu0."),
         _ => (root, ""),
