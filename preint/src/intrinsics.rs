@@ -194,10 +194,12 @@ impl ImuIntrinsics {
         Ok(())
     }
 
-    /// The linear map of a raw sample to the corrected one (module docs), fixed once.
+    /// The linear map of a raw sample to the corrected one (module docs), fixed once. A
+    /// singular `T_w` or `T_a` ([`ImuIntrinsics::validate`] refuses them) gives NaN entries,
+    /// so that nothing computed from it passes for a result.
     pub fn correction(&self) -> Correction {
-        let d_w = self.t_w.try_inverse().unwrap_or_else(Matrix3::zeros);
-        let d_a = self.t_a.try_inverse().unwrap_or_else(Matrix3::zeros);
+        let inv = |m: &Matrix3<f64>| m.try_inverse().unwrap_or_else(|| Matrix3::repeat(f64::NAN));
+        let (d_w, d_a) = (inv(&self.t_w), inv(&self.t_a));
         let k_w = self.r_imu_to_gyro.transpose() * d_w;
         let k_a = self.r_imu_to_acc.transpose() * d_a;
         Correction {

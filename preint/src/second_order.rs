@@ -96,7 +96,10 @@ pub fn covariance(
     let b = &m.bias_hat;
     let (mut p1, mut p2) = (M9::zeros(), M9::zeros());
     // The samples as the preintegrator sees them: corrected by the intrinsics.
-    let corr = params.intrinsics.map(|x| x.model.correction());
+    let corr = params
+        .intrinsics
+        .filter(|x| !x.model.is_identity())
+        .map(|x| x.model.correction());
     let corrected = |s: &ImuSample| corr.map_or(*s, |c| c.apply(s));
     for pair in nodes.windows(2) {
         let pair = [corrected(&pair[0]), corrected(&pair[1])];

@@ -256,3 +256,31 @@ fn deskew_deltas_apply_the_intrinsics_as_preintegrate_does() {
         }
     }
 }
+
+#[test]
+fn the_slice_path_with_intrinsics_equals_pushing_one_by_one() {
+    // 1 500 samples: several of the wrapper's stack chunks.
+    let s = preint::sample::synthetic_stream(1500);
+    for &scheme in Scheme::ALL {
+        for level in [Level::Deltas, Level::Covariance] {
+            let p = with(
+                &PreintParams::from_noise(&ImuNoise::euroc())
+                    .with_scheme(scheme)
+                    .with_level(level),
+                realistic(IntrinsicsModel::Kalibr),
+                false,
+            );
+            let mut slice = preint::Preintegrator::new(p.clone(), bias()).unwrap();
+            slice.integrate_slice(&s).unwrap();
+            let mut push = preint::Preintegrator::new(p, bias()).unwrap();
+            for x in &s {
+                push.integrate(x).unwrap();
+            }
+            assert_eq!(
+                slice.finish().unwrap(),
+                push.finish().unwrap(),
+                "{scheme:?} {level:?}"
+            );
+        }
+    }
+}

@@ -14,7 +14,8 @@
 //! `Σ_c [S_gω[c], 0] B_ω,c + [S_ga[c], S_aa[c]] B_a,c`, pushes the result forward (`Φ_N`) and
 //! takes its rotation rows into the chart (`δφ = ΔRᵀ ψ`), as for the bias Jacobians.
 
-use super::Engine;
+use super::{Engine, Preintegrator, checked};
+use crate::error::PreintError;
 use crate::intrinsics::{Correction, ImuIntrinsics, IntrinsicJacobian};
 use crate::measurement::PreintegratedImu;
 use crate::propagation::SampleGain;
@@ -202,5 +203,53 @@ impl IntrAcc {
             view.fixed_view_mut::<3, 3>(0, 0).copy_from(&psi);
         }
         out
+    }
+}
+
+impl Preintegrator {
+    /// [`Preintegrator::finish`] with the Jacobians of `[δφ, δv, δp]` with respect to the
+    /// intrinsics' parameters ([`crate::intrinsics`], columns in
+    /// [`ImuIntrinsics::PARAMS`](crate::intrinsics::ImuIntrinsics::PARAMS) order) at the
+    /// frame-I bias estimate. Errors: those of `finish`, and
+    /// [`PreintError::InvalidParameter`] when `params.intrinsics` does not ask for them or the
+    /// level is [`Level::Deltas`](crate::Level::Deltas).
+    ///
+    /// ```
+    /// use preint::intrinsics::{AppliedIntrinsics, ImuIntrinsics, IntrinsicsModel};
+    /// use preint::nalgebra::Vector3;
+    /// use preint::{ImuBias, ImuSample, PreintParams, Preintegrator};
+    /// let mut x = ImuIntrinsics::identity(IntrinsicsModel::Kalibr);
+    /// x.t_w[(0, 0)] = 1.01; // the gyro x axis reads 1 % high
+    /// let mut params = PreintParams::default();
+    /// params.intrinsics = Some(AppliedIntrinsics::new(x).with_jacobians());
+    /// let mut pi = Preintegrator::new(params, ImuBias::zero()).unwrap();
+    /// for k in 0..201i64 {
+    ///     let s = ImuSample::new(k * 5_000_000, Vector3::new(0.101, 0.0, 0.0), Vector3::new(0.0, 0.0, 9.81));
+    ///     pi.integrate(&s).unwrap();
+    /// }
+    /// let (m, jac) = pi.finish_with_intrinsic_jacobian().unwrap();
+    /// assert!((m.delta_r.log().x - 0.1).abs() < 1e-12); // the true 0.1 rad/s over 1 s
+    /// assert!((jac[(0, 0)] + 0.1 / 1.01).abs() < 1e-12); // ∂φ_x/∂Tw(0,0) = −ω_m T/Tw² ≈ −0.099
+    /// ```
+    pub fn finish_with_intrinsic_jacobian(
+        &self,
+    ) -> Result<(PreintegratedImu, crate::intrinsics::IntrinsicJacobian), PreintError> {
+        let count = self.engine.len();
+        if count < 2 {
+            return Err(PreintError::TooFewSamples { count });
+        }
+        let (m, jac) = self.engine.measurement_and_intrinsics();
+        let Some(jac) = jac else {
+            return Err(PreintError::InvalidParameter {
+                name: "intrinsics",
+                reason: "Jacobians not requested (AppliedIntrinsics::jacobians) or level Deltas",
+            });
+        };
+        if !jac.iter().all(|x| x.is_finite()) {
+            return Err(PreintError::NonFiniteResult {
+                what: "intrinsic Jacobians",
+            });
+        }
+        Ok((checked(m)?, jac))
     }
 }
