@@ -8,6 +8,8 @@
 #   PUSH=1 tools/instructions.sh          # one sample at a time through `integrate`
 #   BODY=1 tools/instructions.sh          # the IMU away from the body origin (body_p_sensor)
 #   BODY=centripetal tools/instructions.sh  # … its lever arm removed per sample (GTSAM's model)
+#   INTR=1 tools/instructions.sh          # IMU intrinsics applied to every sample
+#   INTR=jacobians tools/instructions.sh  # … and the Jacobians with respect to them
 #   FINISH=1 tools/instructions.sh        # instructions of one `finish` (the measurement read
 #                                         # out), not per sample
 set -euo pipefail
@@ -31,6 +33,7 @@ if [ "${FINISH:-0}" = 1 ]; then
   per=1
 fi
 [ "${BODY:-0}" != 0 ] && label="$label, body_p_sensor ${BODY}"
+[ "${INTR:-0}" != 0 ] && label="$label, intrinsics ${INTR}"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 printf '%-9s %10s %12s %10s   (%s)\n' scheme deltas covariance combined "$label"

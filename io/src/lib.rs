@@ -38,6 +38,7 @@ pub mod detect;
 pub mod error;
 pub mod euroc;
 pub mod groundtruth;
+pub mod intrinsics;
 pub mod kalibr;
 pub mod layout;
 pub mod lines;
@@ -47,6 +48,7 @@ pub mod reader;
 pub mod split;
 mod text;
 pub mod units;
+mod yaml;
 
 pub use audit::{Audit, AuditOptions, Auditor, Finding, Severity, audit_reader};
 pub use channel::{ChannelSample, ChannelStream, Sensor};
@@ -56,6 +58,11 @@ pub use euroc::{euroc_imu_string, parse_euroc_imu, read_euroc_imu, write_euroc_i
 pub use groundtruth::{
     GroundTruthState, euroc_groundtruth_string, parse_euroc_groundtruth, read_euroc_groundtruth,
     write_euroc_groundtruth,
+};
+pub use intrinsics::{
+    ImuCalibration, kalibr_imu_string, openvins_imu_chain_string, parse_kalibr_imu,
+    parse_openvins_imu_chain, read_kalibr_imu, read_openvins_imu_chain, write_kalibr_imu,
+    write_openvins_imu_chain,
 };
 pub use kalibr::{kalibr_yaml_string, parse_kalibr_yaml, read_kalibr_yaml, write_kalibr_yaml};
 pub use layout::{Column, Delimiter, TextLayout};

@@ -8,7 +8,10 @@
 //! the work is not optimised away. Without arguments (as `cargo bench` runs every bench) it
 //! does nothing. With the environment variable `BODY=1` the IMU is mounted away from the body
 //! origin (`body_p_sensor`: 0.3 m lever arm, rotated), as in `tests/tests/extrinsics.rs`; with
-//! `BODY=centripetal` its lever arm is removed per sample (`LeverArm::Centripetal`).
+//! `BODY=centripetal` its lever arm is removed per sample (`LeverArm::Centripetal`). With
+//! `INTR=1` IMU intrinsics are applied to every sample (`PreintParams::intrinsics`: 1 % scale,
+//! 2 mrad misalignment, g-sensitivity 1e-3 (rad/s)/(m/s²)); with `INTR=jacobians` their
+//! Jacobians are accumulated too.
 
 use preint::sample::synthetic_stream;
 use preint::{ImuBias, ImuNoise, Level, PreintParams, Preintegrator, Scheme};
@@ -46,6 +49,16 @@ fn main() {
             preint::nalgebra::Vector3::new(0.1, -0.2, 0.2),
         ));
     }
+    let intr = std::env::var("INTR").unwrap_or_default();
+    if intr == "1" || intr == "jacobians" {
+        let x = realistic_intrinsics();
+        let applied = preint::intrinsics::AppliedIntrinsics::new(x);
+        prm.intrinsics = Some(if intr == "jacobians" {
+            applied.with_jacobians()
+        } else {
+            applied
+        });
+    }
     let mut pi = Preintegrator::new(prm, ImuBias::zero()).unwrap();
     if args.get(3).is_some_and(|a| a == "push") {
         push_all(&mut pi, &s);
@@ -63,4 +76,16 @@ fn push_all(pi: &mut Preintegrator, s: &[preint::ImuSample]) {
     for x in s {
         pi.integrate(black_box(x)).unwrap();
     }
+}
+
+/// 1 % scale, 2 mrad misalignment and axis rotation, g-sensitivity 1e-3 (rad/s)/(m/s²).
+fn realistic_intrinsics() -> preint::intrinsics::ImuIntrinsics {
+    use preint::nalgebra::{Matrix3, Vector3};
+    let mut x =
+        preint::intrinsics::ImuIntrinsics::identity(preint::intrinsics::IntrinsicsModel::Kalibr);
+    x.t_w = Matrix3::new(1.01, 0.0, 0.0, 0.002, 0.99, 0.0, -0.002, 0.002, 1.005);
+    x.t_a = Matrix3::new(0.99, 0.0, 0.0, -0.002, 1.01, 0.0, 0.002, 0.002, 1.0);
+    x.r_imu_to_gyro = *preint::SO3::exp(&Vector3::new(0.002, -0.002, 0.001)).matrix();
+    x.t_g = Matrix3::from_fn(|i, j| 1e-3 * (1.0 + i as f64 - j as f64));
+    x
 }

@@ -46,6 +46,7 @@ pub use sample::{ImuBias, ImuSample, dt_seconds};
 pub mod error;
 pub mod extrinsics;
 pub(crate) mod fast;
+pub mod intrinsics;
 pub mod params;
 pub mod preintegrator;
 pub(crate) mod propagation;

@@ -112,6 +112,11 @@ pub struct PreintParams {
     /// [`BiasCorrection::Additive`] (Forster eq. 44, GTSAM's Manifold/Tangent backends)
     /// otherwise; see [`BiasCorrection::default_for`].
     pub bias_correction: Option<BiasCorrection>,
+    /// IMU intrinsics applied to every raw sample before integration, and whether the deltas'
+    /// Jacobians with respect to them are accumulated ([`crate::intrinsics`]; the bias
+    /// estimate and the noise densities are then those of the corrected samples). `None` (the
+    /// default): samples are integrated as read.
+    pub intrinsics: Option<crate::intrinsics::AppliedIntrinsics>,
 }
 
 /// Default gyro-bias change [rad/s] above which the first-order correction is replaced by
@@ -157,6 +162,7 @@ impl PreintParams {
             omega_coriolis: None,
             coriolis: CoriolisMode::Exact,
             bias_correction: None,
+            intrinsics: None,
         }
     }
 
@@ -254,6 +260,15 @@ impl PreintParams {
                 "body_p_sensor",
                 "non-finite entry or rotation not orthonormal",
             );
+        }
+        if let Some(x) = &self.intrinsics {
+            x.model.validate()?;
+            if x.jacobians && self.body_p_sensor.is_some() {
+                return bad(
+                    "intrinsics",
+                    "Jacobians with respect to the intrinsics are not supported with body_p_sensor",
+                );
+            }
         }
         if self.max_gap_ns <= 0 {
             return bad("max_gap_ns", "must be positive");

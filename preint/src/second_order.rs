@@ -97,7 +97,14 @@ pub fn covariance(
     let (lg1, la1) = (sqrt_psd(&sg), sqrt_psd(&sa));
     let b = &m.bias_hat;
     let (mut p1, mut p2) = (M9::zeros(), M9::zeros());
+    // The samples as the preintegrator sees them: corrected by the intrinsics.
+    let corr = params
+        .intrinsics
+        .filter(|x| !x.model.is_identity())
+        .map(|x| x.model.correction());
+    let corrected = |s: &ImuSample| corr.map_or(*s, |c| c.apply(s));
     for pair in nodes.windows(2) {
+        let pair = [corrected(&pair[0]), corrected(&pair[1])];
         let h = (pair[1].t_ns - pair[0].t_ns) as f64 * 1e-9;
         let (w, a) = (r_bs * (pair[0].gyro - b.gyro), r_bs * (pair[0].acc - b.acc));
         let step = transition(&w, &a, h);

@@ -183,6 +183,7 @@ pub(crate) fn decode_params(b: &[u8]) -> PyResult<PreintParams> {
         omega_coriolis,
         coriolis,
         bias_correction,
+        intrinsics: None,
     };
     r.end()?;
     Ok(p)

@@ -143,6 +143,10 @@ impl<'a> WindowDeltas<'a> {
         let corr = Corr {
             bias: *bias,
             centripetal,
+            intrinsics: params
+                .intrinsics
+                .filter(|x| !x.model.is_identity())
+                .map(|x| x.model.correction()),
         };
         let ctx = inner.ctx_before.map(|k| corr.node(&samples[k]));
         let c = usize::from(ctx.is_some());

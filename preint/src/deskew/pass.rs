@@ -6,16 +6,22 @@ use crate::sample::{ImuBias, ImuSample};
 use crate::scheme::{Deltas, IntervalScheme, MAX_STENCIL, Node, RENORM_EVERY, Stencil};
 use nalgebra::Vector3;
 
-/// A stream sample as the loop sees it: bias-corrected and, with GTSAM's per-sample lever-arm
-/// model, without `ω × (ω × r)` (as the preintegrator's `Centripetal` wrapper does).
+/// A stream sample as the loop sees it: corrected by the IMU intrinsics (the preintegrator's
+/// `Corrected` wrapper), bias-corrected and, with GTSAM's per-sample lever-arm model, without
+/// `ω × (ω × r)` (as the preintegrator's `Centripetal` wrapper does).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Corr {
     pub bias: ImuBias,
     pub centripetal: Option<Vector3<f64>>,
+    pub intrinsics: Option<crate::intrinsics::Correction>,
 }
 
 impl Corr {
     pub(super) fn node(&self, s: &ImuSample) -> Node {
+        let s = &match &self.intrinsics {
+            Some(c) => c.apply(s),
+            None => *s,
+        };
         match &self.centripetal {
             Some(r) => Node::corrected(
                 &crate::extrinsics::without_centripetal(s, r, &self.bias.gyro),

@@ -9,9 +9,11 @@
 //! added afterwards.
 
 use super::edges::{EdgeGains, EdgeLayout, WindowSpec, resolve};
+use super::intrinsic::{IntrAcc, IntrMode, NoIntr, WithIntr};
 use super::output::Chart;
 use super::retire::{Retirer, edge_count};
 use crate::fast::{FastDeltas, SliceInput};
+use crate::intrinsics::IntrinsicJacobian;
 use crate::measurement::{EdgeNoise, PreintegratedImu};
 use crate::noise::walk_scale;
 use crate::params::{CovShape, Level};
@@ -88,6 +90,11 @@ pub(crate) struct Core<S: IntervalScheme> {
     /// With a lever arm corrected per sample: `−Σ_j G_a,j D_j`, the bias Jacobian's share
     /// through the nodes' centripetal terms (pulled back, gyro columns).
     lever_j: crate::propagation::blocks::Cols9,
+    /// The intrinsics' Jacobian sums (when requested and linearising).
+    intr: Option<Box<IntrAcc>>,
+    /// A lever arm corrected per sample, or the intrinsics' Jacobians: the loop's variants
+    /// other than the default.
+    special: bool,
 }
 
 impl<S: IntervalScheme> Core<S> {
@@ -105,7 +112,6 @@ impl<S: IntervalScheme> Core<S> {
             ring[0] = c;
         }
         Self {
-            fixed,
             ring,
             n: 0,
             ctx_before: usize::from(ctx_before.is_some()),
@@ -120,7 +126,23 @@ impl<S: IntervalScheme> Core<S> {
             e: ErrorState::default(),
             edges: EdgeGains::default(),
             lever_j: [[0.0; 9]; 3],
+            intr: None,
+            special: fixed.centripetal.is_some(),
+            fixed,
         }
+    }
+
+    /// The same loop accumulating the Jacobians with respect to `model` (the samples reach it
+    /// corrected, by the preintegrator's `Corrected` wrapper); nothing at `Level::Deltas`.
+    pub(crate) fn with_intrinsics(
+        mut self,
+        model: Option<crate::intrinsics::ImuIntrinsics>,
+    ) -> Self {
+        if let Some(x) = model.filter(|_| self.linearise()) {
+            self.intr = Some(Box::new(IntrAcc::new(x, self.fixed.bias_hat)));
+            self.special = true;
+        }
+        self
     }
 
     fn linearise(&self) -> bool {
@@ -163,20 +185,31 @@ impl<S: IntervalScheme> Core<S> {
 
     #[inline(always)]
     fn advance(&mut self, at_end: bool) {
-        let lever = || self.fixed.centripetal.is_some();
+        let special = || self.special;
         match (self.linearise(), self.fixed.noise) {
-            (false, _) => self.advance_with::<IsotropicNoise, false, false>(
+            (false, _) => self.advance_with::<IsotropicNoise, false, false, NoIntr>(
                 &IsotropicNoise { g: 0.0, a: 0.0 },
                 at_end,
             ),
-            (true, NoiseKind::Isotropic(q)) if lever() => {
-                self.advance_with::<_, true, true>(&q, at_end)
+            (true, NoiseKind::Isotropic(q)) if special() => self.advance_special(&q, at_end),
+            (true, NoiseKind::Anisotropic(q)) if special() => self.advance_special(&q, at_end),
+            (true, NoiseKind::Isotropic(q)) => {
+                self.advance_with::<_, true, false, NoIntr>(&q, at_end)
             }
-            (true, NoiseKind::Anisotropic(q)) if lever() => {
-                self.advance_with::<_, true, true>(&q, at_end)
+            (true, NoiseKind::Anisotropic(q)) => {
+                self.advance_with::<_, true, false, NoIntr>(&q, at_end)
             }
-            (true, NoiseKind::Isotropic(q)) => self.advance_with::<_, true, false>(&q, at_end),
-            (true, NoiseKind::Anisotropic(q)) => self.advance_with::<_, true, false>(&q, at_end),
+        }
+    }
+
+    /// [`Core::advance`] with a lever arm corrected per sample or the intrinsics' Jacobians
+    /// (never both: [`crate::PreintParams::validate`]).
+    #[inline(never)]
+    fn advance_special<N: NoiseCov>(&mut self, noise: &N, at_end: bool) {
+        if self.fixed.centripetal.is_some() {
+            self.advance_with::<N, true, true, NoIntr>(noise, at_end)
+        } else {
+            self.advance_with::<N, true, false, WithIntr>(noise, at_end)
         }
     }
 
@@ -191,7 +224,7 @@ impl<S: IntervalScheme> Core<S> {
     /// Integrates every interval that is ready; with `at_end`, all remaining intervals and
     /// the remaining noise (the window then has exactly `self.n` samples).
     #[inline(always)]
-    fn advance_with<N: NoiseCov, const LINEARISE: bool, const LEVER: bool>(
+    fn advance_with<N: NoiseCov, const LINEARISE: bool, const LEVER: bool, I: IntrMode>(
         &mut self,
         noise: &N,
         at_end: bool,
@@ -199,9 +232,9 @@ impl<S: IntervalScheme> Core<S> {
         let n = self.n;
         while self.done + 1 < n && (at_end || self.ready(self.done)) {
             if at_end {
-                self.interval::<N, LINEARISE, true, LEVER>(noise, self.done);
+                self.interval::<N, LINEARISE, true, LEVER, I>(noise, self.done);
             } else {
-                self.interval::<N, LINEARISE, false, LEVER>(noise, self.done);
+                self.interval::<N, LINEARISE, false, LEVER, I>(noise, self.done);
             }
             self.done += 1;
             if self.done.is_multiple_of(RENORM_EVERY) {
@@ -211,7 +244,7 @@ impl<S: IntervalScheme> Core<S> {
         if at_end && LINEARISE && n >= 2 {
             let last = self.ctx_before + n - 1;
             let r_last = self.d.r;
-            let (e, mut r) = self.split::<N, LEVER>(noise, true);
+            let (e, mut r) = self.split::<N, LEVER, I>(noise, true);
             if S::NODES_BEFORE + S::NODES_AFTER == 0 {
                 e.retire_last::<S>(last, &r_last, |p, id, g| r.retire::<S>(p, id, g));
             } else {
@@ -230,11 +263,11 @@ impl<S: IntervalScheme> Core<S> {
 
     /// The error state and a [`Retirer`] borrowing the ring and the edge store.
     #[inline(always)]
-    fn split<'a, N, const LEVER: bool>(
+    fn split<'a, N, const LEVER: bool, I: IntrMode>(
         &'a mut self,
         noise: &'a N,
         at_end: bool,
-    ) -> (&'a mut ErrorState, Retirer<'a, N, LEVER>) {
+    ) -> (&'a mut ErrorState, Retirer<'a, N, LEVER, I::Sink<'a>>) {
         let Self {
             fixed,
             ring,
@@ -244,20 +277,28 @@ impl<S: IntervalScheme> Core<S> {
             ctx_before,
             n,
             lever_j,
+            intr,
             ..
         } = self;
         let window = (*ctx_before, *n, at_end);
         let lever = fixed.centripetal.map(|r| (r, lever_j));
+        let intr = I::sink(intr);
         (
             e,
-            Retirer::new(ring, ctx_after.as_ref(), edges, noise, window, lever),
+            Retirer::new(ring, ctx_after.as_ref(), edges, noise, window, lever, intr),
         )
     }
 
     /// Interval `k` (out of line: it keeps the per-interval code small enough for the
     /// compiler to inline the fixed-size matrix operations).
     #[inline(never)]
-    fn interval<N: NoiseCov, const LINEARISE: bool, const AT_END: bool, const LEVER: bool>(
+    fn interval<
+        N: NoiseCov,
+        const LINEARISE: bool,
+        const AT_END: bool,
+        const LEVER: bool,
+        I: IntrMode,
+    >(
         &mut self,
         noise: &N,
         k: usize,
@@ -276,6 +317,7 @@ impl<S: IntervalScheme> Core<S> {
             e,
             edges,
             lever_j,
+            intr,
             ..
         } = self;
         let (first_id, st) = stencil::<S>(ring, ctx_after.as_ref(), *ctx_before, *n, k, at_end);
@@ -284,13 +326,15 @@ impl<S: IntervalScheme> Core<S> {
             return;
         }
         let lever = fixed.centripetal.filter(|_| LEVER).map(|r| (r, lever_j));
-        let mut r = Retirer::<N, LEVER>::new(
+        let intr = I::sink(intr);
+        let mut r = Retirer::<N, LEVER, _>::new(
             ring,
             ctx_after.as_ref(),
             edges,
             noise,
             (*ctx_before, *n, at_end),
             lever,
+            intr,
         );
         if LINEARISE && S::NODES_BEFORE + S::NODES_AFTER > 0 {
             e.retire_below(first_id, |p, id, g| r.retire::<S>(p, id, g));
@@ -369,6 +413,21 @@ impl<S: IntervalScheme> Core<S> {
             crate::propagation::blocks::add_cols(&mut core.e.j.g, &extra);
         }
         core.output()
+    }
+
+    /// The measurement and, when they are accumulated, the intrinsics' Jacobians
+    /// ([`super::intrinsic`]).
+    pub(crate) fn measurement_and_intrinsics(
+        &self,
+    ) -> (PreintegratedImu, Option<IntrinsicJacobian>) {
+        let mut core = self.clone();
+        core.advance(true);
+        let jac = core.intr.as_ref().map(|acc| {
+            let last_t_ns = core.node(core.n - 1).t_ns;
+            let tr = core.origin.push_to(last_t_ns, &core.d.v, &core.d.p);
+            acc.jacobian(&tr, &core.d.r)
+        });
+        (core.output(), jac)
     }
 
     fn output(&self) -> PreintegratedImu {

@@ -11,10 +11,12 @@
 //! | `retire.rs` | a sample's noise once no interval reads it (or its gain, near an edge) |
 //! | `edges.rs` | the samples near the window's edges, collected for exact merges |
 //! | `output.rs` | the measurement in the documented chart |
+//! | `intrinsic.rs` | IMU intrinsics: the samples corrected in front of the loop, the Jacobians |
 //! | `validation.rs` | the sample checks shared with the window path |
 
 mod edges;
 mod engine;
+mod intrinsic;
 mod output;
 mod retire;
 pub(crate) mod validation;
@@ -29,6 +31,7 @@ use crate::propagation::{AnisotropicNoise, BiasWalk, IsotropicNoise};
 use crate::sample::{ImuBias, ImuSample};
 use crate::scheme::{IntervalScheme, with_scheme};
 use engine::{Core, Fixed, NoiseKind};
+use intrinsic::Corrected;
 use validation::{check_sample, common_case};
 
 /// What the preintegrator needs of a scheme's interval loop ([`Core`]), behind one pointer so
@@ -38,6 +41,15 @@ trait Engine: std::fmt::Debug + Send + Sync {
     fn run_slice(&mut self, samples: &[ImuSample], last_t_ns: i64, gap_limit: u64) -> usize;
     fn len(&self) -> usize;
     fn measurement(&self) -> PreintegratedImu;
+    /// The measurement and the intrinsics' Jacobians, when they are accumulated.
+    fn measurement_and_intrinsics(
+        &self,
+    ) -> (
+        PreintegratedImu,
+        Option<crate::intrinsics::IntrinsicJacobian>,
+    ) {
+        (self.measurement(), None)
+    }
     fn end_rates(&self) -> (nalgebra::Vector3<f64>, nalgebra::Vector3<f64>, f64);
     fn boxed_clone(&self) -> Box<dyn Engine>;
 }
@@ -58,6 +70,14 @@ where
     }
     fn measurement(&self) -> PreintegratedImu {
         Core::measurement(self)
+    }
+    fn measurement_and_intrinsics(
+        &self,
+    ) -> (
+        PreintegratedImu,
+        Option<crate::intrinsics::IntrinsicJacobian>,
+    ) {
+        Core::measurement_and_intrinsics(self)
     }
     fn end_rates(&self) -> (nalgebra::Vector3<f64>, nalgebra::Vector3<f64>, f64) {
         Core::end_rates(self)
@@ -215,19 +235,43 @@ impl Preintegrator {
             });
         }
         let mut fixed = fixed(&params, bias_hat, spec);
-        let engine: Box<dyn Engine> = match fixed.centripetal {
-            Some(r) => {
+        // The intrinsics correct every raw sample first (identity: nothing to do), then a lever
+        // arm corrected per sample takes its term off.
+        let corr = params
+            .intrinsics
+            .filter(|x| !x.model.is_identity())
+            .map(|x| x.model.correction());
+        if let Some(c) = &corr {
+            for side in [&mut fixed.spec.start, &mut fixed.spec.end] {
+                side.ctx = side.ctx.map(|s| c.apply(&s));
+            }
+        }
+        let jac_model = params.intrinsics.filter(|x| x.jacobians).map(|x| x.model);
+        let engine: Box<dyn Engine> = match (fixed.centripetal, corr) {
+            (Some(r), corr) => {
                 let b_g = bias_hat.gyro;
                 for side in [&mut fixed.spec.start, &mut fixed.spec.end] {
                     side.ctx = side.ctx.map(|c| without_centripetal(&c, &r, &b_g));
                 }
-                with_scheme!(params.scheme, S => Box::new(Centripetal {
-                    core: Core::<S>::new(fixed),
-                    r,
-                    b_g,
-                }))
+                match corr {
+                    Some(c) => with_scheme!(params.scheme, S => Box::new(Corrected {
+                        inner: Centripetal { core: Core::<S>::new(fixed).with_intrinsics(jac_model), r, b_g },
+                        c,
+                    })),
+                    None => with_scheme!(params.scheme, S => Box::new(Centripetal {
+                        core: Core::<S>::new(fixed).with_intrinsics(jac_model),
+                        r,
+                        b_g,
+                    })),
+                }
             }
-            None => with_scheme!(params.scheme, S => Box::new(Core::<S>::new(fixed))),
+            (None, Some(c)) => with_scheme!(params.scheme, S => Box::new(Corrected {
+                inner: Core::<S>::new(fixed).with_intrinsics(jac_model),
+                c,
+            })),
+            (None, None) => {
+                with_scheme!(params.scheme, S => Box::new(Core::<S>::new(fixed).with_intrinsics(jac_model)))
+            }
         };
         let samples = if params.keep_samples {
             Vec::with_capacity(capacity)
@@ -353,20 +397,7 @@ impl Preintegrator {
             let ends = self.end_rates(m.t_i_ns);
             crate::extrinsics::to_body(&mut m, &pose, &ends);
         }
-        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
-        let deltas = finite(m.delta_r.matrix().as_slice())
-            && finite(m.delta_v.as_slice())
-            && finite(m.delta_p.as_slice());
-        let what = if !deltas {
-            "deltas"
-        } else if !finite(m.cov15.as_slice()) {
-            "covariance"
-        } else if !m.jac.is_finite() {
-            "bias Jacobians"
-        } else {
-            return Ok(m);
-        };
-        Err(PreintError::NonFiniteResult { what })
+        checked(m)
     }
 
     /// The end rates of the window and the stream samples each is made of (for the lever arm):
@@ -480,6 +511,24 @@ impl Preintegrator {
         *self = fresh;
         Ok(())
     }
+}
+
+/// `m` if every delta, covariance and bias Jacobian is finite.
+fn checked(m: PreintegratedImu) -> Result<PreintegratedImu, PreintError> {
+    let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+    let deltas = finite(m.delta_r.matrix().as_slice())
+        && finite(m.delta_v.as_slice())
+        && finite(m.delta_p.as_slice());
+    let what = if !deltas {
+        "deltas"
+    } else if !finite(m.cov15.as_slice()) {
+        "covariance"
+    } else if !m.jac.is_finite() {
+        "bias Jacobians"
+    } else {
+        return Ok(m);
+    };
+    Err(PreintError::NonFiniteResult { what })
 }
 
 /// What the interval loop needs of the parameters: the noise shapes (isotropic closed form

@@ -1,10 +1,12 @@
 //! Retiring a sample: once no later interval reads it, its noise enters the covariance with
 //! its total gain, or (near a window's edge) its gain is collected for exact merges; with a
 //! lever arm corrected per sample, the gain first carries the gyro noise and bias that the
-//! centripetal term moves into the specific force.
+//! centripetal term moves into the specific force; with the intrinsics' Jacobians requested,
+//! each gain is also accumulated for them (`intrinsic.rs`).
 
 use super::edges::EdgeGains;
 use super::engine::RING;
+use super::intrinsic::Sink;
 use crate::extrinsics::centripetal_d;
 use crate::noise::white_scale;
 use crate::propagation::blocks::PackedSym9;
@@ -13,7 +15,7 @@ use crate::scheme::{IntervalScheme, Node, span_s};
 use nalgebra::Vector3;
 
 /// Hands retired samples' noise to the covariance, or their gains to the edge store.
-pub(super) struct Retirer<'a, N, const LEVER: bool> {
+pub(super) struct Retirer<'a, N, const LEVER: bool, K> {
     ring: &'a [Node; RING],
     ctx_after: Option<&'a Node>,
     edges: &'a mut EdgeGains,
@@ -24,9 +26,11 @@ pub(super) struct Retirer<'a, N, const LEVER: bool> {
     /// Lever arm in sensor axes and the bias-Jacobian accumulator, when the centripetal term
     /// is removed per sample.
     lever: Option<(Vector3<f64>, &'a mut crate::propagation::blocks::Cols9)>,
+    /// Where each total gain goes for the intrinsics' Jacobians (`()`: nowhere).
+    intr: K,
 }
 
-impl<'a, N, const LEVER: bool> Retirer<'a, N, LEVER> {
+impl<'a, N, const LEVER: bool, K> Retirer<'a, N, LEVER, K> {
     /// For a window with `(ctx_before, n, at_end)`: context samples before it, samples, and
     /// whether it is complete.
     #[inline(always)]
@@ -37,6 +41,7 @@ impl<'a, N, const LEVER: bool> Retirer<'a, N, LEVER> {
         noise: &'a N,
         (ctx_before, n, at_end): (usize, usize, bool),
         lever: Option<(Vector3<f64>, &'a mut crate::propagation::blocks::Cols9)>,
+        intr: K,
     ) -> Self {
         Self {
             ring,
@@ -47,11 +52,12 @@ impl<'a, N, const LEVER: bool> Retirer<'a, N, LEVER> {
             n,
             at_end,
             lever,
+            intr,
         }
     }
 }
 
-impl<N: NoiseCov, const LEVER: bool> Retirer<'_, N, LEVER> {
+impl<N: NoiseCov, const LEVER: bool, K: Sink> Retirer<'_, N, LEVER, K> {
     /// Node at extended index `i`.
     #[inline(always)]
     fn ext(&self, i: usize) -> &Node {
@@ -69,6 +75,12 @@ impl<N: NoiseCov, const LEVER: bool> Retirer<'_, N, LEVER> {
         id: usize,
         gain: &SampleGain,
     ) {
+        if K::ON {
+            // Every sample's total gain passes here once (edge samples too); the intrinsics'
+            // Jacobians take it before the lever arm (the two are not combined).
+            let node = *self.ext(id);
+            self.intr.add(gain, &node);
+        }
         if LEVER {
             self.retire_lever::<S>(p, id, gain);
         } else {

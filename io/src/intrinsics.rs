@@ -1,0 +1,377 @@
+//! IMU intrinsics files: OpenVINS' `kalibr_imu_chain.yaml` and Kalibr's `imu.yaml` of the
+//! `scale-misalignment` model, read into [`preint::intrinsics::ImuIntrinsics`] (its module
+//! docs state the model, frames and units) with the noise densities the file holds.
+//!
+//! # OpenVINS (`config/*/kalibr_imu_chain.yaml`, `ov_msckf/src/core/VioManagerOptions.h`)
+//!
+//! Under `imu0`: `Tw` (gyro axes → reading, `ω_m = Tw R_IMUtoGYRO ω_I + Tg a_I + b_g`), `Ta`
+//! (accelerometer axes → reading, `a_m = Ta R_IMUtoACC a_I + b_a`), `R_IMUtoGYRO` and
+//! `R_IMUtoACC` (rotate IMU-frame vectors into the sensor's axes), `Tg` (g-sensitivity
+//! [(rad/s)/(m/s²)], IMU-frame specific force), `model: kalibr | calibrated | rpng`
+//! (`kalibr`: `Tw`, `Ta` lower triangular, `rpng`: upper), each matrix as three rows
+//! `- [ x, y, z ]`; a missing matrix is OpenVINS' default (identity, `Tg = 0`). OpenVINS uses
+//! only the model's triangle of `Tw⁻¹`, `Ta⁻¹`, so a matrix outside it is refused here rather
+//! than read as something OpenVINS would not use. The noise densities
+//! (`gyroscope_noise_density` …) and `update_rate` are read as in Kalibr's `imu.yaml`;
+//! `time_offset` [s] and `rostopic` are kept as the file holds them.
+//!
+//! # Kalibr (`IccSensors.py`, `IccScaledMisalignedImu`)
+//!
+//! Under `imu0` (or at the top level): `model: scale-misalignment`, `gyroscopes: {M, A,
+//! C_gyro_i}`, `accelerometers: {M}`, with `ω_m = M_w C_gyro_i ω_I + A C_gyro_i a_I + b_g`,
+//! `a_m = M_a a_I + b_a`: `Tw = M_w`, `R_IMUtoGYRO = C_gyro_i`, `Ta = M_a`, `R_IMUtoACC = I`,
+//! `Tg = A C_gyro_i`. `model: calibrated` (or no model) is the identity.
+
+use crate::error::{IoError, Location, read_text, write_text};
+use crate::number::parse_finite;
+use crate::yaml::{Node, parse};
+use preint::ImuNoise;
+use preint::intrinsics::{ImuIntrinsics, IntrinsicsModel};
+use preint::nalgebra::Matrix3;
+use std::path::Path;
+
+/// An IMU calibration file's content.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImuCalibration {
+    /// The intrinsics.
+    pub intrinsics: ImuIntrinsics,
+    /// The noise densities and rate, when the file holds all five Kalibr keys.
+    pub noise: Option<ImuNoise>,
+    /// `time_offset` [s], as the file holds it (its sign convention is the file's producer's).
+    pub time_offset_s: Option<f64>,
+    /// `rostopic`.
+    pub rostopic: Option<String>,
+}
+
+const NOISE_KEYS: [&str; 5] = [
+    "gyroscope_noise_density",
+    "gyroscope_random_walk",
+    "accelerometer_noise_density",
+    "accelerometer_random_walk",
+    "update_rate",
+];
+
+/// Reading context: the file name and the key path for messages.
+struct Ctx<'a> {
+    source: &'a str,
+}
+
+impl Ctx<'_> {
+    fn err(&self, line: u64, msg: impl Into<String>) -> IoError {
+        IoError::parse(self.source, Location::Line(line), msg)
+    }
+
+    fn number(&self, node: &Node, field: &str) -> Result<f64, IoError> {
+        match node {
+            Node::Scalar(s, l) => {
+                parse_finite(s).map_err(|m| self.err(*l, format!("`{field}`: {m}")))
+            }
+            other => Err(self.err(other.line(), format!("`{field}`: expected a number"))),
+        }
+    }
+
+    /// A 3×3 matrix given as three rows of three numbers.
+    fn matrix(&self, node: &Node, field: &str) -> Result<Matrix3<f64>, IoError> {
+        let shape = || {
+            self.err(
+                node.line(),
+                format!("`{field}`: expected 3 rows of 3 numbers"),
+            )
+        };
+        let Node::Seq(rows, _) = node else {
+            return Err(shape());
+        };
+        if rows.len() != 3 {
+            return Err(shape());
+        }
+        let mut m = Matrix3::zeros();
+        for (i, row) in rows.iter().enumerate() {
+            match row {
+                Node::Seq(xs, _) if xs.len() == 3 => {
+                    for (j, x) in xs.iter().enumerate() {
+                        m[(i, j)] = self.number(x, &format!("{field}[{i}][{j}]"))?;
+                    }
+                }
+                _ => return Err(shape()),
+            }
+        }
+        Ok(m)
+    }
+
+    fn optional_matrix(
+        &self,
+        map: &Node,
+        path: &str,
+        key: &str,
+        default: Matrix3<f64>,
+    ) -> Result<Matrix3<f64>, IoError> {
+        match map.get(key) {
+            Some(n) => self.matrix(n, &format!("{path}{key}")),
+            None => Ok(default),
+        }
+    }
+
+    /// The five noise keys: all, none, or an error naming the first missing one.
+    fn noise(&self, map: &Node, path: &str) -> Result<Option<ImuNoise>, IoError> {
+        let mut v = [0.0; 5];
+        let mut found = 0;
+        for (i, key) in NOISE_KEYS.iter().enumerate() {
+            if let Some(n) = map.get(key) {
+                let x = self.number(n, &format!("{path}{key}"))?;
+                if x < 0.0 || (i == 4 && x == 0.0) {
+                    return Err(
+                        self.err(n.line(), format!("`{path}{key}` must be positive, got {x}"))
+                    );
+                }
+                v[i] = x;
+                found += 1;
+            }
+        }
+        if found == 0 {
+            return Ok(None);
+        }
+        if let Some(missing) = NOISE_KEYS.iter().find(|k| map.get(k).is_none()) {
+            return Err(IoError::MissingKey {
+                source_name: self.source.to_string(),
+                key: missing,
+            });
+        }
+        Ok(Some(ImuNoise {
+            gyro_noise_density: v[0],
+            gyro_random_walk: v[1],
+            acc_noise_density: v[2],
+            acc_random_walk: v[3],
+            update_rate_hz: v[4],
+        }))
+    }
+
+    fn common(&self, map: &Node, path: &str) -> Result<(Option<f64>, Option<String>), IoError> {
+        let offset = match map.get("time_offset") {
+            Some(n) => Some(self.number(n, &format!("{path}time_offset"))?),
+            None => None,
+        };
+        let topic = match map.get("rostopic") {
+            Some(Node::Scalar(s, _)) => Some(s.clone()),
+            Some(n) => return Err(self.err(n.line(), format!("`{path}rostopic`: expected a name"))),
+            None => None,
+        };
+        Ok((offset, topic))
+    }
+
+    /// The intrinsics checked: the model's triangle, invertible, rotations orthonormal.
+    fn checked(&self, x: ImuIntrinsics, line: u64, path: &str) -> Result<ImuIntrinsics, IoError> {
+        let free = x.model.free_entries();
+        for (name, m) in [("Tw", &x.t_w), ("Ta", &x.t_a)] {
+            for r in 0..3 {
+                for c in 0..3 {
+                    if m[(r, c)] != 0.0 && !free.contains(&(r, c)) {
+                        let shape = match x.model {
+                            IntrinsicsModel::Kalibr => "lower",
+                            IntrinsicsModel::Rpng => "upper",
+                        };
+                        return Err(self.err(
+                            line,
+                            format!(
+                                "`{path}{name}` must be {shape} triangular for model `{}`: entry ({r}, {c}) is {}",
+                                x.model.name(),
+                                m[(r, c)]
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+        x.validate()
+            .map_err(|e| self.err(line, format!("`{path}`: {e}")))?;
+        Ok(x)
+    }
+}
+
+/// The `imu0` mapping (or the root when there is none) and its key prefix.
+fn imu_map(root: &Node) -> (&Node, &'static str) {
+    match root.get("imu0") {
+        Some(m @ Node::Map(..)) => (m, "imu0."),
+        _ => (root, ""),
+    }
+}
+
+/// Parses an OpenVINS `kalibr_imu_chain.yaml` (module docs).
+pub fn parse_openvins_imu_chain(text: &str, source_name: &str) -> Result<ImuCalibration, IoError> {
+    let root = parse(text, source_name)?;
+    let cx = Ctx {
+        source: source_name,
+    };
+    let (map, path) = imu_map(&root);
+    let model = match map.get("model") {
+        Some(Node::Scalar(s, l)) => IntrinsicsModel::parse(s).ok_or_else(|| {
+            cx.err(
+                *l,
+                format!("`{path}model`: `{s}` is not kalibr, calibrated or rpng"),
+            )
+        })?,
+        Some(n) => return Err(cx.err(n.line(), format!("`{path}model`: expected a name"))),
+        None => IntrinsicsModel::Kalibr,
+    };
+    let i = Matrix3::identity();
+    let x = ImuIntrinsics {
+        model,
+        t_w: cx.optional_matrix(map, path, "Tw", i)?,
+        t_a: cx.optional_matrix(map, path, "Ta", i)?,
+        r_imu_to_gyro: cx.optional_matrix(map, path, "R_IMUtoGYRO", i)?,
+        r_imu_to_acc: cx.optional_matrix(map, path, "R_IMUtoACC", i)?,
+        t_g: cx.optional_matrix(map, path, "Tg", Matrix3::zeros())?,
+    };
+    let intrinsics = cx.checked(x, map.line(), path)?;
+    let (time_offset_s, rostopic) = cx.common(map, path)?;
+    Ok(ImuCalibration {
+        intrinsics,
+        noise: cx.noise(map, path)?,
+        time_offset_s,
+        rostopic,
+    })
+}
+
+/// Parses Kalibr's `imu.yaml` with the `scale-misalignment` (or `calibrated`) model (module
+/// docs).
+pub fn parse_kalibr_imu(text: &str, source_name: &str) -> Result<ImuCalibration, IoError> {
+    let root = parse(text, source_name)?;
+    let cx = Ctx {
+        source: source_name,
+    };
+    let (map, path) = imu_map(&root);
+    let mut x = ImuIntrinsics::identity(IntrinsicsModel::Kalibr);
+    match map.get("model") {
+        None => {}
+        Some(Node::Scalar(s, _)) if s == "calibrated" => {}
+        Some(Node::Scalar(s, _)) if s == "scale-misalignment" => {
+            let section = |key: &'static str| {
+                map.get(key).ok_or(IoError::MissingKey {
+                    source_name: source_name.to_string(),
+                    key,
+                })
+            };
+            let (g, a) = (section("gyroscopes")?, section("accelerometers")?);
+            let get = |sec: &Node, name: &str, key: &'static str| match sec.get(key) {
+                Some(n) => cx.matrix(n, &format!("{path}{name}.{key}")),
+                None => Err(IoError::MissingKey {
+                    source_name: source_name.to_string(),
+                    key,
+                }),
+            };
+            x.t_w = get(g, "gyroscopes", "M")?;
+            x.r_imu_to_gyro = get(g, "gyroscopes", "C_gyro_i")?;
+            x.t_g = get(g, "gyroscopes", "A")? * x.r_imu_to_gyro;
+            x.t_a = get(a, "accelerometers", "M")?;
+        }
+        Some(n) => {
+            return Err(cx.err(
+                n.line(),
+                format!("`{path}model`: only `calibrated` and `scale-misalignment` are read"),
+            ));
+        }
+    }
+    let intrinsics = cx.checked(x, map.line(), path)?;
+    let (time_offset_s, rostopic) = cx.common(map, path)?;
+    Ok(ImuCalibration {
+        intrinsics,
+        noise: cx.noise(map, path)?,
+        time_offset_s,
+        rostopic,
+    })
+}
+
+/// Reads an OpenVINS `kalibr_imu_chain.yaml`.
+pub fn read_openvins_imu_chain(path: &Path) -> Result<ImuCalibration, IoError> {
+    parse_openvins_imu_chain(&read_text(path)?, &path.display().to_string())
+}
+
+/// Reads a Kalibr `imu.yaml` with intrinsics.
+pub fn read_kalibr_imu(path: &Path) -> Result<ImuCalibration, IoError> {
+    parse_kalibr_imu(&read_text(path)?, &path.display().to_string())
+}
+
+fn matrix_lines(out: &mut String, key: &str, m: &Matrix3<f64>, indent: &str) {
+    out.push_str(&format!("{indent}{key}:\n"));
+    for r in 0..3 {
+        out.push_str(&format!(
+            "{indent}  - [ {:?}, {:?}, {:?} ]\n",
+            m[(r, 0)],
+            m[(r, 1)],
+            m[(r, 2)]
+        ));
+    }
+}
+
+fn header_lines(out: &mut String, cal: &ImuCalibration) {
+    if let Some(n) = &cal.noise {
+        out.push_str(&format!(
+            "  accelerometer_noise_density: {:?}  # [ m / s^2 / sqrt(Hz) ]\n  \
+             accelerometer_random_walk: {:?}  # [ m / s^3 / sqrt(Hz) ]\n  \
+             gyroscope_noise_density: {:?}  # [ rad / s / sqrt(Hz) ]\n  \
+             gyroscope_random_walk: {:?}  # [ rad / s^2 / sqrt(Hz) ]\n  \
+             update_rate: {:?}  # [ Hz ]\n",
+            n.acc_noise_density,
+            n.acc_random_walk,
+            n.gyro_noise_density,
+            n.gyro_random_walk,
+            n.update_rate_hz
+        ));
+    }
+    if let Some(t) = &cal.rostopic {
+        out.push_str(&format!("  rostopic: {t}\n"));
+    }
+    if let Some(t) = cal.time_offset_s {
+        out.push_str(&format!("  time_offset: {t:?}  # [ s ]\n"));
+    }
+}
+
+/// OpenVINS `kalibr_imu_chain.yaml` text for `cal` (every number written exactly).
+pub fn openvins_imu_chain_string(cal: &ImuCalibration) -> String {
+    let x = &cal.intrinsics;
+    let mut out = String::from("%YAML:1.0\n\nimu0:\n");
+    header_lines(&mut out, cal);
+    out.push_str(&format!("  model: \"{}\"\n", x.model.name()));
+    matrix_lines(&mut out, "Tw", &x.t_w, "  ");
+    matrix_lines(&mut out, "R_IMUtoGYRO", &x.r_imu_to_gyro, "  ");
+    matrix_lines(&mut out, "Ta", &x.t_a, "  ");
+    matrix_lines(&mut out, "R_IMUtoACC", &x.r_imu_to_acc, "  ");
+    matrix_lines(&mut out, "Tg", &x.t_g, "  ");
+    out
+}
+
+/// Kalibr `imu.yaml` text (`scale-misalignment`) for `cal`; an error when the intrinsics are
+/// not of that model (`rpng`, or `R_IMUtoACC ≠ I`), naming `name` as the destination.
+pub fn kalibr_imu_string(cal: &ImuCalibration, name: &str) -> Result<String, IoError> {
+    let x = &cal.intrinsics;
+    if x.model != IntrinsicsModel::Kalibr || x.r_imu_to_acc != Matrix3::identity() {
+        return Err(IoError::format(
+            name,
+            "Kalibr's scale-misalignment model has lower-triangular matrices and no \
+             accelerometer rotation: write an OpenVINS file for these intrinsics",
+        ));
+    }
+    let mut out = String::from("imu0:\n");
+    header_lines(&mut out, cal);
+    out.push_str("  model: scale-misalignment\n  gyroscopes:\n");
+    matrix_lines(&mut out, "M", &x.t_w, "    ");
+    matrix_lines(
+        &mut out,
+        "A",
+        &(x.t_g * x.r_imu_to_gyro.transpose()),
+        "    ",
+    );
+    matrix_lines(&mut out, "C_gyro_i", &x.r_imu_to_gyro, "    ");
+    out.push_str("  accelerometers:\n");
+    matrix_lines(&mut out, "M", &x.t_a, "    ");
+    Ok(out)
+}
+
+/// Writes an OpenVINS `kalibr_imu_chain.yaml`.
+pub fn write_openvins_imu_chain(path: &Path, cal: &ImuCalibration) -> Result<(), IoError> {
+    write_text(path, &openvins_imu_chain_string(cal))
+}
+
+/// Writes a Kalibr `imu.yaml` ([`kalibr_imu_string`]).
+pub fn write_kalibr_imu(path: &Path, cal: &ImuCalibration) -> Result<(), IoError> {
+    write_text(path, &kalibr_imu_string(cal, &path.display().to_string())?)
+}
