@@ -28,6 +28,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod analysis;
+pub mod calibration_file;
 pub mod charts;
 pub mod checks;
 pub mod cli;

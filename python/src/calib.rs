@@ -357,6 +357,7 @@ pub(crate) fn calibrate_file<'py>(
         body_p_sensor: None,
         latitude,
         heading,
+        out: None,
     };
     let json = py
         .detach(|| calibrate::run(&args).map(|o| o.json))

@@ -17,8 +17,9 @@
 
 use crate::format::{list, opt_list};
 use crate::imu_args::ImuArgs;
-use crate::{CliError, Output, checks, noise, stream};
+use crate::{CliError, Output, calibration_file, checks, noise, stream};
 use nalgebra::Vector3;
+use preint::intrinsics::{ImuIntrinsics, IntrinsicsModel};
 use preint::{ImuNoise, ImuSample, PreintParams, Scheme};
 use preint_calib::bias::{
     KnownPose, KnownPoseCalibration, KnownPoseOptions, MultiPoseCalibration, MultiPoseOptions,
@@ -78,6 +79,11 @@ pub struct Args {
         requires = "latitude"
     )]
     pub heading: Option<f64>,
+    /// Write the calibration as OpenVINS' kalibr_imu_chain.yaml: the intrinsics (Tw,
+    /// R_IMUtoGYRO, Ta, R_IMUtoACC, Tg; from the multi-position model BIC chose, else the
+    /// identity) and the noise densities. `integrate --calibration FILE` applies it.
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<std::path::PathBuf>,
 }
 
 /// The problem solved and its estimates.
@@ -425,8 +431,25 @@ pub fn to_text(cal: &Calibration) -> String {
 /// Runs `preint calibrate`.
 pub fn run(args: &Args) -> Result<Output, CliError> {
     let c = compute(args)?;
-    Ok(Output {
-        human: to_text(&c),
-        json: to_json(&c),
-    })
+    let (mut human, mut json) = (to_text(&c), to_json(&c));
+    if let Some(path) = &args.out {
+        let intrinsics = match &c {
+            Calibration::MultiPose(m) => calibration_file::intrinsics_of_multi_pose(m)?,
+            _ => ImuIntrinsics::identity(IntrinsicsModel::Kalibr),
+        };
+        let noise = noise::or_default(args.noise.as_deref())?;
+        calibration_file::write(path, intrinsics, &noise, None)?;
+        human.push_str(&format!(
+            "calibration written to {} (OpenVINS kalibr_imu_chain.yaml: intrinsics{}, noise \
+             densities)\n",
+            path.display(),
+            if matches!(c, Calibration::MultiPose(_)) {
+                " from the chosen model"
+            } else {
+                " identity: this problem does not estimate them"
+            }
+        ));
+        json["out"] = json!(path.display().to_string());
+    }
+    Ok(Output { human, json })
 }

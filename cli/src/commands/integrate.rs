@@ -62,6 +62,12 @@ pub struct Args {
     /// rather than streaming the whole recording.
     #[arg(long)]
     pub second_order: bool,
+    /// An IMU calibration file (what `calibrate --out` writes: OpenVINS kalibr_imu_chain.yaml,
+    /// or Kalibr's imu.yaml with a scale-misalignment model): its intrinsics are applied to the
+    /// raw samples, and its `time_offset` (s; t_imu = t_keyframe + time_offset) moves
+    /// --from/--to onto the IMU's clock. Noise densities still come from --noise.
+    #[arg(long, value_name = "FILE")]
+    pub calibration: Option<std::path::PathBuf>,
 }
 
 /// A preintegrated window.
@@ -97,6 +103,9 @@ pub struct Integration {
     pub truncation: Option<preint::TruncationEstimate>,
     /// The second-order covariance term, [δφ, δv, δp] (`--second-order`).
     pub second_order: Option<preint::nalgebra::SMatrix<f64, 9, 9>>,
+    /// The calibration file applied (`--calibration`): its path, intrinsics and the time
+    /// offset \[ns\] added to `--from`/`--to`.
+    pub calibration: Option<(String, preint::intrinsics::ImuIntrinsics, i64)>,
 }
 
 /// Reads the file once and preintegrates `[--from, --to]` at [`Level::Combined`]: the whole
@@ -111,6 +120,21 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
         args.bias_gyro.unwrap_or_default(),
         args.bias_acc.unwrap_or_default(),
     );
+    let calibration = match &args.calibration {
+        Some(path) => {
+            let cal = crate::calibration_file::read(path)?;
+            if !cal.intrinsics.is_identity() {
+                params.intrinsics =
+                    Some(preint::intrinsics::AppliedIntrinsics::new(cal.intrinsics));
+            }
+            let td = crate::calibration_file::time_offset_ns(&cal);
+            Some((path.display().to_string(), cal.intrinsics, td))
+        }
+        None => None,
+    };
+    // The keyframes on the IMU's clock.
+    let td = calibration.as_ref().map_or(0, |c| c.2);
+    let (from, to) = (args.from.map(|t| t + td), args.to.map(|t| t + td));
     let scheme = params.scheme;
     let (body_p_sensor, lever_arm) = (params.body_p_sensor, params.lever_arm);
     let fail = |e| CliError::failed_in(args.input.path(), e);
@@ -135,19 +159,19 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
     };
     let (source, noise, (pim, samples, at, truncation, second_order)) = if args.input.is_split() {
         // The merged accelerometer's effective density is known once the files are read.
-        let (w, source, split) = stream::split_window(&args.input, args.from, args.to)?;
+        let (w, source, split) = stream::split_window(&args.input, from, to)?;
         let noise = noise::apply_split(&noise, split.as_ref(), &mut params);
         (source, noise, window(&params, w)?)
     } else {
-        let stream = stream::open_checked_until(&args.input, args.to)?;
+        let stream = stream::open_checked_until(&args.input, to)?;
         let source = stream.info().clone();
         let _bar = ReadingBar::start(stream.progress(), "integrate");
-        let streamed = args.from.is_none() && args.to.is_none();
+        let streamed = from.is_none() && to.is_none();
         let result = if streamed && args.at.is_empty() && !args.truncation && !args.second_order {
             let (pim, count) = whole_recording(stream, params, &bias, fail)?;
             (pim, count, vec![], None, None)
         } else {
-            window(&params, stream::cut_window(stream, args.from, args.to)?)?
+            window(&params, stream::cut_window(stream, from, to)?)?
         };
         (source, noise, result)
     };
@@ -166,6 +190,7 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
         at,
         truncation,
         second_order,
+        calibration,
     })
 }
 
@@ -327,6 +352,15 @@ pub fn to_json(r: &Integration) -> Value {
             "units": {"dphi": "rad", "dv": "m/s", "dp": "m"},
         });
     }
+    if let Some((file, x, td)) = &r.calibration {
+        out["calibration"] = json!({
+            "file": file, "time_offset_ns": td, "model": x.model.name(),
+            "Tw": rows(&x.t_w), "R_IMUtoGYRO": rows(&x.r_imu_to_gyro), "Ta": rows(&x.t_a),
+            "R_IMUtoACC": rows(&x.r_imu_to_acc), "Tg": rows(&x.t_g),
+            "note": "intrinsics applied to the raw samples (preint::intrinsics); t_i_ns and \
+                     t_j_ns are on the IMU clock: --from/--to plus time_offset_ns",
+        });
+    }
     if let Some(c) = &r.second_order {
         out["second_order"] = json!({
             "covariance": rows(c),
@@ -444,6 +478,15 @@ pub fn to_text(r: &Integration) -> String {
             (m.cov[(0, 0)] + m.cov[(1, 1)] + m.cov[(2, 2)]).sqrt(),
             (m.cov[(3, 3)] + m.cov[(4, 4)] + m.cov[(5, 5)]).sqrt(),
             (m.cov[(6, 6)] + m.cov[(7, 7)] + m.cov[(8, 8)]).sqrt()
+        );
+    }
+    if let Some((file, x, td)) = &r.calibration {
+        let _ = writeln!(
+            h,
+            "calibration {file}: intrinsics ({} model{}) applied to the raw samples; keyframes \
+             moved by the time offset {td} ns onto the IMU clock",
+            x.model.name(),
+            if x.is_identity() { ", identity" } else { "" }
         );
     }
     if let Some(c) = &r.second_order {

@@ -1,0 +1,133 @@
+//! The IMU calibration file: what `calibrate --out` writes and `--calibration` reads.
+//!
+//! Written as OpenVINS' `kalibr_imu_chain.yaml` (`preint_io::write_openvins_imu_chain`): the
+//! intrinsics `Tw`, `R_IMUtoGYRO`, `Ta`, `R_IMUtoACC`, `Tg` (`preint::intrinsics`), the noise
+//! densities and rate, and, when known, `time_offset` [s]: the IMU clock reads
+//! `t_imu = t_keyframe + time_offset` (Kalibr's `timeshift_cam_imu` convention), so the
+//! keyframe window `[t_i, t_j]` is the IMU window `[t_i + time_offset, t_j + time_offset]`.
+//! Read: that format, or Kalibr's `imu.yaml` with a `scale-misalignment` model (told apart by
+//! Kalibr's `gyroscopes:` section).
+//!
+//! The multi-position calibration's model (Tedaldi et al. 2014, `preint_calib::bias::multipose`)
+//! maps exactly: `a_m = S_a a + b_a` with `S_a` lower triangular is OpenVINS' `kalibr` model
+//! with `Ta = S_a`, `R_IMUtoACC = I`; `ω_m = S_g ω + b_g` with a full `S_g` becomes
+//! `Tw R_IMUtoGYRO = S_g` by the RQ decomposition (`Tw` lower triangular with a positive
+//! diagonal, `R_IMUtoGYRO` a rotation), `Tg = 0`.
+
+use crate::CliError;
+use nalgebra::{Matrix3, SVector, Vector3};
+use preint::ImuNoise;
+use preint::intrinsics::{ImuIntrinsics, IntrinsicsModel};
+use preint_calib::bias::MultiPoseCalibration;
+use preint_calib::bias::multipose::{acc_scale_matrix, gyro_scale_matrix};
+use preint_io::ImuCalibration;
+use std::path::Path;
+
+/// Reads a calibration file (module docs for the formats); the intrinsics are validated.
+pub fn read(path: &Path) -> Result<ImuCalibration, CliError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| CliError::Usage(format!("--calibration {}: {e}", path.display())))?;
+    let cal = if text.contains("gyroscopes:") {
+        preint_io::read_kalibr_imu(path)?
+    } else {
+        preint_io::read_openvins_imu_chain(path)?
+    };
+    cal.intrinsics
+        .validate()
+        .map_err(|e| CliError::Usage(format!("--calibration {}: {e}", path.display())))?;
+    if let Some(t) = cal.time_offset_s
+        && !(t.abs() < 1.0)
+    {
+        return Err(CliError::Usage(format!(
+            "--calibration {}: time_offset {t} s is not a clock offset between an IMU and its \
+             keyframes (|t| < 1 s)",
+            path.display()
+        )));
+    }
+    Ok(cal)
+}
+
+/// The time offset of `cal` in integer nanoseconds (0 when the file has none).
+pub fn time_offset_ns(cal: &ImuCalibration) -> i64 {
+    cal.time_offset_s.map_or(0, |t| (t * 1e9).round() as i64)
+}
+
+/// Writes `intrinsics`, `noise` and `time_offset_s` to `path` as OpenVINS'
+/// `kalibr_imu_chain.yaml`.
+pub fn write(
+    path: &Path,
+    intrinsics: ImuIntrinsics,
+    noise: &ImuNoise,
+    time_offset_s: Option<f64>,
+) -> Result<(), CliError> {
+    let cal = ImuCalibration {
+        intrinsics,
+        noise: Some(*noise),
+        time_offset_s,
+        rostopic: None,
+    };
+    preint_io::write_openvins_imu_chain(path, &cal)?;
+    Ok(())
+}
+
+/// The intrinsics of a multi-position calibration (module docs); the identity for the terms its
+/// chosen model does not have.
+pub fn intrinsics_of_multi_pose(c: &MultiPoseCalibration) -> Result<ImuIntrinsics, CliError> {
+    let z3 = Vector3::zeros();
+    let s_a = acc_scale_matrix(
+        &c.acc_scale.unwrap_or(z3),
+        &c.acc_misalignment.unwrap_or(z3),
+    );
+    let s_g = gyro_scale_matrix(
+        &c.gyro_scale.unwrap_or(z3),
+        &c.gyro_misalignment.unwrap_or(SVector::zeros()),
+    );
+    let (t_w, r) = rq(&s_g).ok_or_else(|| {
+        CliError::Failed(format!(
+            "the gyro scale/misalignment matrix {s_g} is not a rotation times a lower-triangular \
+             matrix with a positive diagonal (det ≤ 0)"
+        ))
+    })?;
+    Ok(ImuIntrinsics {
+        t_w,
+        r_imu_to_gyro: r,
+        t_a: s_a,
+        ..ImuIntrinsics::identity(IntrinsicsModel::Kalibr)
+    })
+}
+
+/// `S = L Q` with `L` lower triangular with a positive diagonal and `Q` a rotation (the RQ
+/// decomposition, from the QR decomposition of `Sᵀ`); `None` when `det S ≤ 0`.
+pub fn rq(s: &Matrix3<f64>) -> Option<(Matrix3<f64>, Matrix3<f64>)> {
+    if !(s.determinant() > 0.0) {
+        return None;
+    }
+    let qr = s.transpose().qr();
+    let (q1, r1) = (qr.q(), qr.r());
+    let d = Matrix3::from_diagonal(&r1.diagonal().map(|x| if x < 0.0 { -1.0 } else { 1.0 }));
+    // Sᵀ = Q₁R₁ ⇒ S = R₁ᵀQ₁ᵀ = (R₁ᵀD)(DQ₁ᵀ), D² = I.
+    let (l, q) = (r1.transpose() * d, d * q1.transpose());
+    (q.determinant() > 0.0).then_some((l, q))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rq_recomposes_a_scale_misalignment_matrix() {
+        let s = gyro_scale_matrix(
+            &Vector3::new(0.01, -0.02, 0.005),
+            &SVector::<f64, 6>::from_column_slice(&[0.002, -0.001, 0.003, 0.0015, -0.002, 0.001]),
+        );
+        let (l, q) = rq(&s).unwrap();
+        assert!((l * q - s).norm() < 1e-15);
+        assert!((q * q.transpose() - Matrix3::identity()).norm() < 1e-15);
+        assert!((q.determinant() - 1.0).abs() < 1e-15);
+        for (i, j) in [(0, 1), (0, 2), (1, 2)] {
+            assert_eq!(l[(i, j)], 0.0);
+        }
+        assert!(l.diagonal().iter().all(|x| *x > 0.0));
+        assert!(rq(&-Matrix3::<f64>::identity()).is_none());
+    }
+}
