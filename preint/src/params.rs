@@ -112,6 +112,11 @@ pub struct PreintParams {
     /// [`BiasCorrection::Additive`] (Forster eq. 44, GTSAM's Manifold/Tangent backends)
     /// otherwise; see [`BiasCorrection::default_for`].
     pub bias_correction: Option<BiasCorrection>,
+    /// Time-offset change \[s\] above which
+    /// [`time_offset::measurement_for_time_offset`](crate::time_offset::measurement_for_time_offset)
+    /// re-integrates instead of correcting to first order; default
+    /// [`DEFAULT_REINTEGRATE_TIME_OFFSET`].
+    pub reintegrate_time_offset_threshold: f64,
 }
 
 /// Default gyro-bias change [rad/s] above which the first-order correction is replaced by
@@ -130,6 +135,9 @@ pub const DEFAULT_REINTEGRATE_GYRO: f64 = 0.01;
 /// 0.01 rad/s, n reaches 1 at ‖δb_a‖ = 0.40 m/s² and is 0.50 at this default; with
 /// ‖δb_g‖ = 0.003 rad/s the crossing is 1.34 m/s².
 pub const DEFAULT_REINTEGRATE_ACC: f64 = 0.2;
+/// Default time-offset change \[s\] above which the first-order time-offset correction
+/// ([`crate::time_offset`]) is replaced by re-integration. STUDY_PLACEHOLDER
+pub const DEFAULT_REINTEGRATE_TIME_OFFSET: f64 = 0.002;
 /// Default largest sample gap: 250 ms.
 pub const DEFAULT_MAX_GAP_NS: i64 = 250_000_000;
 
@@ -157,6 +165,7 @@ impl PreintParams {
             omega_coriolis: None,
             coriolis: CoriolisMode::Exact,
             bias_correction: None,
+            reintegrate_time_offset_threshold: DEFAULT_REINTEGRATE_TIME_OFFSET,
         }
     }
 
@@ -246,6 +255,10 @@ impl PreintParams {
         }
         if self.reintegrate_acc_threshold.is_nan() || self.reintegrate_acc_threshold <= 0.0 {
             return bad("reintegrate_acc_threshold", "must be positive");
+        }
+        let td = self.reintegrate_time_offset_threshold;
+        if td.is_nan() || td <= 0.0 {
+            return bad("reintegrate_time_offset_threshold", "must be positive");
         }
         if let Some(pose) = &self.body_p_sensor
             && !pose.is_valid()

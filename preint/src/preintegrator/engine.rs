@@ -77,6 +77,8 @@ pub(crate) struct Core<S: IntervalScheme> {
     first_t_ns: i64,
     /// The first window node's rate [rad/s] (bias-corrected).
     first_w: Vector3<f64>,
+    /// The first window node's specific force [m/s²] (bias-corrected).
+    first_a: Vector3<f64>,
     origin: Origin,
     /// Window intervals integrated.
     done: usize,
@@ -112,6 +114,7 @@ impl<S: IntervalScheme> Core<S> {
             ctx_after,
             first_t_ns: 0,
             first_w: Vector3::zeros(),
+            first_a: Vector3::zeros(),
             origin: Origin::default(),
             done: 0,
             d: Deltas::default(),
@@ -153,6 +156,7 @@ impl<S: IntervalScheme> Core<S> {
         if self.n == 0 {
             self.first_t_ns = s.t_ns;
             self.first_w = node.w;
+            self.first_a = node.a;
             S::start(&mut self.carry, &node);
             self.fast.start(&node);
         }
@@ -381,7 +385,15 @@ impl<S: IntervalScheme> Core<S> {
         let last_t_ns = self.node(self.n - 1).t_ns;
         let mut chart = Chart::zeros();
         let mut edge_noise = EdgeNoise::default();
+        let mut jac_td = nalgebra::SVector::<f64, 9>::zeros();
         if self.linearise() {
+            let last = self.node(self.n - 1);
+            jac_td = crate::time_offset::jacobian(
+                (&self.first_w, &self.first_a),
+                (&last.w, &last.a),
+                (&r, &v, &p),
+                span_s(self.first_t_ns, last_t_ns),
+            );
             // Pulled back to the origin → pushed forward to the end (rotated coordinates) →
             // the documented chart.
             let tr = self.origin.push_to(last_t_ns, &v, &p);
@@ -416,6 +428,7 @@ impl<S: IntervalScheme> Core<S> {
             cov: chart.cov,
             cov15: chart.cov15,
             jac: chart.jac,
+            jac_td,
             bias_hat: fixed.bias_hat,
             gravity: fixed.gravity,
             omega_coriolis: fixed.omega_coriolis,
