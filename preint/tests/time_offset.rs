@@ -14,10 +14,13 @@
 //! deltas follow it to the scheme's order, because their derivative with respect to a window
 //! end differs from the end sample by the rate of change of the local truncation error of the
 //! last (first) interval. Measured relative errors `‖J − J_fd‖ / ‖J‖` at 200 Hz (keyframes on a
-//! sample / mid-interval / 1 ms after a sample; printed by the test):
-//! euler 3.9e-3 / 3.3e-3 / 2.2e-3, galilean the same, midpoint 3.6e-5 / 1.6e-5 / 2.3e-5,
-//! hermite4 ≤ 2e-8. Asserted: hermite4 ≤ 1e-6 at every rate; midpoint ≤ 1e-4 and euler and
-//! galilean ≤ 1e-2 at 200 Hz; and each error falls with the rate at the scheme's order (the
+//! sample / mid-interval / 1 ms after a sample; printed by the test): euler 5.2e-3 / 5.2e-3 /
+//! 7.1e-3, galilean 2.5e-3 / 2.5e-3 / 3.8e-3, midpoint 1.8e-5 / 9.2e-6 / 1.7e-5, hermite4 2.0e-9 /
+//! 3.9e-9 / 9.6e-9 (5e-10 at 400 and 800 Hz, the central differences' floor); halving the period
+//! halves the euler and galilean errors and quarters midpoint's. The closed form itself is
+//! checked to 2e-10 against central differences of exact continuous-time deltas (last test).
+//! Asserted: hermite4 ≤ 1e-6 at every rate; midpoint ≤ 1e-4 and euler and galilean ≤ 1e-2 at
+//! 200 Hz; and each error falls with the rate at the scheme's order (the
 //! 200 → 800 Hz ratio ≥ 3 for order 1, ≥ 10 for order 2: 4 and 16 expected), which a wrong
 //! closed form (an O(1) discrepancy) would fail.
 
