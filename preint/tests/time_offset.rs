@@ -235,7 +235,7 @@ fn correction_levels_and_sensor_pose() {
 }
 
 /// Below the threshold the first-order correction (closer to re-integration than the
-/// uncorrected deltas by at least 20×, at δt_d = 1 ms), above it re-integration, which equals
+/// uncorrected deltas by at least 20×, at 0.8 × the threshold), above it re-integration, which equals
 /// `preintegrate_with_offset` at the new offset.
 #[test]
 fn reintegration_switch() {
@@ -244,7 +244,7 @@ fn reintegration_switch() {
     let w = (SEC, 2 * SEC);
     let td_hat = 3_000_000;
     let m = preintegrate_with_offset(&p, &bias(), &s, w, td_hat).unwrap();
-    let small = td_hat + 1_000_000;
+    let small = td_hat + offset_ns(0.8 * p.reintegrate_time_offset_threshold);
     let u = measurement_for_time_offset(&p, &s, w, &m, (td_hat, small)).unwrap();
     assert!(!u.reintegrated);
     assert_eq!(
@@ -254,7 +254,7 @@ fn reintegration_switch() {
     let exact = preintegrate_with_offset(&p, &bias(), &s, w, small).unwrap();
     let e_corr = u.measurement.delta_error(&exact).norm();
     let e_none = m.delta_error(&exact).norm();
-    println!("δt_d = 1 ms: corrected {e_corr:.2e}, uncorrected {e_none:.2e}");
+    println!("δt_d = 0.8 × threshold: corrected {e_corr:.2e}, uncorrected {e_none:.2e}");
     assert!(e_corr * 20.0 <= e_none);
     let large = td_hat + 2 * offset_ns(p.reintegrate_time_offset_threshold);
     let u = measurement_for_time_offset(&p, &s, w, &m, (td_hat, large)).unwrap();
