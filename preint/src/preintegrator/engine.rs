@@ -77,8 +77,6 @@ pub(crate) struct Core<S: IntervalScheme> {
     first_t_ns: i64,
     /// The first window node's rate [rad/s] (bias-corrected).
     first_w: Vector3<f64>,
-    /// The first window node's specific force [m/s²] (bias-corrected).
-    first_a: Vector3<f64>,
     origin: Origin,
     /// Window intervals integrated.
     done: usize,
@@ -90,6 +88,9 @@ pub(crate) struct Core<S: IntervalScheme> {
     /// With a lever arm corrected per sample: `−Σ_j G_a,j D_j`, the bias Jacobian's share
     /// through the nodes' centripetal terms (pulled back, gyro columns).
     lever_j: crate::propagation::blocks::Cols9,
+    /// The first window node's specific force [m/s²] (bias-corrected), for the time-offset
+    /// column (last, away from the fields the interval loop reads).
+    first_a: Vector3<f64>,
 }
 
 impl<S: IntervalScheme> Core<S> {
@@ -114,7 +115,6 @@ impl<S: IntervalScheme> Core<S> {
             ctx_after,
             first_t_ns: 0,
             first_w: Vector3::zeros(),
-            first_a: Vector3::zeros(),
             origin: Origin::default(),
             done: 0,
             d: Deltas::default(),
@@ -123,6 +123,7 @@ impl<S: IntervalScheme> Core<S> {
             e: ErrorState::default(),
             edges: EdgeGains::default(),
             lever_j: [[0.0; 9]; 3],
+            first_a: Vector3::zeros(),
         }
     }
 
