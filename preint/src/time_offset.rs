@@ -4,7 +4,7 @@
 //!
 //! # Convention
 //!
-//! As in OpenVINS and VINS-Mono, the IMU clock reads `t_imu = t_cam + t_d` [s]: an event the
+//! As in OpenVINS and VINS-Mono, the IMU clock reads `t_imu = t_cam + t_d` \[s\]: an event the
 //! camera stamps `t` is stamped `t + t_d` by the IMU. A keyframe window `[t_i, t_j]` on the
 //! keyframe clock is therefore the IMU window `[t_i + t_d, t_j + t_d]`, and a measurement
 //! preintegrated with the offset estimate `t̂_d` is
@@ -45,7 +45,7 @@
 //!
 //! Shifting `t_d` shifts all three keyframes of consecutive windows `a = [t_i, t_k]`,
 //! `b = [t_k, t_j]` together, so the merged derivative is the chain rule through the
-//! composition: `J_td = A J_td,a + B J_td,b` with the `A`, `B` of [`crate::merge`]. The inner
+//! composition: `J_td = A J_td,a + B J_td,b` with the `A`, `B` of [`crate::merge`](mod@crate::merge). The inner
 //! keyframe's terms (`+ω_k`, `+ΔR_a a_k` from a's end, `−ω_k`, `−a_k` from b's start) cancel and
 //! the result equals the closed form of the whole window. This holds only when both windows
 //! were integrated with the same offset: windows of different sensors (offsets) would not move
