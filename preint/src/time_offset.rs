@@ -61,6 +61,32 @@
 //! [`PreintParams::reintegrate_time_offset_threshold`](crate::PreintParams::reintegrate_time_offset_threshold)
 //! [`measurement_for_time_offset`] re-integrates instead (the threshold and the study behind it:
 //! [`crate::params::DEFAULT_REINTEGRATE_TIME_OFFSET`]).
+//!
+//! ```
+//! use preint::nalgebra::Vector3;
+//! use preint::time_offset::preintegrate_with_offset;
+//! use preint::{ImuBias, ImuFactor, ImuSample, NavState, PreintParams};
+//! let s: Vec<ImuSample> = (0..601i64)
+//!     .map(|k| {
+//!         let t = k as f64 * 5e-3;
+//!         ImuSample::new(k * 5_000_000, Vector3::new(0.0, 0.3, t.sin()), Vector3::new(t.cos(), 0.0, 9.81))
+//!     })
+//!     .collect();
+//! let (p, b) = (PreintParams::default(), ImuBias::zero());
+//! let keyframes = (1_000_000_000, 2_000_000_000); // camera clock [ns]
+//! let m = preintegrate_with_offset(&p, &b, &s, keyframes, 3_000_000).unwrap(); // t̂_d = 3 ms
+//! // The offset is 3.4 ms: the first-order correction against re-integration.
+//! let exact = preintegrate_with_offset(&p, &b, &s, keyframes, 3_400_000).unwrap();
+//! let mut c = m.clone();
+//! (c.delta_r, c.delta_v, c.delta_p) = m.corrected_with_time_offset(&b, 4e-4);
+//! assert!(exact.delta_error(&c).norm() < 1e-3 * exact.delta_error(&m).norm());
+//! // A factor with t_d as a variable: the residual at δt_d and its column ∂r/∂δt_d.
+//! let f = ImuFactor::new(m.clone()).unwrap();
+//! let xi = NavState::identity();
+//! let xj = f.predict(&xi, &b);
+//! let (r, _jac, d_r_d_td) = f.evaluate_with_time_offset(&xi, &xj, &b, 0.0);
+//! assert!(r.amax() < 1e-12 && d_r_d_td.norm() > 0.1);
+//! ```
 
 use crate::bias_correction::{BiasCorrection, Corrected};
 use crate::error::PreintError;
