@@ -36,7 +36,7 @@ pub fn read(path: &Path) -> Result<ImuCalibration, CliError> {
         .validate()
         .map_err(|e| CliError::Usage(format!("--calibration {}: {e}", path.display())))?;
     if let Some(t) = cal.time_offset_s
-        && !(t.abs() < 1.0)
+        && t.abs() >= 1.0
     {
         return Err(CliError::Usage(format!(
             "--calibration {}: time_offset {t} s is not a clock offset between an IMU and its \
@@ -99,7 +99,8 @@ pub fn intrinsics_of_multi_pose(c: &MultiPoseCalibration) -> Result<ImuIntrinsic
 /// `S = L Q` with `L` lower triangular with a positive diagonal and `Q` a rotation (the RQ
 /// decomposition, from the QR decomposition of `Sᵀ`); `None` when `det S ≤ 0`.
 pub fn rq(s: &Matrix3<f64>) -> Option<(Matrix3<f64>, Matrix3<f64>)> {
-    if !(s.determinant() > 0.0) {
+    let det = s.determinant();
+    if det.is_nan() || det <= 0.0 {
         return None;
     }
     let qr = s.transpose().qr();

@@ -15,6 +15,9 @@
 //! - The measurement: [`PreintegratedImu`] (its `cov`, `cov15`, `residual_cov15()` and bias
 //!   Jacobians), [`predict`] and [`NavState`].
 //! - Factors: [`ImuFactor`], [`CombinedImuFactor`] (residual, analytic Jacobians, whitening).
+//! - Time offset: [`time_offset`] (`t_imu = t_cam + t_d`): the deltas' derivative
+//!   [`PreintegratedImu::jac_td`], the first-order correction, re-integration above a
+//!   threshold, and `evaluate_with_time_offset` on both factors.
 //! - Earth rotation: [`earth`] (`PreintParams::omega_coriolis`, [`CoriolisMode`]): a world frame
 //!   rotating at a constant rate in prediction and both factors.
 //! - Schemes: [`scheme`] (the mathematics of each). Reading and writing files is the
@@ -52,6 +55,7 @@ pub mod preintegrator;
 pub(crate) mod propagation;
 pub mod scheme;
 pub mod second_order;
+pub mod time_offset;
 pub mod truncation;
 pub mod window;
 
@@ -65,6 +69,7 @@ pub use merge::{MergeError, merge};
 pub use navstate::{NavState, predict};
 pub use params::{Level, PreintParams, Scheme};
 pub use preintegrator::{BiasUpdate, Preintegrator};
+pub use time_offset::{TimeOffsetUpdate, preintegrate_with_offset};
 pub use truncation::TruncationEstimate;
 pub use window::preintegrate;
 

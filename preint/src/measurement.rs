@@ -272,6 +272,11 @@ pub struct PreintegratedImu {
     pub cov15: Cov15,
     /// Bias Jacobians at `bias_hat`.
     pub jac: BiasJacobians,
+    /// `∂[δφ, δv, δp]/∂t_d` [rad/s, m/s², m/s]: the deltas' derivative with respect to the
+    /// IMU–keyframe time offset, both window ends moving (`t_imu = t_cam + t_d`;
+    /// [`crate::time_offset`]), at the offset the window was integrated with. Zero when
+    /// unknown (at [`Level::Deltas`], with a lever arm removed in closed form, hand-made).
+    pub jac_td: SVector<f64, 9>,
     /// Bias estimate used for integration.
     pub bias_hat: ImuBias,
     /// Gravity vector in the world frame [m/s²] (default (0, 0, −9.81)).

@@ -19,7 +19,11 @@
 //! ```
 //!
 //! plus, when the windows share stream samples, their covariance (below). Bias Jacobians
-//! (9×6, columns [b_g, b_a]) compose the same way: `J = A J_a + B J_b`.
+//! (9×6, columns [b_g, b_a]) compose the same way: `J = A J_a + B J_b`, and so does the
+//! time-offset column [`PreintegratedImu::jac_td`]: `J_td = A J_td,a + B J_td,b`, because a
+//! common offset shifts the inner keyframe for both windows; its terms cancel and the result is
+//! the whole window's ([`crate::time_offset`], "Merge"). Windows integrated with different
+//! offsets do not share that shift, and their merged column means nothing.
 //!
 //! # Shared samples
 //!
@@ -172,6 +176,7 @@ pub fn merge(a: &PreintegratedImu, b: &PreintegratedImu) -> Result<Preintegrated
         cov: 0.5 * (cov + cov.transpose()),
         cov15: 0.5 * (cov15 + cov15.transpose()),
         jac,
+        jac_td: am * a.jac_td + bm * b.jac_td,
         bias_hat: a.bias_hat,
         gravity: a.gravity,
         omega_coriolis: a.omega_coriolis,

@@ -117,6 +117,11 @@ pub struct PreintParams {
     /// estimate and the noise densities are then those of the corrected samples). `None` (the
     /// default): samples are integrated as read.
     pub intrinsics: Option<crate::intrinsics::AppliedIntrinsics>,
+    /// Time-offset change \[s\] above which
+    /// [`time_offset::measurement_for_time_offset`](crate::time_offset::measurement_for_time_offset)
+    /// re-integrates instead of correcting to first order; default
+    /// [`DEFAULT_REINTEGRATE_TIME_OFFSET`].
+    pub reintegrate_time_offset_threshold: f64,
 }
 
 /// Default gyro-bias change [rad/s] above which the first-order correction is replaced by
@@ -135,6 +140,17 @@ pub const DEFAULT_REINTEGRATE_GYRO: f64 = 0.01;
 /// 0.01 rad/s, n reaches 1 at ‖δb_a‖ = 0.40 m/s² and is 0.50 at this default; with
 /// ‖δb_g‖ = 0.003 rad/s the crossing is 1.34 m/s².
 pub const DEFAULT_REINTEGRATE_ACC: f64 = 0.2;
+/// Default time-offset change \[s\] above which the first-order time-offset correction
+/// ([`crate::time_offset`]) is replaced by re-integration. Measured (`tests/tests/time_offset.rs`:
+/// `aggressive` scene, 200 Hz, ten 1 s windows, EuRoC densities, largest value over windows and
+/// signs): the first-order error against re-integration grows as δt_d² for midpoint and hermite4
+/// (`n(2 ms)/n(1 ms) = 4.0`) and its Mahalanobis norm `n = √(eᵀΣ⁻¹e)` (9 dof) reaches 1 at
+/// δt_d = 2.26 ms; at this default it is 0.049 (a margin of 20 in n, 4.5 in δt_d, for faster
+/// motion and longer windows). Euler and galilean reach 1 at 0.95 and 0.88 ms (0.48 and 0.52
+/// here): their discrete deltas' derivative with respect to a window end differs from the end
+/// sample at first order in the sample period, which the correction does not model. Not
+/// correcting at all costs n = 3.4 already at 0.1 ms.
+pub const DEFAULT_REINTEGRATE_TIME_OFFSET: f64 = 5e-4;
 /// Default largest sample gap: 250 ms.
 pub const DEFAULT_MAX_GAP_NS: i64 = 250_000_000;
 
@@ -163,6 +179,7 @@ impl PreintParams {
             coriolis: CoriolisMode::Exact,
             bias_correction: None,
             intrinsics: None,
+            reintegrate_time_offset_threshold: DEFAULT_REINTEGRATE_TIME_OFFSET,
         }
     }
 
@@ -252,6 +269,10 @@ impl PreintParams {
         }
         if self.reintegrate_acc_threshold.is_nan() || self.reintegrate_acc_threshold <= 0.0 {
             return bad("reintegrate_acc_threshold", "must be positive");
+        }
+        let td = self.reintegrate_time_offset_threshold;
+        if td.is_nan() || td <= 0.0 {
+            return bad("reintegrate_time_offset_threshold", "must be positive");
         }
         if let Some(pose) = &self.body_p_sensor
             && !pose.is_valid()

@@ -77,6 +77,7 @@ fn pim(out: &Value) -> PreintegratedImu {
             d_p_d_bg: m3(&bj["dp_dbg"]),
             d_p_d_ba: m3(&bj["dp_dba"]),
         },
+        jac_td: Default::default(),
         bias_hat: ImuBias::new(v3(&p["bg"]), v3(&p["ba"])),
         gravity: Vector3::new(0.0, 0.0, -p["gravity"].as_f64().unwrap()),
         omega_coriolis: None,

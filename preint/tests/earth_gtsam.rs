@@ -85,6 +85,7 @@ fn case(name: &str) -> Case {
         cov: Cov9::from_fn(|r, col| c[(perm[r], perm[col])]),
         cov15,
         jac: BiasJacobians::default(),
+        jac_td: Default::default(),
         bias_hat: ImuBias::new(v3(&f["bias_hat"]["bg"]), v3(&f["bias_hat"]["ba"])),
         gravity: v3(&f["n_gravity"]),
         omega_coriolis: Some(omega),

@@ -168,6 +168,7 @@ fn predict_free_fall_and_rest_by_hand() {
         cov: Cov9::identity(),
         cov15: Cov15::identity(),
         jac: BiasJacobians::default(),
+        jac_td: Default::default(),
         bias_hat: ImuBias::zero(),
         gravity: Vector3::new(0.0, 0.0, -9.81),
         omega_coriolis: None,

@@ -221,6 +221,7 @@ fn load_case(name: &str) -> Case {
             d_p_d_bg: bj.at("dp_dbg").m3(),
             d_p_d_ba: bj.at("dp_dba").m3(),
         },
+        jac_td: Default::default(),
         bias_hat,
         gravity: out.at("n_gravity").v3(),
         omega_coriolis: None,

@@ -151,6 +151,7 @@ fn euler(s: &[ImuSample], bias: &ImuBias) -> PreintegratedImu {
             d_p_d_bg: blk(6, 0),
             d_p_d_ba: blk(6, 3),
         },
+        jac_td: Default::default(),
         bias_hat: *bias,
         gravity: Vector3::new(0.0, 0.0, -9.81),
         omega_coriolis: None,

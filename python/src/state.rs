@@ -12,7 +12,7 @@ use preint::{
 use pyo3::PyResult;
 
 /// Format version written first.
-const VERSION: u8 = 2;
+const VERSION: u8 = 3;
 
 #[derive(Default)]
 struct Writer(Vec<u8>);
@@ -134,6 +134,7 @@ pub(crate) fn encode_params(p: &PreintParams) -> Vec<u8> {
     w.u8(p
         .bias_correction
         .map_or(0, |c| 1 + index_of(&CORRECTIONS, c)));
+    w.f64(p.reintegrate_time_offset_threshold);
     w.0
 }
 
@@ -165,6 +166,7 @@ pub(crate) fn decode_params(b: &[u8]) -> PyResult<PreintParams> {
         0 => None,
         i => Some(pick(&CORRECTIONS, i - 1)?),
     };
+    let reintegrate_time_offset_threshold = r.f64()?;
     let p = PreintParams {
         gravity,
         gyro_cov,
@@ -184,6 +186,7 @@ pub(crate) fn decode_params(b: &[u8]) -> PyResult<PreintParams> {
         coriolis,
         bias_correction,
         intrinsics: None,
+        reintegrate_time_offset_threshold,
     };
     r.end()?;
     Ok(p)
@@ -202,6 +205,7 @@ pub(crate) fn encode_measurement(m: &PreintegratedImu) -> Vec<u8> {
     w.mat(&m.cov);
     w.mat(&m.cov15);
     w.mat(&m.jac.as_matrix());
+    w.mat(&m.jac_td);
     w.mat(&m.bias_hat.gyro);
     w.mat(&m.bias_hat.acc);
     w.mat(&m.gravity);
@@ -240,6 +244,7 @@ pub(crate) fn decode_measurement(b: &[u8]) -> PyResult<PreintegratedImu> {
     let cov = r.mat()?;
     let cov15 = r.mat()?;
     let jac = BiasJacobians::from_matrix(&r.mat()?);
+    let jac_td = r.mat()?;
     let bias_hat = ImuBias::new(r.mat()?, r.mat()?);
     let gravity = r.mat()?;
     let omega_coriolis = r.opt_mat()?;
@@ -272,6 +277,7 @@ pub(crate) fn decode_measurement(b: &[u8]) -> PyResult<PreintegratedImu> {
         cov,
         cov15,
         jac,
+        jac_td,
         bias_hat,
         gravity,
         omega_coriolis,

@@ -307,6 +307,7 @@ fn template(params: &PreintParams, bias: &ImuBias, t_i_ns: i64) -> Preintegrated
         cov: Cov9::zeros(),
         cov15: Cov15::zeros(),
         jac: BiasJacobians::default(),
+        jac_td: Default::default(),
         bias_hat: *bias,
         gravity: params.gravity,
         omega_coriolis: params.omega_coriolis,

@@ -85,35 +85,31 @@ impl CombinedImuFactor {
         bias_j: &ImuBias,
     ) -> (SVector<f64, 15>, CombinedImuFactorJacobians) {
         let (r9, j9) = self.0.residual9_mode(state_i, state_j, bias_i);
-        let mut r = SVector::<f64, 15>::zeros();
-        r.fixed_rows_mut::<9>(0).copy_from(&r9);
-        r.fixed_rows_mut::<3>(9)
-            .copy_from(&(bias_j.gyro - bias_i.gyro));
-        r.fixed_rows_mut::<3>(12)
-            .copy_from(&(bias_j.acc - bias_i.acc));
-        let ext = |m: &SMatrix<f64, 9, 3>| {
-            let mut o = SMatrix::<f64, 15, 3>::zeros();
-            o.fixed_rows_mut::<9>(0).copy_from(m);
-            o
-        };
-        let id = Matrix3::identity();
-        let mut j = CombinedImuFactorJacobians {
-            phi_i: ext(&j9.phi_i),
-            p_i: ext(&j9.p_i),
-            v_i: ext(&j9.v_i),
-            phi_j: ext(&j9.phi_j),
-            p_j: ext(&j9.p_j),
-            v_j: ext(&j9.v_j),
-            bg_i: ext(&j9.bg_i),
-            ba_i: ext(&j9.ba_i),
-            bg_j: SMatrix::zeros(),
-            ba_j: SMatrix::zeros(),
-        };
-        j.bg_i.fixed_view_mut::<3, 3>(9, 0).copy_from(&(-id));
-        j.ba_i.fixed_view_mut::<3, 3>(12, 0).copy_from(&(-id));
-        j.bg_j.fixed_view_mut::<3, 3>(9, 0).copy_from(&id);
-        j.ba_j.fixed_view_mut::<3, 3>(12, 0).copy_from(&id);
-        (r, j)
+        extend15((r9, j9), bias_i, bias_j)
+    }
+
+    /// Residual, Jacobians and `∂r/∂δt_d` [per s] at a time-offset change `dtd_s` \[s\]
+    /// relative to the offset the measurement was integrated with (as
+    /// [`ImuFactor::evaluate_with_time_offset`](crate::ImuFactor::evaluate_with_time_offset); the
+    /// bias rows do not depend on it). With `dtd_s = 0` the residual and blocks are
+    /// [`evaluate`](Self::evaluate)'s.
+    pub fn evaluate_with_time_offset(
+        &self,
+        state_i: &NavState,
+        state_j: &NavState,
+        bias_i: &ImuBias,
+        bias_j: &ImuBias,
+        dtd_s: f64,
+    ) -> (
+        SVector<f64, 15>,
+        CombinedImuFactorJacobians,
+        SVector<f64, 15>,
+    ) {
+        let (r9, j9, c9) = self.0.residual9_mode_td(state_i, state_j, bias_i, dtd_s);
+        let (r, j) = extend15((r9, j9), bias_i, bias_j);
+        let mut col = SVector::<f64, 15>::zeros();
+        col.fixed_rows_mut::<9>(0).copy_from(&c9);
+        (r, j, col)
     }
 
     /// Whitened residual `U r` and Jacobians `U J`.
@@ -151,4 +147,41 @@ impl CombinedImuFactor {
     ) -> f64 {
         0.5 * self.chi2(state_i, state_j, bias_i, bias_j)
     }
+}
+
+/// The 15-dim residual and Jacobians from the 9-dim ones: bias rows `b_j − b_i`.
+fn extend15(
+    (r9, j9): (SVector<f64, 9>, crate::ImuFactorJacobians),
+    bias_i: &ImuBias,
+    bias_j: &ImuBias,
+) -> (SVector<f64, 15>, CombinedImuFactorJacobians) {
+    let mut r = SVector::<f64, 15>::zeros();
+    r.fixed_rows_mut::<9>(0).copy_from(&r9);
+    r.fixed_rows_mut::<3>(9)
+        .copy_from(&(bias_j.gyro - bias_i.gyro));
+    r.fixed_rows_mut::<3>(12)
+        .copy_from(&(bias_j.acc - bias_i.acc));
+    let ext = |m: &SMatrix<f64, 9, 3>| {
+        let mut o = SMatrix::<f64, 15, 3>::zeros();
+        o.fixed_rows_mut::<9>(0).copy_from(m);
+        o
+    };
+    let id = Matrix3::identity();
+    let mut j = CombinedImuFactorJacobians {
+        phi_i: ext(&j9.phi_i),
+        p_i: ext(&j9.p_i),
+        v_i: ext(&j9.v_i),
+        phi_j: ext(&j9.phi_j),
+        p_j: ext(&j9.p_j),
+        v_j: ext(&j9.v_j),
+        bg_i: ext(&j9.bg_i),
+        ba_i: ext(&j9.ba_i),
+        bg_j: SMatrix::zeros(),
+        ba_j: SMatrix::zeros(),
+    };
+    j.bg_i.fixed_view_mut::<3, 3>(9, 0).copy_from(&(-id));
+    j.ba_i.fixed_view_mut::<3, 3>(12, 0).copy_from(&(-id));
+    j.bg_j.fixed_view_mut::<3, 3>(9, 0).copy_from(&id);
+    j.ba_j.fixed_view_mut::<3, 3>(12, 0).copy_from(&id);
+    (r, j)
 }

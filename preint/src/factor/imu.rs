@@ -104,6 +104,21 @@ impl ImuFactor {
         self.0.residual9_mode(state_i, state_j, bias_i)
     }
 
+    /// Residual, Jacobians and `∂r/∂δt_d` [per s] at a time-offset change `dtd_s` \[s\] relative
+    /// to the offset the measurement was integrated with (`t_imu = t_cam + t_d`;
+    /// [`crate::time_offset`], and the module docs): the deltas corrected by
+    /// `J_b δb + J_td δt_d` ([`PreintegratedImu::corrected_with_time_offset`]). With
+    /// `dtd_s = 0` the residual and blocks are [`evaluate`](Self::evaluate)'s.
+    pub fn evaluate_with_time_offset(
+        &self,
+        state_i: &NavState,
+        state_j: &NavState,
+        bias_i: &ImuBias,
+        dtd_s: f64,
+    ) -> (SVector<f64, 9>, ImuFactorJacobians, SVector<f64, 9>) {
+        self.0.residual9_mode_td(state_i, state_j, bias_i, dtd_s)
+    }
+
     /// Whitened residual `U r` and Jacobians `U J` (`U` = [`sqrt_information`](Self::sqrt_information)).
     pub fn evaluate_whitened(
         &self,

@@ -64,8 +64,8 @@
 //! over long windows) is charted, which is what the NEES evidence in `docs/EVIDENCE.md` measures.
 
 use super::FactorJacobians;
+use crate::bias_correction::Corrected;
 use crate::measurement::PreintegratedImu;
-use crate::sample::ImuBias;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use preint_lie::se3::q_block;
 use preint_lie::{hat, jl, jl_inv};
@@ -138,20 +138,25 @@ pub(super) fn logmap_cov<const R: usize>(
 
 /// Maps a component-wise residual and its Jacobians (first nine rows [r_φ, r_v, r_p]; any
 /// further rows, the bias rows of the combined factor, are left as they are) to the Logmap
-/// residual and its Jacobians, in place (module docs for the formulas).
+/// residual and its Jacobians, in place (module docs for the formulas), at the corrected deltas
+/// `c`. `td`, if given, is a further column `∂r/∂δt_d` (the time offset,
+/// [`crate::time_offset`]) with the rotation direction `u` its correction moves `ΔR(b)` along
+/// (`ΔR(b) Exp(Jr(c_φ) u ε)`); it maps as the gyro-bias columns do, `ΔR(b)ᵀ` moving with it.
 pub(super) fn to_logmap<const R: usize>(
     pim: &PreintegratedImu,
-    bias_i: &ImuBias,
+    c: &Corrected,
     r: &mut SVector<f64, R>,
     jac: &mut FactorJacobians<R>,
+    mut td: Option<(&mut SVector<f64, R>, Vector3<f64>)>,
 ) {
     let j_rg = pim.jac.d_r_d_bg;
-    let (dr, jr_db, _, _, _) = super::residual::corrected(pim, bias_i);
+    let (dr, jr_db) = (c.r, c.jr);
     let q = dr.matrix().transpose();
     let phi: Vector3<f64> = r.fixed_rows::<3>(0).into_owned();
     let jli = jl_inv(&phi);
     let jlp = jl(&phi);
     let rows_phi = |b: &SMatrix<f64, R, 3>| -> Matrix3<f64> { b.fixed_view::<3, 3>(0, 0).into() };
+    let td_phi: Option<Vector3<f64>> = td.as_ref().map(|(col, _)| col.fixed_rows::<3>(0).into());
     for row in [3, 6] {
         let u = q * r.fixed_rows::<3>(row);
         let rho = jli * u;
@@ -165,6 +170,11 @@ pub(super) fn to_logmap<const R: usize>(
                 m += bias_term;
             }
             b.fixed_view_mut::<3, 3>(row, 0).copy_from(&m);
+        }
+        if let (Some((col, dir)), Some(cp)) = (td.as_mut(), td_phi.as_ref()) {
+            let ck: Vector3<f64> = col.fixed_rows::<3>(row).into();
+            let m = jq * ck + g * cp + jli * hat(&u) * jr_db * *dir;
+            col.fixed_rows_mut::<3>(row).copy_from(&m);
         }
         r.fixed_rows_mut::<3>(row).copy_from(&rho);
     }

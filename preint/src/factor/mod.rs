@@ -56,6 +56,16 @@
 //! [`CoriolisMode`](crate::CoriolisMode); Jacobians checked in `preint/tests/earth.rs`); its
 //! covariance is the same.
 //!
+//! # Time offset
+//!
+//! `evaluate_with_time_offset` (both factors) evaluates the residual at a change `δt_d` \[s\]
+//! of the IMU–keyframe time offset relative to the one the measurement was integrated with
+//! ([`crate::time_offset`]): the deltas corrected by `J_b δb + J_td δt_d` in the measurement's
+//! bias correction, every Jacobian block at that point, and the column `∂r/∂δt_d`
+//! (`[−Jr⁻¹(r_φ) Eᵀ Jr(c_φ) j_φ, −∂Δv(b)/∂t_d, −∂Δp(b)/∂t_d]`, mapped to the Logmap chart as the
+//! gyro-bias columns are). At `δt_d = 0` the residual and blocks are those of `evaluate`.
+//! Checked against central differences in `preint/tests/time_offset_factor.rs`.
+//!
 //! # Whitening
 //!
 //! The square-root information `U` is the **upper** Cholesky factor of `Σ⁻¹` (`Σ⁻¹ = UᵀU`,
@@ -386,11 +396,31 @@ impl<const R: usize> Weighted<R> {
         xj: &crate::NavState,
         bias_i: &crate::ImuBias,
     ) -> (SVector<f64, 9>, ImuFactorJacobians) {
-        let (mut r, mut j) = residual::residual9(&self.pim, xi, xj, bias_i);
+        let c = crate::bias_correction::correct(&self.pim, bias_i);
+        let (mut r, mut j, _) = residual::residual9_at(&self.pim, xi, xj, &c);
         if self.mode == ResidualMode::Logmap {
-            logmap::to_logmap(&self.pim, bias_i, &mut r, &mut j);
+            logmap::to_logmap(&self.pim, &c, &mut r, &mut j, None);
         }
         (r, j)
+    }
+
+    /// As [`residual9_mode`](Self::residual9_mode) with the deltas corrected for a time-offset
+    /// change `dtd_s` \[s\] ([`crate::time_offset`]), and the column `∂r/∂δt_d`.
+    fn residual9_mode_td(
+        &self,
+        xi: &crate::NavState,
+        xj: &crate::NavState,
+        bias_i: &crate::ImuBias,
+        dtd_s: f64,
+    ) -> (SVector<f64, 9>, ImuFactorJacobians, SVector<f64, 9>) {
+        let (c, z) = crate::time_offset::correct(&self.pim, bias_i, dtd_s);
+        let (mut r, mut j, rot) = residual::residual9_at(&self.pim, xi, xj, &c);
+        let mut col = residual::td_column(&rot, &z);
+        if self.mode == ResidualMode::Logmap {
+            let dir = z.fixed_rows::<3>(0).into_owned();
+            logmap::to_logmap(&self.pim, &c, &mut r, &mut j, Some((&mut col, dir)));
+        }
+        (r, j, col)
     }
 
     /// `(U r, U J)`.

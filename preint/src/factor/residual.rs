@@ -1,24 +1,27 @@
 //! Forster's 9-dim residual and its analytic Jacobians (formulas in the parent module's docs).
 
 use super::ImuFactorJacobians;
+use crate::bias_correction::Corrected;
 use crate::measurement::{BiasJacobians, PreintegratedImu};
 use crate::navstate::NavState;
-use crate::sample::ImuBias;
-use nalgebra::{Matrix3, SVector, Vector3};
-use preint_lie::{SO3, hat};
+use nalgebra::{Matrix3, SVector};
+use preint_lie::hat;
 
-/// The 9-dim residual and its Jacobians (module docs).
-pub(super) fn residual9(
+/// The 9-dim residual and its Jacobians (module docs) at the corrected deltas `c` (for the bias `bias_i`,
+/// and a time-offset change when `c` comes from [`crate::time_offset`]), and
+/// `rot = Jr⁻¹(r_φ) Eᵀ Jr(c_φ)`: `∂r_φ/∂u = −rot` for a rotation correction moving along `u`
+/// (`ΔR(b) ≈ ΔR(b) Exp(Jr(c_φ) u ε)`; [`td_column`]).
+pub(super) fn residual9_at(
     pim: &PreintegratedImu,
     xi: &NavState,
     xj: &NavState,
-    bias_i: &ImuBias,
-) -> (SVector<f64, 9>, ImuFactorJacobians) {
+    c: &Corrected,
+) -> (SVector<f64, 9>, ImuFactorJacobians, Matrix3<f64>) {
     if let Some(w) = &pim.omega_coriolis {
-        return super::rotating::residual9_rotating(pim, xi, xj, bias_i, w);
+        return super::rotating::residual9_rotating(pim, xi, xj, c, w);
     }
-    let (dr, jr_db, dv, dp, jb) = corrected(pim, bias_i);
-    let jb = &jb;
+    let (dr, jr_db, dv, dp) = (c.r, c.jr, c.v, c.p);
+    let jb = &c.jac;
 
     let dt = pim.delta_t;
     let g = pim.gravity;
@@ -56,21 +59,19 @@ pub(super) fn residual9(
         .fixed_view_mut::<3, 3>(6, 0)
         .copy_from(ri_t_rj.matrix());
     jac.v_j.fixed_view_mut::<3, 3>(3, 0).copy_from(&ri_tm);
-    bias_blocks(&mut jac, &(jr_inv * e.matrix().transpose() * jr_db), jb);
-    (r, jac)
+    let rot = jr_inv * e.matrix().transpose() * jr_db;
+    bias_blocks(&mut jac, &rot, jb);
+    (r, jac, rot)
 }
 
-/// The deltas corrected to first order for the bias `bias_i` (as
-/// [`PreintegratedImu::corrected`], in its [`BiasCorrection`](crate::BiasCorrection)):
-/// `(ΔR(b), Jr(∂ΔR/∂b_g δb_g), Δv(b) [m/s], Δp(b) [m], J)`, the right Jacobian of the rotation
-/// correction and `J` the derivatives of `Δv(b)`, `Δp(b)` with respect to `δb`
-/// ([`crate::bias_correction`]; its rotation block is `∂ΔR/∂b_g`) for the bias Jacobians.
-pub(super) fn corrected(
-    pim: &PreintegratedImu,
-    bias_i: &ImuBias,
-) -> (SO3, Matrix3<f64>, Vector3<f64>, Vector3<f64>, BiasJacobians) {
-    let c = crate::bias_correction::correct(pim, bias_i);
-    (c.r, c.jr, c.v, c.p, c.jac)
+/// `∂r/∂δt_d` of the component-wise residual for corrected deltas that move along `z` with
+/// the time offset ([`crate::time_offset`]'s `ζ`: rotation direction, `∂Δv`, `∂Δp`), with `rot`
+/// from [`residual9_at`]: `[−rot z_φ, −z_v, −z_p]` (the residual is measured-subtracted).
+pub(super) fn td_column(rot: &Matrix3<f64>, z: &SVector<f64, 9>) -> SVector<f64, 9> {
+    let mut col = -z;
+    let phi = -rot * z.fixed_rows::<3>(0);
+    col.fixed_rows_mut::<3>(0).copy_from(&phi);
+    col
 }
 
 /// The bias-i blocks of a 9-dim residual's Jacobian: the rotation row through the first-order

@@ -47,7 +47,6 @@ use super::ImuFactorJacobians;
 use crate::earth::{CoriolisMode, Transport, centrifugal};
 use crate::measurement::PreintegratedImu;
 use crate::navstate::NavState;
-use crate::sample::ImuBias;
 use nalgebra::{Matrix3, SVector, Vector3};
 use preint_lie::{SO3, hat, jl_inv, jr};
 
@@ -171,15 +170,15 @@ pub(super) fn residual9_rotating(
     pim: &PreintegratedImu,
     xi: &NavState,
     xj: &NavState,
-    bias_i: &ImuBias,
+    c: &crate::bias_correction::Corrected,
     w: &Vector3<f64>,
-) -> (SVector<f64, 9>, ImuFactorJacobians) {
+) -> (SVector<f64, 9>, ImuFactorJacobians, Matrix3<f64>) {
     let imp = match pim.coriolis {
         CoriolisMode::Exact => implied_exact(pim, xi, xj, w),
         mode => implied_approx(pim, xi, xj, w, mode),
     };
-    let (dr, jr_db, dv, dp, jb) = super::residual::corrected(pim, bias_i);
-    let jb = &jb;
+    let (dr, jr_db, dv, dp) = (c.r, c.jr, c.v, c.p);
+    let jb = &c.jac;
     let e = dr.inverse().compose(&imp.y);
     let (r_phi, jr_inv_e) = e.log_jac();
 
@@ -196,6 +195,7 @@ pub(super) fn residual9_rotating(
         blk.fixed_view_mut::<3, 3>(3, 0).copy_from(&imp.dv[k]);
         blk.fixed_view_mut::<3, 3>(6, 0).copy_from(&imp.dp[k]);
     }
-    super::residual::bias_blocks(&mut jac, &(jr_inv_e * e.matrix().transpose() * jr_db), jb);
-    (r, jac)
+    let rot = jr_inv_e * e.matrix().transpose() * jr_db;
+    super::residual::bias_blocks(&mut jac, &rot, jb);
+    (r, jac, rot)
 }

@@ -95,6 +95,9 @@ pub(crate) struct Core<S: IntervalScheme> {
     /// A lever arm corrected per sample, or the intrinsics' Jacobians: the loop's variants
     /// other than the default.
     special: bool,
+    /// The first window node's specific force [m/s²] (bias-corrected), for the time-offset
+    /// column (last, away from the fields the interval loop reads).
+    first_a: Vector3<f64>,
 }
 
 impl<S: IntervalScheme> Core<S> {
@@ -128,6 +131,7 @@ impl<S: IntervalScheme> Core<S> {
             lever_j: [[0.0; 9]; 3],
             intr: None,
             special: fixed.centripetal.is_some(),
+            first_a: Vector3::zeros(),
             fixed,
         }
     }
@@ -175,6 +179,7 @@ impl<S: IntervalScheme> Core<S> {
         if self.n == 0 {
             self.first_t_ns = s.t_ns;
             self.first_w = node.w;
+            self.first_a = node.a;
             S::start(&mut self.carry, &node);
             self.fast.start(&node);
         }
@@ -440,7 +445,15 @@ impl<S: IntervalScheme> Core<S> {
         let last_t_ns = self.node(self.n - 1).t_ns;
         let mut chart = Chart::zeros();
         let mut edge_noise = EdgeNoise::default();
+        let mut jac_td = nalgebra::SVector::<f64, 9>::zeros();
         if self.linearise() {
+            let last = self.node(self.n - 1);
+            jac_td = crate::time_offset::jacobian(
+                (&self.first_w, &self.first_a),
+                (&last.w, &last.a),
+                (&r, &v, &p),
+                span_s(self.first_t_ns, last_t_ns),
+            );
             // Pulled back to the origin → pushed forward to the end (rotated coordinates) →
             // the documented chart.
             let tr = self.origin.push_to(last_t_ns, &v, &p);
@@ -475,6 +488,7 @@ impl<S: IntervalScheme> Core<S> {
             cov: chart.cov,
             cov15: chart.cov15,
             jac: chart.jac,
+            jac_td,
             bias_hat: fixed.bias_hat,
             gravity: fixed.gravity,
             omega_coriolis: fixed.omega_coriolis,

@@ -396,6 +396,7 @@ impl Preintegrator {
         if let (_, Some(pose)) = crate::extrinsics::plan(&self.params) {
             let ends = self.end_rates(m.t_i_ns);
             crate::extrinsics::to_body(&mut m, &pose, &ends);
+            m.jac_td = crate::time_offset::to_body(&m.jac_td, &pose);
         }
         checked(m)
     }

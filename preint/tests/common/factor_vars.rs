@@ -63,6 +63,7 @@ pub fn random_pim(
             d_p_d_bg: rng.m3(1.0),
             d_p_d_ba: rng.m3(0.3),
         },
+        jac_td: Default::default(),
         bias_hat: ImuBias::new(rng.v3(0.01), rng.v3(0.1)),
         gravity: Vector3::new(0.0, 0.0, -9.81),
         omega_coriolis: omega.map(|o| o.0),

@@ -1,0 +1,286 @@
+//! The time offset between the IMU clock and the keyframe (camera, motion-capture) clock:
+//! derivatives of the preintegrated deltas with respect to it, the first-order correction for a
+//! new offset estimate, and re-integration above a threshold.
+//!
+//! # Convention
+//!
+//! As in OpenVINS and VINS-Mono, the IMU clock reads `t_imu = t_cam + t_d` \[s\]: an event the
+//! camera stamps `t` is stamped `t + t_d` by the IMU. A keyframe window `[t_i, t_j]` on the
+//! keyframe clock is therefore the IMU window `[t_i + t_d, t_j + t_d]`, and a measurement
+//! preintegrated with the offset estimate `t̂_d` is
+//! `preintegrate(params, bias, samples, t_i + t̂_d, t_j + t̂_d)` ([`preintegrate_with_offset`]);
+//! its `t_i_ns`, `t_j_ns` are on the IMU clock and its `delta_t` is the keyframes' `t_j − t_i`
+//! whatever the offset.
+//!
+//! # Derivatives (chart of [`crate::measurement`], order [δφ, δv, δp])
+//!
+//! With `ω`, `a` the bias-corrected body rate [rad/s] and specific force [m/s²], moving the window
+//! end `t_j` adds the end rate, `∂ΔR/∂t_j = ΔR [ω_j]×`, `∂Δv/∂t_j = ΔR a_j`, `∂Δp/∂t_j = Δv`;
+//! moving the start `t_i` removes the first instant and re-expresses everything in the new
+//! frame i (`ΔR ← Exp(−ω_i ε) ΔR`, `Δv ← Exp(−ω_i ε)(Δv − a_i ε)`,
+//! `Δp ← Exp(−ω_i ε)(Δp − a_i Δt ε)`). Both ends move with `t_d`, so
+//!
+//! ```text
+//! ∂φ/∂t_d  = ω_j − ΔRᵀ ω_i                     [rad/s]   (ΔR(t_d + ε) ≈ ΔR Exp(ε ∂φ/∂t_d))
+//! ∂Δv/∂t_d = ΔR a_j − a_i − ω_i × Δv           [m/s²]
+//! ∂Δp/∂t_d = Δv − a_i Δt − ω_i × Δp            [m/s]
+//! ```
+//!
+//! `ω_i, a_i, ω_j, a_j` are the window's first and last samples, i.e. the boundary samples at the
+//! keyframes, interpolated as the scheme interpolates them ([`crate::window`]: linear for
+//! euler, midpoint and galilean, cubic Lagrange for hermite4). This is the exact derivative of the
+//! continuous-time deltas of the interpolated signal; a scheme's discrete deltas follow it to
+//! the scheme's order in the sample period (their derivative with respect to an end differs
+//! by the local truncation error's rate of change; at a keyframe on a sample the discrete deltas
+//! have one-sided derivatives that differ by as much), measured in `preint/tests/time_offset.rs`.
+//! The result is [`PreintegratedImu::jac_td`], computed once per measurement from the end
+//! samples (no per-sample cost). It is zero at [`Level::Deltas`](crate::Level::Deltas), for hand-made
+//! measurements, and with a `body_p_sensor` whose lever arm is removed in closed form
+//! ([`crate::extrinsics`]): the body deltas then depend on the end rates' derivatives, which the
+//! end samples do not give (a rotation-only `body_p_sensor` maps the column by
+//! `diag(R_bs, R_bs, R_bs)`; GTSAM's per-sample centripetal model is covered, its samples being
+//! the ones integrated).
+//!
+//! # Merge
+//!
+//! Shifting `t_d` shifts all three keyframes of consecutive windows `a = [t_i, t_k]`,
+//! `b = [t_k, t_j]` together, so the merged derivative is the chain rule through the
+//! composition: `J_td = A J_td,a + B J_td,b` with the `A`, `B` of [`crate::merge`](mod@crate::merge). The inner
+//! keyframe's terms (`+ω_k`, `+ΔR_a a_k` from a's end, `−ω_k`, `−a_k` from b's start) cancel and
+//! the result equals the closed form of the whole window. This holds only when both windows
+//! were integrated with the same offset: windows of different sensors (offsets) would not move
+//! their shared keyframe by the same amount.
+//!
+//! # First-order correction
+//!
+//! For `t_d = t̂_d + δt_d` the deltas are corrected with the column `J_td δt_d` added to the
+//! bias correction of [`crate::bias_correction`] (`c = J_b δb + J_td δt_d`, applied additively
+//! or on the group as the measurement's `bias_correction` says):
+//! [`PreintegratedImu::corrected_with_time_offset`]. Its error against re-integration grows as
+//! `δt_d²` (the end samples' rates of change: `ω̇`, `ȧ`); above
+//! [`PreintParams::reintegrate_time_offset_threshold`](crate::PreintParams::reintegrate_time_offset_threshold)
+//! [`measurement_for_time_offset`] re-integrates instead (the threshold and the study behind it:
+//! [`crate::params::DEFAULT_REINTEGRATE_TIME_OFFSET`]).
+//!
+//! ```
+//! use preint::nalgebra::Vector3;
+//! use preint::time_offset::preintegrate_with_offset;
+//! use preint::{ImuBias, ImuFactor, ImuSample, NavState, PreintParams};
+//! let s: Vec<ImuSample> = (0..601i64)
+//!     .map(|k| {
+//!         let t = k as f64 * 5e-3;
+//!         ImuSample::new(k * 5_000_000, Vector3::new(0.0, 0.3, t.sin()), Vector3::new(t.cos(), 0.0, 9.81))
+//!     })
+//!     .collect();
+//! let (p, b) = (PreintParams::default(), ImuBias::zero());
+//! let keyframes = (1_000_000_000, 2_000_000_000); // camera clock [ns]
+//! let m = preintegrate_with_offset(&p, &b, &s, keyframes, 3_000_000).unwrap(); // t̂_d = 3 ms
+//! // The offset is 3.4 ms: the first-order correction against re-integration.
+//! let exact = preintegrate_with_offset(&p, &b, &s, keyframes, 3_400_000).unwrap();
+//! let mut c = m.clone();
+//! (c.delta_r, c.delta_v, c.delta_p) = m.corrected_with_time_offset(&b, 4e-4);
+//! assert!(exact.delta_error(&c).norm() < 1e-3 * exact.delta_error(&m).norm());
+//! // A factor with t_d as a variable: the residual at δt_d and its column ∂r/∂δt_d.
+//! let f = ImuFactor::new(m.clone()).unwrap();
+//! let xi = NavState::identity();
+//! let xj = f.predict(&xi, &b);
+//! let (r, _jac, d_r_d_td) = f.evaluate_with_time_offset(&xi, &xj, &b, 0.0);
+//! assert!(r.amax() < 1e-12 && d_r_d_td.norm() > 0.1);
+//! ```
+
+use crate::bias_correction::{BiasCorrection, Corrected};
+use crate::error::PreintError;
+use crate::measurement::{BiasJacobians, PreintegratedImu};
+use crate::params::PreintParams;
+use crate::sample::{ImuBias, ImuSample};
+use nalgebra::{Matrix3, SVector, Vector3};
+use preint_lie::se3::q_block;
+use preint_lie::{SO3, hat, jl};
+
+/// `∂[δφ, δv, δp]/∂t_d` of deltas `(ΔR, Δv [m/s], Δp [m])` over `delta_t` \[s\] with the
+/// bias-corrected end samples `(ω_i, a_i)`, `(ω_j, a_j)` [rad/s, m/s²] (module docs). Units of
+/// the rows: rad/s, m/s², m/s.
+pub fn jacobian(
+    (w_i, a_i): (&Vector3<f64>, &Vector3<f64>),
+    (w_j, a_j): (&Vector3<f64>, &Vector3<f64>),
+    (delta_r, delta_v, delta_p): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
+    delta_t: f64,
+) -> SVector<f64, 9> {
+    let phi = w_j - delta_r.transpose() * w_i;
+    let v = delta_r * a_j - a_i - w_i.cross(delta_v);
+    let p = delta_v - a_i * delta_t - w_i.cross(delta_p);
+    let mut j = SVector::<f64, 9>::zeros();
+    j.fixed_rows_mut::<3>(0).copy_from(&phi);
+    j.fixed_rows_mut::<3>(3).copy_from(&v);
+    j.fixed_rows_mut::<3>(6).copy_from(&p);
+    j
+}
+
+/// The time-offset column of a sensor measurement mapped into the body by a rotation-only
+/// `body_p_sensor` (`R_bs`): `diag(R_bs, R_bs, R_bs) j`. With a lever arm the body column is
+/// unknown from the end samples (module docs) and this returns zero.
+pub(crate) fn to_body(
+    j: &SVector<f64, 9>,
+    pose: &crate::extrinsics::SensorPose,
+) -> SVector<f64, 9> {
+    if pose.translation != Vector3::zeros() {
+        return SVector::zeros();
+    }
+    let rm = pose.rotation.matrix();
+    let mut out = SVector::<f64, 9>::zeros();
+    for k in 0..3 {
+        let b = rm * j.fixed_rows::<3>(3 * k);
+        out.fixed_rows_mut::<3>(3 * k).copy_from(&b);
+    }
+    out
+}
+
+/// The offset `td_s` \[s\] as integer nanoseconds (rounded to the nearest).
+pub fn offset_ns(td_s: f64) -> i64 {
+    (td_s * 1e9).round() as i64
+}
+
+/// The keyframe window `[t_i_ns, t_j_ns]` (keyframe clock) preintegrated with the offset
+/// estimate `td_hat_ns` \[ns\]: [`preintegrate`](crate::preintegrate) over the IMU window
+/// `[t_i + t̂_d, t_j + t̂_d]` (module docs). Errors as `preintegrate`'s (for the shifted times).
+pub fn preintegrate_with_offset(
+    params: &PreintParams,
+    bias: &ImuBias,
+    samples: &[ImuSample],
+    (t_i_ns, t_j_ns): (i64, i64),
+    td_hat_ns: i64,
+) -> Result<PreintegratedImu, PreintError> {
+    crate::window::preintegrate(
+        params,
+        bias,
+        samples,
+        t_i_ns.saturating_add(td_hat_ns),
+        t_j_ns.saturating_add(td_hat_ns),
+    )
+}
+
+/// Result of [`measurement_for_time_offset`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct TimeOffsetUpdate {
+    /// The measurement for the new offset (deltas corrected or re-integrated; bias estimate
+    /// unchanged).
+    pub measurement: PreintegratedImu,
+    /// True if the window was re-integrated, false for the first-order correction.
+    pub reintegrated: bool,
+}
+
+/// The measurement of keyframe window `[t_i_ns, t_j_ns]` for a new offset `td_ns`, given `m`, the
+/// same window preintegrated with `td_hat_ns` ([`preintegrate_with_offset`], same `params`,
+/// bias and samples): if `|td − t̂d| ≤ params.reintegrate_time_offset_threshold`, `m` with its
+/// deltas corrected to first order ([`PreintegratedImu::corrected_with_time_offset`] at
+/// `m.bias_hat`; covariance and Jacobians kept, times moved by `td − t̂d`), otherwise the
+/// window re-integrated with `td_ns`. Errors as [`preintegrate_with_offset`]'s.
+pub fn measurement_for_time_offset(
+    params: &PreintParams,
+    samples: &[ImuSample],
+    (t_i_ns, t_j_ns): (i64, i64),
+    m: &PreintegratedImu,
+    (td_hat_ns, td_ns): (i64, i64),
+) -> Result<TimeOffsetUpdate, PreintError> {
+    let d_ns = td_ns.saturating_sub(td_hat_ns);
+    let dtd = d_ns as f64 * 1e-9;
+    if dtd.abs() <= params.reintegrate_time_offset_threshold {
+        let mut out = m.clone();
+        (out.delta_r, out.delta_v, out.delta_p) = m.corrected_with_time_offset(&m.bias_hat, dtd);
+        out.t_i_ns = m.t_i_ns.saturating_add(d_ns);
+        out.t_j_ns = m.t_j_ns.saturating_add(d_ns);
+        return Ok(TimeOffsetUpdate {
+            measurement: out,
+            reintegrated: false,
+        });
+    }
+    let measurement =
+        preintegrate_with_offset(params, &m.bias_hat, samples, (t_i_ns, t_j_ns), td_ns)?;
+    Ok(TimeOffsetUpdate {
+        measurement,
+        reintegrated: true,
+    })
+}
+
+impl PreintegratedImu {
+    /// Deltas corrected to first order for a new bias estimate `bias` and a time-offset change
+    /// `dtd_s` = `t_d − t̂_d` \[s\] (module docs): the bias correction of
+    /// [`corrected`](Self::corrected) with `J_td δt_d` added to its tangent vector,
+    /// `Δ ⊕ (J_b δb + J_td δt_d)` in the measurement's [`BiasCorrection`]. Equals `corrected`
+    /// for `dtd_s = 0`. Returns `(ΔR, Δv [m/s], Δp [m])`.
+    pub fn corrected_with_time_offset(
+        &self,
+        bias: &ImuBias,
+        dtd_s: f64,
+    ) -> (SO3, Vector3<f64>, Vector3<f64>) {
+        let (c, _) = correct(self, bias, dtd_s);
+        (c.r, c.v, c.p)
+    }
+}
+
+/// The deltas of `pim` corrected for `bias` and `dtd_s` (as
+/// [`crate::bias_correction::correct`], with the time-offset column), and `ζ`, the derivative
+/// of the corrected deltas with respect to `dtd_s`: rows 0..3 the rotation direction `u` with
+/// `ΔR(b, t_d + ε) ≈ ΔR(b, t_d) Exp(ε Jr(c_φ) u)` (`Jr(c_φ)` is the returned `jr`), rows 3..9
+/// `∂Δv/∂t_d`, `∂Δp/∂t_d`.
+pub(crate) fn correct(
+    pim: &PreintegratedImu,
+    bias: &ImuBias,
+    dtd_s: f64,
+) -> (Corrected, SVector<f64, 9>) {
+    let dbg = bias.gyro - pim.bias_hat.gyro;
+    let dba = bias.acc - pim.bias_hat.acc;
+    let (j, td) = (&pim.jac, &pim.jac_td);
+    let (t_r, t_v, t_p) = (
+        td.fixed_rows::<3>(0).into_owned(),
+        td.fixed_rows::<3>(3).into_owned(),
+        td.fixed_rows::<3>(6).into_owned(),
+    );
+    let c_phi = j.d_r_d_bg * dbg + t_r * dtd_s;
+    let (exp_c, jr) = SO3::exp_jr(&c_phi);
+    let r = pim.delta_r.compose(&exp_c);
+    let c_v = j.d_v_d_bg * dbg + j.d_v_d_ba * dba + t_v * dtd_s;
+    let c_p = j.d_p_d_bg * dbg + j.d_p_d_ba * dba + t_p * dtd_s;
+    match pim.bias_correction {
+        BiasCorrection::Additive => (
+            Corrected {
+                r,
+                jr,
+                v: pim.delta_v + c_v,
+                p: pim.delta_p + c_p,
+                jac: *j,
+            },
+            *td,
+        ),
+        BiasCorrection::Group => {
+            let dr = *pim.delta_r.matrix();
+            let drt = dr.transpose();
+            let jl_c = jl(&c_phi);
+            let m = dr * jl_c * drt;
+            // ∂(ΔR Jl(c_φ) ν)/∂c_φ, ν = ΔRᵀ c (crate::bias_correction).
+            let through_phi = |c: &Vector3<f64>| -> Matrix3<f64> {
+                let nu = drt * c;
+                dr * (q_block(&nu, &c_phi) - hat(&(jl_c * nu)) * jl_c)
+            };
+            let (kv, kp) = (through_phi(&c_v), through_phi(&c_p));
+            let mut z = SVector::<f64, 9>::zeros();
+            z.fixed_rows_mut::<3>(0).copy_from(&t_r);
+            z.fixed_rows_mut::<3>(3).copy_from(&(kv * t_r + m * t_v));
+            z.fixed_rows_mut::<3>(6).copy_from(&(kp * t_r + m * t_p));
+            let c = Corrected {
+                r,
+                jr,
+                v: pim.delta_v + m * c_v,
+                p: pim.delta_p + m * c_p,
+                jac: BiasJacobians {
+                    d_r_d_bg: j.d_r_d_bg,
+                    d_v_d_bg: kv * j.d_r_d_bg + m * j.d_v_d_bg,
+                    d_v_d_ba: m * j.d_v_d_ba,
+                    d_p_d_bg: kp * j.d_r_d_bg + m * j.d_p_d_bg,
+                    d_p_d_ba: m * j.d_p_d_ba,
+                },
+            };
+            (c, z)
+        }
+    }
+}
