@@ -38,21 +38,13 @@ impl<E: Engine + Clone + 'static> Engine for Corrected<E> {
     }
     /// The slice fast path on the corrected samples, a stack chunk at a time.
     fn run_slice(&mut self, samples: &[ImuSample], last_t_ns: i64, gap_limit: u64) -> usize {
-        const CHUNK: usize = 512;
-        let mut buf = [ImuSample::new(0, Default::default(), Default::default()); CHUNK];
-        let (mut used, mut last) = (0, last_t_ns);
-        for chunk in samples.chunks(CHUNK) {
-            for (b, s) in buf.iter_mut().zip(chunk) {
-                *b = self.c.apply(s);
-            }
-            let n = self.inner.run_slice(&buf[..chunk.len()], last, gap_limit);
-            used += n;
-            if n < chunk.len() {
-                break;
-            }
-            last = chunk[n - 1].t_ns;
-        }
-        used
+        let c = self.c;
+        super::run_mapped::<512>(
+            samples,
+            last_t_ns,
+            |s| c.apply(s),
+            |buf, last| self.inner.run_slice(buf, last, gap_limit),
+        )
     }
     fn len(&self) -> usize {
         self.inner.len()

@@ -108,21 +108,13 @@ where
     }
     /// The slice fast path on the corrected samples, a stack chunk at a time.
     fn run_slice(&mut self, samples: &[ImuSample], last_t_ns: i64, gap_limit: u64) -> usize {
-        const CHUNK: usize = 128;
-        let mut buf = [ImuSample::new(0, Default::default(), Default::default()); CHUNK];
-        let (mut used, mut last) = (0, last_t_ns);
-        for chunk in samples.chunks(CHUNK) {
-            for (b, s) in buf.iter_mut().zip(chunk) {
-                *b = without_centripetal(s, &self.r, &self.b_g);
-            }
-            let n = self.core.run_slice(&buf[..chunk.len()], last, gap_limit);
-            used += n;
-            if n < chunk.len() {
-                break;
-            }
-            last = chunk[n - 1].t_ns;
-        }
-        used
+        let (r, b_g) = (self.r, self.b_g);
+        run_mapped::<128>(
+            samples,
+            last_t_ns,
+            |s| without_centripetal(s, &r, &b_g),
+            |buf, last| self.core.run_slice(buf, last, gap_limit),
+        )
     }
     fn len(&self) -> usize {
         self.core.len()
@@ -587,4 +579,30 @@ pub struct BiasUpdate {
     pub measurement: PreintegratedImu,
     /// True if the samples were re-integrated, false for the first-order correction.
     pub reintegrated: bool,
+}
+
+/// `run` on `map` of every sample, `CHUNK` samples at a time through a stack buffer (the slice
+/// paths of the per-sample wrappers): stops at the first chunk `run` does not take whole and
+/// returns how many samples were taken; `run` gets each chunk and the time of the sample before
+/// it.
+pub(crate) fn run_mapped<const CHUNK: usize>(
+    samples: &[ImuSample],
+    last_t_ns: i64,
+    map: impl Fn(&ImuSample) -> ImuSample,
+    mut run: impl FnMut(&[ImuSample], i64) -> usize,
+) -> usize {
+    let mut buf = [ImuSample::new(0, Default::default(), Default::default()); CHUNK];
+    let (mut used, mut last) = (0, last_t_ns);
+    for chunk in samples.chunks(CHUNK) {
+        for (b, s) in buf.iter_mut().zip(chunk) {
+            *b = map(s);
+        }
+        let n = run(&buf[..chunk.len()], last);
+        used += n;
+        if n < chunk.len() {
+            break;
+        }
+        last = chunk[n - 1].t_ns;
+    }
+    used
 }
