@@ -2,7 +2,7 @@
 //!
 //! Written as OpenVINS' `kalibr_imu_chain.yaml` (`preint_io::write_openvins_imu_chain`): the
 //! intrinsics `Tw`, `R_IMUtoGYRO`, `Ta`, `R_IMUtoACC`, `Tg` (`preint::intrinsics`), the noise
-//! densities and rate, and, when known, `time_offset` [s]: the IMU clock reads
+//! densities and rate, and, when known, `time_offset` \[s\]: the IMU clock reads
 //! `t_imu = t_keyframe + time_offset` (Kalibr's `timeshift_cam_imu` convention), so the
 //! keyframe window `[t_i, t_j]` is the IMU window `[t_i + time_offset, t_j + time_offset]`.
 //! Read: that format, or Kalibr's `imu.yaml` with a `scale-misalignment` model (told apart by

@@ -13,7 +13,7 @@
 //! only the model's triangle of `Tw⁻¹`, `Ta⁻¹`, so a matrix outside it is refused here rather
 //! than read as something OpenVINS would not use. The noise densities
 //! (`gyroscope_noise_density` …) and `update_rate` are read as in Kalibr's `imu.yaml`;
-//! `time_offset` [s] and `rostopic` are kept as the file holds them.
+//! `time_offset` \[s\] and `rostopic` are kept as the file holds them.
 //!
 //! # Kalibr (`IccSensors.py`, `IccScaledMisalignedImu`)
 //!
@@ -37,7 +37,7 @@ pub struct ImuCalibration {
     pub intrinsics: ImuIntrinsics,
     /// The noise densities and rate, when the file holds all five Kalibr keys.
     pub noise: Option<ImuNoise>,
-    /// `time_offset` [s], as the file holds it (its sign convention is the file's producer's).
+    /// `time_offset` \[s\], as the file holds it (its sign convention is the file's producer's).
     pub time_offset_s: Option<f64>,
     /// `rostopic`.
     pub rostopic: Option<String>,

@@ -325,7 +325,7 @@ impl Correction {
 
 /// Intrinsics as [`PreintParams::intrinsics`](crate::PreintParams::intrinsics) holds them:
 /// the model applied to every raw sample, and whether the Jacobians of the deltas with respect
-/// to its parameters are accumulated ([`crate::Preintegrator::intrinsic_jacobian`]).
+/// to its parameters are accumulated ([`crate::Preintegrator::finish_with_intrinsic_jacobian`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AppliedIntrinsics {
     /// The intrinsics.
