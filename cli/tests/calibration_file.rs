@@ -184,3 +184,67 @@ fn the_time_offset_moves_the_keyframes_onto_the_imu_clock() {
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("offset.yaml") && err.contains("Tw"), "{err}");
 }
+
+#[test]
+fn advise_applies_the_calibrations_intrinsics() {
+    let dir = tmp("calfile-advise");
+    common::simulate(&dir, &["--scene", "aggressive", "--duration", "8"]);
+    let imu = dir.join("imu.csv");
+    // 1 % scale and 2 mrad misalignment on both sensors (the kalibr model's lower triangles).
+    let x = preint::intrinsics::ImuIntrinsics {
+        t_w: Matrix3::new(1.01, 0.0, 0.0, 0.002, 0.99, 0.0, -0.002, 0.001, 1.005),
+        t_a: Matrix3::new(0.99, 0.0, 0.0, -0.002, 1.01, 0.0, 0.001, 0.002, 1.0),
+        ..Default::default()
+    };
+    let cal = dir.join("calib.yaml");
+    preint_io::write_openvins_imu_chain(
+        &cal,
+        &preint_io::ImuCalibration {
+            intrinsics: x,
+            noise: None,
+            time_offset_s: None,
+            rostopic: None,
+        },
+    )
+    .unwrap();
+    // The same recording corrected beforehand, written exactly.
+    let c = x.correction();
+    let rows: Vec<(i64, [f64; 6])> = preint_io::read_euroc_imu(&imu)
+        .unwrap()
+        .iter()
+        .map(|s| {
+            let s = c.apply(s);
+            let (w, a) = (s.gyro, s.acc);
+            (s.t_ns, [w.x, w.y, w.z, a.x, a.y, a.z])
+        })
+        .collect();
+    let corrected = write_imu_csv(&dir, "corrected.csv", &rows);
+    let noise = dir.join("imu.yaml");
+    let advise = |file: &std::path::Path, extra: &[&str]| {
+        let mut a = vec![
+            "advise",
+            "--imu",
+            file.to_str().unwrap(),
+            "--noise",
+            noise.to_str().unwrap(),
+        ];
+        a.extend_from_slice(extra);
+        json(&a)
+    };
+    let (with, pre, raw) = (
+        advise(&imu, &["--calibration", cal.to_str().unwrap()]),
+        advise(&corrected, &[]),
+        advise(&imu, &[]),
+    );
+    let errs = |v: &serde_json::Value| -> Vec<serde_json::Value> {
+        v["candidates"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| serde_json::json!([c["disc_err"], c["noise_sigma"], c["embedded_err"]]))
+            .collect()
+    };
+    assert_eq!(errs(&with), errs(&pre));
+    assert_ne!(errs(&with), errs(&raw));
+    assert_eq!(with["calibration"], cal.to_str().unwrap());
+}

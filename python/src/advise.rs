@@ -60,6 +60,7 @@ pub(crate) fn advise_py<'py>(
         from: None,
         to: None,
         input_class: class,
+        calibration: None,
     };
     let json = py
         .detach(|| {
@@ -113,6 +114,7 @@ pub(crate) fn advise_file<'py>(
     let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_args()?;
     let args = advise::Args {
         input_class,
+        calibration: None,
         input,
         noise,
         window,

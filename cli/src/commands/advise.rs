@@ -39,6 +39,10 @@ pub struct Args {
     /// delivers; galilean is exact for it and is the reference, lower rates average the samples.
     #[arg(long = "input", value_name = "CLASS", value_enum, default_value_t = InputClass::Smooth)]
     pub input_class: InputClass,
+    /// An IMU calibration file (`calibrate --out`, OpenVINS kalibr_imu_chain.yaml or Kalibr
+    /// imu.yaml): its intrinsics are applied to the raw samples before the analysis.
+    #[arg(long, value_name = "FILE")]
+    pub calibration: Option<std::path::PathBuf>,
 }
 
 /// The evaluation and the recommendation.
@@ -67,7 +71,14 @@ impl Advice {
 pub fn compute(args: &Args) -> Result<Advice, CliError> {
     checks::positive("--fraction", args.fraction)?;
     let noise = noise::or_default(Some(&args.noise))?;
-    let samples = stream::read_span(&args.input, args.from, args.to, "advise")?;
+    let mut samples = stream::read_span(&args.input, args.from, args.to, "advise")?;
+    if let Some(path) = &args.calibration {
+        let x = crate::calibration_file::read(path)?.intrinsics;
+        if !x.is_identity() {
+            let c = x.correction();
+            samples.iter_mut().for_each(|s| *s = c.apply(s));
+        }
+    }
     // Held input is not low-passed: the filter would smear its steps (analysis::advise docs).
     let (signal, cutoffs) = match args.input_class {
         InputClass::Smooth => denoise(&samples, noise.gyro_noise_density, noise.acc_noise_density),
@@ -143,6 +154,7 @@ pub fn to_json(a: &Advice) -> Value {
         "candidates": rows,
         "tangent_order": ["dphi", "dv", "dp"],
         "method": method(input),
+        "calibration": a.args.calibration.as_ref().map(|p| p.display().to_string()),
     });
     if let (Value::Object(o), Value::Object(i)) = (&mut out, input_json(input)) {
         o.extend(i);
