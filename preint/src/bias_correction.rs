@@ -48,7 +48,7 @@
 use crate::measurement::{BiasJacobians, PreintegratedImu};
 use crate::params::Scheme;
 use crate::sample::ImuBias;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, SVector, Vector3};
 use preint_lie::se3::q_block;
 use preint_lie::{SO3, hat, jl};
 
@@ -107,45 +107,73 @@ pub(crate) struct Corrected {
 
 /// The corrected deltas of `pim` for the bias `bias` (module docs).
 pub(crate) fn correct(pim: &PreintegratedImu, bias: &ImuBias) -> Corrected {
+    correct_with_time_offset(pim, bias, 0.0).0
+}
+
+/// The deltas of `pim` corrected for `bias` and a time-offset change `dtd_s` \[s\] along the
+/// tangent `J_b δb + J_td δt_d` (module docs; [`crate::time_offset`] for `J_td`), and `ζ`, the
+/// derivative
+/// of the corrected deltas with respect to `dtd_s`: rows 0..3 the rotation direction `u` with
+/// `ΔR(b, t_d + ε) ≈ ΔR(b, t_d) Exp(ε Jr(c_φ) u)` (`Jr(c_φ)` is the returned `jr`), rows 3..9
+/// `∂Δv/∂t_d`, `∂Δp/∂t_d`.
+pub(crate) fn correct_with_time_offset(
+    pim: &PreintegratedImu,
+    bias: &ImuBias,
+    dtd_s: f64,
+) -> (Corrected, SVector<f64, 9>) {
     let dbg = bias.gyro - pim.bias_hat.gyro;
     let dba = bias.acc - pim.bias_hat.acc;
-    let j = &pim.jac;
-    let c_phi = j.d_r_d_bg * dbg;
+    let (j, td) = (&pim.jac, &pim.jac_td);
+    let (t_r, t_v, t_p) = (
+        td.fixed_rows::<3>(0).into_owned(),
+        td.fixed_rows::<3>(3).into_owned(),
+        td.fixed_rows::<3>(6).into_owned(),
+    );
+    let c_phi = j.d_r_d_bg * dbg + t_r * dtd_s;
     let (exp_c, jr) = SO3::exp_jr(&c_phi);
     let r = pim.delta_r.compose(&exp_c);
-    let c_v = j.d_v_d_bg * dbg + j.d_v_d_ba * dba;
-    let c_p = j.d_p_d_bg * dbg + j.d_p_d_ba * dba;
+    let c_v = j.d_v_d_bg * dbg + j.d_v_d_ba * dba + t_v * dtd_s;
+    let c_p = j.d_p_d_bg * dbg + j.d_p_d_ba * dba + t_p * dtd_s;
     match pim.bias_correction {
-        BiasCorrection::Additive => Corrected {
-            r,
-            jr,
-            v: pim.delta_v + c_v,
-            p: pim.delta_p + c_p,
-            jac: *j,
-        },
+        BiasCorrection::Additive => (
+            Corrected {
+                r,
+                jr,
+                v: pim.delta_v + c_v,
+                p: pim.delta_p + c_p,
+                jac: *j,
+            },
+            *td,
+        ),
         BiasCorrection::Group => {
             let dr = *pim.delta_r.matrix();
             let drt = dr.transpose();
             let jl_c = jl(&c_phi);
             let m = dr * jl_c * drt;
-            // ∂(ΔR Jl(c_φ) ν)/∂δb_g through c_φ, ν = ΔRᵀ c.
+            // ∂(ΔR Jl(c_φ) ν)/∂c_φ, ν = ΔRᵀ c (crate::bias_correction).
             let through_phi = |c: &Vector3<f64>| -> Matrix3<f64> {
                 let nu = drt * c;
-                dr * (q_block(&nu, &c_phi) - hat(&(jl_c * nu)) * jl_c) * j.d_r_d_bg
+                dr * (q_block(&nu, &c_phi) - hat(&(jl_c * nu)) * jl_c)
             };
-            Corrected {
+            let (kv, kp) = (through_phi(&c_v), through_phi(&c_p));
+            let mut z = SVector::<f64, 9>::zeros();
+            z.fixed_rows_mut::<3>(0).copy_from(&t_r);
+            z.fixed_rows_mut::<3>(3).copy_from(&(kv * t_r + m * t_v));
+            z.fixed_rows_mut::<3>(6).copy_from(&(kp * t_r + m * t_p));
+            let c = Corrected {
                 r,
                 jr,
                 v: pim.delta_v + m * c_v,
                 p: pim.delta_p + m * c_p,
                 jac: BiasJacobians {
                     d_r_d_bg: j.d_r_d_bg,
-                    d_v_d_bg: through_phi(&c_v) + m * j.d_v_d_bg,
+                    d_v_d_bg: kv * j.d_r_d_bg + m * j.d_v_d_bg,
                     d_v_d_ba: m * j.d_v_d_ba,
-                    d_p_d_bg: through_phi(&c_p) + m * j.d_p_d_bg,
+                    d_p_d_bg: kp * j.d_r_d_bg + m * j.d_p_d_bg,
                     d_p_d_ba: m * j.d_p_d_ba,
                 },
-            }
+            };
+            (c, z)
         }
     }
 }

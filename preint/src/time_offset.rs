@@ -88,14 +88,12 @@
 //! assert!(r.amax() < 1e-12 && d_r_d_td.norm() > 0.1);
 //! ```
 
-use crate::bias_correction::{BiasCorrection, Corrected};
 use crate::error::PreintError;
-use crate::measurement::{BiasJacobians, PreintegratedImu};
+use crate::measurement::PreintegratedImu;
 use crate::params::PreintParams;
 use crate::sample::{ImuBias, ImuSample};
 use nalgebra::{Matrix3, SVector, Vector3};
-use preint_lie::se3::q_block;
-use preint_lie::{SO3, hat, jl};
+use preint_lie::SO3;
 
 /// `∂[δφ, δv, δp]/∂t_d` of deltas `(ΔR, Δv [m/s], Δp [m])` over `delta_t` \[s\] with the
 /// bias-corrected end samples `(ω_i, a_i)`, `(ω_j, a_j)` [rad/s, m/s²] (module docs). Units of
@@ -213,74 +211,7 @@ impl PreintegratedImu {
         bias: &ImuBias,
         dtd_s: f64,
     ) -> (SO3, Vector3<f64>, Vector3<f64>) {
-        let (c, _) = correct(self, bias, dtd_s);
+        let (c, _) = crate::bias_correction::correct_with_time_offset(self, bias, dtd_s);
         (c.r, c.v, c.p)
-    }
-}
-
-/// The deltas of `pim` corrected for `bias` and `dtd_s` (as
-/// [`crate::bias_correction::correct`], with the time-offset column), and `ζ`, the derivative
-/// of the corrected deltas with respect to `dtd_s`: rows 0..3 the rotation direction `u` with
-/// `ΔR(b, t_d + ε) ≈ ΔR(b, t_d) Exp(ε Jr(c_φ) u)` (`Jr(c_φ)` is the returned `jr`), rows 3..9
-/// `∂Δv/∂t_d`, `∂Δp/∂t_d`.
-pub(crate) fn correct(
-    pim: &PreintegratedImu,
-    bias: &ImuBias,
-    dtd_s: f64,
-) -> (Corrected, SVector<f64, 9>) {
-    let dbg = bias.gyro - pim.bias_hat.gyro;
-    let dba = bias.acc - pim.bias_hat.acc;
-    let (j, td) = (&pim.jac, &pim.jac_td);
-    let (t_r, t_v, t_p) = (
-        td.fixed_rows::<3>(0).into_owned(),
-        td.fixed_rows::<3>(3).into_owned(),
-        td.fixed_rows::<3>(6).into_owned(),
-    );
-    let c_phi = j.d_r_d_bg * dbg + t_r * dtd_s;
-    let (exp_c, jr) = SO3::exp_jr(&c_phi);
-    let r = pim.delta_r.compose(&exp_c);
-    let c_v = j.d_v_d_bg * dbg + j.d_v_d_ba * dba + t_v * dtd_s;
-    let c_p = j.d_p_d_bg * dbg + j.d_p_d_ba * dba + t_p * dtd_s;
-    match pim.bias_correction {
-        BiasCorrection::Additive => (
-            Corrected {
-                r,
-                jr,
-                v: pim.delta_v + c_v,
-                p: pim.delta_p + c_p,
-                jac: *j,
-            },
-            *td,
-        ),
-        BiasCorrection::Group => {
-            let dr = *pim.delta_r.matrix();
-            let drt = dr.transpose();
-            let jl_c = jl(&c_phi);
-            let m = dr * jl_c * drt;
-            // ∂(ΔR Jl(c_φ) ν)/∂c_φ, ν = ΔRᵀ c (crate::bias_correction).
-            let through_phi = |c: &Vector3<f64>| -> Matrix3<f64> {
-                let nu = drt * c;
-                dr * (q_block(&nu, &c_phi) - hat(&(jl_c * nu)) * jl_c)
-            };
-            let (kv, kp) = (through_phi(&c_v), through_phi(&c_p));
-            let mut z = SVector::<f64, 9>::zeros();
-            z.fixed_rows_mut::<3>(0).copy_from(&t_r);
-            z.fixed_rows_mut::<3>(3).copy_from(&(kv * t_r + m * t_v));
-            z.fixed_rows_mut::<3>(6).copy_from(&(kp * t_r + m * t_p));
-            let c = Corrected {
-                r,
-                jr,
-                v: pim.delta_v + m * c_v,
-                p: pim.delta_p + m * c_p,
-                jac: BiasJacobians {
-                    d_r_d_bg: j.d_r_d_bg,
-                    d_v_d_bg: kv * j.d_r_d_bg + m * j.d_v_d_bg,
-                    d_v_d_ba: m * j.d_v_d_ba,
-                    d_p_d_bg: kp * j.d_r_d_bg + m * j.d_p_d_bg,
-                    d_p_d_ba: m * j.d_p_d_ba,
-                },
-            };
-            (c, z)
-        }
     }
 }

@@ -413,7 +413,7 @@ impl<const R: usize> Weighted<R> {
         bias_i: &crate::ImuBias,
         dtd_s: f64,
     ) -> (SVector<f64, 9>, ImuFactorJacobians, SVector<f64, 9>) {
-        let (c, z) = crate::time_offset::correct(&self.pim, bias_i, dtd_s);
+        let (c, z) = crate::bias_correction::correct_with_time_offset(&self.pim, bias_i, dtd_s);
         let (mut r, mut j, rot) = residual::residual9_at(&self.pim, xi, xj, &c);
         let mut col = residual::td_column(&rot, &z);
         if self.mode == ResidualMode::Logmap {
