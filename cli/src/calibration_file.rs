@@ -27,10 +27,11 @@ use std::path::Path;
 pub fn read(path: &Path) -> Result<ImuCalibration, CliError> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| CliError::Usage(format!("--calibration {}: {e}", path.display())))?;
+    let name = path.display().to_string();
     let cal = if text.contains("gyroscopes:") {
-        preint_io::read_kalibr_imu(path)?
+        preint_io::parse_kalibr_imu(&text, &name)?
     } else {
-        preint_io::read_openvins_imu_chain(path)?
+        preint_io::parse_openvins_imu_chain(&text, &name)?
     };
     cal.intrinsics
         .validate()

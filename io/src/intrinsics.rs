@@ -57,6 +57,23 @@ struct Ctx<'a> {
 }
 
 impl Ctx<'_> {
+    /// The file's content: `x` checked, and the keys both formats share.
+    fn calibration(
+        &self,
+        x: ImuIntrinsics,
+        map: &Node,
+        path: &str,
+    ) -> Result<ImuCalibration, IoError> {
+        let intrinsics = self.checked(x, map.line(), path)?;
+        let (time_offset_s, rostopic) = self.common(map, path)?;
+        Ok(ImuCalibration {
+            intrinsics,
+            noise: self.noise(map, path)?,
+            time_offset_s,
+            rostopic,
+        })
+    }
+
     fn err(&self, line: u64, msg: impl Into<String>) -> IoError {
         IoError::parse(self.source, Location::Line(line), msg)
     }
@@ -221,14 +238,7 @@ pub fn parse_openvins_imu_chain(text: &str, source_name: &str) -> Result<ImuCali
         r_imu_to_acc: cx.optional_matrix(map, path, "R_IMUtoACC", i)?,
         t_g: cx.optional_matrix(map, path, "Tg", Matrix3::zeros())?,
     };
-    let intrinsics = cx.checked(x, map.line(), path)?;
-    let (time_offset_s, rostopic) = cx.common(map, path)?;
-    Ok(ImuCalibration {
-        intrinsics,
-        noise: cx.noise(map, path)?,
-        time_offset_s,
-        rostopic,
-    })
+    cx.calibration(x, map, path)
 }
 
 /// Parses Kalibr's `imu.yaml` with the `scale-misalignment` (or `calibrated`) model (module
@@ -270,14 +280,7 @@ pub fn parse_kalibr_imu(text: &str, source_name: &str) -> Result<ImuCalibration,
             ));
         }
     }
-    let intrinsics = cx.checked(x, map.line(), path)?;
-    let (time_offset_s, rostopic) = cx.common(map, path)?;
-    Ok(ImuCalibration {
-        intrinsics,
-        noise: cx.noise(map, path)?,
-        time_offset_s,
-        rostopic,
-    })
+    cx.calibration(x, map, path)
 }
 
 /// Reads an OpenVINS `kalibr_imu_chain.yaml`.

@@ -114,7 +114,7 @@ pub fn covariance(
         p1 = add_white(y1, &sg, &sa, h);
         p2 = add_white(y2, &sg, &sa, h) + bracket_covariance(&y2, &lg, &la) * 0.25;
     }
-    let t = chart_map(m);
+    let t = crate::factor::logmap::chart_map9(m);
     let s = t.transpose() * (p2 - p1) * t;
     // Symmetric by construction; the difference of two propagations is not, to round-off.
     Ok((s + s.transpose()) * 0.5)
@@ -189,15 +189,6 @@ fn sqrt_psd(s: &Matrix3<f64>) -> Matrix3<f64> {
     let e = s.symmetric_eigen();
     let d = Matrix3::from_diagonal(&e.eigenvalues.map(|x| x.max(0.0).sqrt()));
     e.eigenvectors * d
-}
-
-/// `T = diag(I, ΔRᵀ, ΔRᵀ)` at the measurement's ΔR.
-fn chart_map(m: &PreintegratedImu) -> M9 {
-    let rt = m.delta_r.matrix().transpose();
-    let mut t = M9::identity();
-    t.fixed_view_mut::<3, 3>(3, 3).copy_from(&rt);
-    t.fixed_view_mut::<3, 3>(6, 6).copy_from(&rt);
-    t
 }
 
 #[cfg(test)]

@@ -204,7 +204,7 @@ impl PreintegratedImu {
     /// Deltas corrected to first order for a new bias estimate `bias` and a time-offset change
     /// `dtd_s` = `t_d − t̂_d` \[s\] (module docs): the bias correction of
     /// [`corrected`](Self::corrected) with `J_td δt_d` added to its tangent vector,
-    /// `Δ ⊕ (J_b δb + J_td δt_d)` in the measurement's [`BiasCorrection`]. Equals `corrected`
+    /// `Δ ⊕ (J_b δb + J_td δt_d)` in the measurement's [`BiasCorrection`](crate::BiasCorrection). Equals `corrected`
     /// for `dtd_s = 0`. Returns `(ΔR, Δv [m/s], Δp [m])`.
     pub fn corrected_with_time_offset(
         &self,

@@ -117,7 +117,7 @@ impl ResidualMode {
 
 /// `T = diag(I, ΔRᵀ, ΔRᵀ)`, the first-order map from the component-wise residual to the
 /// Logmap one (module docs), at the integration bias.
-pub(super) fn chart_map9(pim: &PreintegratedImu) -> SMatrix<f64, 9, 9> {
+pub(crate) fn chart_map9(pim: &PreintegratedImu) -> SMatrix<f64, 9, 9> {
     let rt = pim.delta_r.matrix().transpose();
     let mut t = SMatrix::<f64, 9, 9>::identity();
     t.fixed_view_mut::<3, 3>(3, 3).copy_from(&rt);
