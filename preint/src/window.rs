@@ -445,3 +445,20 @@ pub fn preintegrate(
     pi.integrate_slice(&plan.nodes)?;
     pi.finish()
 }
+
+/// [`preintegrate`] with the Jacobians of the deltas with respect to the intrinsics'
+/// parameters ([`Preintegrator::finish_with_intrinsic_jacobian`]); `params.intrinsics` must ask
+/// for them ([`AppliedIntrinsics::with_jacobians`](crate::intrinsics::AppliedIntrinsics::with_jacobians)).
+/// Errors: those of [`preintegrate`] and of `finish_with_intrinsic_jacobian`.
+pub fn preintegrate_with_intrinsic_jacobian(
+    params: &PreintParams,
+    bias: &ImuBias,
+    samples: &[ImuSample],
+    t_i_ns: i64,
+    t_j_ns: i64,
+) -> Result<(PreintegratedImu, crate::intrinsics::IntrinsicJacobian), PreintError> {
+    let plan = plan(params.scheme, samples, t_i_ns, t_j_ns, params.max_gap_ns)?;
+    let mut pi = Preintegrator::build(params.clone(), *bias, plan.nodes.len(), plan.spec, false)?;
+    pi.integrate_slice(&plan.nodes)?;
+    pi.finish_with_intrinsic_jacobian()
+}

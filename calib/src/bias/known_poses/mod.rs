@@ -14,14 +14,23 @@
 //! by its covariance, which includes the noise of the known poses with the correlation between
 //! factors that share a pose ([`pose_noise`]).
 //!
-//! Because the bias correction is first order, the problem is re-linearised: after a solve
-//! the windows are re-integrated at the new bias and the problem solved again, until the bias
-//! moves by less than 1e-6 (or `max_relinearizations`).
+//! On request ([`KnownPoseOptions::estimate`], [`extras`]) the time offset `t_d` between the
+//! IMU and pose clocks, the gyroscope intrinsics, its g-sensitivity and the accelerometer
+//! intrinsics ([`preint::intrinsics`]) are estimated too, each through the first-order
+//! correction of the windows' deltas (their Jacobians `J_td`, `J_θ`), with a standard deviation,
+//! and withheld when the motion does not excite them ([`extras::ExcitationLimits`]).
+//!
+//! Because the corrections are first order, the problem is re-linearised: after a solve the
+//! windows are re-integrated at the new bias and calibration and the problem solved again,
+//! until the bias moves by less than 1e-6 and every calibration parameter by less than 1e-3 of
+//! its excitation limit (or `max_relinearizations`).
 //!
 //! Limits: the biases are constant over the segment (over T seconds a random walk of density
 //! σ_b moves them by ≈ σ_b√T, e.g. 0.013 m/s² in 20 s for EuRoC's σ_ba: keep segments short or
 //! expect that much model error); dense linear algebra, O(P³) per iteration.
 
+pub mod attitudes;
+pub mod extras;
 pub mod gravity;
 pub mod pose_noise;
 pub mod residuals;
@@ -29,12 +38,17 @@ pub mod residuals;
 mod test_data;
 
 use super::BiasError;
-use super::validate::{check_gravity, check_non_negative, check_samples};
+use super::validate::{check_gravity, check_non_negative, check_positive, check_samples};
 use crate::gauss_newton::{GaussNewton, Solution, StopReason, solve};
+pub use attitudes::{KnownAttitude, KnownAttitudeCalibration, calibrate_known_attitudes};
+use extras::{
+    Calibration, Estimate, ExcitationLimits, Param, ParameterEstimate, fit_excited, parameters,
+};
 use gravity::GravityDir;
-use nalgebra::{DVector, Vector3};
+use nalgebra::{DMatrix, DVector, Vector3};
 use pose_noise::{Whitening, residual_covariance};
-use preint::{ImuBias, ImuSample, PreintParams, dt_seconds, preintegrate};
+use preint::intrinsics::ImuIntrinsics;
+use preint::{ImuBias, ImuSample, PreintParams, dt_seconds};
 use preint_lie::SO3;
 use residuals::Problem;
 
@@ -62,10 +76,20 @@ pub struct KnownPoseOptions {
     pub pose_pos_std: f64,
     /// Initial bias (default zero).
     pub initial_bias: ImuBias,
-    /// Maximum number of re-linearisations (default 4).
+    /// Maximum number of re-linearisations (default 8).
     pub max_relinearizations: usize,
     /// Gauss-Newton iterations per solve (default 50).
     pub max_iters: u64,
+    /// Calibration parameters estimated beside the biases (default none).
+    pub estimate: Estimate,
+    /// Intrinsics applied to the samples, and the initial value of those estimated (default
+    /// identity, `kalibr` model; its model decides which sensor rotation is estimated).
+    pub initial_intrinsics: ImuIntrinsics,
+    /// Time offset `t_d` \[s\] (`t_imu = t_pose + t_d`) applied to the windows, and the initial
+    /// value when estimated (default 0).
+    pub initial_time_offset_s: f64,
+    /// Standard deviations above which a parameter counts as not excited.
+    pub excitation: ExcitationLimits,
 }
 
 impl KnownPoseOptions {
@@ -76,8 +100,12 @@ impl KnownPoseOptions {
             pose_rot_std: 0.0,
             pose_pos_std: 0.0,
             initial_bias: ImuBias::zero(),
-            max_relinearizations: 4,
+            max_relinearizations: 8,
             max_iters: 50,
+            estimate: Estimate::default(),
+            initial_intrinsics: ImuIntrinsics::default(),
+            initial_time_offset_s: 0.0,
+            excitation: ExcitationLimits::default(),
         }
     }
 }
@@ -87,7 +115,9 @@ impl KnownPoseOptions {
 /// rescaled by the residuals); compare [`KnownPoseCalibration::chi2_per_dof`] with 1.
 #[derive(Clone, Debug)]
 pub struct KnownPoseCalibration {
-    /// Bias estimate \[b_g rad/s, b_a m/s²\].
+    /// Bias estimate \[b_g rad/s, b_a m/s²\], in the IMU frame of the intrinsics (the biases
+    /// the preintegrator subtracts from intrinsics-corrected samples; OpenVINS' sensor-frame
+    /// biases are `intrinsics.bias_from_imu(&bias)`).
     pub bias: ImuBias,
     /// Standard deviation of b_g \[rad/s\].
     pub gyro_bias_std: Vector3<f64>,
@@ -114,6 +144,19 @@ pub struct KnownPoseCalibration {
     pub solves: usize,
     /// Why the last solve stopped.
     pub stop: StopReason,
+    /// The intrinsics: the estimated ones where [`KnownPoseCalibration::parameters`] says
+    /// excited, the initial ones elsewhere.
+    pub intrinsics: ImuIntrinsics,
+    /// The time offset \[s\] (estimated, or the initial one).
+    pub time_offset_s: f64,
+    /// Every parameter asked for, with its standard deviation and excitation, in the order of
+    /// [`extras::parameters`].
+    pub parameters: Vec<ParameterEstimate>,
+    /// Joint covariance of `[b_g, b_a, e]`, `e` the excited entries of
+    /// [`KnownPoseCalibration::parameters`] in their order (angles as right perturbations of
+    /// the estimated rotation): what propagates the calibration's own uncertainty into a
+    /// window it is applied to, `Σ + J Σ_c Jᵀ` with `J = [J_b, J_e]`.
+    pub covariance: DMatrix<f64>,
 }
 
 impl KnownPoseCalibration {
@@ -176,14 +219,76 @@ pub fn calibrate_known_poses(
     check_poses(samples, poses)?;
     check_non_negative("pose_rot_std", opts.pose_rot_std)?;
     check_non_negative("pose_pos_std", opts.pose_pos_std)?;
+    check_calibration_options(opts)?;
     let gnorm = check_gravity("params.gravity", &opts.params.gravity)?;
     let g0 = Vector3::new(0.0, 0.0, -gnorm);
-    let mut x = initial_state(poses, opts, &g0);
-    let mut bias_hat = opts.initial_bias;
-    let mut iterations = 0;
-    let mut solves = 0;
+    let asked = parameters(&opts.estimate, opts.initial_intrinsics.model);
+    let eo = 6 + 3 * poses.len();
+    let out = fit_excited(
+        &asked,
+        &Calibration::initial(opts),
+        &opts.excitation,
+        |active| {
+            let f = fit(samples, poses, opts, &g0, active)?;
+            let stds = f.sol.std_devs();
+            let calib = f.calib;
+            Ok((f, calib, (0..active.len()).map(|k| stds[eo + k]).collect()))
+        },
+    )?;
+    Ok(calibration(
+        out.fit,
+        &g0,
+        &opts.params.gravity,
+        poses.len(),
+        out.parameters,
+    ))
+}
+
+/// The initial calibration is valid: intrinsics invertible, time offset finite, and the
+/// excitation limits positive.
+pub(super) fn check_calibration_options(opts: &KnownPoseOptions) -> Result<(), BiasError> {
+    opts.initial_intrinsics.validate()?;
+    if !opts.initial_time_offset_s.is_finite() {
+        return Err(BiasError::InvalidParameter {
+            name: "initial_time_offset_s",
+            reason: format!("{} is not finite", opts.initial_time_offset_s),
+        });
+    }
+    let l = &opts.excitation;
+    for (name, v) in [
+        ("excitation.time_offset_s", l.time_offset_s),
+        ("excitation.scale_misalignment", l.scale_misalignment),
+        ("excitation.g_sensitivity", l.g_sensitivity),
+    ] {
+        check_positive(name, v)?;
+    }
+    Ok(())
+}
+
+/// A converged fit of the parameters `active`.
+struct Fit {
+    sol: Solution<State>,
+    bias: ImuBias,
+    calib: Calibration,
+    iterations: u64,
+    solves: usize,
+}
+
+/// Solves, re-linearises at the new bias and calibration, and solves again until they stop
+/// moving (module docs).
+fn fit(
+    samples: &[ImuSample],
+    poses: &[KnownPose],
+    opts: &KnownPoseOptions,
+    g0: &Vector3<f64>,
+    active: &[Param],
+) -> Result<Fit, BiasError> {
+    let eo = 6 + 3 * poses.len();
+    let mut x = initial_state(poses, opts, g0, active.len());
+    let mut lin = (opts.initial_bias, Calibration::initial(opts));
+    let (mut iterations, mut solves) = (0, 0);
     loop {
-        let sol = solve_linearised(samples, poses, opts, &bias_hat, &g0, x)?;
+        let sol = solve_linearised(samples, poses, opts, &lin, active, g0, x)?;
         solves += 1;
         iterations += sol.iterations;
         let p = &sol.estimate.0;
@@ -191,24 +296,30 @@ pub fn calibrate_known_poses(
             Vector3::new(p[0], p[1], p[2]),
             Vector3::new(p[3], p[4], p[5]),
         );
-        let moved = (b.gyro - bias_hat.gyro).norm() + (b.acc - bias_hat.acc).norm();
+        let e: Vec<f64> = p.rows(eo, active.len()).iter().copied().collect();
+        let moved = (b.gyro - lin.0.gyro).norm() + (b.acc - lin.0.acc).norm();
+        let moved_e = active
+            .iter()
+            .zip(&e)
+            .map(|(q, v)| v.abs() / q.limit(&opts.excitation))
+            .fold(0.0, f64::max);
+        lin = (b, lin.1.moved(active, &e));
         x = sol.estimate.clone();
-        bias_hat = b;
-        if moved < 1e-6 || solves > opts.max_relinearizations {
-            return Ok(calibration(
+        x.0.rows_mut(eo, active.len()).fill(0.0);
+        if (moved < 1e-6 && moved_e < 1e-3) || solves > opts.max_relinearizations {
+            return Ok(Fit {
                 sol,
-                b,
-                &g0,
-                &opts.params.gravity,
+                bias: b,
+                calib: lin.1,
                 iterations,
                 solves,
-            ));
+            });
         }
     }
 }
 
 /// At least 3 poses, at strictly increasing times within the samples' span, finite.
-fn check_poses(samples: &[ImuSample], poses: &[KnownPose]) -> Result<(), BiasError> {
+pub(super) fn check_poses(samples: &[ImuSample], poses: &[KnownPose]) -> Result<(), BiasError> {
     if poses.len() < 3 {
         return Err(BiasError::TooFew {
             what: "poses",
@@ -248,10 +359,15 @@ fn check_poses(samples: &[ImuSample], poses: &[KnownPose]) -> Result<(), BiasErr
 }
 
 /// The initial state: the initial bias, velocities by central differences of the positions
-/// (one-sided at the ends), gravity along `params.gravity`.
-fn initial_state(poses: &[KnownPose], opts: &KnownPoseOptions, g0: &Vector3<f64>) -> State {
+/// (one-sided at the ends), no calibration correction, gravity along `params.gravity`.
+fn initial_state(
+    poses: &[KnownPose],
+    opts: &KnownPoseOptions,
+    g0: &Vector3<f64>,
+    extras: usize,
+) -> State {
     let n = poses.len();
-    let mut p0 = DVector::zeros(6 + 3 * n);
+    let mut p0 = DVector::zeros(6 + 3 * n + extras);
     p0.fixed_rows_mut::<3>(0).copy_from(&opts.initial_bias.gyro);
     p0.fixed_rows_mut::<3>(3).copy_from(&opts.initial_bias.acc);
     for k in 0..n {
@@ -263,25 +379,31 @@ fn initial_state(poses: &[KnownPose], opts: &KnownPoseOptions, g0: &Vector3<f64>
     (p0, GravityDir::aligned_with(g0, &opts.params.gravity))
 }
 
-/// One solve at the linearisation point `bias_hat`: the windows preintegrated there, weighted
-/// by their covariance with the pose noise, solved from `x`.
+/// One solve at the linearisation point `(b̂, calibration)`: the windows preintegrated there
+/// with their calibration Jacobians, weighted by their covariance with the pose noise, solved
+/// from `x`.
 fn solve_linearised(
     samples: &[ImuSample],
     poses: &[KnownPose],
     opts: &KnownPoseOptions,
-    bias_hat: &ImuBias,
+    (bias_hat, calib): &(ImuBias, Calibration),
+    active: &[Param],
     g0: &Vector3<f64>,
     x: State,
 ) -> Result<Solution<State>, BiasError> {
     let mut pims = Vec::with_capacity(poses.len() - 1);
+    let mut extras: Vec<DMatrix<f64>> = Vec::with_capacity(poses.len() - 1);
     for w in poses.windows(2) {
-        pims.push(preintegrate(
+        let (pim, je) = extras::window(
             &opts.params,
+            calib,
+            active,
             bias_hat,
             samples,
-            w[0].t_ns,
-            w[1].t_ns,
-        )?);
+            (w[0].t_ns, w[1].t_ns),
+        )?;
+        pims.push(pim);
+        extras.push(je);
     }
     let (diag, sub) = residual_covariance(&pims, poses, opts.pose_rot_std, opts.pose_pos_std);
     let white = Whitening::new(&diag, &sub).ok_or_else(|| BiasError::InvalidParameter {
@@ -293,6 +415,7 @@ fn solve_linearised(
     let problem = Problem {
         poses,
         pims: &pims,
+        extras: &extras,
         g0: *g0,
         white: &white,
     };
@@ -301,21 +424,25 @@ fn solve_linearised(
 
 /// The result of the last solve: estimates and marginal standard deviations.
 fn calibration(
-    sol: Solution<State>,
-    bias: ImuBias,
+    fit: Fit,
     g0: &Vector3<f64>,
     g_init: &Vector3<f64>,
-    iterations: u64,
-    solves: usize,
+    n: usize,
+    parameters: Vec<ParameterEstimate>,
 ) -> KnownPoseCalibration {
+    let sol = fit.sol;
     let (p, rwg) = &sol.estimate;
     let np = p.len();
-    let n = (np - 6) / 3;
+    let eo = 6 + 3 * n;
+    let idx: Vec<usize> = (0..6).chain(eo..np).collect();
+    let covariance = DMatrix::from_fn(idx.len(), idx.len(), |i, j| {
+        sol.covariance[(idx[i], idx[j])]
+    });
     let (gravity, gd) = rwg.gravity(g0);
     let gcov = gd * sol.marginal_covariance::<2>(np) * gd.transpose();
     let cosang = (gravity.dot(g_init) / (gravity.norm() * g_init.norm())).clamp(-1.0, 1.0);
     KnownPoseCalibration {
-        bias,
+        bias: fit.bias,
         gyro_bias_std: sol.marginal_std::<3>(0),
         acc_bias_std: sol.marginal_std::<3>(3),
         gravity,
@@ -327,8 +454,12 @@ fn calibration(
         velocity_std: (0..n).map(|k| sol.marginal_std::<3>(6 + 3 * k)).collect(),
         chi2: 2.0 * sol.cost,
         dof: sol.residual_count.saturating_sub(sol.rank),
-        iterations,
-        solves,
+        iterations: fit.iterations,
+        solves: fit.solves,
         stop: sol.stop,
+        intrinsics: fit.calib.intrinsics,
+        time_offset_s: fit.calib.td_s,
+        parameters,
+        covariance,
     }
 }

@@ -29,7 +29,7 @@
 
 use super::KnownPose;
 use nalgebra::allocator::Allocator;
-use nalgebra::{DefaultAllocator, Dim, Dyn, Matrix3, OMatrix, SMatrix, U9};
+use nalgebra::{Const, DefaultAllocator, Dim, Dyn, Matrix3, OMatrix, SMatrix};
 use preint::PreintegratedImu;
 use preint_lie::{hat, jr_inv};
 
@@ -99,8 +99,8 @@ pub(super) fn residual_covariance(
     (diag, sub)
 }
 
-/// Lower-triangular inverse of the Cholesky factor of a 9×9 SPD matrix, `None` if not SPD.
-fn chol_lower_inv(m: &M9) -> Option<M9> {
+/// Lower-triangular inverse of the Cholesky factor of an N×N SPD matrix, `None` if not SPD.
+fn chol_lower_inv<const N: usize>(m: &SMatrix<f64, N, N>) -> Option<SMatrix<f64, N, N>> {
     let sym = (m + m.transpose()) * 0.5;
     let l = sym.cholesky()?.l();
     let inv = l.try_inverse()?;
@@ -110,23 +110,24 @@ fn chol_lower_inv(m: &M9) -> Option<M9> {
 /// Whitening by the block Cholesky factor of a block-tridiagonal covariance (module docs):
 /// `w_0 = L₀₀⁻¹ r_0`, `w_k = L_kk⁻¹ (r_k − M_k w_k−1)` with `M_k = Σ_k,k−1 L_k−1,k−1⁻ᵀ`,
 /// `L_kk L_kkᵀ = Σ_kk − M_k M_kᵀ`.
-pub(super) struct Whitening {
+/// Blocks of `N` rows: 9 for `[r_φ, r_v, r_p]`, 3 for attitudes only.
+pub(super) struct Whitening<const N: usize = 9> {
     /// `L_kk⁻¹` per block.
-    lkk_inv: Vec<M9>,
+    lkk_inv: Vec<SMatrix<f64, N, N>>,
     /// `M_k` (zero for k = 0, and for all k without pose noise).
-    m: Vec<M9>,
+    m: Vec<SMatrix<f64, N, N>>,
 }
 
-impl Whitening {
+impl<const N: usize> Whitening<N> {
     /// `diag` = Σ_kk, `sub[k]` = Σ_k,k−1 (`sub[0]` unused); `None` if Σ is not positive
     /// definite.
-    pub(super) fn new(diag: &[M9], sub: &[M9]) -> Option<Self> {
+    pub(super) fn new(diag: &[SMatrix<f64, N, N>], sub: &[SMatrix<f64, N, N>]) -> Option<Self> {
         let n = diag.len();
-        let mut lkk_inv: Vec<M9> = Vec::with_capacity(n);
+        let mut lkk_inv: Vec<SMatrix<f64, N, N>> = Vec::with_capacity(n);
         let mut m = Vec::with_capacity(n);
         for k in 0..n {
             let mk = if k == 0 {
-                M9::zeros()
+                SMatrix::zeros()
             } else {
                 sub[k] * lkk_inv[k - 1].transpose()
             };
@@ -137,21 +138,21 @@ impl Whitening {
         Some(Self { lkk_inv, m })
     }
 
-    /// `L⁻¹x` for `x` with 9 rows per block: a residual vector or a Jacobian.
+    /// `L⁻¹x` for `x` with N rows per block: a residual vector or a Jacobian.
     pub(super) fn apply<C: Dim>(&self, mut x: OMatrix<f64, Dyn, C>) -> OMatrix<f64, Dyn, C>
     where
-        DefaultAllocator: Allocator<Dyn, C> + Allocator<U9, C>,
+        DefaultAllocator: Allocator<Dyn, C> + Allocator<Const<N>, C>,
     {
-        let mut prev: Option<OMatrix<f64, U9, C>> = None;
+        let mut prev: Option<OMatrix<f64, Const<N>, C>> = None;
         for k in 0..self.lkk_inv.len() {
-            let mut xk: OMatrix<f64, U9, C> = x.fixed_rows::<9>(9 * k).into_owned();
+            let mut xk: OMatrix<f64, Const<N>, C> = x.fixed_rows::<N>(N * k).into_owned();
             if let Some(p) = &prev
                 && self.m[k].amax() > 0.0
             {
                 xk -= self.m[k] * p;
             }
             let w = self.lkk_inv[k] * xk;
-            x.fixed_rows_mut::<9>(9 * k).copy_from(&w);
+            x.fixed_rows_mut::<N>(N * k).copy_from(&w);
             prev = Some(w);
         }
         x

@@ -9,7 +9,12 @@
 //! r_p = R̃_iᵀ(p̃_j − p̃_i − v_i Δt − ½ g Δt²) − Δp(b)
 //! ```
 //!
-//! Jacobians: `∂r_φ/∂b_g = −Jr⁻¹(r_φ) Eᵀ Jr(J_R δb_g) J_R` (`E = Exp(r_φ)`),
+//! With calibration parameters ([`super::extras`]) the correction is `J_b δb + J_e e`, `e` the
+//! state's correction of the time offset and intrinsics, added to the `J_R δb_g` inside `ΔR`
+//! and to `Δv`, `Δp`.
+//!
+//! Jacobians: `∂r_φ/∂b_g = −Jr⁻¹(r_φ) Eᵀ Jr(φ_c) J_R` (`E = Exp(r_φ)`, `φ_c` the rotation
+//! correction), `∂r_φ/∂e = −Jr⁻¹(r_φ) Eᵀ Jr(φ_c) J_e,φ`, `∂r_v/∂e = −J_e,v`, `∂r_p/∂e = −J_e,p`,
 //! `∂r_v/∂b = −J_v`, `∂r_p/∂b = −J_p`, `∂r_v/∂v_i = −R̃_iᵀ`, `∂r_v/∂v_j = R̃_iᵀ`,
 //! `∂r_p/∂v_i = −R̃_iᵀΔt`, `∂r_v/∂δ = −R̃_iᵀ G Δt`, `∂r_p/∂δ = −½Δt² R̃_iᵀ G` with
 //! `G = ∂g/∂δ` ([`super::gravity`]); checked against Ridders' numeric Jacobian in this module's
@@ -24,11 +29,13 @@ use nalgebra::{DMatrix, DVector, Vector3};
 use preint::PreintegratedImu;
 use preint_lie::{jr, jr_inv};
 
-/// The problem at one linearisation point (the windows preintegrated at `b̂`); state
-/// `([b_g, b_a, v_0, …, v_P−1], R_wg)`.
+/// The problem at one linearisation point (the windows preintegrated at `b̂` and the
+/// calibration's estimate); state `([b_g, b_a, v_0, …, v_P−1, e_0, …, e_m−1], R_wg)`.
 pub(super) struct Problem<'a> {
     pub(super) poses: &'a [KnownPose],
     pub(super) pims: &'a [PreintegratedImu],
+    /// Per window, the 9 × m Jacobian of its deltas with respect to `e` ([`super::extras`]).
+    pub(super) extras: &'a [DMatrix<f64>],
     /// `g₀ = (0, 0, −|g|)`.
     pub(super) g0: Vector3<f64>,
     pub(super) white: &'a Whitening,
@@ -53,21 +60,25 @@ impl Problem<'_> {
         let v3 = |o: usize| Vector3::new(p[o], p[o + 1], p[o + 2]);
         let bg = v3(0);
         let ba = v3(3);
+        let eo = 6 + 3 * self.poses.len();
+        let e = p.rows(eo, np - eo);
         let (g, gd) = rwg.gravity(&self.g0);
         for (k, pim) in self.pims.iter().enumerate() {
+            let je = &self.extras[k];
+            let c = je * e;
             let (pi, pj) = (&self.poses[k], &self.poses[k + 1]);
             let (vi, vj) = (v3(6 + 3 * k), v3(6 + 3 * k + 3));
             let jb = &pim.jac;
             let dbg = bg - pim.bias_hat.gyro;
             let dba = ba - pim.bias_hat.acc;
-            let phi_b = jb.d_r_d_bg * dbg;
+            let phi_b = jb.d_r_d_bg * dbg + c.fixed_rows::<3>(0);
             let dr = pim.delta_r.plus(&phi_b);
-            let dv = pim.delta_v + jb.d_v_d_bg * dbg + jb.d_v_d_ba * dba;
-            let dp = pim.delta_p + jb.d_p_d_bg * dbg + jb.d_p_d_ba * dba;
+            let dv = pim.delta_v + jb.d_v_d_bg * dbg + jb.d_v_d_ba * dba + c.fixed_rows::<3>(3);
+            let dp = pim.delta_p + jb.d_p_d_bg * dbg + jb.d_p_d_ba * dba + c.fixed_rows::<3>(6);
             let dt = pim.delta_t;
             let rit = pi.r.inverse();
-            let e = dr.inverse().compose(&rit.compose(&pj.r));
-            let rphi = e.log();
+            let err = dr.inverse().compose(&rit.compose(&pj.r));
+            let rphi = err.log();
             let rv = rit.act(&(vj - vi - g * dt)) - dv;
             let rp = rit.act(&(pj.p - pi.p - vi * dt - g * (0.5 * dt * dt))) - dp;
             let row = 9 * k;
@@ -78,8 +89,16 @@ impl Problem<'_> {
                 continue;
             }
             let ritm = *rit.matrix();
+            let d_rphi = -jr_inv(&rphi) * err.matrix().transpose() * jr(&phi_b);
             j.view_mut((row, 0), (3, 3))
-                .copy_from(&(-jr_inv(&rphi) * e.matrix().transpose() * jr(&phi_b) * jb.d_r_d_bg));
+                .copy_from(&(d_rphi * jb.d_r_d_bg));
+            let m = np - eo;
+            if m > 0 {
+                j.view_mut((row, eo), (3, m))
+                    .copy_from(&(d_rphi * je.rows(0, 3)));
+                j.view_mut((row + 3, eo), (6, m))
+                    .copy_from(&(-je.rows(3, 6)));
+            }
             j.view_mut((row + 3, 0), (3, 3)).copy_from(&(-jb.d_v_d_bg));
             j.view_mut((row + 3, 3), (3, 3)).copy_from(&(-jb.d_v_d_ba));
             j.view_mut((row + 6, 0), (3, 3)).copy_from(&(-jb.d_p_d_bg));
@@ -98,7 +117,7 @@ impl Problem<'_> {
 }
 
 impl LeastSquares for Problem<'_> {
-    /// ([b_g, b_a, v_0, …, v_P−1], R_wg with its 2-DoF tangent).
+    /// ([b_g, b_a, v_0, …, v_P−1, e], R_wg with its 2-DoF tangent).
     type State = (DVector<f64>, GravityDir);
     fn residual_jacobian(&self, x: &Self::State) -> (DVector<f64>, DMatrix<f64>) {
         let (r, j) = self.raw(x, true);
@@ -111,10 +130,12 @@ impl LeastSquares for Problem<'_> {
 
 #[cfg(test)]
 mod tests {
+    use super::super::extras::{Calibration, Estimate, parameters, window};
     use super::super::pose_noise::residual_covariance;
     use super::super::test_data::{pims, setup};
     use super::*;
     use crate::checker::{CheckOptions, check_jacobian};
+    use preint::intrinsics::{ImuIntrinsics, IntrinsicsModel};
     use preint::{ImuBias, ImuNoise};
     use preint_lie::SO3;
 
@@ -123,19 +144,66 @@ mod tests {
         let s = setup(ImuNoise::euroc());
         let bias_hat = ImuBias::new(Vector3::new(0.003, -0.002, 0.005), Vector3::zeros());
         let pims = pims(&s, &bias_hat);
-        let (diag, sub) = residual_covariance(&pims, &s.poses, 2e-3, 4e-3);
+        // Without calibration parameters, and with all 25 (time offset, gyro, g-sensitivity,
+        // accelerometer) at non-identity intrinsics.
+        let none = vec![DMatrix::zeros(9, 0); pims.len()];
+        check_problem(&s, &pims, &none);
+        let all = Estimate {
+            time_offset: true,
+            gyro_intrinsics: true,
+            g_sensitivity: true,
+            accel_intrinsics: true,
+        };
+        let active = parameters(&all, IntrinsicsModel::Kalibr);
+        assert_eq!(active.len(), 25);
+        let mut x0 = ImuIntrinsics::identity(IntrinsicsModel::Kalibr);
+        x0.t_w[(1, 0)] = 2e-3;
+        x0.t_w[(2, 2)] = 1.01;
+        x0.t_a[(0, 0)] = 0.99;
+        x0.t_g[(0, 2)] = 3e-4;
+        let calib = Calibration {
+            intrinsics: x0,
+            td_s: 0.0,
+        };
+        let (pims, extras): (Vec<_>, Vec<_>) = s
+            .poses
+            .windows(2)
+            .map(|w| {
+                window(
+                    &s.params,
+                    &calib,
+                    &active,
+                    &bias_hat,
+                    &s.samples,
+                    (w[0].t_ns, w[1].t_ns),
+                )
+                .unwrap()
+            })
+            .unzip();
+        check_problem(&s, &pims, &extras);
+    }
+
+    /// The analytic Jacobian of the whitened problem against Ridders' away from the optimum.
+    fn check_problem(
+        s: &super::super::test_data::Setup,
+        pims: &[PreintegratedImu],
+        extras: &[DMatrix<f64>],
+    ) {
+        let (diag, sub) = residual_covariance(pims, &s.poses, 2e-3, 4e-3);
         let white = Whitening::new(&diag, &sub).unwrap();
         let g0 = Vector3::new(0.0, 0.0, -9.81);
         let problem = Problem {
             poses: &s.poses,
-            pims: &pims,
+            pims,
+            extras,
             g0,
             white: &white,
         };
         let n = s.poses.len();
         // Away from the optimum: biases off by 1e-3 rad/s and 0.05 m/s², velocities off,
         // gravity tilted by ≈ 3°.
-        let mut p = DVector::zeros(6 + 3 * n);
+        let m = extras[0].ncols();
+        let mut p = DVector::zeros(6 + 3 * n + m);
         p.fixed_rows_mut::<3>(0)
             .copy_from(&Vector3::new(0.005, -0.004, 0.007));
         p.fixed_rows_mut::<3>(3)
@@ -144,9 +212,13 @@ mod tests {
             let v = s.truth[50 * k].v + Vector3::new(0.01, -0.02, 0.005) * k as f64;
             p.fixed_rows_mut::<3>(6 + 3 * k).copy_from(&v);
         }
+        // Calibration corrections of a few milliseconds / per mille.
+        for k in 0..m {
+            p[6 + 3 * n + k] = 1e-3 * ((k as f64) * 0.7).sin();
+        }
         let x = (p, GravityDir(SO3::exp(&Vector3::new(0.04, -0.03, 0.2))));
         let (_, j) = problem.residual_jacobian(&x);
-        let np = 6 + 3 * n;
+        let np = 6 + 3 * n + m;
         let blocks = [j.columns(0, np).into_owned(), j.columns(np, 2).into_owned()];
         let rep = check_jacobian(
             |x: &(DVector<f64>, GravityDir)| problem.residual(x),
@@ -156,7 +228,7 @@ mod tests {
         )
         .unwrap();
         println!(
-            "known-pose problem: worst relative error {:.2e}",
+            "known-pose problem, {m} calibration parameters: worst relative error {:.2e}",
             rep.worst_rel_error
         );
     }

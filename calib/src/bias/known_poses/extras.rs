@@ -1,0 +1,359 @@
+//! Calibration parameters estimated beside the biases from known poses: the time offset
+//! ([`preint::time_offset`]) and the IMU intrinsics ([`preint::intrinsics`]); their
+//! linearisation point, the columns they add to each window's residual, and the test of
+//! whether the motion excites them.
+//!
+//! # Parameters
+//!
+//! [`Estimate`] names groups; [`parameters`] expands them into scalars ([`Param`]):
+//! - `time-offset`: `t_d` \[s\], `t_imu = t_keyframe + t_d` ([`preint::time_offset`]);
+//! - `gyro-intrinsics`: the 6 free entries of `T_w` and, in the `kalibr` model, the 3 angles of
+//!   `R_IMUtoGYRO` (together a full 3×3 gyroscope matrix); dimensionless and rad;
+//! - `g-sensitivity`: the 9 entries of `T_g` \[(rad/s)/(m/s²)\];
+//! - `accel-intrinsics`: the 6 free entries of `T_a` and, in the `rpng` model, the 3 angles of
+//!   `R_IMUtoACC`.
+//!
+//! As in OpenVINS, one of the two sensor rotations stays fixed (identity by default): the IMU
+//! frame is defined by that sensor's axes, and the known poses fix it against the world.
+//!
+//! # Linearisation
+//!
+//! A window is preintegrated at the current estimate `(θ̂, t̂_d)` and corrected to first order,
+//! `Δ(θ̂ ⊞ δθ, t̂_d + δt_d) ≈ Δ ⊕ (J_θ δθ + J_td δt_d)`, exactly as for the biases (Forster et
+//! al., T-RO 2017, eq. 44); the state carries `e = (δt_d, δθ)`, which is folded into the
+//! linearisation point and reset at each re-linearisation.
+//!
+//! # Excitation
+//!
+//! A parameter is *excited* when its standard deviation is below a limit
+//! ([`ExcitationLimits`]): above it, applying the estimate would not be worth its uncertainty,
+//! and the estimate is withheld (the parameter is held at its initial value and the problem
+//! solved again without it). A parameter the motion does not move at all (e.g. the gyroscope's
+//! x scale on a rotation about z only) has an infinite standard deviation and is withheld too.
+
+use crate::bias::BiasError;
+use nalgebra::{DMatrix, SVector};
+use preint::intrinsics::{AppliedIntrinsics, ImuIntrinsics, IntrinsicsModel};
+use preint::{ImuBias, ImuSample, PreintError, PreintParams, PreintegratedImu};
+
+/// Which calibration parameters [`super::calibrate_known_poses`] estimates beside the biases
+/// (module docs). All false by default: biases, velocities and gravity only.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Estimate {
+    /// The time offset `t_d` \[s\].
+    pub time_offset: bool,
+    /// `T_w` and, in the `kalibr` model, `R_IMUtoGYRO`.
+    pub gyro_intrinsics: bool,
+    /// `T_g`.
+    pub g_sensitivity: bool,
+    /// `T_a` and, in the `rpng` model, `R_IMUtoACC`.
+    pub accel_intrinsics: bool,
+}
+
+impl Estimate {
+    /// The names [`Estimate::parse`] accepts.
+    pub const NAMES: [&'static str; 4] = [
+        "time-offset",
+        "gyro-intrinsics",
+        "g-sensitivity",
+        "accel-intrinsics",
+    ];
+
+    /// Parses a comma-separated list of [`Estimate::NAMES`] (e.g.
+    /// `time-offset,gyro-intrinsics`); the error names the unknown entry.
+    pub fn parse(list: &str) -> Result<Self, String> {
+        let mut e = Estimate::default();
+        for name in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+            match name {
+                "time-offset" => e.time_offset = true,
+                "gyro-intrinsics" => e.gyro_intrinsics = true,
+                "g-sensitivity" => e.g_sensitivity = true,
+                "accel-intrinsics" => e.accel_intrinsics = true,
+                _ => {
+                    return Err(format!(
+                        "unknown parameter `{name}` (expected some of {})",
+                        Self::NAMES.join(", ")
+                    ));
+                }
+            }
+        }
+        Ok(e)
+    }
+
+    /// True when any parameter is asked for.
+    pub fn any(&self) -> bool {
+        self.time_offset || self.gyro_intrinsics || self.g_sensitivity || self.accel_intrinsics
+    }
+}
+
+/// One estimated scalar.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Param {
+    /// The time offset `t_d` \[s\].
+    TimeOffset,
+    /// Column `i` of the intrinsics' parameters ([`preint::intrinsics`], 24 columns).
+    Intrinsic(usize),
+}
+
+impl Param {
+    /// A readable name: `t_d`, `T_w[1,0]`, `R_IMUtoGYRO.θy`, `T_g[2,0]`, ….
+    pub fn name(self, model: IntrinsicsModel) -> String {
+        let entry = |i: usize| model.free_entries()[i];
+        match self {
+            Param::TimeOffset => "t_d".into(),
+            Param::Intrinsic(i) if i < 6 => format!("T_w[{},{}]", entry(i).0, entry(i).1),
+            Param::Intrinsic(i) if i < 12 => {
+                format!("T_a[{},{}]", entry(i - 6).0, entry(i - 6).1)
+            }
+            Param::Intrinsic(i) if i < 15 => {
+                let r = match model {
+                    IntrinsicsModel::Kalibr => "R_IMUtoGYRO",
+                    IntrinsicsModel::Rpng => "R_IMUtoACC",
+                };
+                format!("{r}.θ{}", ["x", "y", "z"][i - 12])
+            }
+            Param::Intrinsic(i) => format!("T_g[{},{}]", (i - 15) % 3, (i - 15) / 3),
+        }
+    }
+
+    /// Its unit.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Param::TimeOffset => "s",
+            Param::Intrinsic(i) if i < 12 => "1",
+            Param::Intrinsic(i) if i < 15 => "rad",
+            Param::Intrinsic(_) => "(rad/s)/(m/s²)",
+        }
+    }
+
+    /// The limit of its standard deviation in `limits`.
+    pub fn limit(self, limits: &ExcitationLimits) -> f64 {
+        match self {
+            Param::TimeOffset => limits.time_offset_s,
+            Param::Intrinsic(i) if i < 15 => limits.scale_misalignment,
+            Param::Intrinsic(_) => limits.g_sensitivity,
+        }
+    }
+}
+
+/// The standard deviation above which a parameter counts as not excited (module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ExcitationLimits {
+    /// Time offset \[s\] (default 1e-3: 1 ms).
+    pub time_offset_s: f64,
+    /// Entries of `T_w`, `T_a` (dimensionless) and sensor-axis angles \[rad\] (default 1e-3:
+    /// 0.1 % scale, 1 mrad).
+    pub scale_misalignment: f64,
+    /// Entries of `T_g` \[(rad/s)/(m/s²)\] (default 1e-4, ≈ 0.06 °/s per g).
+    pub g_sensitivity: f64,
+}
+
+impl Default for ExcitationLimits {
+    fn default() -> Self {
+        Self {
+            time_offset_s: 1e-3,
+            scale_misalignment: 1e-3,
+            g_sensitivity: 1e-4,
+        }
+    }
+}
+
+/// The scalars of `e` for intrinsics of `model`, in the state's order (module docs).
+pub fn parameters(e: &Estimate, model: IntrinsicsModel) -> Vec<Param> {
+    let mut out = Vec::new();
+    if e.time_offset {
+        out.push(Param::TimeOffset);
+    }
+    if e.gyro_intrinsics {
+        out.extend((0..6).map(Param::Intrinsic));
+        if model == IntrinsicsModel::Kalibr {
+            out.extend((12..15).map(Param::Intrinsic));
+        }
+    }
+    if e.g_sensitivity {
+        out.extend((15..24).map(Param::Intrinsic));
+    }
+    if e.accel_intrinsics {
+        out.extend((6..12).map(Param::Intrinsic));
+        if model == IntrinsicsModel::Rpng {
+            out.extend((12..15).map(Param::Intrinsic));
+        }
+    }
+    out
+}
+
+/// An estimated parameter with its standard deviation; `excited: false` means the estimate is
+/// withheld: `value` is the initial value and `std` the deviation the data would have given.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ParameterEstimate {
+    /// Which parameter.
+    pub param: Param,
+    /// Its value: `t_d` \[s\], the intrinsics' entry, or the angle \[rad\] of the estimated
+    /// rotation relative to the initial one (the rotation itself is in the result's
+    /// intrinsics).
+    pub value: f64,
+    /// Its standard deviation (same unit; `+∞` when the motion does not move it at all).
+    pub std: f64,
+    /// Whether it passed the excitation limit (module docs).
+    pub excited: bool,
+}
+
+/// The linearisation point of the calibration parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Calibration {
+    pub(crate) intrinsics: ImuIntrinsics,
+    pub(crate) td_s: f64,
+}
+
+impl Calibration {
+    /// The initial calibration of `opts`.
+    pub(crate) fn initial(opts: &super::KnownPoseOptions) -> Self {
+        Self {
+            intrinsics: opts.initial_intrinsics,
+            td_s: opts.initial_time_offset_s,
+        }
+    }
+
+    /// The preintegration parameters with these intrinsics applied (with their Jacobians when
+    /// `jacobians`).
+    pub(crate) fn params(&self, base: &PreintParams, jacobians: bool) -> PreintParams {
+        PreintParams {
+            intrinsics: Some(AppliedIntrinsics {
+                model: self.intrinsics,
+                jacobians,
+            }),
+            ..base.clone()
+        }
+    }
+
+    /// The offset in integer nanoseconds (the windows' shift).
+    pub(crate) fn td_ns(&self) -> i64 {
+        preint::time_offset::offset_ns(self.td_s)
+    }
+
+    /// Moved by the state's correction `e` of the scalars `params`.
+    pub(crate) fn moved(&self, params: &[Param], e: &[f64]) -> Calibration {
+        let mut delta = SVector::<f64, { ImuIntrinsics::PARAMS }>::zeros();
+        let mut td = self.td_s;
+        for (p, v) in params.iter().zip(e) {
+            match p {
+                Param::TimeOffset => td += v,
+                Param::Intrinsic(i) => delta[*i] = *v,
+            }
+        }
+        Calibration {
+            intrinsics: self.intrinsics.perturbed(&delta),
+            td_s: td,
+        }
+    }
+
+    /// The estimate's value of `p` (module docs of [`ParameterEstimate::value`]): the angle
+    /// entries are those of `Log(R_initialᵀ R)`.
+    pub(crate) fn value(&self, p: Param, initial: &ImuIntrinsics) -> f64 {
+        let x = &self.intrinsics;
+        match p {
+            Param::TimeOffset => self.td_s,
+            Param::Intrinsic(i) if i < 12 => x.params()[i],
+            Param::Intrinsic(i) if i < 15 => {
+                let (r0, r) = match x.model {
+                    IntrinsicsModel::Kalibr => (initial.r_imu_to_gyro, x.r_imu_to_gyro),
+                    IntrinsicsModel::Rpng => (initial.r_imu_to_acc, x.r_imu_to_acc),
+                };
+                let d = preint_lie::SO3::from_matrix(&(r0.transpose() * r)).log();
+                d[i - 12]
+            }
+            Param::Intrinsic(i) => x.params()[i],
+        }
+    }
+}
+
+/// The window `[t_i_ns, t_j_ns]` (keyframe clock) preintegrated at the calibration `c` and
+/// bias `bias`, and the 9 × `params.len()` Jacobian of its `[δφ, δv, δp]` with respect to the
+/// scalars `params` (module docs).
+pub(crate) fn window(
+    base: &PreintParams,
+    c: &Calibration,
+    params: &[Param],
+    bias: &ImuBias,
+    samples: &[ImuSample],
+    (t_i_ns, t_j_ns): (i64, i64),
+) -> Result<(PreintegratedImu, DMatrix<f64>), PreintError> {
+    let td = c.td_ns();
+    let (ti, tj) = (t_i_ns.saturating_add(td), t_j_ns.saturating_add(td));
+    let intrinsic = params.iter().any(|p| matches!(p, Param::Intrinsic(_)));
+    let (pim, jac) = if intrinsic {
+        let (m, j) = preint::window::preintegrate_with_intrinsic_jacobian(
+            &c.params(base, true),
+            bias,
+            samples,
+            ti,
+            tj,
+        )?;
+        (m, Some(j))
+    } else {
+        let m = preint::preintegrate(&c.params(base, false), bias, samples, ti, tj)?;
+        (m, None)
+    };
+    let mut out = DMatrix::zeros(9, params.len());
+    for (k, p) in params.iter().enumerate() {
+        match (p, &jac) {
+            (Param::TimeOffset, _) => out.column_mut(k).copy_from(&pim.jac_td),
+            (Param::Intrinsic(i), Some(j)) => out.column_mut(k).copy_from(&j.column(*i)),
+            // `jac` is present whenever an intrinsic parameter is asked for.
+            (Param::Intrinsic(_), None) => {}
+        }
+    }
+    Ok((pim, out))
+}
+
+/// A fit of the excited parameters and every asked-for parameter's estimate.
+pub(crate) struct Excited<T> {
+    pub(crate) fit: T,
+    pub(crate) parameters: Vec<ParameterEstimate>,
+}
+
+/// Fits the parameters `asked` with `fit` (which returns its fit, the calibration it reached
+/// and the standard deviations of the parameters it was given), withholds those over their
+/// limit and fits again without them, until all that remain are excited (module docs).
+pub(crate) fn fit_excited<T>(
+    asked: &[Param],
+    initial: &Calibration,
+    limits: &ExcitationLimits,
+    mut fit: impl FnMut(&[Param]) -> Result<(T, Calibration, Vec<f64>), BiasError>,
+) -> Result<Excited<T>, BiasError> {
+    let mut active = asked.to_vec();
+    let mut withheld: Vec<(Param, f64)> = Vec::new();
+    loop {
+        let (f, calib, stds) = fit(&active)?;
+        let excited = |k: usize| stds[k] <= active[k].limit(limits);
+        if (0..active.len()).all(excited) {
+            let mut parameters: Vec<ParameterEstimate> = active
+                .iter()
+                .zip(&stds)
+                .map(|(p, std)| (*p, calib.value(*p, &initial.intrinsics), *std, true))
+                .chain(
+                    withheld
+                        .iter()
+                        .map(|(p, std)| (*p, initial.value(*p, &initial.intrinsics), *std, false)),
+                )
+                .map(|(param, value, std, excited)| ParameterEstimate {
+                    param,
+                    value,
+                    std,
+                    excited,
+                })
+                .collect();
+            parameters.sort_by_key(|e| asked.iter().position(|p| *p == e.param));
+            return Ok(Excited { fit: f, parameters });
+        }
+        withheld.extend(
+            (0..active.len())
+                .filter(|&k| !excited(k))
+                .map(|k| (active[k], stds[k])),
+        );
+        active = (0..active.len())
+            .filter(|&k| excited(k))
+            .map(|k| active[k])
+            .collect();
+    }
+}
