@@ -223,7 +223,7 @@ fn with_calibration_cov(
 #[test]
 fn time_offset_and_intrinsics_are_recovered_within_their_sigma() {
     let trials: u64 = 200;
-    let mut within = vec![0usize; 25];
+    let mut within = [0usize; 25];
     let (mut dv_before, mut dv_after, mut windows) = (0.0, 0.0, 0usize);
     let (mut nees, mut nees_window) = (0.0, 0.0);
     for seed in 0..trials {
@@ -363,7 +363,7 @@ fn attitudes_alone_calibrate_the_gyroscope() {
     use rand::SeedableRng;
     use rand_distr::{Distribution, Normal};
     let trials = 100u64;
-    let mut within = vec![0usize; 19];
+    let mut within = [0usize; 19];
     let mut chi2 = 0.0;
     for seed in 0..trials {
         let t = trial(1000 + seed);
