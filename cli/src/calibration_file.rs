@@ -50,7 +50,12 @@ pub fn read(path: &Path) -> Result<ImuCalibration, CliError> {
 
 /// The time offset of `cal` in integer nanoseconds (0 when the file has none).
 pub fn time_offset_ns(cal: &ImuCalibration) -> i64 {
-    cal.time_offset_s.map_or(0, |t| (t * 1e9).round() as i64)
+    time_offset_ns_of(cal.time_offset_s)
+}
+
+/// A time offset \[s\] in integer nanoseconds (0 for `None`).
+pub fn time_offset_ns_of(t: Option<f64>) -> i64 {
+    t.map_or(0, |t| (t * 1e9).round() as i64)
 }
 
 /// Writes `intrinsics`, `noise` and `time_offset_s` to `path` as OpenVINS'

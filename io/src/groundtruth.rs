@@ -64,10 +64,10 @@ fn row_values(fields: &[&str], name: &str, at: Location) -> Result<[f64; 16], Io
     Ok(v)
 }
 
-/// The unit quaternion of `v[3..7]` (w, x, y, z); norm within 1e-3 of one (re-normalised
+/// The unit quaternion of `v[3..7]` (w, x, y, z; `v` holds at least 7 values); norm within 1e-3 of one (re-normalised
 /// when off by more than 1e-12).
-fn unit_quaternion(
-    v: &[f64; 16],
+pub(crate) fn unit_quaternion(
+    v: &[f64],
     name: &str,
     at: Location,
 ) -> Result<UnitQuaternion<f64>, IoError> {
@@ -85,6 +85,39 @@ fn unit_quaternion(
     } else {
         UnitQuaternion::new_unchecked(raw)
     })
+}
+
+/// The integer-ns timestamp of a row, strictly after the previous row's `prev`; the error
+/// names the line.
+pub(crate) fn timestamp(
+    field: &str,
+    prev: Option<i64>,
+    name: &str,
+    at: Location,
+) -> Result<i64, IoError> {
+    let t_ns = match parse_scaled(field, 0) {
+        Some((t, true)) => t,
+        _ => {
+            return Err(IoError::parse(
+                name,
+                at,
+                format!("timestamp `{field}` is not an integer [ns]"),
+            ));
+        }
+    };
+    if let Some(prev) = prev.filter(|&p| t_ns <= p) {
+        let what = if t_ns == prev {
+            "duplicate"
+        } else {
+            "decreasing"
+        };
+        return Err(IoError::parse(
+            name,
+            at,
+            format!("{what} timestamp {t_ns} ns (previous row {prev} ns)"),
+        ));
+    }
+    Ok(t_ns)
 }
 
 /// Parses EuRoC ground-truth CSV text (17 columns, see the module docs): `#` lines are
@@ -113,28 +146,7 @@ pub fn parse_euroc_groundtruth(
                 ),
             ));
         }
-        let t_ns = match parse_scaled(fields[0], 0) {
-            Some((t, true)) => t,
-            _ => {
-                return Err(IoError::parse(
-                    source_name,
-                    at,
-                    format!("timestamp `{}` is not an integer [ns]", fields[0]),
-                ));
-            }
-        };
-        if let Some(prev) = out.last().map(|s| s.t_ns).filter(|&p| t_ns <= p) {
-            let what = if t_ns == prev {
-                "duplicate"
-            } else {
-                "decreasing"
-            };
-            return Err(IoError::parse(
-                source_name,
-                at,
-                format!("{what} timestamp {t_ns} ns (previous row {prev} ns)"),
-            ));
-        }
+        let t_ns = timestamp(fields[0], out.last().map(|s| s.t_ns), source_name, at)?;
         let v = row_values(&fields, source_name, at)?;
         out.push(GroundTruthState {
             t_ns,

@@ -2,8 +2,12 @@
 //! observable.
 //!
 //! Model choice:
-//! - `--poses FILE` (EuRoC ground-truth format, or any pose source written in it): the
-//!   known-pose problem (biases, velocities, gravity direction) on poses ≥ 0.5 s apart;
+//! - `--poses FILE` (EuRoC ground truth, `t,p,q` or attitudes only `t,q`;
+//!   [`preint_io::poses`]): the known-pose problem (biases, velocities, gravity direction) on
+//!   poses `--pose-spacing` apart, or with attitudes only the gyroscope problem (gyro bias);
+//!   `--estimate` adds the time offset, gyroscope intrinsics, g-sensitivity and accelerometer
+//!   intrinsics, each with its σ or withheld when the motion does not excite it
+//!   ([`preint_calib::bias::known_poses::extras`]);
 //! - otherwise, still intervals are detected; with at least three of them at distinct
 //!   attitudes (> 20° apart) the multi-position problem (Tedaldi et al. 2014) estimates both
 //!   biases, the attitudes and, if BIC supports it, scale factors;
@@ -21,12 +25,16 @@ use crate::{CliError, Output, calibration_file, checks, noise, stream};
 use nalgebra::Vector3;
 use preint::intrinsics::{ImuIntrinsics, IntrinsicsModel};
 use preint::{ImuNoise, ImuSample, PreintParams, Scheme};
+use preint_calib::bias::known_poses::extras::{Estimate, ParameterEstimate};
+use preint_calib::bias::known_poses::{
+    KnownAttitude, KnownAttitudeCalibration, calibrate_known_attitudes,
+};
 use preint_calib::bias::{
     KnownPose, KnownPoseCalibration, KnownPoseOptions, MultiPoseCalibration, MultiPoseOptions,
     StaticCalibration, StaticOptions, StillInterval, StillOptions, calibrate_known_poses,
     calibrate_multi_pose, calibrate_static, detect_still_intervals, roll_pitch_of_up,
 };
-use preint_io::read_euroc_groundtruth;
+use preint_lie::SO3;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 
@@ -36,9 +44,24 @@ pub struct Args {
     /// The recording and how to read it.
     #[command(flatten)]
     pub input: ImuArgs,
-    /// Known poses (EuRoC ground-truth format) for the known-pose problem.
+    /// Known poses for the known-pose problem: EuRoC ground truth (17 columns), `t,x,y,z,qw,qx,
+    /// qy,qz` (8) or attitudes only `t,qw,qx,qy,qz` (5: a gyroscope-only calibration); t in ns,
+    /// quaternion body→world.
     #[arg(long)]
     pub poses: Option<PathBuf>,
+    /// Known-pose problem: parameters estimated beside the biases, comma-separated, from
+    /// time-offset, gyro-intrinsics, g-sensitivity, accel-intrinsics (OpenVINS' kalibr model:
+    /// Tw and R_IMUtoGYRO, Tg, Ta). Each is printed with its σ, or withheld (not applied, not
+    /// written) when the motion does not excite it.
+    #[arg(long, value_name = "LIST", requires = "poses", value_parser = parse_estimate)]
+    pub estimate: Option<Estimate>,
+    /// Known-pose problem: spacing of the poses used, in s.
+    #[arg(long, value_name = "S", default_value_t = 0.5, requires = "poses")]
+    pub pose_spacing: f64,
+    /// Known-pose problem: a calibration file (as --out writes) whose intrinsics and time
+    /// offset are applied, and are the starting point of those --estimate asks for.
+    #[arg(long, value_name = "FILE", requires = "poses")]
+    pub calibration: Option<PathBuf>,
     /// Kalibr imu.yaml with the noise densities (default: EuRoC figures).
     #[arg(long)]
     pub noise: Option<PathBuf>,
@@ -80,8 +103,9 @@ pub struct Args {
     )]
     pub heading: Option<f64>,
     /// Write the calibration as OpenVINS' kalibr_imu_chain.yaml: the intrinsics (Tw,
-    /// R_IMUtoGYRO, Ta, R_IMUtoACC, Tg; from the multi-position model BIC chose, else the
-    /// identity) and the noise densities. `integrate --calibration FILE` applies it.
+    /// R_IMUtoGYRO, Ta, R_IMUtoACC, Tg; from the multi-position model BIC chose, or the
+    /// known-pose estimate, else the identity), the time offset when estimated, and the noise
+    /// densities. `integrate --calibration FILE` applies it.
     #[arg(long, value_name = "FILE")]
     pub out: Option<std::path::PathBuf>,
 }
@@ -89,16 +113,31 @@ pub struct Args {
 /// The problem solved and its estimates.
 #[derive(Clone, Debug)]
 pub enum Calibration {
-    /// Known poses: biases, velocities and the gravity direction.
+    /// Known poses: biases, velocities and the gravity direction (and what `--estimate` asks).
     KnownPoses {
         /// The pose file, as printed.
         source: String,
-        /// Number of poses used (≥ 0.5 s apart, inside the IMU time span).
+        /// Number of poses used (`--pose-spacing` apart, inside the IMU time span).
         poses: usize,
         /// The stated pose noise: attitude \[rad\], position \[m\].
         pose_std: (f64, f64),
         /// The estimates.
         c: Box<KnownPoseCalibration>,
+        /// Whether the time offset was asked for or given (then it is written by `--out`).
+        time_offset: bool,
+    },
+    /// Known attitudes only: the gyro bias (and what `--estimate` asks of the gyroscope).
+    KnownAttitudes {
+        /// The pose file, as printed.
+        source: String,
+        /// Number of attitudes used.
+        poses: usize,
+        /// The stated attitude noise \[rad\].
+        pose_rot_std: f64,
+        /// The estimates.
+        c: Box<KnownAttitudeCalibration>,
+        /// Whether the time offset was asked for or given.
+        time_offset: bool,
     },
     /// Still intervals at ≥ 3 distinct attitudes: both biases, scale factors if BIC says so.
     MultiPose(Box<MultiPoseCalibration>),
@@ -150,48 +189,131 @@ fn read_samples(args: &Args) -> Result<Vec<ImuSample>, CliError> {
     stream::read_span(&args.input, args.from, args.to, "calibrate")
 }
 
-/// The known-pose problem on the poses of `pfile` inside the samples' time span.
+/// `--estimate`'s list.
+fn parse_estimate(list: &str) -> Result<Estimate, String> {
+    Estimate::parse(list)
+}
+
+/// Largest time offset `--estimate time-offset` looks for \[ns\]: poses within this of the
+/// recording's ends are not used, so that every shifted window stays inside the samples.
+const MAX_TIME_OFFSET_NS: i64 = 100_000_000;
+
+/// The poses of `pfile` inside the samples' time span (less a margin for the time offset),
+/// `--pose-spacing` apart.
+fn select_poses(
+    args: &Args,
+    pfile: &Path,
+    samples: &[ImuSample],
+    margin_ns: i64,
+) -> Result<Vec<preint_io::PoseRow>, CliError> {
+    let rows = preint_io::read_poses(pfile)?;
+    let (t0, t1) = (
+        samples[0].t_ns + margin_ns,
+        samples[samples.len() - 1].t_ns - margin_ns,
+    );
+    let spacing = (args.pose_spacing * 1e9).round() as i64;
+    let mut kp: Vec<preint_io::PoseRow> = Vec::new();
+    for s in rows.iter().filter(|s| s.t_ns >= t0 && s.t_ns <= t1) {
+        if kp.last().is_none_or(|l| s.t_ns - l.t_ns >= spacing) {
+            kp.push(*s);
+        }
+    }
+    if kp.len() < 3 {
+        return Err(CliError::Failed(format!(
+            "{}: fewer than three poses inside the IMU time span (poses ≥ {} s apart{} are \
+             used)",
+            pfile.display(),
+            args.pose_spacing,
+            if margin_ns > 0 {
+                format!(", ≥ {} s from its ends", margin_ns as f64 * 1e-9)
+            } else {
+                String::new()
+            }
+        )));
+    }
+    Ok(kp)
+}
+
+/// The known-pose problem on the poses of `pfile` inside the samples' time span (attitudes
+/// only when the file has no positions).
 fn known_poses(
     args: &Args,
     pfile: &Path,
     samples: &[ImuSample],
     noise: &ImuNoise,
 ) -> Result<Calibration, CliError> {
-    let gt = read_euroc_groundtruth(pfile)?;
-    let (t0, t1) = (samples[0].t_ns, samples[samples.len() - 1].t_ns);
-    let mut kp: Vec<KnownPose> = Vec::new();
-    for s in gt.iter().filter(|s| s.t_ns >= t0 && s.t_ns <= t1) {
-        if kp.last().is_none_or(|l| s.t_ns - l.t_ns >= 500_000_000) {
-            kp.push(KnownPose {
-                t_ns: s.t_ns,
-                r: s.rotation(),
-                p: s.p,
-            });
-        }
+    checks::positive("--pose-spacing", args.pose_spacing)?;
+    let estimate = args.estimate.unwrap_or_default();
+    if estimate.any() && args.body_p_sensor.is_some() {
+        return Err(CliError::Usage(
+            "--estimate with --body-p-sensor: the calibration parameters are estimated in the \
+             IMU's frame; give poses of the IMU instead"
+                .into(),
+        ));
     }
-    if kp.len() < 3 {
-        return Err(CliError::Failed(format!(
-            "{}: fewer than three poses inside the IMU time span (poses ≥ 0.5 s apart are used)",
-            pfile.display()
-        )));
-    }
+    let file = args
+        .calibration
+        .as_deref()
+        .map(calibration_file::read)
+        .transpose()?;
+    let td0 = file.as_ref().and_then(|f| f.time_offset_s);
+    let time_offset = estimate.time_offset || td0.is_some();
+    let margin = if time_offset {
+        MAX_TIME_OFFSET_NS + calibration_file::time_offset_ns_of(td0).abs()
+    } else {
+        0
+    };
+    let rows = select_poses(args, pfile, samples, margin)?;
     let params = PreintParams {
         body_p_sensor: args.body_p_sensor,
         ..PreintParams::from_noise(noise)
             .with_scheme(Scheme::Midpoint)
             .with_gravity(Vector3::new(0.0, 0.0, -args.gravity))
     };
-    let opts = KnownPoseOptions {
+    let mut opts = KnownPoseOptions {
         pose_rot_std: args.pose_rot_std,
         pose_pos_std: args.pose_pos_std,
+        estimate,
+        initial_time_offset_s: td0.unwrap_or(0.0),
         ..KnownPoseOptions::new(params)
     };
-    let c = calibrate_known_poses(samples, &kp, &opts).map_err(fail_in(args.input.path()))?;
+    if let Some(f) = &file {
+        opts.initial_intrinsics = f.intrinsics;
+    }
+    let source = pfile.display().to_string();
+    let fail = fail_in(args.input.path());
+    if rows.iter().any(|r| r.p.is_none()) {
+        let atts: Vec<KnownAttitude> = rows
+            .iter()
+            .map(|r| KnownAttitude {
+                t_ns: r.t_ns,
+                r: SO3::from_quaternion(&r.q),
+            })
+            .collect();
+        let c = calibrate_known_attitudes(samples, &atts, &opts).map_err(fail)?;
+        return Ok(Calibration::KnownAttitudes {
+            source,
+            poses: atts.len(),
+            pose_rot_std: args.pose_rot_std,
+            c: Box::new(c),
+            time_offset,
+        });
+    }
+    let kp: Vec<KnownPose> = rows
+        .iter()
+        .map(|r| KnownPose {
+            t_ns: r.t_ns,
+            r: SO3::from_quaternion(&r.q),
+            p: r.p.unwrap_or_default(),
+        })
+        .collect();
+    let c = calibrate_known_poses(samples, &kp, &opts).map_err(fail)?;
     Ok(Calibration::KnownPoses {
-        source: pfile.display().to_string(),
+        source,
         poses: kp.len(),
         pose_std: (args.pose_rot_std, args.pose_pos_std),
         c: Box::new(c),
+        time_offset,
     })
 }
 
@@ -278,15 +400,38 @@ pub fn compute(args: &Args) -> Result<Calibration, CliError> {
 pub fn to_json(cal: &Calibration) -> Value {
     match cal {
         Calibration::KnownPoses {
-            poses, pose_std, c, ..
+            poses,
+            pose_std,
+            c,
+            time_offset,
+            ..
         } => json!({
             "model": "known-poses", "poses": poses,
+            "parameters": parameters_json(&c.parameters, c.intrinsics.model),
+            "time_offset_s": time_offset.then_some(c.time_offset_s),
+            "intrinsics": intrinsics_json(&c.intrinsics),
             "gyro_bias": list(&c.bias.gyro), "gyro_bias_std": list(&c.gyro_bias_std),
             "acc_bias": list(&c.bias.acc), "acc_bias_std": list(&c.acc_bias_std),
             "gravity": list(&c.gravity), "gravity_std": list(&c.gravity_std), "gravity_tilt_deg": c.gravity_tilt.to_degrees(),
             "pose_rot_std": pose_std.0, "pose_pos_std": pose_std.1,
             "iterations": c.iterations, "cost": 0.5 * c.chi2, "chi2": c.chi2, "dof": c.dof,
             "units": {"gyro_bias": "rad/s", "acc_bias": "m/s^2", "gravity": "m/s^2"},
+        }),
+        Calibration::KnownAttitudes {
+            poses,
+            pose_rot_std,
+            c,
+            time_offset,
+            ..
+        } => json!({
+            "model": "known-attitudes", "poses": poses,
+            "gyro_bias": list(&c.gyro_bias), "gyro_bias_std": list(&c.gyro_bias_std),
+            "parameters": parameters_json(&c.parameters, c.intrinsics.model),
+            "time_offset_s": time_offset.then_some(c.time_offset_s),
+            "intrinsics": intrinsics_json(&c.intrinsics),
+            "pose_rot_std": pose_rot_std,
+            "iterations": c.iterations, "chi2": c.chi2, "dof": c.dof,
+            "units": {"gyro_bias": "rad/s"},
         }),
         Calibration::MultiPose(c) => multi_pose_json(c),
         Calibration::Static {
@@ -309,6 +454,46 @@ pub fn to_json(cal: &Calibration) -> Value {
             "earth_rate": earth.as_ref().map(earth_json),
         }),
     }
+}
+
+/// The `--estimate` parameters: name, value, σ, unit and whether excited (else withheld).
+fn parameters_json(ps: &[ParameterEstimate], model: IntrinsicsModel) -> Value {
+    ps.iter()
+        .map(|e| {
+            json!({"name": e.param.name(model), "value": e.value,
+                "std": e.std.is_finite().then_some(e.std), "unit": e.param.unit(),
+                "excited": e.excited})
+        })
+        .collect()
+}
+
+/// The intrinsics' matrices, row by row.
+fn intrinsics_json(x: &ImuIntrinsics) -> Value {
+    let rows = |m: &nalgebra::Matrix3<f64>| -> Vec<Vec<f64>> {
+        (0..3)
+            .map(|r| (0..3).map(|c| m[(r, c)]).collect())
+            .collect()
+    };
+    json!({"model": x.model.name(), "Tw": rows(&x.t_w), "R_IMUtoGYRO": rows(&x.r_imu_to_gyro),
+        "Ta": rows(&x.t_a), "R_IMUtoACC": rows(&x.r_imu_to_acc), "Tg": rows(&x.t_g)})
+}
+
+/// The `--estimate` parameters, one line each: value ± σ, or why withheld.
+fn parameter_lines(ps: &[ParameterEstimate], model: IntrinsicsModel) -> String {
+    ps.iter()
+        .map(|e| {
+            let name = e.param.name(model);
+            let unit = e.param.unit();
+            if e.excited {
+                format!("  {name} = {:+.6e} ± {:.1e} {unit}\n", e.value, e.std)
+            } else {
+                format!(
+                    "  {name}: not excited by the motion (σ {:.1e} {unit}): kept at {:+.6e}\n",
+                    e.std, e.value
+                )
+            }
+        })
+        .collect()
 }
 
 /// What `--latitude` did to the gyro bias.
@@ -378,12 +563,23 @@ pub fn to_text(cal: &Calibration) -> String {
         Calibration::KnownPoses {
             source, poses, c, ..
         } => format!(
-            "known-pose calibration ({poses} poses from {source}):\n{}{}  gravity tilt {:.3}°, \
+            "known-pose calibration ({poses} poses from {source}):\n{}{}{}  gravity tilt {:.3}°, \
              χ²/dof = {:.2}, {} iterations\n",
             gyro_line(&c.bias.gyro, &c.gyro_bias_std),
             acc_line(&c.bias.acc, &c.acc_bias_std),
+            parameter_lines(&c.parameters, c.intrinsics.model),
             c.gravity_tilt.to_degrees(),
             c.chi2 / c.dof.max(1) as f64,
+            c.iterations
+        ),
+        Calibration::KnownAttitudes {
+            source, poses, c, ..
+        } => format!(
+            "known-attitude (gyroscope) calibration ({poses} attitudes from {source}):\n{}{}  \
+             χ²/dof = {:.2}, {} iterations\n",
+            gyro_line(&c.gyro_bias, &c.gyro_bias_std),
+            parameter_lines(&c.parameters, c.intrinsics.model),
+            c.chi2_per_dof(),
             c.iterations
         ),
         Calibration::MultiPose(c) => format!(
@@ -433,21 +629,35 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
     let c = compute(args)?;
     let (mut human, mut json) = (to_text(&c), to_json(&c));
     if let Some(path) = &args.out {
-        let intrinsics = match &c {
-            Calibration::MultiPose(m) => calibration_file::intrinsics_of_multi_pose(m)?,
-            _ => ImuIntrinsics::identity(IntrinsicsModel::Kalibr),
+        let (intrinsics, td, from) = match &c {
+            Calibration::MultiPose(m) => (
+                calibration_file::intrinsics_of_multi_pose(m)?,
+                None,
+                " from the chosen model",
+            ),
+            Calibration::KnownPoses { c, time_offset, .. } => (
+                c.intrinsics,
+                time_offset.then_some(c.time_offset_s),
+                " as estimated (withheld parameters at their initial value)",
+            ),
+            Calibration::KnownAttitudes { c, time_offset, .. } => (
+                c.intrinsics,
+                time_offset.then_some(c.time_offset_s),
+                " as estimated (withheld parameters at their initial value)",
+            ),
+            Calibration::Static { .. } => (
+                ImuIntrinsics::identity(IntrinsicsModel::Kalibr),
+                None,
+                " identity: this problem does not estimate them",
+            ),
         };
         let noise = noise::or_default(args.noise.as_deref())?;
-        calibration_file::write(path, intrinsics, &noise, None)?;
+        calibration_file::write(path, intrinsics, &noise, td)?;
         human.push_str(&format!(
-            "calibration written to {} (OpenVINS kalibr_imu_chain.yaml: intrinsics{}, noise \
-             densities)\n",
+            "calibration written to {} (OpenVINS kalibr_imu_chain.yaml: intrinsics{from}{}, \
+             noise densities)\n",
             path.display(),
-            if matches!(c, Calibration::MultiPose(_)) {
-                " from the chosen model"
-            } else {
-                " identity: this problem does not estimate them"
-            }
+            if td.is_some() { ", time offset" } else { "" }
         ));
         json["out"] = json!(path.display().to_string());
     }

@@ -29,7 +29,9 @@
 //! ([`ExcitationLimits`]): above it, applying the estimate would not be worth its uncertainty,
 //! and the estimate is withheld (the parameter is held at its initial value and the problem
 //! solved again without it). A parameter the motion does not move at all (e.g. the gyroscope's
-//! x scale on a rotation about z only) has an infinite standard deviation and is withheld too.
+//! x scale on a rotation about z only) has an infinite standard deviation. Those are withheld
+//! together; of the others, the one furthest over its limit (in σ / limit) is withheld alone
+//! and the problem solved again, since a parameter correlated with it may then pass.
 
 use crate::bias::BiasError;
 use nalgebra::{DMatrix, SVector};
@@ -313,8 +315,9 @@ pub(crate) struct Excited<T> {
 }
 
 /// Fits the parameters `asked` with `fit` (which returns its fit, the calibration it reached
-/// and the standard deviations of the parameters it was given), withholds those over their
-/// limit and fits again without them, until all that remain are excited (module docs).
+/// and the standard deviations of the parameters it was given) and, while some are over their
+/// limit, withholds those with an infinite σ or else the one furthest over (in σ / limit), and
+/// fits again (module docs).
 pub(crate) fn fit_excited<T>(
     asked: &[Param],
     initial: &Calibration,
@@ -346,13 +349,22 @@ pub(crate) fn fit_excited<T>(
             parameters.sort_by_key(|e| asked.iter().position(|p| *p == e.param));
             return Ok(Excited { fit: f, parameters });
         }
-        withheld.extend(
+        // Parameters the motion does not move at all go together; of the others the weakest
+        // alone, because withholding it may make the rest excited.
+        let ratio = |k: usize| stds[k] / active[k].limit(limits);
+        let drop: Vec<usize> = if stds.iter().any(|s| !s.is_finite()) {
             (0..active.len())
-                .filter(|&k| !excited(k))
-                .map(|k| (active[k], stds[k])),
-        );
+                .filter(|&k| !stds[k].is_finite())
+                .collect()
+        } else {
+            (0..active.len())
+                .max_by(|&a, &b| ratio(a).total_cmp(&ratio(b)))
+                .into_iter()
+                .collect()
+        };
+        withheld.extend(drop.iter().map(|&k| (active[k], stds[k])));
         active = (0..active.len())
-            .filter(|&k| excited(k))
+            .filter(|k| !drop.contains(k))
             .map(|k| active[k])
             .collect();
     }
