@@ -235,3 +235,99 @@ fn topics_of_a_split_recording_need_a_container() {
         "{err}"
     );
 }
+
+/// `audit --calibration`: a still recording whose accelerometer reads 1 % high on every axis.
+/// The right file (Ta = 1.01 I) brings the median norm back to |g| (info finding, both norms
+/// in the JSON, no warning); a file with the opposite scale moves it away (a `calibration`
+/// warning); a file beyond a MEMS sensor's range is a warning too; and the file is named in
+/// the output.
+#[test]
+fn audit_checks_a_calibration_file_against_the_recording() {
+    use nalgebra::Matrix3;
+    let dir = tmp("audit-calibration");
+    let cfg = preint_sim::SimConfig {
+        noise: preint::ImuNoise::euroc(),
+        bias_random_walk: false,
+        acc_scale: Matrix3::identity() * 1.01,
+        ..preint_sim::SimConfig::default()
+    };
+    let out =
+        preint_sim::simulate(&preint_sim::StaticScene::default(), 200.0, 20.0, &cfg, 3).unwrap();
+    let rows: Vec<(i64, [f64; 6])> = (out.samples.iter())
+        .map(|s| {
+            (
+                s.t_ns,
+                [s.gyro.x, s.gyro.y, s.gyro.z, s.acc.x, s.acc.y, s.acc.z],
+            )
+        })
+        .collect();
+    let imu = common::write_imu_csv(&dir, "imu.csv", &rows);
+    let file = |name: &str, ta: f64, tw: f64| {
+        let x = preint::intrinsics::ImuIntrinsics {
+            t_a: Matrix3::identity() * ta,
+            t_w: Matrix3::identity() * tw,
+            ..Default::default()
+        };
+        let p = dir.join(name);
+        let cal = preint_io::ImuCalibration {
+            intrinsics: x,
+            noise: None,
+            time_offset_s: Some(2e-3),
+            rostopic: None,
+        };
+        preint_io::write_openvins_imu_chain(&p, &cal).unwrap();
+        p
+    };
+    let audit = |cal: &std::path::Path| {
+        json(&[
+            "audit",
+            "--imu",
+            imu.to_str().unwrap(),
+            "--calibration",
+            cal.to_str().unwrap(),
+        ])
+    };
+    let right = audit(&file("right.yaml", 1.01, 1.0));
+    let (g, raw) = (
+        right["units"]["gravity_median_m_s2"].as_f64().unwrap(),
+        right["units"]["raw_gravity_median_m_s2"].as_f64().unwrap(),
+    );
+    assert!(
+        (g - 9.81).abs() < 0.01 && (raw - 9.9081).abs() < 0.01,
+        "{g} {raw}"
+    );
+    assert!(kinds(&right, "info").contains(&"calibration".to_string()));
+    assert!(
+        !kinds(&right, "warning").contains(&"calibration".to_string()),
+        "{right:#}"
+    );
+    assert_eq!(right["calibration"]["time_offset_s"], 2e-3);
+    assert!(
+        right["calibration"]["file"]
+            .as_str()
+            .unwrap()
+            .ends_with("right.yaml")
+    );
+    let wrong = audit(&file("wrong.yaml", 0.99, 1.0));
+    assert!(
+        kinds(&wrong, "warning").contains(&"calibration".to_string()),
+        "{wrong:#}"
+    );
+    let wild = audit(&file("wild.yaml", 1.01, 1.5));
+    let msgs: Vec<&str> = (wild["findings"].as_array().unwrap().iter())
+        .filter(|f| f["severity"] == "warning")
+        .map(|f| f["message"].as_str().unwrap())
+        .collect();
+    assert!(
+        msgs.iter()
+            .any(|m| m.contains("beyond a MEMS sensor's range")),
+        "{msgs:?}"
+    );
+    // Without the file: the raw norm, no calibration finding.
+    let plain = json(&["audit", "--imu", imu.to_str().unwrap()]);
+    assert_eq!(
+        plain["units"]["gravity_median_m_s2"],
+        plain["units"]["raw_gravity_median_m_s2"]
+    );
+    assert_eq!(plain["calibration"], Value::Null);
+}

@@ -8,6 +8,16 @@
 //! container) is audited channel by channel, with the offsets of the accelerometer stamps from
 //! the nearest gyro stamps ([`preint_io::audit::audit_channels`]).
 //!
+//! With `--calibration FILE` (one stream), the file's intrinsics correct the samples of the unit
+//! checks (the accelerometer's median norm is then that of the corrected samples; timing,
+//! clipping and stillness stay on the raw readings, where the sensor produced them), and the
+//! file is checked against the recording: an info finding states what it applies (largest
+//! scale/misalignment, axis rotation, g-sensitivity, time offset) and the accelerometer's
+//! median norm corrected and raw; a warning says when the intrinsics are beyond a MEMS
+//! sensor's range (10 % scale or misalignment, 0.1 rad, 0.01 (rad/s)/(m/s²)) or when, on a
+//! recording still at least half of the time, the correction moves that norm further from |g|
+//! than the raw one by more than 0.5 %.
+//!
 //! Exit status 0 with a verdict; with `--strict`, exit 2 when a defect is found (the defects
 //! are printed on stderr, each naming counts, indices and lines). With `--no-unit-check` a
 //! unit problem is a warning instead of a defect.
@@ -18,7 +28,8 @@
 //! - `clean` (no defect), `defects`, `warnings`: counts; `findings`: `[{severity` (`defect`,
 //!   `warning`, `info`), `kind`, `message}]`, defects first. Kinds: `empty`, `bad_rows`,
 //!   `stopped`, `non_finite`, `duplicates`, `out_of_order`, `long_gaps`, `gaps`, `rate`,
-//!   `jitter`, `drift`, `clipping`, `constant_axis`, `units`, `still`.
+//!   `jitter`, `drift`, `clipping`, `constant_axis`, `units`, `still`, `calibration`.
+//! - `calibration`: `{file, model, time_offset_s}` of `--calibration`, or null.
 //! - `samples`; `t_first_ns`, `t_last_ns` (largest stamp), `span_s`.
 //! - `rate`: `nominal_hz` (1 / median Δt), `median_interval_ns`, `resolution_ns` (of the
 //!   median), `mean_interval_ns` (positive intervals), `reference_interval_ns` (median of the
@@ -39,7 +50,8 @@
 //!   `flat_fraction`, `at_max` and `at_min` (`clipped`, `total`: samples at the extreme,
 //!   `samples`, `runs`, `longest`, `first_index`, `first_at`: runs of ≥ 3 equal readings at
 //!   it; clipped when they hold at least half of `total`).
-//! - `units` (on the first 32 768 samples, or null): `samples`, `gravity_median_m_s2`,
+//! - `units` (on the first 32 768 samples, or null): `samples`, `gravity_median_m_s2`
+//!   (corrected with `--calibration`), `raw_gravity_median_m_s2`,
 //!   `gyro_median_rad_s`, `gyro_scale` (`pairs`, `misfit_deg`: `{deg_per_s, as_read,
 //!   rad_per_s}`, or null), `error` (the unit check's message, or null).
 //! - `still`: `window_samples` (0.5 s), `windows`, `still`, `fraction`.
@@ -54,7 +66,7 @@
 
 use crate::imu_args::{ImuArgs, source_json};
 use crate::progress::ReadingBar;
-use crate::{CliError, Output};
+use crate::{CliError, Output, calibration_file};
 use preint_io::audit::{
     Audit, AuditOptions, AxisReport, BadRow, Event, EventList, Finding, FlatTop, HISTOGRAM_EDGES,
     Severity, SplitAudit, Timing, audit_channels, audit_reader,
@@ -72,6 +84,11 @@ pub struct Args {
     /// Exit with status 2 when a defect is found (for scripts and CI).
     #[arg(long)]
     pub strict: bool,
+    /// An IMU calibration file (`calibrate --out`, OpenVINS kalibr_imu_chain.yaml or Kalibr
+    /// imu.yaml): its intrinsics correct the samples of the unit checks, and it is checked
+    /// against the recording (accelerometer norm at rest, plausible ranges). One stream only.
+    #[arg(long, value_name = "FILE")]
+    pub calibration: Option<std::path::PathBuf>,
 }
 
 /// What was audited: one stream, or the two channels of a split recording.
@@ -92,6 +109,8 @@ pub struct AuditRun {
     pub source: Option<SourceInfo>,
     /// What was found.
     pub report: Report,
+    /// The calibration file applied (`--calibration`) and what it holds.
+    pub calibration: Option<(String, preint_io::ImuCalibration)>,
 }
 
 impl AuditRun {
@@ -114,16 +133,30 @@ impl AuditRun {
 
 /// Reads the recording once, sample by sample, and audits it.
 pub fn compute(args: &Args) -> Result<AuditRun, CliError> {
-    let opts = AuditOptions::default();
+    let mut opts = AuditOptions::default();
     let imu = args.input.label();
+    let calibration = match &args.calibration {
+        Some(p) => Some((p.display().to_string(), calibration_file::read(p)?)),
+        None => None,
+    };
     if let Some((gyro, accel)) = split_channels(&args.input)? {
+        if calibration.is_some() {
+            return Err(CliError::Usage(
+                "--calibration: the intrinsics mix the gyro and accelerometer readings of a \
+                 sample, which a split recording's channels audited apart do not have (merge \
+                 them with `preint convert` first)"
+                    .into(),
+            ));
+        }
         let audit = audit_channels(gyro, accel, &imu, opts);
         return Ok(AuditRun {
             imu,
             source: None,
             report: Report::Split(Box::new(audit)),
+            calibration,
         });
     }
+    opts.correction = calibration.as_ref().map(|(_, c)| c.intrinsics.correction());
     let reader = args.input.open()?;
     let source = reader.info().clone();
     let progress = reader.progress().clone();
@@ -137,11 +170,101 @@ pub fn compute(args: &Args) -> Result<AuditRun, CliError> {
         }
         audit.findings.sort_by_key(|f| f.severity);
     }
+    if let Some((name, cal)) = &calibration {
+        audit
+            .findings
+            .extend(calibration_findings(name, cal, &audit));
+        audit.findings.sort_by_key(|f| f.severity);
+    }
     Ok(AuditRun {
         imu,
         source: Some(source),
         report: Report::Single(Box::new(audit)),
+        calibration,
     })
+}
+
+/// Largest plausible deviation of a MEMS IMU's scale or misalignment entries from the
+/// identity (10 %), and of its g-sensitivity entries \[(rad/s)/(m/s²)\] (0.01, ≈ 5.6 °/s per g).
+const PLAUSIBLE_SCALE: f64 = 0.1;
+const PLAUSIBLE_G_SENSITIVITY: f64 = 0.01;
+
+/// What the calibration file does to this recording (module docs): an info finding with the
+/// resting accelerometer norm before and after, a warning when the intrinsics are beyond a MEMS
+/// sensor's range or move a mostly still recording's accelerometer norm away from |g|.
+fn calibration_findings(name: &str, cal: &preint_io::ImuCalibration, a: &Audit) -> Vec<Finding> {
+    let x = &cal.intrinsics;
+    let eye = nalgebra::Matrix3::identity();
+    let scale = [(x.t_w - eye).amax(), (x.t_a - eye).amax()]
+        .into_iter()
+        .fold(0.0, f64::max);
+    let angles = [x.r_imu_to_gyro, x.r_imu_to_acc]
+        .iter()
+        .map(|r| preint_lie::SO3::from_matrix(r).log().norm())
+        .fold(0.0, f64::max);
+    let mut out = Vec::new();
+    let td = cal
+        .time_offset_s
+        .map_or(String::from("no time offset"), |t| {
+            format!(
+                "time offset {:+.3} ms (stamps audited as recorded)",
+                t * 1e3
+            )
+        });
+    let g = a.units.as_ref().map_or(String::new(), |u| {
+        format!(
+            "; accelerometer median norm {:.4} m/s² corrected, {:.4} raw",
+            u.gravity_median_m_s2, u.raw_gravity_median_m_s2
+        )
+    });
+    out.push(Finding::new(
+        Severity::Info,
+        "calibration",
+        format!(
+            "{name}: intrinsics ({} model, scale/misalignment up to {:.2} %, axis rotation up \
+             to {:.2} mrad, g-sensitivity up to {:.1e} (rad/s)/(m/s²)) applied to the unit \
+             checks; {td}{g}",
+            x.model.name(),
+            scale * 100.0,
+            angles * 1e3,
+            x.t_g.amax()
+        ),
+    ));
+    if scale > PLAUSIBLE_SCALE || angles > PLAUSIBLE_SCALE || x.t_g.amax() > PLAUSIBLE_G_SENSITIVITY
+    {
+        out.push(Finding::new(
+            Severity::Warning,
+            "calibration",
+            format!(
+                "{name}: intrinsics beyond a MEMS sensor's range (scale/misalignment {:.1} %, \
+                 rotation {:.1} mrad, g-sensitivity {:.1e}): is the file this sensor's, in \
+                 OpenVINS' convention?",
+                scale * 100.0,
+                angles * 1e3,
+                x.t_g.amax()
+            ),
+        ));
+    }
+    if let Some(u) = &a.units {
+        let g0 = preint::PreintParams::default().gravity.norm();
+        let (raw, corr) = (
+            (u.raw_gravity_median_m_s2 - g0).abs(),
+            (u.gravity_median_m_s2 - g0).abs(),
+        );
+        if a.still.fraction() >= 0.5 && corr > raw + 0.005 * g0 {
+            out.push(Finding::new(
+                Severity::Warning,
+                "calibration",
+                format!(
+                    "{name}: on this mostly still recording the corrected accelerometer norm \
+                     ({:.4} m/s²) is further from {g0} than the raw one ({:.4}): is the file \
+                     this sensor's?",
+                    u.gravity_median_m_s2, u.raw_gravity_median_m_s2
+                ),
+            ));
+        }
+    }
+    out
 }
 
 /// The gyro and accelerometer channels of a split recording (`--gyro`/`--accel` files, or
@@ -266,6 +389,7 @@ fn single_json(a: &Audit) -> Map<String, Value> {
     m.insert("axes".into(), json!(axes));
     let units = a.units.as_ref().map(|u| {
         json!({"samples": u.samples, "gravity_median_m_s2": u.gravity_median_m_s2,
+               "raw_gravity_median_m_s2": u.raw_gravity_median_m_s2,
                "gyro_median_rad_s": u.gyro_median_rad_s,
                "gyro_scale": u.gyro_scale.map(|s| {
                    let [d, one, rad] = s.median_error.map(f64::to_degrees);
@@ -319,6 +443,12 @@ pub fn to_json(r: &AuditRun) -> Value {
     m.insert("defects".into(), json!(defects));
     m.insert("warnings".into(), json!(r.count(Severity::Warning)));
     m.insert("findings".into(), json!(findings));
+    m.insert(
+        "calibration".into(),
+        json!(r.calibration.as_ref().map(|(name, c)| json!({
+            "file": name, "model": c.intrinsics.model.name(), "time_offset_s": c.time_offset_s,
+        }))),
+    );
     m.extend(match &r.report {
         Report::Single(a) => single_json(a),
         Report::Split(a) => split_json(a),

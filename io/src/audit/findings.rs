@@ -42,7 +42,8 @@ pub struct Finding {
 }
 
 impl Finding {
-    pub(crate) fn new(severity: Severity, kind: &'static str, message: String) -> Self {
+    /// A finding of `kind` with `message`.
+    pub fn new(severity: Severity, kind: &'static str, message: String) -> Self {
         Self {
             severity,
             kind,

@@ -51,13 +51,18 @@ use axes::{FlatTops, StillWindows};
 use preint::ImuSample;
 
 /// How much an audit keeps.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AuditOptions {
     /// Samples kept from the start for the reference interval and the unit checks (default
     /// 32 768: 164 s at 200 Hz, 2.4 MB).
     pub prefix_samples: usize,
     /// Events of each kind listed (the rest are counted; default 20).
     pub max_listed: usize,
+    /// IMU intrinsics applied to the samples of the unit checks (a calibration file's
+    /// [`preint::intrinsics::ImuIntrinsics::correction`]); timing, clipping, non-finite
+    /// readings and stillness are audited on the raw readings, where the sensor produced them.
+    /// Default `None`.
+    pub correction: Option<preint::intrinsics::Correction>,
 }
 
 impl Default for AuditOptions {
@@ -65,6 +70,7 @@ impl Default for AuditOptions {
         Self {
             prefix_samples: 1 << 15,
             max_listed: 20,
+            correction: None,
         }
     }
 }
@@ -110,8 +116,11 @@ impl ErrorLog {
 pub struct UnitCheck {
     /// Samples checked.
     pub samples: usize,
-    /// Median accelerometer norm \[m/s²\] (≈ 9.81 when the unit is right).
+    /// Median accelerometer norm \[m/s²\] (≈ 9.81 when the unit is right), of the corrected
+    /// samples when [`AuditOptions::correction`] is given.
     pub gravity_median_m_s2: f64,
+    /// The same median of the raw readings.
+    pub raw_gravity_median_m_s2: f64,
     /// Median gyro norm \[rad/s\].
     pub gyro_median_rad_s: f64,
     /// How well the gyro scaled by π/180, 1 and 180/π explains the turning of gravity
@@ -248,7 +257,7 @@ impl Auditor {
     fn start_streaming(&mut self) {
         let prefix = std::mem::take(&mut self.prefix);
         let reference = reference_interval(prefix.iter().map(|s| s.sample.t_ns));
-        self.units = unit_check(&prefix);
+        self.units = unit_check(&prefix, self.opts.correction.as_ref());
         let limit = self.opts.max_listed;
         let mut st = Streaming {
             timing: TimingStats::new(reference, limit),
@@ -288,14 +297,21 @@ impl Auditor {
     }
 }
 
-/// The unit checks of the module docs on `prefix`.
-fn unit_check(prefix: &[Located]) -> Option<UnitCheck> {
+/// The unit checks of the module docs on `prefix`, corrected by `correction`.
+fn unit_check(
+    prefix: &[Located],
+    correction: Option<&preint::intrinsics::Correction>,
+) -> Option<UnitCheck> {
     let finite = |s: &ImuSample| (s.gyro.iter().chain(s.acc.iter())).all(|v| v.is_finite());
     let mut v: Vec<ImuSample> = prefix.iter().map(|l| l.sample).filter(finite).collect();
     v.sort_by_key(|s| s.t_ns);
     v.dedup_by_key(|s| s.t_ns);
     if v.len() < 2 {
         return None;
+    }
+    let raw: Vec<f64> = v.iter().map(|s| s.acc.norm()).collect();
+    if let Some(c) = correction {
+        v.iter_mut().for_each(|s| *s = c.apply(s));
     }
     let med = |mut x: Vec<f64>| {
         let mid = x.len() / 2;
@@ -308,6 +324,7 @@ fn unit_check(prefix: &[Located]) -> Option<UnitCheck> {
     Some(UnitCheck {
         samples: v.len(),
         gravity_median_m_s2: med(v.iter().map(|s| s.acc.norm()).collect()),
+        raw_gravity_median_m_s2: med(raw),
         gyro_median_rad_s: med(v.iter().map(|s| s.gyro.norm()).collect()),
         gyro_scale: gyro_scale_fit(&v, median_interval_ns(&v) * 1e-9),
         error,
