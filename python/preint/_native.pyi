@@ -662,12 +662,15 @@ def audit(
     *,
     gyro: str | os.PathLike[str] | None = None,
     accel: str | os.PathLike[str] | None = None,
+    calibration: str | os.PathLike[str] | None = None,
     **options: Unpack[_ReaderOptions],
 ) -> dict[str, Any]:
     """What is wrong with a recording (timing, gaps, duplicates, clipping, units, stillness), in
     one streaming pass in bounded memory: the ``preint audit --json`` report as a dict (keys
     ``clean``, ``defects``, ``warnings``, ``findings`` [{severity, kind, message}], ``rate``,
-    ``jitter``, ``gaps``, ``axes``, ...; see the command's documentation)."""
+    ``jitter``, ``gaps``, ``axes``, ...; see the command's documentation). ``calibration``: an
+    IMU calibration file whose intrinsics correct the unit checks' samples and which is checked
+    against the recording (``preint audit --calibration``)."""
 
 def allan_variance(
     t_ns: _I64,
@@ -792,14 +795,23 @@ def calibrate_file(
     pose_pos_std: float = 0.0,
     latitude: float | None = None,
     heading: float | None = None,
+    estimate: str | None = None,
+    pose_spacing: float = 0.5,
+    calibration: str | os.PathLike[str] | None = None,
+    out: str | os.PathLike[str] | None = None,
     **options: Unpack[_ReaderOptions],
 ) -> dict[str, Any]:
     """``preint calibrate --json`` on a recording, as a dict: the model is chosen as the
-    command does (known poses with ``poses``, a EuRoC ground-truth file; multi-position with
-    ≥ 3 distinct still attitudes; otherwise single-attitude static on the longest still
-    interval), ``model`` names it. ``noise``: a Kalibr imu.yaml (default EuRoC figures).
-    Raises CalibrationError (kind ``Failed``) when nothing can be answered, e.g. no still
-    interval; InputError for a bad file."""
+    command does (known poses with ``poses``: a EuRoC ground-truth, ``t,x,y,z,qw,qx,qy,qz`` or
+    attitudes-only ``t,qw,qx,qy,qz`` file; multi-position with ≥ 3 distinct still attitudes;
+    otherwise single-attitude static on the longest still interval), ``model`` names it.
+    ``noise``: a Kalibr imu.yaml (default EuRoC figures). With ``poses``: ``estimate``, a
+    comma-separated list of ``time-offset``, ``gyro-intrinsics``, ``g-sensitivity``,
+    ``accel-intrinsics`` (``parameters`` [{name, value, std, unit, excited}] in the result; a
+    parameter the motion does not excite is withheld), ``pose_spacing`` [s], ``calibration`` (a
+    calibration file applied and used as the starting point). ``out``: write the calibration
+    file (OpenVINS kalibr_imu_chain.yaml). Raises CalibrationError (kind ``Failed``) when
+    nothing can be answered, e.g. no still interval; InputError for a bad file or list."""
 
 def advise(
     t_ns: _I64,

@@ -17,6 +17,7 @@ use nalgebra::Vector3;
 use numpy::IntoPyArray;
 use numpy::ndarray::Array3;
 use preint::{ImuNoise, ImuSample};
+use preint_calib::bias::known_poses::extras::Estimate;
 use preint_calib::bias::{
     AccBiasPrior, BiasError, MultiPoseCalibration, MultiPoseOptions, StaticCalibration,
     StaticOptions, StillInterval, StillOptions, calibrate_multi_pose, calibrate_static,
@@ -319,13 +320,14 @@ pub(crate) fn calibrate_multi_pose_py<'py>(
 }
 
 /// calibrate(path=None, *, gyro=None, accel=None, ..., noise=None, poses=None, gravity=9.81,
-/// from_ns=None, to_ns=None, pose_rot_std=0.0, pose_pos_std=0.0, latitude=None, heading=None)
+/// from_ns=None, to_ns=None, pose_rot_std=0.0, pose_pos_std=0.0, latitude=None, heading=None,
+/// estimate=None, pose_spacing=0.5, calibration=None, out=None)
 ///
 /// `preint calibrate --json` on a recording, as a dict (docs in `_native.pyi`).
 #[pyfunction]
 #[pyo3(signature = (path=None, *, gyro=None, accel=None, noise=None, poses=None,
     gravity=9.81, from_ns=None, to_ns=None, pose_rot_std=0.0, pose_pos_std=0.0, latitude=None,
-    heading=None, **options))]
+    heading=None, estimate=None, pose_spacing=0.5, calibration=None, out=None, **options))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn calibrate_file<'py>(
     py: Python<'py>,
@@ -341,10 +343,25 @@ pub(crate) fn calibrate_file<'py>(
     pose_pos_std: f64,
     latitude: Option<f64>,
     heading: Option<f64>,
+    estimate: Option<String>,
+    pose_spacing: f64,
+    calibration: Option<PathBuf>,
+    out: Option<PathBuf>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_args()?;
     earth_args(latitude, heading)?;
+    let needs_poses = estimate.is_some() || calibration.is_some();
+    if needs_poses && poses.is_none() {
+        return Err(raise(
+            Class::Input,
+            "estimate and calibration are options of the known-pose problem: give poses",
+        ));
+    }
+    let estimate = estimate
+        .map(|e| Estimate::parse(&e))
+        .transpose()
+        .map_err(|e| raise(Class::Input, e))?;
     let args = calibrate::Args {
         input,
         poses,
@@ -357,7 +374,10 @@ pub(crate) fn calibrate_file<'py>(
         body_p_sensor: None,
         latitude,
         heading,
-        out: None,
+        out,
+        estimate,
+        pose_spacing,
+        calibration,
     };
     let json = py
         .detach(|| calibrate::run(&args).map(|o| o.json))

@@ -301,23 +301,26 @@ pub(crate) fn read_groundtruth<'py>(
     Ok(d)
 }
 
-/// audit(path=None, *, gyro=None, accel=None, format=None, ..., check_units=True)
+/// audit(path=None, *, gyro=None, accel=None, format=None, ..., check_units=True,
+/// calibration=None)
 ///
 /// The `preint audit --json` report as a dict (docs in `_native.pyi`).
 #[pyfunction]
-#[pyo3(signature = (path=None, *, gyro=None, accel=None, **options))]
+#[pyo3(signature = (path=None, *, gyro=None, accel=None, calibration=None, **options))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn audit<'py>(
     py: Python<'py>,
     path: Option<PathBuf>,
     gyro: Option<PathBuf>,
     accel: Option<PathBuf>,
+    calibration: Option<PathBuf>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_args()?;
     let args = audit_cmd::Args {
         input,
         strict: false,
+        calibration,
     };
     let json = py
         .detach(|| audit_cmd::run(&args).map(|o| o.json))

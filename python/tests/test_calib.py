@@ -299,3 +299,54 @@ def test_advise_refusals_are_typed():
     with pytest.raises(preint.ShapeError):
         preint.advise(d["t_ns"][:800], d["gyro"][:800], d["acc"][:800], EUROC_NOISE,
                       fraction=-1.0)
+
+
+# --- Time offset and intrinsics from known poses ------------------------------------------------
+
+EUROC_GT = DATA / "euroc" / "V1_01_easy_groundtruth_vicon2gt.csv"
+
+
+def test_time_offset_from_known_poses_equals_the_command(preint_cli, tmp_path):
+    """``calibrate_file(estimate=...)`` is ``preint calibrate --estimate ... --json`` (the same
+    numbers, parsed from the same JSON), and the calibration file ``out`` writes carries the
+    estimated time offset."""
+    import json
+    import subprocess
+
+    t0 = 1_403_715_283_262_142_976  # 10 s into the ground truth
+    span = ["--from", str(t0), "--to", str(t0 + 20_000_000_000)]
+    out = tmp_path / "calib.yaml"
+    f = preint.calibrate_file(EUROC, poses=EUROC_GT, from_ns=t0, to_ns=t0 + 20_000_000_000,
+                              pose_rot_std=1.75e-3, pose_pos_std=0.005,
+                              estimate="time-offset", out=out)
+    r = subprocess.run([*preint_cli, "calibrate", "--imu", str(EUROC), "--poses", str(EUROC_GT),
+                        *span, "--pose-rot-std", "1.75e-3", "--pose-pos-std", "0.005",
+                        "--estimate", "time-offset", "--json"],
+                       check=True, capture_output=True, text=True)
+    c = json.loads(r.stdout)
+    assert f["model"] == c["model"] == "known-poses"
+    assert f["parameters"] == c["parameters"]
+    (td,) = f["parameters"]
+    assert td["name"] == "t_d" and td["unit"] == "s" and td["excited"]
+    assert abs(td["value"]) < 0.02 and 0 < td["std"] < 1e-3
+    text = out.read_text()
+    assert "time_offset:" in text and repr(f["time_offset_s"]) in text
+
+
+def test_estimate_refusals():
+    with pytest.raises(preint.InputError, match="give poses"):
+        preint.calibrate_file(EUROC, estimate="time-offset")
+    with pytest.raises(preint.InputError, match="unknown parameter `scale`"):
+        preint.calibrate_file(EUROC, poses=EUROC_GT, estimate="time-offset,scale")
+
+
+def test_audit_with_a_calibration_file(tmp_path):
+    """``audit(calibration=...)``: the file's accelerometer scale divides the median norm."""
+    cal = tmp_path / "c.yaml"
+    cal.write_text("%YAML:1.0\nimu0:\n  model: \"kalibr\"\n  Ta:\n    - [1.02, 0.0, 0.0]\n"
+                   "    - [0.0, 1.02, 0.0]\n    - [0.0, 0.0, 1.02]\n  time_offset: 0.001\n")
+    a = preint.audit(EUROC, calibration=cal)
+    u = a["units"]
+    assert u["gravity_median_m_s2"] == pytest.approx(u["raw_gravity_median_m_s2"] / 1.02, rel=1e-9)
+    assert a["calibration"]["time_offset_s"] == 0.001
+    assert "calibration" in [f["kind"] for f in a["findings"]]
