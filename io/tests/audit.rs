@@ -428,6 +428,7 @@ fn the_prefix_size_changes_nothing_but_the_unit_check_when_the_reference_is_the_
         let opts = AuditOptions {
             prefix_samples,
             max_listed: 20,
+            ..AuditOptions::default()
         };
         audit_stream(located, "rec", opts)
     };
@@ -476,7 +477,7 @@ proptest::proptest! {
             let sample = ImuSample::new(t, Vector3::new(x, v, 0.0), Vector3::new(v, 0.0, 9.8));
             Ok(Located { at: Location::Line(k as u64 + 1), sample })
         });
-        let opts = AuditOptions { prefix_samples: prefix, max_listed: 5 };
+        let opts = AuditOptions { prefix_samples: prefix, max_listed: 5, ..AuditOptions::default() };
         let a = audit_stream(located, "p", opts);
         let n = rows.len() as u64;
         let tm = &a.timing;

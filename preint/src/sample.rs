@@ -9,6 +9,7 @@ use nalgebra::Vector3;
 /// - `gyro`: angular rate ω_m [rad/s].
 /// - `acc`: specific force a_m [m/s²] (reads about +9.81 on the up axis at rest).
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub struct ImuSample {
     /// Timestamp \[ns\].
     pub t_ns: i64,

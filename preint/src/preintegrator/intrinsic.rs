@@ -28,21 +28,48 @@ use nalgebra::{SMatrix, Vector3};
 /// A loop whose samples are corrected by the intrinsics first.
 #[derive(Clone, Debug)]
 pub(super) struct Corrected<E> {
-    pub inner: E,
-    pub c: Correction,
+    inner: E,
+    c: Correction,
+    /// `c.kernel()`, chosen once for this CPU.
+    apply: unsafe fn(&Correction, &ImuSample) -> ImuSample,
+    /// The slice path's chunk of corrected samples (allocated at the slice path's first use:
+    /// only `Level::Deltas` takes it).
+    buf: Vec<ImuSample>,
+}
+
+impl<E> Corrected<E> {
+    /// Samples corrected per chunk of the slice path: large, because the inner slice path
+    /// pays a fixed cost per call (hermite4 clears a block buffer).
+    const CHUNK: usize = 2048;
+
+    pub(super) fn new(inner: E, c: Correction) -> Self {
+        Self {
+            inner,
+            // SAFETY: called here and used in this process, on this CPU.
+            apply: unsafe { c.kernel() },
+            c,
+            buf: Vec::new(),
+        }
+    }
 }
 
 impl<E: Engine + Clone + 'static> Engine for Corrected<E> {
     fn push(&mut self, s: &ImuSample) {
-        self.inner.push(&self.c.apply(s));
+        // SAFETY: `apply` was chosen for this CPU (`Correction::kernel`).
+        self.inner.push(&unsafe { (self.apply)(&self.c, s) });
     }
     /// The slice fast path on the corrected samples, a stack chunk at a time.
     fn run_slice(&mut self, samples: &[ImuSample], last_t_ns: i64, gap_limit: u64) -> usize {
         let c = self.c;
-        super::run_mapped::<512>(
+        if self.buf.is_empty() {
+            let zero = ImuSample::new(0, Vector3::zeros(), Vector3::zeros());
+            self.buf = vec![zero; Self::CHUNK];
+        }
+        super::run_mapped(
             samples,
             last_t_ns,
-            |s| c.apply(s),
+            &mut self.buf,
+            |src, dst| c.apply_all(src, dst),
             |buf, last| self.inner.run_slice(buf, last, gap_limit),
         )
     }

@@ -109,10 +109,16 @@ where
     /// The slice fast path on the corrected samples, a stack chunk at a time.
     fn run_slice(&mut self, samples: &[ImuSample], last_t_ns: i64, gap_limit: u64) -> usize {
         let (r, b_g) = (self.r, self.b_g);
-        run_mapped::<128>(
+        let mut buf = [ImuSample::new(0, Default::default(), Default::default()); 128];
+        run_mapped(
             samples,
             last_t_ns,
-            |s| without_centripetal(s, &r, &b_g),
+            &mut buf,
+            |src, dst| {
+                for (d, s) in dst.iter_mut().zip(src) {
+                    *d = without_centripetal(s, &r, &b_g);
+                }
+            },
             |buf, last| self.core.run_slice(buf, last, gap_limit),
         )
     }
@@ -246,10 +252,10 @@ impl Preintegrator {
                     side.ctx = side.ctx.map(|c| without_centripetal(&c, &r, &b_g));
                 }
                 match corr {
-                    Some(c) => with_scheme!(params.scheme, S => Box::new(Corrected {
-                        inner: Centripetal { core: Core::<S>::new(fixed).with_intrinsics(jac_model), r, b_g },
+                    Some(c) => with_scheme!(params.scheme, S => Box::new(Corrected::new(
+                        Centripetal { core: Core::<S>::new(fixed).with_intrinsics(jac_model), r, b_g },
                         c,
-                    })),
+                    ))),
                     None => with_scheme!(params.scheme, S => Box::new(Centripetal {
                         core: Core::<S>::new(fixed).with_intrinsics(jac_model),
                         r,
@@ -257,10 +263,10 @@ impl Preintegrator {
                     })),
                 }
             }
-            (None, Some(c)) => with_scheme!(params.scheme, S => Box::new(Corrected {
-                inner: Core::<S>::new(fixed).with_intrinsics(jac_model),
+            (None, Some(c)) => with_scheme!(params.scheme, S => Box::new(Corrected::new(
+                Core::<S>::new(fixed).with_intrinsics(jac_model),
                 c,
-            })),
+            ))),
             (None, None) => {
                 with_scheme!(params.scheme, S => Box::new(Core::<S>::new(fixed).with_intrinsics(jac_model)))
             }
@@ -581,22 +587,20 @@ pub struct BiasUpdate {
     pub reintegrated: bool,
 }
 
-/// `run` on `map` of every sample, `CHUNK` samples at a time through a stack buffer (the slice
-/// paths of the per-sample wrappers): stops at the first chunk `run` does not take whole and
-/// returns how many samples were taken; `run` gets each chunk and the time of the sample before
-/// it.
-pub(crate) fn run_mapped<const CHUNK: usize>(
+/// `run` on `map` of every sample, `buf.len()` samples at a time through `buf` (the slice
+/// paths of the per-sample wrappers): `map(src, dst)` writes the mapped chunk `src` into `dst`
+/// (same length); stops at the first chunk `run` does not take whole and returns how many
+/// samples were taken; `run` gets each chunk and the time of the sample before it.
+pub(crate) fn run_mapped(
     samples: &[ImuSample],
     last_t_ns: i64,
-    map: impl Fn(&ImuSample) -> ImuSample,
+    buf: &mut [ImuSample],
+    map: impl Fn(&[ImuSample], &mut [ImuSample]),
     mut run: impl FnMut(&[ImuSample], i64) -> usize,
 ) -> usize {
-    let mut buf = [ImuSample::new(0, Default::default(), Default::default()); CHUNK];
     let (mut used, mut last) = (0, last_t_ns);
-    for chunk in samples.chunks(CHUNK) {
-        for (b, s) in buf.iter_mut().zip(chunk) {
-            *b = map(s);
-        }
+    for chunk in samples.chunks(buf.len()) {
+        map(chunk, &mut buf[..chunk.len()]);
         let n = run(&buf[..chunk.len()], last);
         used += n;
         if n < chunk.len() {
