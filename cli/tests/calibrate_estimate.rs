@@ -154,8 +154,8 @@ fn time_offset_and_intrinsics_from_poses_and_from_attitudes() {
     );
 }
 
-/// A recording at rest excites no time offset: the output says so (`excited: false`, the
-/// initial 0) and `--out` writes 0, not a number the data did not give; unknown names and
+/// A recording at rest excites no time offset: the output says so (`excited: false`, `value`
+/// null, the initial 0 `kept`), not a number the data did not give; unknown names and
 /// `--estimate` without `--poses` are usage errors.
 #[test]
 fn unexcited_parameters_are_withheld_and_bad_lists_refused() {
@@ -174,7 +174,8 @@ fn unexcited_parameters_are_withheld_and_bad_lists_refused() {
     ]);
     let td = param(&out, "t_d");
     assert_eq!(td["excited"], false, "{td}");
-    assert_eq!(td["value"], 0.0);
+    assert_eq!(td["value"], serde_json::Value::Null);
+    assert_eq!(td["kept"], 0.0);
     let text = String::from_utf8_lossy(
         &run(&[
             "calibrate",

@@ -807,8 +807,9 @@ def calibrate_file(
     otherwise single-attitude static on the longest still interval), ``model`` names it.
     ``noise``: a Kalibr imu.yaml (default EuRoC figures). With ``poses``: ``estimate``, a
     comma-separated list of ``time-offset``, ``gyro-intrinsics``, ``g-sensitivity``,
-    ``accel-intrinsics`` (``parameters`` [{name, value, std, unit, excited}] in the result; a
-    parameter the motion does not excite is withheld), ``pose_spacing`` [s], ``calibration`` (a
+    ``accel-intrinsics`` (``parameters`` [{name, unit, excited, value, kept, std}] in the
+    result; a parameter the motion does not excite is withheld: ``value`` None, ``kept`` its
+    initial value), ``pose_spacing`` [s], ``calibration`` (a
     calibration file applied and used as the starting point). ``out``: write the calibration
     file (OpenVINS kalibr_imu_chain.yaml). Raises CalibrationError (kind ``Failed``) when
     nothing can be answered, e.g. no still interval; InputError for a bad file or list."""

@@ -7,7 +7,10 @@
 //!   poses `--pose-spacing` apart, or with attitudes only the gyroscope problem (gyro bias);
 //!   `--estimate` adds the time offset, gyroscope intrinsics, g-sensitivity and accelerometer
 //!   intrinsics, each with its σ or withheld when the motion does not excite it
-//!   ([`preint_calib::bias::known_poses::extras`]);
+//!   ([`preint_calib::bias::known_poses::extras`]); JSON `parameters`: `[{name, unit,
+//!   excited, value` (null when withheld), `kept` (the value applied and written), `std}]`,
+//!   `time_offset_s` (null unless estimated or given) and `intrinsics` (`Tw`, `R_IMUtoGYRO`,
+//!   `Ta`, `R_IMUtoACC`, `Tg` row by row);
 //! - otherwise, still intervals are detected; with at least three of them at distinct
 //!   attitudes (> 20° apart) the multi-position problem (Tedaldi et al. 2014) estimates both
 //!   biases, the attitudes and, if BIC supports it, scale factors;
@@ -456,13 +459,15 @@ pub fn to_json(cal: &Calibration) -> Value {
     }
 }
 
-/// The `--estimate` parameters: name, value, σ, unit and whether excited (else withheld).
+/// The `--estimate` parameters: name, unit, whether excited, the estimate (`value`, null when
+/// withheld), the value kept (`kept`: the estimate, or the initial value when withheld) and σ
+/// (null when the motion does not move the parameter at all).
 fn parameters_json(ps: &[ParameterEstimate], model: IntrinsicsModel) -> Value {
     ps.iter()
         .map(|e| {
-            json!({"name": e.param.name(model), "value": e.value,
-                "std": e.std.is_finite().then_some(e.std), "unit": e.param.unit(),
-                "excited": e.excited})
+            json!({"name": e.param.name(model), "unit": e.param.unit(), "excited": e.excited,
+                "value": e.excited.then_some(e.value), "kept": e.value,
+                "std": e.std.is_finite().then_some(e.std)})
         })
         .collect()
 }
