@@ -561,10 +561,12 @@ __all__ += [
     "allan_variance",
     "allan_variance_file",
     "audit",
+    "apply_intrinsics",
     "calibrate_file",
     "calibrate_multi_pose",
     "calibrate_static",
     "detect_still_intervals",
+    "read_calibration",
     "read_groundtruth",
     "read_imu",
     "read_kalibr_yaml",
@@ -813,6 +815,27 @@ def calibrate_file(
     calibration file applied and used as the starting point). ``out``: write the calibration
     file (OpenVINS kalibr_imu_chain.yaml). Raises CalibrationError (kind ``Failed``) when
     nothing can be answered, e.g. no still interval; InputError for a bad file or list."""
+
+def read_calibration(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """An IMU calibration file (``calibrate_file(out=...)``, ``preint calibrate --out``;
+    OpenVINS kalibr_imu_chain.yaml or Kalibr imu.yaml): ``model`` (``kalibr`` or ``rpng``),
+    ``Tw``, ``R_IMUtoGYRO``, ``Ta``, ``R_IMUtoACC``, ``Tg`` (3×3 float64; OpenVINS' model
+    ``ω_m = Tw R_IMUtoGYRO ω + Tg a + b_g``, ``a_m = Ta R_IMUtoACC a + b_a``; Tg in
+    (rad/s)/(m/s²)), ``time_offset_s`` (``t_imu = t_keyframe + time_offset_s``, or None) and
+    ``noise`` (a Noise, or None). Raises InputError naming the file, line and field."""
+
+def apply_intrinsics(
+    calibration: str | os.PathLike[str],
+    t_ns: _I64,
+    gyro: _F64,
+    acc: _F64,
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+    """The samples corrected by a calibration file's intrinsics, bias not removed:
+    ``a' = R_ACCtoIMU Ta⁻¹ a_m``, ``ω' = R_GYROtoIMU Tw⁻¹ (ω_m − Tg a')`` (gyro', acc', float64
+    [N, 3]; the same bits as the Rust preintegrator's correction). Preintegrating them with
+    keyframes moved by ``time_offset_s`` is ``preint integrate --calibration`` (to rounding: the
+    command interpolates boundary samples before correcting them). Raises InputError for the
+    file, ShapeError for the arrays."""
 
 def advise(
     t_ns: _I64,

@@ -5,6 +5,7 @@
 mod advise;
 mod allan;
 mod calib;
+mod calibration;
 mod convert;
 mod errors;
 mod factor;
@@ -52,6 +53,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(calib::calibrate_static_py, m)?)?;
     m.add_function(wrap_pyfunction!(calib::calibrate_multi_pose_py, m)?)?;
     m.add_function(wrap_pyfunction!(calib::calibrate_file, m)?)?;
+    m.add_function(wrap_pyfunction!(calibration::read_calibration, m)?)?;
+    m.add_function(wrap_pyfunction!(calibration::apply_intrinsics, m)?)?;
     m.add_function(wrap_pyfunction!(advise::advise_py, m)?)?;
     m.add_function(wrap_pyfunction!(advise::advise_file, m)?)?;
     m.add(

@@ -350,3 +350,59 @@ def test_audit_with_a_calibration_file(tmp_path):
     assert u["gravity_median_m_s2"] == pytest.approx(u["raw_gravity_median_m_s2"] / 1.02, rel=1e-9)
     assert a["calibration"]["time_offset_s"] == 0.001
     assert "calibration" in [f["kind"] for f in a["findings"]]
+
+
+def _calibration_file(tmp_path: Path) -> Path:
+    """An OpenVINS kalibr_imu_chain.yaml with every term: 1 % scales, 2 mrad misalignments,
+    an axis rotation, g-sensitivity and a time offset."""
+    p = tmp_path / "intrinsics.yaml"
+    p.write_text(
+        "%YAML:1.0\nimu0:\n  model: \"kalibr\"\n"
+        "  Tw:\n    - [1.01, 0.0, 0.0]\n    - [0.002, 0.99, 0.0]\n    - [-0.002, 0.001, 1.005]\n"
+        "  R_IMUtoGYRO:\n    - [0.9999980000006666, -0.0019999986666669335, 0.0]\n"
+        "    - [0.0019999986666669335, 0.9999980000006666, 0.0]\n    - [0.0, 0.0, 1.0]\n"
+        "  Ta:\n    - [0.99, 0.0, 0.0]\n    - [-0.002, 1.01, 0.0]\n    - [0.001, 0.002, 1.0]\n"
+        "  R_IMUtoACC:\n    - [1.0, 0.0, 0.0]\n    - [0.0, 1.0, 0.0]\n    - [0.0, 0.0, 1.0]\n"
+        "  Tg:\n    - [0.0002, 0.0, 0.0001]\n    - [0.0, -0.0003, 0.0]\n    - [0.0001, 0.0, 0.0002]\n"
+        "  time_offset: 0.0042\n")
+    return p
+
+
+def test_read_calibration_and_apply_intrinsics(tmp_path, euroc_imu):
+    """``apply_intrinsics`` against OpenVINS' correction written here in numpy
+    (``a' = R_ACCtoIMU Ta⁻¹ a_m``, ``ω' = R_GYROtoIMU Tw⁻¹ (ω_m − Tg a')``)."""
+    cal = _calibration_file(tmp_path)
+    c = preint.read_calibration(cal)
+    assert c["model"] == "kalibr" and c["time_offset_s"] == 0.0042 and c["noise"] is None
+    assert c["Tw"].shape == (3, 3) and c["Tw"][1, 0] == 0.002 and c["Tg"][0, 2] == 0.0001
+    t, g, a = euroc_imu
+    g2, a2 = preint.apply_intrinsics(cal, t, g, a)
+    a_ref = (c["R_IMUtoACC"].T @ np.linalg.inv(c["Ta"]) @ a.T).T
+    w_ref = (c["R_IMUtoGYRO"].T @ np.linalg.inv(c["Tw"]) @ (g.T - c["Tg"] @ a_ref.T)).T
+    np.testing.assert_allclose(a2, a_ref, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(g2, w_ref, rtol=0, atol=1e-13)
+    assert np.abs(a2 - a).max() > 0.05  # the intrinsics do change the samples
+    with pytest.raises(preint.InputError, match="nope.yaml"):
+        preint.read_calibration(tmp_path / "nope.yaml")
+
+
+def test_apply_intrinsics_is_integrate_calibration(preint_cli, tmp_path, euroc_imu):
+    """Preintegrating the corrected arrays over keyframes moved by the file's time offset is
+    ``preint integrate --calibration`` (to rounding: the command corrects interpolated boundary
+    samples, here the samples are corrected before the interpolation)."""
+    import json
+    import subprocess
+
+    cal = _calibration_file(tmp_path)
+    t, g, a = euroc_imu
+    g2, a2 = preint.apply_intrinsics(cal, t, g, a)
+    ti, tj = 1_403_715_280_000_000_000, 1_403_715_281_000_000_000
+    r = subprocess.run([*preint_cli, "integrate", "--imu", str(EUROC), "--from", str(ti), "--to",
+                        str(tj), "--calibration", str(cal), "--json"],
+                       check=True, capture_output=True, text=True)
+    cli = json.loads(r.stdout)
+    td = round(0.0042 * 1e9)
+    m = preint.preintegrate(preint.Params(preint.Noise.euroc()), t, g2, a2, ti + td, tj + td)
+    np.testing.assert_allclose(m.delta_v, cli["delta_v"], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(m.delta_p, cli["delta_p"], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(m.delta_R, cli["delta_R"], rtol=0, atol=1e-12)
