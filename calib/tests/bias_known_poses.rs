@@ -253,7 +253,7 @@ fn euroc_v1_01_biases_velocities_gravity() {
     let gt_bg = sel.iter().map(|s| s.bias.gyro).sum::<Vector3<f64>>() / n;
     let gt_ba = sel.iter().map(|s| s.bias.acc).sum::<Vector3<f64>>() / n;
     let range = |f: &dyn Fn(&preint_io::GroundTruthState) -> f64| {
-        let v: Vec<f64> = all.iter().map(|s| f(s)).collect();
+        let v: Vec<f64> = all.iter().map(f).collect();
         v.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
             - v.iter().cloned().fold(f64::INFINITY, f64::min)
     };

@@ -114,10 +114,10 @@ fn time_offset_and_intrinsics_from_poses_and_from_attitudes() {
     let td = out["time_offset_s"].as_f64().unwrap();
     assert!((file.time_offset_s.unwrap() - td).abs() <= 1e-18);
     let tw = common::matrix(&out["intrinsics"]["Tw"]);
-    for r in 0..3 {
-        for c in 0..3 {
+    for (r, row) in tw.iter().enumerate() {
+        for (c, v) in row.iter().enumerate() {
             // serde_json's parser may round the last digit differently.
-            assert!((file.intrinsics.t_w[(r, c)] - tw[r][c]).abs() <= 2e-16);
+            assert!((file.intrinsics.t_w[(r, c)] - v).abs() <= 2e-16);
         }
     }
     // Attitudes only: the gyroscope's parameters; the accelerometer's are refused.
