@@ -342,7 +342,7 @@ impl Correction {
     /// `ω'_r = fma(K_wa[r,2], a_z, fma(K_wa[r,1], a_y, fma(K_wa[r,0], a_x, fma(K_w[r,2], ω_z,
     /// fma(K_w[r,1], ω_y, K_w[r,0] ω_x)))))` and `a'_r = fma(K_a[r,2], a_z, fma(K_a[r,1], a_y,
     /// K_a[r,0] a_x))`, one rounding per step. With AVX2 and FMA it runs as four- and two-lane
-    /// vector instructions ([`avx2`]), with the same roundings.
+    /// vector instructions (the private module `avx2`), with the same roundings.
     #[inline(always)]
     pub fn apply(&self, s: &ImuSample) -> ImuSample {
         #[cfg(target_arch = "x86_64")]
