@@ -12,7 +12,10 @@
 //! values (the g-sensitivity reads the accelerometer's corrected samples, as in
 //! [`preint::intrinsics`]).
 
-use super::extras::{self, Calibration, Param, ParameterEstimate, fit_excited, parameters};
+use super::extras::{
+    self, Calibration, Layout, Param, ParameterEstimate, Relinearised, fit_excited, parameters,
+    relinearise,
+};
 use super::pose_noise::Whitening;
 use super::{KnownPoseOptions, check_calibration_options};
 use crate::bias::BiasError;
@@ -107,12 +110,18 @@ pub fn calibrate_known_attitudes(
         &opts.excitation,
         |active| {
             let f = fit(samples, attitudes, opts, active)?;
-            let stds = f.0.std_devs();
-            let calib = f.2;
+            let stds = f.sol.std_devs();
+            let calib = f.calib;
             Ok((f, calib, (0..active.len()).map(|k| stds[3 + k]).collect()))
         },
     )?;
-    let (sol, (iterations, solves), calib) = out.fit;
+    let Relinearised {
+        sol,
+        calib,
+        iterations,
+        solves,
+        ..
+    } = out.fit;
     Ok(KnownAttitudeCalibration {
         gyro_bias: extras_v3(&sol.estimate),
         gyro_bias_std: sol.marginal_std::<3>(0),
@@ -132,39 +141,26 @@ fn extras_v3(p: &DVector<f64>) -> Vector3<f64> {
     Vector3::new(p[0], p[1], p[2])
 }
 
-type Fit = (Solution<DVector<f64>>, (u64, usize), Calibration);
+type Fit = Relinearised<DVector<f64>>;
 
-/// Solves and re-linearises until the bias and calibration stop moving (as
-/// [`super::calibrate_known_poses`]).
+/// The re-linearised fit (as [`super::calibrate_known_poses`]'s).
 fn fit(
     samples: &[ImuSample],
     attitudes: &[KnownAttitude],
     opts: &KnownPoseOptions,
     active: &[Param],
 ) -> Result<Fit, BiasError> {
+    let layout = Layout {
+        vec: |x: &DVector<f64>| x,
+        vec_mut: |x: &mut DVector<f64>| x,
+        eo: 3,
+        bias: |p, lin| ImuBias::new(extras_v3(p), lin.acc),
+    };
     let mut x = DVector::zeros(3 + active.len());
     x.fixed_rows_mut::<3>(0).copy_from(&opts.initial_bias.gyro);
-    let mut lin = (opts.initial_bias, Calibration::initial(opts));
-    let (mut iterations, mut solves) = (0, 0);
-    loop {
-        let sol = solve_linearised(samples, attitudes, opts, &lin, active, x)?;
-        solves += 1;
-        iterations += sol.iterations;
-        let bg = extras_v3(&sol.estimate);
-        let e: Vec<f64> = sol.estimate.rows(3, active.len()).iter().copied().collect();
-        let moved = (bg - lin.0.gyro).norm();
-        let moved_e = active
-            .iter()
-            .zip(&e)
-            .map(|(q, v)| v.abs() / q.limit(&opts.excitation))
-            .fold(0.0, f64::max);
-        lin = (ImuBias::new(bg, lin.0.acc), lin.1.moved(active, &e));
-        x = sol.estimate.clone();
-        x.rows_mut(3, active.len()).fill(0.0);
-        if (moved < 1e-6 && moved_e < 1e-3) || solves > opts.max_relinearizations {
-            return Ok((sol, (iterations, solves), lin.1));
-        }
-    }
+    relinearise(opts, active, x, &layout, |lin, x| {
+        solve_linearised(samples, attitudes, opts, lin, active, x)
+    })
 }
 
 /// One solve at the linearisation point.
@@ -172,24 +168,13 @@ fn solve_linearised(
     samples: &[ImuSample],
     attitudes: &[KnownAttitude],
     opts: &KnownPoseOptions,
-    (bias_hat, calib): &(ImuBias, Calibration),
+    lin: &(ImuBias, Calibration),
     active: &[Param],
     x: DVector<f64>,
 ) -> Result<Solution<DVector<f64>>, BiasError> {
-    let mut pims = Vec::with_capacity(attitudes.len() - 1);
-    let mut je = Vec::with_capacity(attitudes.len() - 1);
-    for w in attitudes.windows(2) {
-        let (pim, j) = extras::window(
-            &opts.params,
-            calib,
-            active,
-            bias_hat,
-            samples,
-            (w[0].t_ns, w[1].t_ns),
-        )?;
-        pims.push(pim);
-        je.push(j.rows(0, 3).into_owned());
-    }
+    let times = attitudes.windows(2).map(|w| (w[0].t_ns, w[1].t_ns));
+    let (pims, jacs) = extras::windows(&opts.params, lin, active, samples, times)?;
+    let je: Vec<DMatrix<f64>> = jacs.iter().map(|j| j.rows(0, 3).into_owned()).collect();
     let (diag, sub) = rotation_covariance(&pims, attitudes, opts.pose_rot_std);
     let white = Whitening::<3>::new(&diag, &sub).ok_or_else(|| BiasError::InvalidParameter {
         name: "params",

@@ -34,7 +34,8 @@
 //! and the problem solved again, since a parameter correlated with it may then pass.
 
 use crate::bias::BiasError;
-use nalgebra::{DMatrix, SVector};
+use crate::gauss_newton::Solution;
+use nalgebra::{DMatrix, DVector, SVector};
 use preint::intrinsics::{AppliedIntrinsics, ImuIntrinsics, IntrinsicsModel};
 use preint::{ImuBias, ImuSample, PreintError, PreintParams, PreintegratedImu};
 
@@ -367,5 +368,86 @@ pub(crate) fn fit_excited<T>(
             .filter(|k| !drop.contains(k))
             .map(|k| active[k])
             .collect();
+    }
+}
+
+/// The windows between consecutive keyframe `times` preintegrated at `lin` with their
+/// calibration Jacobians ([`window`]).
+pub(crate) fn windows(
+    base: &PreintParams,
+    (bias, calib): &(ImuBias, Calibration),
+    params: &[Param],
+    samples: &[ImuSample],
+    times: impl Iterator<Item = (i64, i64)>,
+) -> Result<(Vec<PreintegratedImu>, Vec<DMatrix<f64>>), PreintError> {
+    let (mut pims, mut jacs) = (Vec::new(), Vec::new());
+    for t in times {
+        let (pim, j) = window(base, calib, params, bias, samples, t)?;
+        pims.push(pim);
+        jacs.push(j);
+    }
+    Ok((pims, jacs))
+}
+
+/// A converged fit: the last solve, the bias and calibration it reached.
+pub(crate) struct Relinearised<X> {
+    pub(crate) sol: Solution<X>,
+    pub(crate) bias: ImuBias,
+    pub(crate) calib: Calibration,
+    pub(crate) iterations: u64,
+    pub(crate) solves: usize,
+}
+
+/// The state's vector part and where the calibration corrections `e` start in it.
+pub(crate) struct Layout<X> {
+    /// The vector of a state.
+    pub(crate) vec: fn(&X) -> &DVector<f64>,
+    /// The same, to write.
+    pub(crate) vec_mut: fn(&mut X) -> &mut DVector<f64>,
+    /// Index of `e` in it.
+    pub(crate) eo: usize,
+    /// The bias of a state, given the linearisation point's (for the entries it does not hold).
+    pub(crate) bias: fn(&DVector<f64>, &ImuBias) -> ImuBias,
+}
+
+/// Solves at the linearisation point (`solve`), folds the state's `e` into the calibration,
+/// resets it, and solves again until the bias moves by less than 1e-6 and every parameter by
+/// less than 1e-3 of its excitation limit, or `opts.max_relinearizations` (module docs).
+pub(crate) fn relinearise<X: Clone + preint_lie::Manifold>(
+    opts: &super::KnownPoseOptions,
+    active: &[Param],
+    mut x: X,
+    layout: &Layout<X>,
+    mut solve: impl FnMut(&(ImuBias, Calibration), X) -> Result<Solution<X>, BiasError>,
+) -> Result<Relinearised<X>, BiasError> {
+    let mut lin = (opts.initial_bias, Calibration::initial(opts));
+    let (mut iterations, mut solves) = (0, 0);
+    loop {
+        let sol = solve(&lin, x)?;
+        solves += 1;
+        iterations += sol.iterations;
+        let p = (layout.vec)(&sol.estimate);
+        let b = (layout.bias)(p, &lin.0);
+        let e: Vec<f64> = p.rows(layout.eo, active.len()).iter().copied().collect();
+        let moved = (b.gyro - lin.0.gyro).norm() + (b.acc - lin.0.acc).norm();
+        let moved_e = active
+            .iter()
+            .zip(&e)
+            .map(|(q, v)| v.abs() / q.limit(&opts.excitation))
+            .fold(0.0, f64::max);
+        lin = (b, lin.1.moved(active, &e));
+        x = sol.estimate.clone();
+        (layout.vec_mut)(&mut x)
+            .rows_mut(layout.eo, active.len())
+            .fill(0.0);
+        if (moved < 1e-6 && moved_e < 1e-3) || solves > opts.max_relinearizations {
+            return Ok(Relinearised {
+                sol,
+                bias: b,
+                calib: lin.1,
+                iterations,
+                solves,
+            });
+        }
     }
 }

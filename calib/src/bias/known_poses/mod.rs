@@ -42,7 +42,8 @@ use super::validate::{check_gravity, check_non_negative, check_positive, check_s
 use crate::gauss_newton::{GaussNewton, Solution, StopReason, solve};
 pub use attitudes::{KnownAttitude, KnownAttitudeCalibration, calibrate_known_attitudes};
 use extras::{
-    Calibration, Estimate, ExcitationLimits, Param, ParameterEstimate, fit_excited, parameters,
+    Calibration, Estimate, ExcitationLimits, Layout, Param, ParameterEstimate, Relinearised,
+    fit_excited, parameters, relinearise,
 };
 use gravity::GravityDir;
 use nalgebra::{DMatrix, DVector, Vector3};
@@ -265,17 +266,9 @@ pub(super) fn check_calibration_options(opts: &KnownPoseOptions) -> Result<(), B
     Ok(())
 }
 
-/// A converged fit of the parameters `active`.
-struct Fit {
-    sol: Solution<State>,
-    bias: ImuBias,
-    calib: Calibration,
-    iterations: u64,
-    solves: usize,
-}
+type Fit = Relinearised<State>;
 
-/// Solves, re-linearises at the new bias and calibration, and solves again until they stop
-/// moving (module docs).
+/// The re-linearised fit of the parameters `active` (module docs).
 fn fit(
     samples: &[ImuSample],
     poses: &[KnownPose],
@@ -283,39 +276,21 @@ fn fit(
     g0: &Vector3<f64>,
     active: &[Param],
 ) -> Result<Fit, BiasError> {
-    let eo = 6 + 3 * poses.len();
-    let mut x = initial_state(poses, opts, g0, active.len());
-    let mut lin = (opts.initial_bias, Calibration::initial(opts));
-    let (mut iterations, mut solves) = (0, 0);
-    loop {
-        let sol = solve_linearised(samples, poses, opts, &lin, active, g0, x)?;
-        solves += 1;
-        iterations += sol.iterations;
-        let p = &sol.estimate.0;
-        let b = ImuBias::new(
-            Vector3::new(p[0], p[1], p[2]),
-            Vector3::new(p[3], p[4], p[5]),
-        );
-        let e: Vec<f64> = p.rows(eo, active.len()).iter().copied().collect();
-        let moved = (b.gyro - lin.0.gyro).norm() + (b.acc - lin.0.acc).norm();
-        let moved_e = active
-            .iter()
-            .zip(&e)
-            .map(|(q, v)| v.abs() / q.limit(&opts.excitation))
-            .fold(0.0, f64::max);
-        lin = (b, lin.1.moved(active, &e));
-        x = sol.estimate.clone();
-        x.0.rows_mut(eo, active.len()).fill(0.0);
-        if (moved < 1e-6 && moved_e < 1e-3) || solves > opts.max_relinearizations {
-            return Ok(Fit {
-                sol,
-                bias: b,
-                calib: lin.1,
-                iterations,
-                solves,
-            });
-        }
-    }
+    let layout = Layout {
+        vec: |x: &State| &x.0,
+        vec_mut: |x: &mut State| &mut x.0,
+        eo: 6 + 3 * poses.len(),
+        bias: |p, _| {
+            ImuBias::new(
+                Vector3::new(p[0], p[1], p[2]),
+                Vector3::new(p[3], p[4], p[5]),
+            )
+        },
+    };
+    let x = initial_state(poses, opts, g0, active.len());
+    relinearise(opts, active, x, &layout, |lin, x| {
+        solve_linearised(samples, poses, opts, lin, active, g0, x)
+    })
 }
 
 /// At least 3 poses, at strictly increasing times within the samples' span, finite.
@@ -386,25 +361,13 @@ fn solve_linearised(
     samples: &[ImuSample],
     poses: &[KnownPose],
     opts: &KnownPoseOptions,
-    (bias_hat, calib): &(ImuBias, Calibration),
+    lin: &(ImuBias, Calibration),
     active: &[Param],
     g0: &Vector3<f64>,
     x: State,
 ) -> Result<Solution<State>, BiasError> {
-    let mut pims = Vec::with_capacity(poses.len() - 1);
-    let mut extras: Vec<DMatrix<f64>> = Vec::with_capacity(poses.len() - 1);
-    for w in poses.windows(2) {
-        let (pim, je) = extras::window(
-            &opts.params,
-            calib,
-            active,
-            bias_hat,
-            samples,
-            (w[0].t_ns, w[1].t_ns),
-        )?;
-        pims.push(pim);
-        extras.push(je);
-    }
+    let times = poses.windows(2).map(|w| (w[0].t_ns, w[1].t_ns));
+    let (pims, extras) = extras::windows(&opts.params, lin, active, samples, times)?;
     let (diag, sub) = residual_covariance(&pims, poses, opts.pose_rot_std, opts.pose_pos_std);
     let white = Whitening::new(&diag, &sub).ok_or_else(|| BiasError::InvalidParameter {
         name: "params",
