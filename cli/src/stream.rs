@@ -116,22 +116,34 @@ pub fn open_checked(args: &ImuArgs) -> Result<CheckedSamples, CliError> {
 /// As [`open_checked`], with a prefix that also ends [`EDGE_SAMPLES`] − 1 samples after
 /// `until` \[ns\] (a window's end): nothing after the window is read for the checks.
 pub fn open_checked_until(args: &ImuArgs, until: Option<i64>) -> Result<CheckedSamples, CliError> {
-    open_checked_prefix(args, until, UNIT_CHECK_PREFIX, None)
+    open_checked_prefix(args, until, UNIT_CHECK_PREFIX, None, EDGE_SAMPLES)
+}
+
+/// As [`open_checked_until`], the prefix ending `edge` − 1 samples after `until` (a window
+/// that reads `edge` samples on each side, [`cut_window_with_edge`]).
+pub fn open_checked_window(
+    args: &ImuArgs,
+    until: Option<i64>,
+    edge: usize,
+) -> Result<CheckedSamples, CliError> {
+    open_checked_prefix(args, until, UNIT_CHECK_PREFIX, None, edge)
 }
 
 /// As [`open_checked_until`], with the unit checks on at most `max_samples` samples spanning at
-/// most `max_span_s` seconds (the prefix ends with the first sample that reaches it).
+/// most `max_span_s` seconds (the prefix ends with the first sample that reaches it), and
+/// `edge` − 1 samples read after `until`.
 pub fn open_checked_prefix(
     args: &ImuArgs,
     until: Option<i64>,
     max_samples: usize,
     max_span_s: Option<f64>,
+    edge: usize,
 ) -> Result<CheckedSamples, CliError> {
     let mut rest = args.open()?;
     let (info, progress) = (rest.info().clone(), rest.progress().clone());
     let max_span_ns = max_span_s.map_or(i64::MAX, |s| (s * 1e9) as i64);
     let (mut prefix, mut after, mut ended) = (Vec::new(), 0, false);
-    while prefix.len() < max_samples && after < EDGE_SAMPLES - 1 {
+    while prefix.len() < max_samples && after < edge - 1 {
         let Some(s) = rest.next() else {
             ended = true;
             break;
@@ -153,7 +165,7 @@ pub fn open_checked_prefix(
         checks::si_units(&prefix, args.path())?;
     }
     // Nothing more is read once the source ended or the window `until` is complete.
-    let more = !ended && after < EDGE_SAMPLES - 1;
+    let more = !ended && after < edge - 1;
     Ok(CheckedSamples {
         prefix: prefix.into_iter(),
         rest: more.then(|| Prefetch::start(rest)),
@@ -212,7 +224,18 @@ pub fn cut_window(
     from: Option<i64>,
     to: Option<i64>,
 ) -> Result<StreamWindow, CliError> {
-    let mut before: VecDeque<ImuSample> = VecDeque::with_capacity(EDGE_SAMPLES + 1);
+    cut_window_with_edge(stream, from, to, EDGE_SAMPLES)
+}
+
+/// [`cut_window`] keeping `edge` (≥ [`EDGE_SAMPLES`]) samples before `from` and `edge` − 1
+/// after `to`.
+pub fn cut_window_with_edge(
+    stream: impl Iterator<Item = Result<ImuSample, CliError>>,
+    from: Option<i64>,
+    to: Option<i64>,
+    edge: usize,
+) -> Result<StreamWindow, CliError> {
+    let mut before: VecDeque<ImuSample> = VecDeque::with_capacity(edge + 1);
     let mut inside: Vec<ImuSample> = Vec::new();
     let (mut first_ns, mut dropped, mut after) = (None, 0usize, 0usize);
     for s in stream {
@@ -221,7 +244,7 @@ pub fn cut_window(
         let t_i = from.unwrap_or(t_i);
         if s.t_ns < t_i {
             before.push_back(s);
-            if before.len() > EDGE_SAMPLES {
+            if before.len() > edge {
                 before.pop_front();
                 dropped += 1;
             }
@@ -237,7 +260,7 @@ pub fn cut_window(
             )));
         }
         inside.push(s);
-        if after == EDGE_SAMPLES - 1 {
+        if after == edge - 1 {
             break;
         }
     }

@@ -8,10 +8,15 @@
 //! it ([`estimate`]):
 //!
 //! - **euler** and **galilean** (order 1 on smooth input) and **midpoint** (order 2): the
-//!   4th-order `hermite4` scheme on the same samples, itself corrected by its Richardson estimate (below):
-//!   `e ≈ (D_h ⊖ D_hermite4) + ê_hermite4`. The companion cuts the window itself, so a keyframe
-//!   between samples is interpolated by a cubic there and by a line in the scheme's window: the
-//!   estimate includes the error of that line, as it should.
+//!   4th-order `hermite4` scheme on the same samples upsampled four times, `e ≈ D_h ⊖ D_fine`.
+//!   Each inserted sample is the value of the degree-11 polynomial through the 12 nearest
+//!   samples (centred on its interval): a smooth signal sampled a few times per period of its
+//!   fastest component is interpolated to high order where a cubic, or Richardson's estimate
+//!   on every other sample, is far from asymptotic (on `aggressive` at 20 Hz, 6.5 samples per
+//!   period, the estimate's own error falls from 1.3σ to 0.13σ of the window's noise). The
+//!   companion cuts the window itself, so a keyframe between samples is interpolated finely
+//!   there and by a line in the scheme's window: the estimate includes the error of that line,
+//!   as it should.
 //! - **hermite4**: Richardson's estimate from the same scheme on every other sample: with
 //!   `e_2h ≈ 2⁴ e_h`, `D_h ⊖ D_2h ≈ e_h − e_2h`, so `e ≈ −(D_h ⊖ D_2h) / (2⁴ − 1)`.
 //!
@@ -81,12 +86,13 @@ pub fn estimate(
                 _ => Level::Covariance,
             };
             let with_cov = h4.clone().with_level(level);
+            // On the samples as they are: the noise the companion responds to (and the
+            // stream's checks, with errors naming its samples).
             let companion = preintegrate(&with_cov, bias, samples, t_i, t_j)?;
-            // The companion's own error, by Richardson, so that at low rates the estimate is
-            // not limited by it: `D_S ⊖ D ≈ (D_S ⊖ D_h4) + (D_h4 ⊖ D)`.
-            let own = richardson(&h4, bias, samples, &companion)?;
+            let fine = upsampled(samples, t_i, t_j);
+            let companion_fine = preintegrate(&h4, bias, &fine, t_i, t_j)?;
             Ok(TruncationEstimate {
-                error: m.delta_error(&companion) + own,
+                error: m.delta_error(&companion_fine),
                 method: "hermite4 companion",
                 companion_cov: companion.cov,
             })
@@ -110,6 +116,56 @@ fn richardson(
     let half = every_other(samples, m.t_i_ns, m.t_j_ns);
     let coarse = preintegrate(params, bias, &half, m.t_i_ns, m.t_j_ns)?;
     Ok(-m.delta_error(&coarse) / 15.0)
+}
+
+/// Samples the companion inserts per interval.
+const UPSAMPLE: i64 = 4;
+/// Points of the interpolating polynomials.
+const STENCIL: usize = 12;
+/// Stream samples the estimate reads on each side of a window (beyond the samples at or next
+/// to its keyframes) for centred interpolating polynomials: with fewer, at a stream's ends,
+/// they are one-sided and the estimate less accurate.
+pub const CONTEXT_SAMPLES: usize = STENCIL / 2 + 2;
+
+/// The stream around `[t_i_ns, t_j_ns]` (from the interval before the one holding `t_i` to the
+/// one after the one holding `t_j`) with `UPSAMPLE − 1` samples inserted in every interval,
+/// each the value at its time of the degree-11 polynomial through the `STENCIL` nearest
+/// samples (centred on the interval, one-sided at the stream's ends; module docs).
+fn upsampled(samples: &[ImuSample], t_i_ns: i64, t_j_ns: i64) -> Vec<ImuSample> {
+    let n = samples.len();
+    let first = samples
+        .partition_point(|s| s.t_ns <= t_i_ns)
+        .saturating_sub(2);
+    let last = (samples.partition_point(|s| s.t_ns < t_j_ns) + 1).min(n - 1);
+    let mut out = Vec::with_capacity((last - first) * UPSAMPLE as usize + 1);
+    for k in first..last {
+        out.push(samples[k]);
+        let lo = (k + 1)
+            .saturating_sub(STENCIL / 2)
+            .min(n.saturating_sub(STENCIL));
+        let stencil = &samples[lo..(lo + STENCIL).min(n)];
+        let dt = samples[k + 1].t_ns - samples[k].t_ns;
+        for j in 1..UPSAMPLE {
+            out.push(lagrange(stencil, samples[k].t_ns + dt * j / UPSAMPLE));
+        }
+    }
+    out.push(samples[last]);
+    out
+}
+
+/// The Lagrange polynomial through `stencil` (distinct times) at `t_ns`, both channels.
+fn lagrange(stencil: &[ImuSample], t_ns: i64) -> ImuSample {
+    let x = |s: &ImuSample| (s.t_ns - t_ns) as f64 * 1e-9;
+    let (mut gyro, mut acc) = (Vector3::zeros(), Vector3::zeros());
+    for (i, si) in stencil.iter().enumerate() {
+        let w: f64 = (stencil.iter().enumerate())
+            .filter(|(j, _)| *j != i)
+            .map(|(_, sj)| x(sj) / (x(sj) - x(si)))
+            .product();
+        gyro += si.gyro * w;
+        acc += si.acc * w;
+    }
+    ImuSample::new(t_ns, gyro, acc)
 }
 
 /// Every other sample of `samples`, keeping those at `t_i_ns` and `t_j_ns` (the window's edges

@@ -110,10 +110,12 @@ pub(crate) fn truncation_estimate<'py>(
     let arrays = SampleArrays::new(t_ns, gyro, acc)?;
     let (v, p, b, m) = (arrays.views(), &params.0, bias_or_zero(bias), &pim.0);
     // Twice the margin: the Richardson companion integrates every other sample, whose window
-    // reads as many samples of its own beyond the edges.
+    // reads as many samples of its own beyond the edges; the other companion's interpolating
+    // stencils read `CONTEXT_SAMPLES`.
+    let margin = (2 * WINDOW_MARGIN).max(preint::truncation::CONTEXT_SAMPLES);
     let e = py
         .detach(|| {
-            v.in_window((m.t_i_ns, m.t_j_ns), 2 * WINDOW_MARGIN, |s| {
+            v.in_window((m.t_i_ns, m.t_j_ns), margin, |s| {
                 preint::truncation::estimate(p, &b, s, m)
             })
         })

@@ -17,8 +17,8 @@
 //!    - the **reference distance**, to the reference's deltas (not defined for the reference
 //!      itself at d = 1);
 //!    - the **embedded estimate** `ê`, from the candidate's own samples alone: for smooth
-//!      input `preint::truncation::estimate` (a hermite4 companion on the same samples, or
-//!      Richardson for hermite4); for held input `D_scheme ⊖ D_galilean` on the same samples,
+//!      input `preint::truncation::estimate` (a hermite4 companion on the samples upsampled,
+//!      or Richardson for hermite4); for held input `D_scheme ⊖ D_galilean` on the same samples,
 //!      exact since galilean is. With it, its χ² `êᵀΣ⁻¹ê` (Σ the candidate's 9×9 covariance,
 //!      order [δφ, δv, δp]): the excess a factor at the true states would show on average.
 //! 4. The noise σ is from the preintegrated covariance at that rate: `√trace` of the δφ, δv and

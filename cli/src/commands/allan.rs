@@ -71,6 +71,7 @@ fn read_stream(args: &Args) -> Result<(AllanStream, Stillness), CliError> {
         None,
         UNIT_CHECK_MAX_SAMPLES,
         Some(UNIT_CHECK_SECONDS),
+        stream::EDGE_SAMPLES,
     )?;
     let _bar = ReadingBar::start(samples.progress(), "allan");
     let mut allan = AllanStream::new();

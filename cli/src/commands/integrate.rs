@@ -163,7 +163,13 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
         let noise = noise::apply_split(&noise, split.as_ref(), &mut params);
         (source, noise, window(&params, w)?)
     } else {
-        let stream = stream::open_checked_until(&args.input, to)?;
+        // `--truncation` reads enough samples around the window for its companion's stencils.
+        let edge = if args.truncation {
+            stream::EDGE_SAMPLES.max(preint::truncation::CONTEXT_SAMPLES)
+        } else {
+            stream::EDGE_SAMPLES
+        };
+        let stream = stream::open_checked_window(&args.input, to, edge)?;
         let source = stream.info().clone();
         let _bar = ReadingBar::start(stream.progress(), "integrate");
         let streamed = from.is_none() && to.is_none();
@@ -171,7 +177,10 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
             let (pim, count) = whole_recording(stream, params, &bias, fail)?;
             (pim, count, vec![], None, None)
         } else {
-            window(&params, stream::cut_window(stream, from, to)?)?
+            window(
+                &params,
+                stream::cut_window_with_edge(stream, from, to, edge)?,
+            )?
         };
         (source, noise, result)
     };
