@@ -65,6 +65,23 @@ fn recording(dir: &Path) -> (PathBuf, PathBuf, PathBuf) {
     )
 }
 
+/// `calibrate --json` with poses every 0.25 s, `--estimate estimate` and `extra` flags.
+fn calibrate(imu: &Path, poses: &Path, estimate: &str, extra: &[&str]) -> serde_json::Value {
+    let (imu, poses) = (imu.to_str().unwrap(), poses.to_str().unwrap());
+    let mut args = vec![
+        "calibrate",
+        "--imu",
+        imu,
+        "--poses",
+        poses,
+        "--pose-spacing",
+        "0.25",
+    ];
+    args.extend(["--estimate", estimate]);
+    args.extend_from_slice(extra);
+    json(&args)
+}
+
 fn param<'a>(out: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
     out["parameters"]
         .as_array()
@@ -87,19 +104,12 @@ fn time_offset_and_intrinsics_from_poses_and_from_attitudes() {
     let dir = tmp("calibrate-estimate");
     let (imu, poses, atts) = recording(&dir);
     let cal = dir.join("calib.yaml");
-    let out = json(&[
-        "calibrate",
-        "--imu",
-        imu.to_str().unwrap(),
-        "--poses",
-        poses.to_str().unwrap(),
-        "--pose-spacing",
-        "0.25",
-        "--estimate",
+    let out = calibrate(
+        &imu,
+        &poses,
         "time-offset,gyro-intrinsics,g-sensitivity,accel-intrinsics",
-        "--out",
-        cal.to_str().unwrap(),
-    ]);
+        &["--out", cal.to_str().unwrap()],
+    );
     assert_eq!(out["model"], "known-poses");
     assert_eq!(out["parameters"].as_array().unwrap().len(), 25);
     let x = truth();
@@ -121,17 +131,12 @@ fn time_offset_and_intrinsics_from_poses_and_from_attitudes() {
         }
     }
     // Attitudes only: the gyroscope's parameters; the accelerometer's are refused.
-    let a = json(&[
-        "calibrate",
-        "--imu",
-        imu.to_str().unwrap(),
-        "--poses",
-        atts.to_str().unwrap(),
-        "--pose-spacing",
-        "0.25",
-        "--estimate",
+    let a = calibrate(
+        &imu,
+        &atts,
         "time-offset,gyro-intrinsics,g-sensitivity",
-    ]);
+        &[],
+    );
     assert_eq!(a["model"], "known-attitudes");
     assert_eq!(a["parameters"].as_array().unwrap().len(), 19);
     check(&a, "t_d", TD_NS as f64 * 1e-9);

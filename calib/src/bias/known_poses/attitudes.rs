@@ -66,11 +66,7 @@ pub struct KnownAttitudeCalibration {
 impl KnownAttitudeCalibration {
     /// `χ²/dof` (NaN for dof = 0).
     pub fn chi2_per_dof(&self) -> f64 {
-        if self.dof == 0 {
-            f64::NAN
-        } else {
-            self.chi2 / self.dof as f64
-        }
+        super::per_dof(self.chi2, self.dof)
     }
 }
 

@@ -163,11 +163,16 @@ pub struct KnownPoseCalibration {
 impl KnownPoseCalibration {
     /// `χ²/dof` (≈ 1 when the noise densities and pose noise are right; NaN for dof = 0).
     pub fn chi2_per_dof(&self) -> f64 {
-        if self.dof == 0 {
-            f64::NAN
-        } else {
-            self.chi2 / self.dof as f64
-        }
+        per_dof(self.chi2, self.dof)
+    }
+}
+
+/// `χ² / dof`, NaN for dof = 0.
+fn per_dof(chi2: f64, dof: usize) -> f64 {
+    if dof == 0 {
+        f64::NAN
+    } else {
+        chi2 / dof as f64
     }
 }
 
