@@ -39,23 +39,13 @@ fn reads_openvins_own_rs_d455_file() {
     assert_eq!(cal.time_offset_s, Some(0.0));
 }
 
+/// The library's example intrinsics with `R_IMUtoACC = I` (Kalibr's `imu.yaml` has no
+/// accelerometer rotation).
 fn realistic(model: IntrinsicsModel) -> ImuIntrinsics {
-    let mut x = ImuIntrinsics::identity(model);
-    let (tw, ta) = match model {
-        IntrinsicsModel::Kalibr => (
-            Matrix3::new(1.01, 0.0, 0.0, 0.002, 0.99, 0.0, -0.002, 0.002, 1.005),
-            Matrix3::new(0.99, 0.0, 0.0, -0.002, 1.01, 0.0, 0.002, 0.002, 1.0),
-        ),
-        IntrinsicsModel::Rpng => (
-            Matrix3::new(1.01, 0.002, -0.002, 0.0, 0.99, 0.002, 0.0, 0.0, 1.005),
-            Matrix3::new(0.99, -0.002, 0.002, 0.0, 1.01, 0.002, 0.0, 0.0, 1.0),
-        ),
-    };
-    x.t_w = tw;
-    x.t_a = ta;
-    x.r_imu_to_gyro = *SO3::exp(&Vector3::new(0.002, -0.002, 0.001)).matrix();
-    x.t_g = Matrix3::from_fn(|i, j| 1e-3 * (1.0 + i as f64 - 0.5 * j as f64));
-    x
+    ImuIntrinsics {
+        r_imu_to_acc: Matrix3::identity(),
+        ..ImuIntrinsics::example(model)
+    }
 }
 
 fn calibration(x: ImuIntrinsics) -> ImuCalibration {

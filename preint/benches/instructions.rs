@@ -78,14 +78,8 @@ fn push_all(pi: &mut Preintegrator, s: &[preint::ImuSample]) {
     }
 }
 
-/// 1 % scale, 2 mrad misalignment and axis rotation, g-sensitivity 1e-3 (rad/s)/(m/s²).
+/// The library's example intrinsics (`ImuIntrinsics::example`: 1 % scale, 2 mrad
+/// misalignment and axis rotations, g-sensitivity 1e-3 (rad/s)/(m/s²)).
 fn realistic_intrinsics() -> preint::intrinsics::ImuIntrinsics {
-    use preint::nalgebra::{Matrix3, Vector3};
-    let mut x =
-        preint::intrinsics::ImuIntrinsics::identity(preint::intrinsics::IntrinsicsModel::Kalibr);
-    x.t_w = Matrix3::new(1.01, 0.0, 0.0, 0.002, 0.99, 0.0, -0.002, 0.002, 1.005);
-    x.t_a = Matrix3::new(0.99, 0.0, 0.0, -0.002, 1.01, 0.0, 0.002, 0.002, 1.0);
-    x.r_imu_to_gyro = *preint::SO3::exp(&Vector3::new(0.002, -0.002, 0.001)).matrix();
-    x.t_g = Matrix3::from_fn(|i, j| 1e-3 * (1.0 + i as f64 - j as f64));
-    x
+    preint::intrinsics::ImuIntrinsics::example(preint::intrinsics::IntrinsicsModel::Kalibr)
 }

@@ -157,6 +157,31 @@ impl ImuIntrinsics {
         }
     }
 
+    /// An example of a MEMS IMU's intrinsics, for tests, benchmarks and examples: ±1 % scales,
+    /// 2 mrad misalignments in the model's triangle of `T_w` and `T_a`, both sensor axes
+    /// rotated by about 3 mrad, and g-sensitivity entries of 0.5–3e-3 (rad/s)/(m/s²).
+    pub fn example(model: IntrinsicsModel) -> Self {
+        let (t_w, t_a) = match model {
+            IntrinsicsModel::Kalibr => (
+                Matrix3::new(1.01, 0.0, 0.0, 0.002, 0.99, 0.0, -0.002, 0.002, 1.005),
+                Matrix3::new(0.99, 0.0, 0.0, -0.002, 1.01, 0.0, 0.002, 0.002, 1.0),
+            ),
+            IntrinsicsModel::Rpng => (
+                Matrix3::new(1.01, 0.002, -0.002, 0.0, 0.99, 0.002, 0.0, 0.0, 1.005),
+                Matrix3::new(0.99, -0.002, 0.002, 0.0, 1.01, 0.002, 0.0, 0.0, 1.0),
+            ),
+        };
+        let rot = |x: f64, y: f64, z: f64| *preint_lie::SO3::exp(&Vector3::new(x, y, z)).matrix();
+        Self {
+            model,
+            t_w,
+            t_a,
+            r_imu_to_gyro: rot(0.002, -0.002, 0.001),
+            r_imu_to_acc: rot(-0.001, 0.002, 0.002),
+            t_g: Matrix3::from_fn(|i, j| 1e-3 * (1.0 + i as f64 - 0.5 * j as f64)),
+        }
+    }
+
     /// True when applying the intrinsics changes nothing (exactly the identity).
     pub fn is_identity(&self) -> bool {
         *self == Self::identity(self.model)
