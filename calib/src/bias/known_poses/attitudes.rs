@@ -12,11 +12,12 @@
 //! values (the g-sensitivity reads the accelerometer's corrected samples, as in
 //! [`preint::intrinsics`]).
 
+use super::KnownPose;
 use super::extras::{
     self, Calibration, Layout, Param, ParameterEstimate, Relinearised, fit_excited, parameters,
     relinearise,
 };
-use super::pose_noise::Whitening;
+use super::pose_noise::{Whitening, pose_noise_jacobians};
 use super::{KnownPoseOptions, check_calibration_options};
 use crate::bias::BiasError;
 use crate::bias::validate::{check_non_negative, check_samples};
@@ -214,12 +215,16 @@ fn rotation_covariance(
     let mut diag = Vec::with_capacity(pims.len());
     let mut sub = Vec::with_capacity(pims.len());
     let mut prev_aj: Option<Matrix3<f64>> = None;
+    let pose = |a: &KnownAttitude| KnownPose {
+        t_ns: a.t_ns,
+        r: a.r,
+        p: Vector3::zeros(),
+    };
     for (k, pim) in pims.iter().enumerate() {
-        let (ri, rj) = (&attitudes[k].r, &attitudes[k + 1].r);
-        let (r, _) = rotation_residual(pim, ri, rj, &Vector3::zeros());
-        let jri = jr_inv(&r);
-        let ai = -jri * rj.inverse().compose(ri).matrix();
-        let aj = jri;
+        // The rotation rows of the full problem's attitude-noise Jacobians.
+        let (ai9, aj9) = pose_noise_jacobians(pim, &pose(&attitudes[k]), &pose(&attitudes[k + 1]));
+        let ai: Matrix3<f64> = ai9.fixed_rows::<3>(0).into_owned();
+        let aj: Matrix3<f64> = aj9.fixed_rows::<3>(0).into_owned();
         diag.push(
             pim.cov.fixed_view::<3, 3>(0, 0) + (ai * ai.transpose() + aj * aj.transpose()) * vr,
         );
