@@ -1,5 +1,6 @@
-//! Known poses for calibration (`preint calibrate --poses`), one per row, comma-separated, `#`
-//! lines comments, in one of three layouts told apart by the column count of the first row:
+//! Known poses for calibration (`preint calibrate --poses`), one per row, comma-separated,
+//! comment lines skipped as in every text reader ([`crate::lines::is_comment`]), in one of
+//! three layouts told apart by the column count of the first row:
 //! - 17 columns: EuRoC ground truth ([`crate::groundtruth`]; velocities and biases ignored);
 //! - 8 columns: `timestamp [ns], p_x, p_y, p_z [m], q_w, q_x, q_y, q_z` (body→world);
 //! - 5 columns: `timestamp [ns], q_w, q_x, q_y, q_z`: attitudes only (motion capture of
@@ -33,11 +34,7 @@ pub fn parse_poses(text: &str, source_name: &str) -> Result<Vec<PoseRow>, IoErro
     let mut out: Vec<PoseRow> = Vec::new();
     let mut width: Option<usize> = None;
     let mut lines = LineReader::new(text.as_bytes(), source_name);
-    while let Some(line) = lines.next_line()? {
-        let (at, text) = (line.at, line.text.trim());
-        if text.is_empty() || text.starts_with('#') {
-            continue;
-        }
+    while let Some(parsed) = lines.next_row(|text, at| {
         let fields: Vec<&str> = text.split(',').map(str::trim).collect();
         let n = *width.get_or_insert(fields.len());
         if ![5, 8, 17].contains(&n) || fields.len() != n {
@@ -52,7 +49,9 @@ pub fn parse_poses(text: &str, source_name: &str) -> Result<Vec<PoseRow>, IoErro
                 ),
             ));
         }
-        out.push(row(&fields, out.last().map(|r| r.t_ns), source_name, at)?);
+        row(&fields, out.last().map(|r| r.t_ns), source_name, at).map(Some)
+    }) {
+        out.push(parsed?);
     }
     if out.is_empty() {
         return Err(IoError::Empty {
