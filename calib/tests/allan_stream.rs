@@ -224,8 +224,67 @@ fn stillness_passes_a_static_recording_and_refuses_a_tilted_one() {
     let st = m.finish();
     assert!(st.still_fraction() > 0.99, "{st:?}");
     assert!((st.max_tilt_deg - 3.0).abs() < 0.1, "{st:?}");
+    assert!((st.step_tilt_deg - 3.0).abs() < 0.1, "{st:?}");
     let e = st.verdict(&opts).unwrap_err().to_string();
     assert!(e.contains("not static") && e.contains("3.0"), "{e}");
+}
+
+/// The accelerometer bias walk is not tilt: 2 h of a static `sim` recording whose
+/// accelerometer bias walks at 0.01 m/s³/√Hz (0.85 m/s² per axis: several degrees of apparent
+/// tilt) is static; a recording whose bias walks at 1e-3 m/s³/√Hz turned slowly by 10° about
+/// a horizontal axis over its length (every window still) is refused for the turn, and a
+/// recording too short to compare two windows is "too short", not "100 % of its 0 windows".
+#[test]
+fn stillness_tells_a_bias_walk_from_a_turn() {
+    let (rate, duration) = (20.0, 7200.0);
+    let walking = |acc_random_walk: f64| {
+        let noise = ImuNoise {
+            gyro_noise_density: 1e-3,
+            gyro_random_walk: 1e-4,
+            acc_noise_density: 2e-3,
+            acc_random_walk,
+            update_rate_hz: rate,
+        };
+        let cfg = SimConfig {
+            noise,
+            bias_random_walk: true,
+            ..SimConfig::default()
+        };
+        let scene = StaticScene::new(SO3::exp(&Vector3::new(0.2, -0.1, 0.3)), Vector3::zeros());
+        simulate(&scene, rate, duration, &cfg, 3).unwrap().samples
+    };
+    let samples = walking(1e-2);
+    let opts = StillnessOptions::default();
+    let mut m = StillnessMonitor::new(opts);
+    samples.iter().for_each(|s| m.push(s));
+    let st = m.finish();
+    assert!(
+        st.max_tilt_deg > opts.max_tilt_deg,
+        "the walk must look like tilt: {st:?}"
+    );
+    assert!(st.tilt_is_bias_walk() && st.step_tilt_deg < 0.5, "{st:?}");
+    assert!(st.verdict(&opts).is_ok(), "{:?}", st.verdict(&opts));
+
+    let samples = walking(1e-3);
+    let up = samples[..20].iter().map(|s| s.acc).sum::<Vector3<f64>>();
+    let axis = up.cross(&Vector3::x()).normalize();
+    let mut m = StillnessMonitor::new(opts);
+    for (k, s) in samples.iter().enumerate() {
+        let angle = 10f64.to_radians() * k as f64 / samples.len() as f64;
+        let mut s = *s;
+        s.acc = SO3::exp(&(axis * angle)).inverse().act(&s.acc);
+        m.push(&s);
+    }
+    let st = m.finish();
+    assert!(st.still_fraction() > 0.99, "{st:?}");
+    assert!(!st.tilt_is_bias_walk(), "{st:?}");
+    let e = st.verdict(&opts).unwrap_err().to_string();
+    assert!(e.contains("not static") && e.contains("it turned"), "{e}");
+
+    let mut m = StillnessMonitor::new(opts);
+    samples[..30].iter().for_each(|s| m.push(s));
+    let e = m.finish().verdict(&opts).unwrap_err().to_string();
+    assert!(e.contains("too short") && !e.contains("0 windows"), "{e}");
 }
 
 /// `PREINT_FULL=1`: the real ADIS16405 hour at 100 Hz (`../shared/data/static_adis16405`,

@@ -184,6 +184,12 @@ impl Page {
             style(),
             self.body.replacen(TOC_MARK, &toc, 1)
         );
+        if let Some((line, text)) = preint_io::error::non_finite_line(&html) {
+            return Err(format!(
+                "{}: not written: line {line} of the page would hold a non-finite number ({text})",
+                path.display()
+            ));
+        }
         std::fs::write(path, html).map_err(|e| format!("{}: {e}", path.display()))
     }
 }

@@ -84,6 +84,19 @@ pub enum IoError {
         /// Which limit, and how to stay below it.
         msg: String,
     },
+    /// A file would be written with a non-finite number in it (nothing is written).
+    #[error(
+        "{path}: not written: line {line} would hold a non-finite number ({text}); the values \
+         it was computed from are out of range (check the inputs named above this message)"
+    )]
+    NotFinite {
+        /// The file that was not written.
+        path: String,
+        /// 1-based line of the text that holds it.
+        line: usize,
+        /// That line (shortened).
+        text: String,
+    },
 }
 
 fn located(source_name: &str, at: &Location, msg: &str) -> String {
@@ -136,7 +149,51 @@ pub(crate) fn read_text(path: &std::path::Path) -> Result<String, IoError> {
     std::fs::read_to_string(path).map_err(|e| IoError::file(path, e))
 }
 
-/// Writes a whole text file.
+/// Writes a whole text file, refusing one that holds a non-finite number
+/// ([`non_finite_line`]): nothing non-finite leaves the program.
 pub(crate) fn write_text(path: &std::path::Path, text: &str) -> Result<(), IoError> {
+    if let Some((line, t)) = non_finite_line(text) {
+        return Err(IoError::NotFinite {
+            path: path.display().to_string(),
+            line,
+            text: t,
+        });
+    }
     std::fs::write(path, text).map_err(|e| IoError::file(path, e))
+}
+
+/// The first line of `text` that holds a non-finite number as Rust prints one (`inf`, `-inf`,
+/// `NaN`, as a whole word), with its 1-based number and its first 120 characters.
+pub fn non_finite_line(text: &str) -> Option<(usize, String)> {
+    text.lines()
+        .enumerate()
+        .find_map(|(k, l)| has_non_finite_word(l).then(|| (k + 1, l.chars().take(120).collect())))
+}
+
+/// Whether `line` holds `inf` or `NaN` as a whole word (letters, digits and `_` around it are
+/// other words: `info`, `inferred`, `NaN_count` are not numbers).
+fn has_non_finite_word(line: &str) -> bool {
+    let b = line.as_bytes();
+    let word = |c: u8| c.is_ascii_alphanumeric() || c == b'_';
+    ["inf", "NaN"].iter().any(|w| {
+        line.match_indices(w).any(|(i, _)| {
+            let before = i == 0 || !word(b[i - 1]);
+            let after = i + w.len() == b.len() || !word(b[i + w.len()]);
+            before && after
+        })
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn non_finite_words_and_other_words() {
+        assert_eq!(non_finite_line("a: 1\nb: inf  # x\n").map(|x| x.0), Some(2));
+        assert_eq!(non_finite_line("x,-inf,2").map(|x| x.0), Some(1));
+        assert_eq!(non_finite_line("[NaN, 1]").map(|x| x.0), Some(1));
+        assert_eq!(non_finite_line("info: inferred from NaN_count\nint"), None);
+        assert_eq!(non_finite_line("1e308, 0.5"), None);
+    }
 }

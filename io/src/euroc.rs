@@ -50,8 +50,20 @@ pub fn write_euroc_stream(
         .map_err(file_err)?;
     let (mut n, mut row) = (0u64, String::with_capacity(160));
     for s in samples {
+        let s = s?;
+        let finite = s.gyro.iter().chain(s.acc.iter()).all(|v| v.is_finite());
+        if !finite {
+            return Err(IoError::NotFinite {
+                path: out_name.to_string(),
+                line: n as usize + 2,
+                text: format!(
+                    "sample {n} (t = {} ns): gyro [{}, {}, {}], acc [{}, {}, {}]",
+                    s.t_ns, s.gyro.x, s.gyro.y, s.gyro.z, s.acc.x, s.acc.y, s.acc.z
+                ),
+            });
+        }
         row.clear();
-        push_euroc_row(&mut row, &s?);
+        push_euroc_row(&mut row, &s);
         out.write_all(row.as_bytes()).map_err(file_err)?;
         n += 1;
     }

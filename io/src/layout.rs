@@ -113,12 +113,14 @@ impl Delimiter {
         }
     }
 
-    /// Calls `f(index, field)` for each trimmed field of `line`; returns the number of fields.
+    /// Calls `f(index, field)` for each trimmed field of `line`, a field in double quotes
+    /// without them (RFC 4180 quoting, as spreadsheet exports write numbers; a quoted field
+    /// holding the delimiter is not supported: numbers never do); returns the number of fields.
     #[inline]
     pub fn for_each_field<'a>(self, line: &'a str, mut f: impl FnMut(usize, &'a str)) -> usize {
         let mut n = 0;
         let mut visit = |s: &'a str| {
-            f(n, s.trim_ascii());
+            f(n, unquote(s.trim_ascii()));
             n += 1;
         };
         match self {
@@ -128,6 +130,15 @@ impl Delimiter {
             Delimiter::Whitespace => line.split_ascii_whitespace().for_each(&mut visit),
         }
         n
+    }
+}
+
+/// `field` without one pair of enclosing double quotes (and the blanks inside them).
+#[inline]
+fn unquote(field: &str) -> &str {
+    match field.as_bytes() {
+        [b'"', .., b'"'] if field.len() >= 2 => field[1..field.len() - 1].trim_ascii(),
+        _ => field,
     }
 }
 

@@ -36,15 +36,25 @@ pub fn parse_poses(text: &str, source_name: &str) -> Result<Vec<PoseRow>, IoErro
     let mut lines = LineReader::new(text.as_bytes(), source_name);
     while let Some(parsed) = lines.next_row(|text, at| {
         let fields: Vec<&str> = text.split(',').map(str::trim).collect();
+        let layouts = "17 (EuRoC ground truth), 8 (timestamp [ns], p [m] ×3, q w,x,y,z) or 5 \
+                       (timestamp [ns], q w,x,y,z)";
         let n = *width.get_or_insert(fields.len());
-        if ![5, 8, 17].contains(&n) || fields.len() != n {
+        if ![5, 8, 17].contains(&n) {
             return Err(IoError::parse(
                 source_name,
                 at,
                 format!(
-                    "expected the first row's {n} columns, one of 17 (EuRoC ground truth), 8 \
-                     (timestamp [ns], p [m] ×3, q w,x,y,z) or 5 (timestamp [ns], q w,x,y,z); \
-                     found {}",
+                    "the first row has {n} columns; a pose file has {layouts}, comma-separated"
+                ),
+            ));
+        }
+        if fields.len() != n {
+            return Err(IoError::parse(
+                source_name,
+                at,
+                format!(
+                    "{} columns, where the first row has {n} (every row of a pose file has the \
+                     same layout: {layouts})",
                     fields.len()
                 ),
             ));
@@ -102,7 +112,17 @@ mod tests {
         assert_eq!(parse_poses(&euroc, "c.csv").unwrap()[0].p, tp[0].p);
         let msg = |t: &str| parse_poses(t, "d.csv").unwrap_err().to_string();
         assert!(msg(&format!("100,{q}\n200,1,2,3,{q}\n")).starts_with("d.csv:2: "));
-        assert!(msg("100,1,0,0\n").contains("found 4"));
+        assert!(msg("100,1,0,0\n").contains("the first row has 4 columns"));
+        let e = msg(&format!("100,1,2,3,{q}\n200,{q}\n"));
+        assert!(
+            e.starts_with("d.csv:2: 5 columns, where the first row has 8"),
+            "{e}"
+        );
+        let e = msg("100,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15\n");
+        assert!(
+            e.contains("has 16 columns") && !e.contains("found 16"),
+            "{e}"
+        );
         assert!(msg(&format!("100,{q}\n100,{q}\n")).contains("duplicate"));
         assert!(msg("100,2,0,0,0\n").contains("norm"));
         assert!(msg("100,nan,0,0,1\n").contains("column 2"));

@@ -76,12 +76,14 @@ pub(crate) fn advise_py<'py>(
             let candidates = evaluate_input(&signal, &noise, 9.81, window, fraction, class)?;
             let recommended = recommend(&candidates)
                 .and_then(|r| candidates.iter().position(|c| std::ptr::eq(c, r)));
+            let rates_not_evaluated = advise::gap_note(&args, &signal, &candidates);
             let a = advise::Advice {
                 args,
                 samples: s.len(),
                 cutoffs,
                 candidates,
                 recommended,
+                rates_not_evaluated,
             };
             Ok(advise::to_json(&a))
         })

@@ -61,6 +61,9 @@ pub enum AllanError {
     /// The recording is not static ([`Stillness::verdict`] says why).
     #[error("{0}")]
     NotStatic(String),
+    /// The recording is too short to judge (the message says what it needs).
+    #[error("{0}")]
+    TooShort(String),
 }
 
 /// Allan analysis of a six-axis IMU record.

@@ -18,8 +18,25 @@
 //!   moves the gravity components, a step that dominates the accelerometers' Allan deviation at
 //!   long τ, while only one or two windows show the motion. (The static ADIS16405 hour: 0.41°,
 //!   its temperature drift.)
+//! - **Bias random walk is not tilt.** Over hours the accelerometer bias walks (4 h at
+//!   0.003 m/s³/√Hz: 0.36 m/s² per axis, 2° of apparent tilt). Two readings of the tilt tell
+//!   a turn of the sensor from it:
+//!   - the turn across the *moving* windows (`step_tilt_deg`: the changes of the gravity
+//!     direction, a unit vector, summed as vectors over the transitions that fail the z test):
+//!     a sensor set down in another attitude turns there, a bias walk (within the z test at
+//!     every transition) does not, and the noise of a few moving windows adds only as a
+//!     random walk (0.3° over 360 of them at 0.002 m/s²/√Hz);
+//!   - the slow turn from the first window counts when its part across gravity,
+//!     `|a₀|·sin(tilt)`, exceeds [`BIAS_WALK_RATIO`] = 8 times the largest change of the mean's
+//!     norm `max_k ||a_k| − |a₀||`: a bias walk moves the mean along gravity as much as
+//!     across it, turning the sensor moves it only across (the norm stays |g|). For an
+//!     isotropic random walk the largest 2-axis excursion exceeds 8 times the largest 1-axis
+//!     one in 5 of 100 000 walks (20 000 simulated walks of 2 000 steps: 0.0016 above 4,
+//!     1e-3 above 6, 5e-5 above 8).
 //! - **Verdict** ([`Stillness::verdict`]): static when at least `min_still_fraction` = 90 % of
-//!   the compared windows are still and the tilt stays within `max_tilt_deg`.
+//!   the compared windows are still and the tilt stays within `max_tilt_deg` (or is explained
+//!   by the bias walk). A recording of fewer than two windows cannot be judged
+//!   ([`AllanError::TooShort`]).
 //!
 //! Rotation at a constant rate about the vertical (a turntable) keeps every window mean
 //! constant and passes; it adds a constant to the gyro, which the Allan variance ignores.
@@ -50,6 +67,11 @@ impl Default for StillnessOptions {
         }
     }
 }
+
+/// A turn of the gravity direction beyond `max_tilt_deg` counts as tilt only when its part
+/// across gravity exceeds this many times the largest change of the accelerometer mean's norm
+/// (module docs).
+pub const BIAS_WALK_RATIO: f64 = 8.0;
 
 /// Smallest per-sample standard deviation used in the z test: gyro \[rad/s\], accelerometer
 /// \[m/s²\] (module docs).
@@ -100,6 +122,14 @@ pub struct Stillness {
     pub max_tilt_deg: f64,
     /// When it was reached, seconds from the first sample.
     pub max_tilt_at_s: f64,
+    /// Largest change of the accelerometer window mean's norm from the first window's
+    /// \[m/s²\]: the part of a bias walk along gravity.
+    pub max_norm_change_ms2: f64,
+    /// The first window's accelerometer mean norm \[m/s²\] (0 before a window closed).
+    pub first_norm_ms2: f64,
+    /// Turn of the gravity direction across the moving windows \[deg\]: the norm of the
+    /// changes of its unit vector summed over the transitions that are not still (module docs).
+    pub step_tilt_deg: f64,
 }
 
 impl Stillness {
@@ -112,31 +142,69 @@ impl Stillness {
         }
     }
 
+    /// Whether the largest turn of the gravity direction is explained by the accelerometer
+    /// bias walk rather than a turn of the sensor (module docs, [`BIAS_WALK_RATIO`]).
+    pub fn tilt_is_bias_walk(&self) -> bool {
+        let across = self.first_norm_ms2 * self.max_tilt_deg.to_radians().sin();
+        across <= BIAS_WALK_RATIO * self.max_norm_change_ms2
+    }
+
+    /// Whether the gravity direction turned beyond `opts.max_tilt_deg` by a turn of the
+    /// sensor, across the moving windows or slowly beyond what the bias walk explains.
+    pub fn tilted(&self, opts: &StillnessOptions) -> bool {
+        self.step_tilt_deg > opts.max_tilt_deg
+            || (self.max_tilt_deg > opts.max_tilt_deg && !self.tilt_is_bias_walk())
+    }
+
     /// `Ok` for a static recording, otherwise [`AllanError::NotStatic`] saying why (module
-    /// docs).
+    /// docs), or [`AllanError::TooShort`] for fewer than two windows.
     pub fn verdict(&self, opts: &StillnessOptions) -> Result<(), AllanError> {
+        if self.windows == 0 {
+            return Err(AllanError::TooShort(format!(
+                "too short to judge whether it is static: stillness compares consecutive \
+                 windows of {} s, and the recording has fewer than two",
+                opts.window_s
+            )));
+        }
         let frac = self.still_fraction();
-        if frac >= opts.min_still_fraction && self.max_tilt_deg <= opts.max_tilt_deg {
+        let still_enough = frac >= opts.min_still_fraction;
+        let tilted = self.tilted(opts);
+        if still_enough && !tilted {
             return Ok(());
         }
         let motion = self.first_motion_s.map_or(String::new(), |t| {
             format!(", the first moving one at {t:.1} s")
         });
-        Err(AllanError::NotStatic(format!(
-            "the recording is not static: {:.1} % of its {} windows of {} s are still (a static \
-             recording needs {:.0} %; a window is still when its mean readings agree with the \
-             previous window's within {} standard errors on every axis){motion}; the gravity \
-             direction turns by up to {:.2}° (at {:.1} s; at most {}° at rest). The Allan \
-             deviation of a moving recording describes the motion, not the sensor's noise: \
-             record the sensor at rest, or keep only its still part",
+        let windows = format!(
+            "{:.1} % of its {} windows of {} s are still (a static recording needs {:.0} %; a \
+             window is still when its mean readings agree with the previous window's within {} \
+             standard errors on every axis){motion}",
             100.0 * frac,
             self.windows,
             opts.window_s,
             100.0 * opts.min_still_fraction,
             opts.max_z,
+        );
+        let tilt = format!(
+            "the gravity direction turns by up to {:.2}° (at {:.1} s; at most {}° at rest), \
+             {:.2}° of it across the moving windows, {:.3} m/s² across gravity while the norm \
+             changes by at most {:.3} m/s² (a bias walk moves both alike)",
             self.max_tilt_deg,
             self.max_tilt_at_s,
-            opts.max_tilt_deg
+            opts.max_tilt_deg,
+            self.step_tilt_deg,
+            self.first_norm_ms2 * self.max_tilt_deg.to_radians().sin(),
+            self.max_norm_change_ms2,
+        );
+        let why = match (still_enough, tilted) {
+            (false, true) => format!("{windows}, and {tilt}"),
+            (false, false) => windows,
+            _ => format!("it turned: {tilt}, although {windows}"),
+        };
+        Err(AllanError::NotStatic(format!(
+            "the recording is not static: {why}. The Allan deviation of a moving recording \
+             describes the motion, not the sensor's noise: record the sensor at rest, or keep \
+             only its still part"
         )))
     }
 }
@@ -172,6 +240,8 @@ pub struct StillnessMonitor {
     cur: Window,
     prev: Option<Summary>,
     first_up: Option<[f64; 3]>,
+    /// Sum of the changes of the gravity direction over the moving transitions.
+    step_turn: [f64; 3],
     result: Stillness,
 }
 
@@ -185,12 +255,16 @@ impl StillnessMonitor {
             cur: Window::default(),
             prev: None,
             first_up: None,
+            step_turn: [0.0; 3],
             result: Stillness {
                 windows: 0,
                 still_windows: 0,
                 first_motion_s: None,
                 max_tilt_deg: 0.0,
                 max_tilt_at_s: 0.0,
+                max_norm_change_ms2: 0.0,
+                first_norm_ms2: 0.0,
+                step_tilt_deg: 0.0,
             },
         }
     }
@@ -227,14 +301,25 @@ impl StillnessMonitor {
             self.result.windows += 1;
             if still {
                 self.result.still_windows += 1;
-            } else if self.result.first_motion_s.is_none() {
-                self.result.first_motion_s = Some(t_s);
+            } else {
+                self.result.first_motion_s.get_or_insert(t_s);
+                let (a, b) = (unit(&acc_mean(&p.mean)), unit(&acc_mean(&sum.mean)));
+                for c in 0..3 {
+                    self.step_turn[c] += b[c] - a[c];
+                }
+                let n = self.step_turn.iter().map(|x| x * x).sum::<f64>().sqrt();
+                self.result.step_tilt_deg = (2.0 * (0.5 * n).min(1.0).asin()).to_degrees();
             }
         }
-        let a = [sum.mean[3], sum.mean[4], sum.mean[5]];
+        let a = acc_mean(&sum.mean);
         let norm = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
-        if norm > 0.0 {
+        if norm > 0.0 && norm.is_finite() {
             let up = a.map(|x| x / norm);
+            if self.first_up.is_none() {
+                self.result.first_norm_ms2 = norm;
+            }
+            let change = (norm - self.result.first_norm_ms2).abs();
+            self.result.max_norm_change_ms2 = self.result.max_norm_change_ms2.max(change);
             let first = *self.first_up.get_or_insert(up);
             let cos = (up[0] * first[0] + up[1] * first[1] + up[2] * first[2]).clamp(-1.0, 1.0);
             let tilt = cos.acos().to_degrees();
@@ -250,5 +335,20 @@ impl StillnessMonitor {
     /// The result over the closed windows (a last, shorter window is left out).
     pub fn finish(self) -> Stillness {
         self.result
+    }
+}
+
+/// The accelerometer part of a window mean.
+fn acc_mean(mean: &[f64; 6]) -> [f64; 3] {
+    [mean[3], mean[4], mean[5]]
+}
+
+/// `a` normalised (zero when `a` is zero or not finite).
+fn unit(a: &[f64; 3]) -> [f64; 3] {
+    let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+    if n > 0.0 && n.is_finite() {
+        a.map(|x| x / n)
+    } else {
+        [0.0; 3]
     }
 }

@@ -217,12 +217,16 @@ pub fn evaluate_input(
     let mut out = Vec::new();
     let mut d = 1;
     let pb = crate::progress::bar(starts.len() as u64, "advise");
-    while dt_s * d as f64 <= window_s / 8.0 && 1.0 / (dt_s * d as f64) >= 5.0 {
+    while decimation_in_range(dt_s, d, window_s) {
         if let Some(pb) = &pb {
             pb.set_position(0);
             pb.set_message(format!("{:.1} Hz", 1.0 / (dt_s * d as f64)));
         }
         let dec = input.decimate(samples, d);
+        if gap_beyond_limit(samples, d).is_some() {
+            // [`gap_beyond_limit`] names it; lower rates widen it further.
+            break;
+        }
         let mut max = [Maxima::default(); scheme::ALL.len()];
         for &t0 in &starts {
             if let Some(pb) = &pb {
@@ -281,6 +285,36 @@ pub fn evaluate_input(
         pb.finish_and_clear();
     }
     Ok(out)
+}
+
+/// Whether the decimation `d` of a stream sampled every `dt_s` s is one [`evaluate_input`]
+/// tries: at least 8 samples per window of `window_s` s and at least 5 Hz.
+pub fn decimation_in_range(dt_s: f64, d: usize, window_s: f64) -> bool {
+    dt_s * d as f64 <= window_s / 8.0 && 1.0 / (dt_s * d as f64) >= 5.0
+}
+
+/// The longest interval the evaluation at decimation `d` preintegrates over, when it exceeds
+/// preintegration's gap limit ([`preint::params::DEFAULT_MAX_GAP_NS`]): `(that interval [ns],
+/// the recording's longest interval [ns], the index of the sample that ends it)`. The
+/// embedded estimate of hermite4 (Richardson's, [`preint::truncation`]) integrates every
+/// other sample of the candidate's stream, so the stream that counts is every `2d`-th sample.
+/// The recording itself is within the limit (its gaps are refused when read), but decimation
+/// widens an interval by up to `2d − 1` sample periods.
+pub fn gap_beyond_limit(samples: &[ImuSample], d: usize) -> Option<(i64, i64, usize)> {
+    let longest = |step: usize| {
+        let t = samples.iter().step_by(step).map(|s| s.t_ns);
+        t.clone()
+            .zip(t.skip(1))
+            .enumerate()
+            .map(|(k, (a, b))| (b - a, step * (k + 1)))
+            .max()
+    };
+    let (wide, _) = longest(2 * d)?;
+    if wide <= preint::params::DEFAULT_MAX_GAP_NS {
+        return None;
+    }
+    let (gap, at) = longest(1)?;
+    Some((wide, gap, at))
 }
 
 /// Costs within this factor of the cheapest count as equal: run-to-run timing on a shared

@@ -257,7 +257,14 @@ pub fn draw(path: &Path, fig: &Figure) -> Result<(), String> {
         .chars()
         .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
         .collect();
-    std::fs::write(path, render(fig, &id)).map_err(|e| format!("{}: {e}", path.display()))
+    let svg = render(fig, &id);
+    if let Some((line, text)) = preint_io::error::non_finite_line(&svg) {
+        return Err(format!(
+            "{}: not written: line {line} of the chart would hold a non-finite number ({text})",
+            path.display()
+        ));
+    }
+    std::fs::write(path, svg).map_err(|e| format!("{}: {e}", path.display()))
 }
 
 #[cfg(test)]

@@ -2,11 +2,14 @@
 //! a fraction of the noise-induced standard deviation, estimated from the recording itself
 //! (method: [`crate::analysis::advise`], after [`crate::analysis::denoise`]).
 
-use crate::analysis::advise::{Candidate, evaluate_input, recommend};
+use crate::analysis::advise::{
+    Candidate, decimation_in_range, evaluate_input, gap_beyond_limit, recommend,
+};
 use crate::analysis::denoise::denoise;
 use crate::analysis::input_class::{InputClass, exactness};
 use crate::imu_args::ImuArgs;
 use crate::{CliError, Output, checks, noise, scheme, stream};
+use preint::ImuSample;
 use serde_json::{Value, json};
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -58,6 +61,9 @@ pub struct Advice {
     pub candidates: Vec<Candidate>,
     /// Index of the recommended candidate, if any is acceptable.
     pub recommended: Option<usize>,
+    /// Why the lower rates were not evaluated, when a gap of the recording widened by
+    /// decimation stopped them ([`gap_note`]).
+    pub rates_not_evaluated: Option<String>,
 }
 
 impl Advice {
@@ -94,13 +100,39 @@ pub fn compute(args: &Args) -> Result<Advice, CliError> {
     )?;
     let recommended =
         recommend(&candidates).and_then(|r| candidates.iter().position(|c| std::ptr::eq(c, r)));
+    let rates_not_evaluated = gap_note(args, &signal, &candidates);
     Ok(Advice {
         args: args.clone(),
         samples: samples.len(),
         cutoffs,
         candidates,
         recommended,
+        rates_not_evaluated,
     })
+}
+
+/// When decimation stopped at a gap of the recording ([`gap_beyond_limit`]): which rates were
+/// not evaluated and why, naming the file, the gap and the sample after it.
+pub fn gap_note(args: &Args, samples: &[ImuSample], candidates: &[Candidate]) -> Option<String> {
+    let (first, last) = (samples.first()?, samples.last()?);
+    let dt_s = (last.t_ns - first.t_ns) as f64 * 1e-9 / (samples.len() - 1).max(1) as f64;
+    let next = 2 * candidates.iter().map(|c| c.decimation).max()?;
+    if !decimation_in_range(dt_s, next, args.window) {
+        return None;
+    }
+    let (wide, gap, at) = gap_beyond_limit(samples, next)?;
+    Some(format!(
+        "rates of {:.2} Hz and below are not evaluated: the recording {} has an interval of \
+         {:.6} s before sample {at} (t = {} ns), which the embedded estimate at that rate (one \
+         sample in {}) widens to {:.6} s, above preintegration's gap limit of {} s",
+        1.0 / (dt_s * next as f64),
+        args.input.label(),
+        gap as f64 * 1e-9,
+        samples[at].t_ns,
+        2 * next,
+        wide as f64 * 1e-9,
+        preint::params::DEFAULT_MAX_GAP_NS as f64 * 1e-9
+    ))
 }
 
 /// `{rot_rad, vel_m_s, pos_m}`.
@@ -155,6 +187,7 @@ pub fn to_json(a: &Advice) -> Value {
         "tangent_order": ["dphi", "dv", "dp"],
         "method": method(input),
         "calibration": a.args.calibration.as_ref().map(|p| p.display().to_string()),
+        "rates_not_evaluated": a.rates_not_evaluated,
     });
     if let (Value::Object(o), Value::Object(i)) = (&mut out, input_json(input)) {
         o.extend(i);
@@ -209,6 +242,9 @@ pub fn to_text(a: &Advice) -> String {
         }
     }
     h.push_str(&table(&a.candidates));
+    if let Some(note) = &a.rates_not_evaluated {
+        let _ = writeln!(h, "note: {note}");
+    }
     match a.recommendation() {
         Some(c) => {
             let exact = input.exact_scheme() == Some(c.scheme) && c.decimation == 1;

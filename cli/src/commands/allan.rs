@@ -155,6 +155,9 @@ pub fn to_json(r: &AllanRun) -> Value {
             "still_windows": st.still_windows,
             "windows": st.windows,
             "max_tilt_deg": st.max_tilt_deg,
+            "step_tilt_deg": st.step_tilt_deg,
+            "max_norm_change_ms2": st.max_norm_change_ms2,
+            "tilt_is_bias_walk": st.tilt_is_bias_walk(),
         },
         "gyroscope_noise_density": white(0),
         "gyroscope_random_walk": walk(0),
@@ -181,9 +184,22 @@ pub fn to_text(r: &AllanRun) -> String {
         a.dt * r.samples as f64
     );
     let st = &r.stillness;
+    let walk = if st.max_tilt_deg > StillnessOptions::default().max_tilt_deg {
+        if st.tilt_is_bias_walk() {
+            format!(
+                " (the accelerometer bias walk: its norm changes by {:.3} m/s² as well; \
+                 {:.2}° across moving windows)",
+                st.max_norm_change_ms2, st.step_tilt_deg
+            )
+        } else {
+            String::new()
+        }
+    } else {
+        String::new()
+    };
     let _ = writeln!(
         h,
-        "still: {:.1} % of {} one-second windows, gravity turns by up to {:.2}°; units {}",
+        "still: {:.1} % of {} one-second windows, gravity turns by up to {:.2}°{walk}; units {}",
         100.0 * st.still_fraction(),
         st.windows,
         st.max_tilt_deg,

@@ -17,8 +17,38 @@ pub mod report;
 pub mod simulate;
 pub mod speed;
 
-/// Runs the selected subcommand.
+/// Runs the selected subcommand. Nothing non-finite leaves it: an output whose summary holds
+/// `inf` or `NaN` is refused ([`finite`]), the inputs' own checks naming the cause first.
 pub fn run(command: &Command) -> Result<Output, CliError> {
+    match dispatch(command) {
+        Ok(out) => finite(out),
+        Err(CliError::Refused { output, msg }) => match finite(*output) {
+            Ok(output) => Err(CliError::Refused {
+                output: Box::new(output),
+                msg,
+            }),
+            Err(e) => Err(e),
+        },
+        Err(e) => Err(e),
+    }
+}
+
+/// `out`, or an error naming the line of its summary that holds a non-finite number (the
+/// JSON form of the same number would be `null`).
+fn finite(out: Output) -> Result<Output, CliError> {
+    match preint_io::error::non_finite_line(&out.human) {
+        None => Ok(out),
+        Some((line, text)) => Err(CliError::Failed(format!(
+            "the result holds a non-finite number (line {line} of the summary: `{text}`), so it \
+             is not printed: the inputs are outside what the method can handle (check the \
+             values of the flags and files given), or this is a bug to report with the command \
+             line"
+        ))),
+    }
+}
+
+/// The selected subcommand's own run.
+fn dispatch(command: &Command) -> Result<Output, CliError> {
     match command {
         Command::Simulate(a) => simulate::run(a),
         Command::Integrate(a) => integrate::run(a),
