@@ -25,6 +25,7 @@ const EUROC_NOISE: &str = "tests/data/euroc/imu.yaml";
 /// subcommand `"*"` for every subcommand that has the argument. A subcommand's own line wins
 /// over a `"*"` line. The argv may go on with the flags the argument requires (`--gyro` needs
 /// `--accel`). Flags (no value) and arguments with possible values need no line.
+#[rustfmt::skip]
 const EXAMPLES: &[(&str, &str, &[&str])] = &[
     // Reader flags (ImuArgs).
     ("*", "imu", &[EUROC]),
@@ -54,37 +55,21 @@ const EXAMPLES: &[(&str, &str, &[&str])] = &[
     ("*", "out", &["out/contract"]),
     ("convert", "out", &["out/contract/imu.csv"]),
     ("calibrate", "out", &["out/contract/calib.yaml"]),
-    (
-        "calibrate",
-        "calibration",
-        &["calib.yaml", "--poses", EUROC_GT],
-    ),
+    ("calibrate", "calibration", &["calib.yaml", "--poses", EUROC_GT]),
     // integrate.
     ("integrate", "bias_gyro", &["0.001,-0.002,0"]),
     ("integrate", "bias_acc", &["0.01,0,-0.02"]),
     ("integrate", "omega_coriolis", &["0,4.6e-5,5.2e-5"]),
-    (
-        "integrate",
-        "coriolis",
-        &["second", "--omega-coriolis", "0,0,7.29e-5"],
-    ),
+    ("integrate", "coriolis", &["second", "--omega-coriolis", "0,0,7.29e-5"]),
     ("integrate", "initial_state", &["0,0,0,1,0,0,1,0,0,0"]),
-    (
-        "integrate",
-        "at",
-        &["1403715280500000000,1403715280600000000"],
-    ),
+    ("integrate", "at", &["1403715280500000000,1403715280600000000"]),
     // factor.
     ("factor", "residual", &["component"]),
     ("*", "pose_rot_std", &["1.75e-3"]),
     ("*", "pose_pos_std", &["0.005"]),
     ("factor", "vel_std", &["0.01"]),
     // calibrate.
-    (
-        "calibrate",
-        "estimate",
-        &["time-offset,gyro-intrinsics", "--poses", EUROC_GT],
-    ),
+    ("calibrate", "estimate", &["time-offset,gyro-intrinsics", "--poses", EUROC_GT]),
     ("calibrate", "pose_spacing", &["0.25", "--poses", EUROC_GT]),
     ("*", "latitude", &["47.4"]),
     ("calibrate", "heading", &["30", "--latitude", "47.4"]),
