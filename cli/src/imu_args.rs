@@ -31,8 +31,10 @@ pub struct ImuArgs {
     pub format: Option<Format>,
     /// Columns of a delimited file, e.g. t,ax,ay,az,wx,wy,wz (skip for unused columns;
     /// default: from the header's names).
+    // One value, the whole list: `std::vec::Vec` (not `Vec`) keeps clap's derive from reading
+    // the field as a list of values, each a `Column`, which is not what `columns` returns.
     #[arg(long, value_parser = columns)]
-    pub columns: Option<Vec<Column>>,
+    pub columns: Option<std::vec::Vec<Column>>,
     /// Field delimiter of a text file: comma, semicolon, tab or whitespace (default: sniffed).
     #[arg(long)]
     pub delimiter: Option<Delimiter>,

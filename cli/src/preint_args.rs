@@ -18,7 +18,7 @@ pub struct PreintArgs {
     #[arg(long)]
     pub noise: Option<PathBuf>,
     /// Gravity magnitude G (m/s^2); gravity is (0, 0, -G).
-    #[arg(long, default_value_t = 9.81)]
+    #[arg(long, default_value_t = 9.81, allow_hyphen_values = true)]
     pub gravity: f64,
     /// Pose of the IMU in the body frame, x,y,z,qw,qx,qy,qz: sensor origin in body coordinates
     /// (m) and the unit quaternion rotating sensor vectors into the body frame. The output is

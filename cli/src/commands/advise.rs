@@ -24,10 +24,10 @@ pub struct Args {
     #[arg(long)]
     pub noise: PathBuf,
     /// Preintegration window (s).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
     pub window: f64,
     /// Allowed discretisation error as a fraction of the noise σ.
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = 0.1, allow_hyphen_values = true)]
     pub fraction: f64,
     /// Analyse only samples with timestamps >= this, in ns.
     #[arg(long, allow_hyphen_values = true)]
@@ -35,7 +35,7 @@ pub struct Args {
     /// Analyse only samples with timestamps <= this, in ns.
     #[arg(long, allow_hyphen_values = true)]
     pub to: Option<i64>,
-    /// What the input is between samples. smooth (default): point samples of a smooth signal,
+    /// What the input is between samples. smooth: point samples of a smooth signal,
     /// as a MEMS IMU delivers; no scheme is exact, the reference is hermite4 at the recording's
     /// rate. held: rate and specific force constant over each sample interval, as an
     /// integrating IMU (delta-angle/delta-velocity outputs) or a sample-and-hold stream

@@ -35,7 +35,7 @@ pub struct Args {
     /// The recording (at rest) and how to read it.
     #[command(flatten)]
     pub input: ImuArgs,
-    /// Output directory for allan.svg and imu.yaml.
+    /// Output directory for the charts allan_gyro.svg and allan_acc.svg and the Kalibr imu.yaml.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Skip the check that the recording is static (the Allan deviation of a moving recording

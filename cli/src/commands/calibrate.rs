@@ -47,9 +47,9 @@ pub struct Args {
     /// The recording and how to read it.
     #[command(flatten)]
     pub input: ImuArgs,
-    /// Known poses for the known-pose problem: EuRoC ground truth (17 columns), `t,x,y,z,qw,qx,
-    /// qy,qz` (8) or attitudes only `t,qw,qx,qy,qz` (5: a gyroscope-only calibration); t in ns,
-    /// quaternion body→world.
+    /// Known poses for the known-pose problem: EuRoC ground truth (17 columns),
+    /// `t,x,y,z,qw,qx,qy,qz` (8) or attitudes only `t,qw,qx,qy,qz` (5: a gyroscope-only
+    /// calibration); t in ns, quaternion body→world.
     #[arg(long)]
     pub poses: Option<PathBuf>,
     /// Known-pose problem: parameters estimated beside the biases, comma-separated, from
@@ -59,7 +59,13 @@ pub struct Args {
     #[arg(long, value_name = "LIST", requires = "poses", value_parser = parse_estimate)]
     pub estimate: Option<Estimate>,
     /// Known-pose problem: spacing of the poses used, in s.
-    #[arg(long, value_name = "S", default_value_t = 0.5, requires = "poses")]
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = 0.5,
+        requires = "poses",
+        allow_hyphen_values = true
+    )]
     pub pose_spacing: f64,
     /// Known-pose problem: a calibration file (as --out writes) whose intrinsics and time
     /// offset are applied, and are the starting point of those --estimate asks for.
@@ -69,7 +75,7 @@ pub struct Args {
     #[arg(long)]
     pub noise: Option<PathBuf>,
     /// Gravity magnitude G (m/s^2).
-    #[arg(long, default_value_t = 9.81)]
+    #[arg(long, default_value_t = 9.81, allow_hyphen_values = true)]
     pub gravity: f64,
     /// Use only samples (and poses) with timestamps >= this, in ns.
     #[arg(long, allow_hyphen_values = true)]
@@ -79,10 +85,10 @@ pub struct Args {
     pub to: Option<i64>,
     /// Known-pose problem: standard deviation of the given attitudes in rad (0: exact).
     /// E.g. 1.75e-3 (0.1°) and --pose-pos-std 0.005 for motion capture such as EuRoC's.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub pose_rot_std: f64,
     /// Known-pose problem: standard deviation of the given positions in m (0: exact).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub pose_pos_std: f64,
     /// Pose of the IMU in the body frame, x,y,z,qw,qx,qy,qz (m; quaternion rotating sensor
     /// vectors into the body frame). Known-pose problem: the poses are the body's and the

@@ -61,17 +61,17 @@ pub struct Args {
     #[arg(long)]
     pub combined: bool,
     /// Residual: `component` (Forster's [r_phi, r_v, r_p]) or `logmap` (the SE_2(3) logarithm
-    /// of predicted^-1 * actual, GTSAM 4.3's default). Default: the library's default.
+    /// of predicted^-1 * actual, GTSAM 4.3's default).
     #[arg(long, value_parser = parse_residual, default_value = ResidualMode::default().name())]
     pub residual: ResidualMode,
     /// Standard deviation of the ground truth's attitudes (rad), added to the weight.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub pose_rot_std: f64,
     /// Standard deviation of the ground truth's positions (m), added to the weight.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub pose_pos_std: f64,
     /// Standard deviation of the ground truth's velocities (m/s), added to the weight.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub vel_std: f64,
     /// Weight the factor with the second-order covariance (`preint::second_order`: the
     /// term the first-order covariance misses over long windows with noisy gyroscopes).

@@ -10,20 +10,23 @@ use std::path::{Path, PathBuf};
 /// Flags of `preint simulate`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
-    /// Scene: seed-ellipse, static, multi-pose-static, gimbal-lock, spin, aggressive.
-    #[arg(long, default_value = "seed-ellipse")]
+    /// Built-in scene (each one's motion is described in the preint-sim crate's `scenes` docs).
+    #[arg(long, default_value = "seed-ellipse",
+          value_parser = clap::builder::PossibleValuesParser::new(preint_sim::SCENE_NAMES))]
     pub scene: String,
-    /// Sample rate (Hz).
-    #[arg(long, default_value_t = 200.0)]
+    /// Sample rate (Hz), positive.
+    #[arg(long, default_value_t = 200.0, allow_hyphen_values = true,
+          value_parser = crate::parse::positive)]
     pub rate: f64,
-    /// Duration (s).
-    #[arg(long, default_value_t = 10.0)]
+    /// Duration (s), positive.
+    #[arg(long, default_value_t = 10.0, allow_hyphen_values = true,
+          value_parser = crate::parse::positive)]
     pub duration: f64,
     /// Noise: a Kalibr imu.yaml, or `none` for noise-free data. Default: EuRoC figures.
     #[arg(long)]
     pub noise: Option<String>,
     /// Random seed (same seed, same data on every machine).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_hyphen_values = true)]
     pub seed: u64,
     /// Output directory (created if missing).
     #[arg(long)]

@@ -17,9 +17,9 @@ const RUNS: usize = 11;
 /// Flags of `preint speed`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
-    /// Number of samples to integrate per measurement, 10 to 10⁷ (default: the criterion
-    /// bench's 10⁵).
-    #[arg(long, default_value_t = 100_000)]
+    /// Number of samples to integrate per measurement, 10 to 10⁷ (10⁵ is the criterion
+    /// bench's stream).
+    #[arg(long, default_value_t = 100_000, allow_hyphen_values = true)]
     pub samples: usize,
 }
 
