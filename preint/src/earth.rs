@@ -143,7 +143,8 @@ pub(crate) fn predict_rotating(
     omega: &Vector3<f64>,
     mode: CoriolisMode,
 ) -> NavState {
-    let (dr, dv, dp) = pim.corrected(bias);
+    let c = crate::bias_correction::correct(pim, bias);
+    let (dr, dv, dp) = (c.r, c.v, c.p);
     let t = pim.delta_t;
     let g = pim.gravity;
     match mode {

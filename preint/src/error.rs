@@ -1,6 +1,7 @@
 //! Typed errors of the preintegrator: every variant names the offending sample (its index in
 //! the order samples were given, and its timestamp) or parameter, and the problem.
 
+use crate::sample::ImuBias;
 use thiserror::Error;
 
 /// Why a preintegration input was rejected. Sample indices count from 0 in the order the
@@ -123,6 +124,22 @@ pub enum PreintError {
         /// Point time \[ns\].
         t_ns: i64,
     },
+    /// A bias other than the measurement's `bias_hat` was given to a measurement preintegrated
+    /// at [`Level::Deltas`](crate::Level::Deltas), which has no bias Jacobians to correct its
+    /// deltas with ([`PreintegratedImu::check_bias`](crate::PreintegratedImu::check_bias)).
+    #[error(
+        "this measurement was preintegrated at level deltas, without bias Jacobians: it cannot \
+         be corrected to bias {} (it was integrated at {}); preintegrate at level covariance \
+         or combined, or re-preintegrate at the new bias",
+        show_bias(.bias),
+        show_bias(.bias_hat)
+    )]
+    NoBiasJacobians {
+        /// The bias asked for (gyro [rad/s], accelerometer [m/s²]).
+        bias: ImuBias,
+        /// The bias the measurement was integrated with.
+        bias_hat: ImuBias,
+    },
     /// A parameter is invalid (non-finite, negative variance, non-positive threshold…).
     #[error("invalid parameter {name}: {reason}")]
     InvalidParameter {
@@ -131,4 +148,13 @@ pub enum PreintError {
         /// What is wrong with it.
         reason: &'static str,
     },
+}
+
+/// `b` as `gyro [x, y, z] rad/s, acc [x, y, z] m/s²` (shortest round-trip numbers).
+fn show_bias(b: &ImuBias) -> String {
+    let (g, a) = (&b.gyro, &b.acc);
+    format!(
+        "gyro [{:?}, {:?}, {:?}] rad/s, acc [{:?}, {:?}, {:?}] m/s²",
+        g.x, g.y, g.z, a.x, a.y, a.z
+    )
 }

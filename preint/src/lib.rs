@@ -13,7 +13,9 @@
 //! - Inside a window: [`deskew`] (the deltas and predicted state at any time between the
 //!   keyframes, one pass over the samples; lidar points deskewed).
 //! - The measurement: [`PreintegratedImu`] (its `cov`, `cov15`, `residual_cov15()` and bias
-//!   Jacobians), [`predict`] and [`NavState`].
+//!   Jacobians), [`predict`] and [`NavState`]; [`try_predict`] and
+//!   [`PreintegratedImu::try_corrected`] refuse a bias a [`Level::Deltas`] measurement (no
+//!   bias Jacobians) cannot be corrected to.
 //! - Factors: [`ImuFactor`], [`CombinedImuFactor`] (residual, analytic Jacobians, whitening).
 //! - Time offset: [`time_offset`] (`t_imu = t_cam + t_d`): the deltas' derivative
 //!   [`PreintegratedImu::jac_td`], the first-order correction, re-integration above a
@@ -66,7 +68,7 @@ pub use error::PreintError;
 pub use extrinsics::{LeverArm, SensorPose};
 pub use factor::{CombinedImuFactor, FactorError, ImuFactor, ResidualMode};
 pub use merge::{MergeError, merge};
-pub use navstate::{NavState, predict};
+pub use navstate::{NavState, predict, try_predict};
 pub use params::{Level, PreintParams, Scheme};
 pub use preintegrator::{BiasUpdate, Preintegrator};
 pub use time_offset::{TimeOffsetUpdate, preintegrate_with_offset};

@@ -12,6 +12,7 @@
 
 use crate::bias_correction::BiasCorrection;
 use crate::earth::CoriolisMode;
+use crate::error::PreintError;
 use crate::noise::{CellRule, white_scale};
 use crate::params::Level;
 use crate::sample::ImuBias;
@@ -332,8 +333,66 @@ impl PreintegratedImu {
     /// `c_φ = ∂ΔR/∂b_g δb_g`, `c_v = ∂Δv/∂b_g δb_g + ∂Δv/∂b_a δb_a`, `c_p` likewise;
     /// [`BiasCorrection::Group`] `ΔR·Exp(c_φ)`, `Δv + ΔR Jl(c_φ) ΔRᵀ c_v`, `Δp + ΔR Jl(c_φ) ΔRᵀ c_p`
     /// (GTSAM 4.3's Galilean `biasCorrectedDelta`). Returns `(ΔR(b), Δv(b) [m/s], Δp(b) [m])`.
+    ///
+    /// # Panics
+    ///
+    /// If the bias cannot be applied ([`check_bias`](Self::check_bias): a [`Level::Deltas`]
+    /// measurement and `bias ≠ bias_hat`); [`try_corrected`](Self::try_corrected) returns the
+    /// error instead.
     pub fn corrected(&self, bias: &ImuBias) -> (SO3, Vector3<f64>, Vector3<f64>) {
+        self.assert_bias(bias);
         let c = crate::bias_correction::correct(self, bias);
         (c.r, c.v, c.p)
+    }
+
+    /// [`corrected`](Self::corrected), or [`PreintError::NoBiasJacobians`] when the bias cannot
+    /// be applied ([`check_bias`](Self::check_bias)).
+    pub fn try_corrected(
+        &self,
+        bias: &ImuBias,
+    ) -> Result<(SO3, Vector3<f64>, Vector3<f64>), PreintError> {
+        self.check_bias(bias)?;
+        let c = crate::bias_correction::correct(self, bias);
+        Ok((c.r, c.v, c.p))
+    }
+
+    /// Whether the deltas can be corrected to `bias`: always for a measurement with bias
+    /// Jacobians ([`Level::Covariance`], [`Level::Combined`]); at [`Level::Deltas`], whose
+    /// Jacobians are zero, only for `bias == bias_hat` exactly (δb = 0, no correction), and
+    /// otherwise [`PreintError::NoBiasJacobians`]: a first-order correction with zero
+    /// Jacobians would return the deltas of `bias_hat` as if they were those of `bias`.
+    /// Costs one comparison of the level for a measurement with Jacobians.
+    ///
+    /// Every function that corrects for a bias checks it: [`corrected`](Self::corrected),
+    /// [`corrected_with_time_offset`](Self::corrected_with_time_offset) and
+    /// [`predict`](crate::predict) panic, [`try_corrected`](Self::try_corrected) and
+    /// [`try_predict`](crate::try_predict) return the error,
+    /// [`Preintegrator::measurement_for_bias`](crate::Preintegrator::measurement_for_bias)
+    /// re-integrates (or returns the error without stored samples). The factors need a
+    /// covariance, so they refuse a [`Level::Deltas`] measurement when they are built
+    /// ([`FactorError::LevelTooLow`](crate::FactorError::LevelTooLow)) and always have
+    /// Jacobians.
+    #[inline]
+    pub fn check_bias(&self, bias: &ImuBias) -> Result<(), PreintError> {
+        if self.level == Level::Deltas && *bias != self.bias_hat {
+            return Err(self.no_bias_jacobians(bias));
+        }
+        Ok(())
+    }
+
+    #[cold]
+    fn no_bias_jacobians(&self, bias: &ImuBias) -> PreintError {
+        PreintError::NoBiasJacobians {
+            bias: *bias,
+            bias_hat: self.bias_hat,
+        }
+    }
+
+    /// Panics with the message of [`check_bias`](Self::check_bias)'s error.
+    #[inline]
+    pub(crate) fn assert_bias(&self, bias: &ImuBias) {
+        if let Err(e) = self.check_bias(bias) {
+            panic!("{e}");
+        }
     }
 }

@@ -20,6 +20,7 @@
 //! (pose first, then velocity); it is **not** the preintegration order [δφ, δv, δp] of
 //! residuals and covariances — the factor exposes named blocks so the two cannot be confused.
 
+use crate::error::PreintError;
 use crate::measurement::PreintegratedImu;
 use crate::sample::ImuBias;
 use nalgebra::{SVector, Vector3};
@@ -121,11 +122,36 @@ impl preint_lie::Manifold for NavState {
 ///
 /// With `pim.omega_coriolis` set, the navigation frame rotates and the prediction follows
 /// `pim.coriolis` ([`crate::earth`] for the equations of each mode).
+///
+/// # Panics
+///
+/// If `bias` cannot be applied to `pim`
+/// ([`PreintegratedImu::check_bias`]: a [`Level::Deltas`](crate::Level::Deltas) measurement,
+/// which has no bias Jacobians, and `bias ≠ pim.bias_hat`); [`try_predict`] returns the error
+/// instead.
 pub fn predict(pim: &PreintegratedImu, state_i: &NavState, bias: &ImuBias) -> NavState {
+    pim.assert_bias(bias);
+    predict_checked(pim, state_i, bias)
+}
+
+/// [`predict`], or [`PreintError::NoBiasJacobians`] when `bias` cannot be applied to `pim`
+/// ([`PreintegratedImu::check_bias`]). Equal to [`predict`] to the bit otherwise.
+pub fn try_predict(
+    pim: &PreintegratedImu,
+    state_i: &NavState,
+    bias: &ImuBias,
+) -> Result<NavState, PreintError> {
+    pim.check_bias(bias)?;
+    Ok(predict_checked(pim, state_i, bias))
+}
+
+/// [`predict`] for a bias [`PreintegratedImu::check_bias`] accepts.
+fn predict_checked(pim: &PreintegratedImu, state_i: &NavState, bias: &ImuBias) -> NavState {
     if let Some(w) = &pim.omega_coriolis {
         return crate::earth::predict_rotating(pim, state_i, bias, w, pim.coriolis);
     }
-    let (dr, dv, dp) = pim.corrected(bias);
+    let c = crate::bias_correction::correct(pim, bias);
+    let (dr, dv, dp) = (c.r, c.v, c.p);
     let dt = pim.delta_t;
     let g = pim.gravity;
     NavState {

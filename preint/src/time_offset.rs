@@ -206,11 +206,17 @@ impl PreintegratedImu {
     /// [`corrected`](Self::corrected) with `J_td δt_d` added to its tangent vector,
     /// `Δ ⊕ (J_b δb + J_td δt_d)` in the measurement's [`BiasCorrection`](crate::BiasCorrection). Equals `corrected`
     /// for `dtd_s = 0`. Returns `(ΔR, Δv [m/s], Δp [m])`.
+    ///
+    /// # Panics
+    ///
+    /// As [`corrected`](Self::corrected), if `bias` cannot be applied
+    /// ([`check_bias`](Self::check_bias)).
     pub fn corrected_with_time_offset(
         &self,
         bias: &ImuBias,
         dtd_s: f64,
     ) -> (SO3, Vector3<f64>, Vector3<f64>) {
+        self.assert_bias(bias);
         let (c, _) = crate::bias_correction::correct_with_time_offset(self, bias, dtd_s);
         (c.r, c.v, c.p)
     }

@@ -48,7 +48,10 @@ SCHEMES: list[str]
 
 @final
 class Noise:
-    """Kalibr-style continuous-time IMU noise densities."""
+    """Kalibr-style continuous-time IMU noise densities. White-noise densities and the rate
+    must be finite and > 0 (a zero white-noise density cannot weight a factor), random walks
+    finite and ≥ 0 (0: a constant bias); otherwise PreintError (kind "InvalidParameter")
+    naming the field."""
 
     def __new__(
         cls,
@@ -82,7 +85,8 @@ class Noise:
 
 @final
 class ImuBias:
-    """A bias estimate: gyro [rad/s], accelerometer [m/s²], sensor frame; order [b_g, b_a]."""
+    """A bias estimate: gyro [rad/s], accelerometer [m/s²], sensor frame; order [b_g, b_a].
+    Non-finite components raise PreintError (kind "InvalidParameter")."""
 
     def __new__(cls, gyro: _Vec3Like | None = None, acc: _Vec3Like | None = None) -> ImuBias: ...
     @property
@@ -99,7 +103,13 @@ class ImuBias:
 
 @final
 class Params:
-    """Preintegration parameters (Rust PreintParams); covariances continuous-time."""
+    """Preintegration parameters (Rust PreintParams); covariances continuous-time.
+
+    Every setter checks its value and keeps the old one on error (PreintError, kind
+    "InvalidParameter", naming the property): gravity finite with |g| ≤ 100 m/s²,
+    omega_coriolis finite with |ω| < 100 rad/s, covariances finite and symmetric with a
+    non-negative diagonal, thresholds > 0, max_gap_ns > 0, body_p_sensor a rotation (within
+    1e-6) and a finite translation."""
 
     def __new__(cls, noise: Noise | None = None, *, scheme: str = "midpoint", level: str = "combined") -> Params: ...
     @property
@@ -254,7 +264,8 @@ class PreintegratedImu:
         "group" (right-applied on SE₂(3), GTSAM's Galilean backend; galilean's default)."""
     def corrected(self, bias: ImuBias) -> tuple[_F64, _F64, _F64]:
         """First-order bias-corrected (ΔR 3×3, Δv [m/s], Δp [m]), additively or on the group
-        (bias_correction)."""
+        (bias_correction). At level "deltas" (no bias Jacobians) a bias other than bias_hat
+        raises PreintError (kind "NoBiasJacobians")."""
     def delta_error(self, reference: PreintegratedImu) -> _F64:
         """[Log(ΔR_refᵀ ΔR), Δv − Δv_ref, Δp − Δp_ref], shape (9,)."""
     def __eq__(self, value: object, /) -> bool: ...
@@ -265,7 +276,8 @@ class PreintegratedImu:
 
 @final
 class Preintegrator:
-    """Accumulates samples (one at a time or from arrays) into a PreintegratedImu."""
+    """Accumulates samples (one at a time or from arrays) into a PreintegratedImu.
+    ``capacity`` (samples stored without reallocating) is at most 50 million."""
 
     def __new__(cls, params: Params, bias: ImuBias | None = None, capacity: int = 0) -> Preintegrator: ...
     def integrate(self, t_ns: int, gyro: _Vec3Like, acc: _Vec3Like) -> None:
@@ -275,7 +287,9 @@ class Preintegrator:
     def finish(self) -> PreintegratedImu:
         """The measurement over [first sample, last sample]."""
     def measurement_for_bias(self, bias: ImuBias) -> tuple[PreintegratedImu, bool]:
-        """(measurement for `bias`, whether it was re-integrated)."""
+        """(measurement for `bias`, whether it was re-integrated). At level "deltas" any
+        change re-integrates, and without keep_samples raises PreintError (kind
+        "NoBiasJacobians")."""
     def reintegrate(self, bias: ImuBias) -> None:
         """Re-integrates the stored samples with `bias`."""
     @property
@@ -376,7 +390,8 @@ def truncation_estimate(
     bias: ImuBias | None = None,
 ) -> tuple[_F64, str, _F64]:
     """(error float64[9] = scheme ⊖ exact deltas in [dphi rad, dv m/s, dp m], method,
-    companion_cov float64[9, 9] the companion's covariance, which inflate weights with)."""
+    companion_cov float64[9, 9] the companion's covariance, which inflate weights with).
+    ``bias`` defaults to pim.bias_hat; another bias raises PreintError."""
 
 def inflate(
     pim: PreintegratedImu,
@@ -420,8 +435,9 @@ class NavState:
         position: npt.ArrayLike | None = None,
         velocity: npt.ArrayLike | None = None,
     ) -> NavState:
-        """`rotation`: 3×3 rotation matrix or unit quaternion (w, x, y, z); `position` [m],
-        `velocity` [m/s], world frame. Defaults: identity, zeros."""
+        """`rotation`: 3×3 rotation matrix or unit quaternion (w, x, y, z), within 1e-6
+        (ShapeError otherwise); `position` [m], `velocity` [m/s], world frame, finite
+        (PreintError otherwise). Defaults: identity, zeros."""
     @staticmethod
     def identity() -> NavState:
         """Identity attitude, zero position and velocity."""
@@ -435,7 +451,7 @@ class NavState:
     def velocity(self) -> _F64:
         """Velocity [m/s], world frame."""
     def retract(self, delta: npt.ArrayLike) -> NavState:
-        """self ⊕ [δφ, δp, δv] = (R Exp(δφ), p + R δp, v + δv)."""
+        """self ⊕ [δφ, δp, δv] = (R Exp(δφ), p + R δp, v + δv); `delta` finite."""
     def local(self, other: NavState) -> _F64:
         """other ⊖ self = [Log(Rᵀ R_o), Rᵀ(p_o − p), v_o − v] (9), inverse of retract."""
     def __eq__(self, value: object, /) -> bool: ...
@@ -443,7 +459,9 @@ class NavState:
 def predict(pim: PreintegratedImu, state_i: NavState, bias_i: ImuBias | None = None) -> NavState:
     """State at keyframe j from the state at i (Forster 2017 eq. 33 with the eq. 44 bias
     correction; rotating frame when `pim.omega_coriolis` is set). `bias_i` [b_g, b_a] defaults
-    to `pim.bias_hat`. GTSAM's `pim.predict(state_i, bias_i)`."""
+    to `pim.bias_hat`. GTSAM's `pim.predict(state_i, bias_i)`. A level "deltas" measurement
+    has no bias Jacobians: a `bias_i` other than its bias_hat raises PreintError (kind
+    "NoBiasJacobians") instead of being ignored."""
 
 @final
 class ImuFactor:
@@ -647,17 +665,21 @@ def read_kalibr_yaml(path: str | os.PathLike[str]) -> Noise:
     """The noise densities of a Kalibr imu.yaml (gyroscope_noise_density [rad/s/√Hz],
     gyroscope_random_walk [rad/s²/√Hz], accelerometer_noise_density [m/s²/√Hz],
     accelerometer_random_walk [m/s³/√Hz], update_rate [Hz]; continuous-time densities).
-    Raises InputError naming the file and the missing key or bad line."""
+    Raises InputError naming the file and the missing key or bad line, or a density a Noise
+    refuses (a zero white-noise density)."""
 
 def write_kalibr_yaml(path: str | os.PathLike[str], noise: Noise) -> None:
     """Writes ``noise`` as a Kalibr imu.yaml (shortest round-trip floats: reading it back gives
-    the same numbers). Raises InputError when the file cannot be written."""
+    the same numbers). A noise a Noise could not be built from (e.g. an allan_variance fit
+    that found no white noise) raises PreintError before the file is opened; InputError when
+    the file cannot be written."""
 
 def write_euroc_imu(path: str | os.PathLike[str], t_ns: _I64, gyro: _F64, acc: _F64) -> None:
     """Writes arrays (t_ns int64[N] ns, gyro float64[N, 3] rad/s, acc float64[N, 3] m/s²) as a
     EuRoC imu0 CSV with shortest round-trip floats, so that :func:`read_imu` gives back the
-    same arrays bit for bit. ShapeError for wrong shapes or dtypes; InputError when the file
-    cannot be written."""
+    same arrays bit for bit. ShapeError for wrong shapes or dtypes; PreintError (NonFinite,
+    DuplicateTimestamp, DecreasingTimestamp, naming the sample) before the file is opened;
+    InputError when the file cannot be written."""
 
 def audit(
     path: str | os.PathLike[str] | None = None,
@@ -757,7 +779,8 @@ def calibrate_static(
     ``noise`` (default EuRoC ADIS16448); chi2/dof ≈ 1 when the densities are right.
 
     Raises CalibrationError: kind ``NotStatic`` when no still interval exists (moving data),
-    ``TooFew``, ``NonFinite``, ``NotIncreasing``, ``Solver``.
+    ``TooFew``, ``NonFinite``, ``NotIncreasing``, ``Solver``; PreintError for a ``gravity``
+    outside [0, 100] m/s² (also in calibrate_multi_pose and calibrate_file).
     """
 
 def calibrate_multi_pose(
@@ -835,7 +858,8 @@ def apply_intrinsics(
     [N, 3]; the same bits as the Rust preintegrator's correction). Preintegrating them with
     keyframes moved by ``time_offset_s`` is ``preint integrate --calibration`` (to rounding: the
     command interpolates boundary samples before correcting them). Raises InputError for the
-    file, ShapeError for the arrays."""
+    file, ShapeError for the arrays, PreintError for a non-finite sample or timestamps out of
+    order (naming the sample)."""
 
 def advise(
     t_ns: _I64,
@@ -858,7 +882,7 @@ def advise(
     [{scheme, rate, decimation, disc_err {rot_rad, vel_m_s, pos_m}, noise_sigma {...},
     cost_ns_per_s (measured on this machine), acceptable}], ``denoise_cutoff_hz`` {gyro, acc},
     ``fraction``, ``window_s``, ``samples``, ``method``. Raises CalibrationError (gap, too short
-    a recording), ShapeError (bad window/fraction).
+    a recording), ShapeError (``window`` or ``fraction`` not a finite number > 0).
     """
 
 def advise_file(

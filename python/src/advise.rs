@@ -43,6 +43,10 @@ pub(crate) fn advise_py<'py>(
     input: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
     let class = input_class(input)?;
+    // The command line's checks of --window and --fraction, named as the arguments.
+    for (name, v) in [("window", window), ("fraction", fraction)] {
+        preint_cli::checks::positive(name, v).map_err(|e| cli_err(e, Class::Calibration))?;
+    }
     let noise = noise_arg(Some(noise), false)?;
     let s = samples(t_ns, gyro, acc)?;
     check(&s)?;
@@ -64,7 +68,6 @@ pub(crate) fn advise_py<'py>(
     };
     let json = py
         .detach(|| {
-            preint_cli::checks::positive("fraction", fraction)?;
             preint_cli::checks::no_gaps(&s, label, preint::params::DEFAULT_MAX_GAP_NS)?;
             // As the command line: held input is not low-passed.
             let (signal, cutoffs) = match class {

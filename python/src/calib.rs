@@ -29,7 +29,8 @@ use pyo3::types::PyDict;
 use std::path::PathBuf;
 
 /// The noise densities of `obj`: a `Noise`, a path to a Kalibr `imu.yaml`, or `None` (the
-/// EuRoC ADIS16448 figures when `default_euroc`, otherwise an error).
+/// EuRoC ADIS16448 figures when `default_euroc`, otherwise an error); checked as a `Noise` is
+/// (`crate::checks::noise`).
 pub(crate) fn noise_arg(obj: Option<&Bound<'_, PyAny>>, default_euroc: bool) -> PyResult<ImuNoise> {
     match obj {
         None if default_euroc => Ok(ImuNoise::euroc()),
@@ -40,6 +41,7 @@ pub(crate) fn noise_arg(obj: Option<&Bound<'_, PyAny>>, default_euroc: bool) -> 
         )),
         Some(o) => {
             if let Ok(n) = o.extract::<PyRef<'_, PyNoise>>() {
+                crate::checks::noise("noise", &n.0)?;
                 return Ok(n.0);
             }
             let p: PathBuf = o.extract().map_err(|_| {
@@ -49,7 +51,7 @@ pub(crate) fn noise_arg(obj: Option<&Bound<'_, PyAny>>, default_euroc: bool) -> 
                     "noise: expected a preint.Noise or the path of a Kalibr imu.yaml".into(),
                 )
             })?;
-            preint_io::read_kalibr_yaml(&p).map_err(|e| raise(Class::Input, e))
+            crate::io::read_noise(&p)
         }
     }
 }
@@ -184,6 +186,7 @@ pub(crate) fn calibrate_static_py<'py>(
     heading: Option<f64>,
     still_check: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
+    crate::checks::gravity_magnitude("gravity", gravity)?;
     let noise = noise_arg(noise, true)?;
     let prior = acc_bias_prior
         .map(|(m, s)| -> PyResult<AccBiasPrior> {
@@ -306,6 +309,7 @@ pub(crate) fn calibrate_multi_pose_py<'py>(
     noise: Option<&Bound<'py, PyAny>>,
     gravity: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
+    crate::checks::gravity_magnitude("gravity", gravity)?;
     let noise = noise_arg(noise, true)?;
     let s = samples(t_ns, gyro, acc)?;
     check(&s)?;
@@ -350,6 +354,7 @@ pub(crate) fn calibrate_file<'py>(
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_args()?;
+    crate::checks::gravity_magnitude("gravity", gravity)?;
     earth_args(latitude, heading)?;
     let needs_poses = estimate.is_some() || calibration.is_some();
     if needs_poses && poses.is_none() {

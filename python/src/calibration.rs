@@ -41,6 +41,13 @@ pub(crate) fn read_calibration<'py>(
     d.set_item("R_IMUtoACC", mat_py(py, &x.r_imu_to_acc))?;
     d.set_item("Tg", mat_py(py, &x.t_g))?;
     d.set_item("time_offset_s", cal.time_offset_s)?;
+    if let Some(m) = cal.noise.as_ref().and_then(crate::checks::noise_problem) {
+        return Err(new_err(
+            Class::Input,
+            "Parse",
+            format!("{}: {m}", path.display()),
+        ));
+    }
     d.set_item("noise", cal.noise.map(crate::params::PyNoise))?;
     Ok(d)
 }
@@ -61,6 +68,7 @@ pub(crate) fn apply_intrinsics<'py>(
     let v = arrays.views();
     let mut src: Vec<ImuSample> = Vec::with_capacity(v.len());
     v.fill(0..v.len(), &mut src);
+    crate::checks::samples(&src)?;
     let c = cal.intrinsics.correction();
     let mut out = src.clone();
     c.apply_all(&src, &mut out);

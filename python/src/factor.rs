@@ -10,7 +10,7 @@
 use crate::convert::{mat_py, svec_py};
 use crate::errors::{Class, raise, shape_err};
 use crate::measurement::PyMeasurement;
-use crate::navstate::{PyNavState, bias_or_hat};
+use crate::navstate::{PyNavState, bias_or_hat, predict_checked};
 use crate::params::PyBias;
 use nalgebra::SVector;
 use numpy::{PyArray1, PyArray2};
@@ -69,7 +69,9 @@ fn factor_state<'py>(
 /// Forster's IMU factor between `(state_i, state_j, bias_i)` (Rust `ImuFactor`):
 /// `ImuFactor(pim, residual="logmap")`, weighted by the measurement's 9×9 covariance. Needs a
 /// measurement preintegrated at level "covariance" or "combined"; raises `FactorError`
-/// otherwise, or when the covariance is not positive definite (e.g. zero noise).
+/// otherwise, or when the covariance is not positive definite (e.g. zero noise). Such a
+/// measurement has bias Jacobians, so every `bias_i` is corrected for (a level "deltas"
+/// measurement, which could not be, never reaches a factor).
 ///
 /// Residual **[r_φ, r_v, r_p]** (rad, m/s, m), with `ΔR(b), Δv(b), Δp(b)` the deltas corrected
 /// to first order for `bias_i` (Forster 2017 eq. 44), `g` gravity, `Δt` the window:
@@ -136,9 +138,9 @@ impl PyImuFactor {
         &self,
         state_i: PyRef<'_, PyNavState>,
         bias_i: Option<PyRef<'_, PyBias>>,
-    ) -> PyNavState {
+    ) -> PyResult<PyNavState> {
         let b = bias_or_hat(bias_i, self.0.preintegrated());
-        PyNavState(self.0.predict(&state_i.0, &b))
+        predict_checked(self.0.preintegrated(), &state_i.0, &b)
     }
 
     /// Residual [r_φ, r_v, r_p] (9, rad, m/s, m) in this factor's mode.
@@ -325,9 +327,9 @@ impl PyCombinedImuFactor {
         &self,
         state_i: PyRef<'_, PyNavState>,
         bias_i: Option<PyRef<'_, PyBias>>,
-    ) -> PyNavState {
+    ) -> PyResult<PyNavState> {
         let b = bias_or_hat(bias_i, self.0.preintegrated());
-        PyNavState(preint::predict(self.0.preintegrated(), &state_i.0, &b))
+        predict_checked(self.0.preintegrated(), &state_i.0, &b)
     }
 
     /// Residual [r_φ, r_v, r_p, r_bg, r_ba] (15) in this factor's mode.

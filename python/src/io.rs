@@ -333,22 +333,39 @@ pub(crate) fn audit<'py>(
 /// The noise densities of a Kalibr `imu.yaml` as a `Noise` (docs in `_native.pyi`).
 #[pyfunction]
 pub(crate) fn read_kalibr_yaml(path: PathBuf) -> PyResult<PyNoise> {
-    preint_io::read_kalibr_yaml(&path)
-        .map(PyNoise)
-        .map_err(|e| raise(Class::Input, e))
+    read_noise(&path).map(PyNoise)
+}
+
+/// The Kalibr `imu.yaml` at `path`, read by `preint_io` and checked as a `Noise` is
+/// (`crate::checks::noise_problem`); every failure an `InputError` naming the file.
+pub(crate) fn read_noise(path: &std::path::Path) -> PyResult<preint::ImuNoise> {
+    let n = preint_io::read_kalibr_yaml(path).map_err(|e| raise(Class::Input, e))?;
+    match crate::checks::noise_problem(&n) {
+        None => Ok(n),
+        Some(m) => Err(new_err(
+            Class::Input,
+            "Parse",
+            format!("{}: {m}", path.display()),
+        )),
+    }
 }
 
 /// write_kalibr_yaml(path, noise)
 ///
-/// Writes a `Noise` as a Kalibr `imu.yaml` (docs in `_native.pyi`).
+/// Writes a `Noise` as a Kalibr `imu.yaml` (docs in `_native.pyi`); a noise a `Noise` could
+/// not be built from (e.g. a fit that found no white noise) is refused before the file is
+/// opened.
 #[pyfunction]
 pub(crate) fn write_kalibr_yaml(path: PathBuf, noise: PyRef<'_, PyNoise>) -> PyResult<()> {
+    crate::checks::noise("noise", &noise.0)?;
     preint_io::write_kalibr_yaml(&path, &noise.0).map_err(|e| raise(Class::Input, e))
 }
 
 /// write_euroc_imu(path, t_ns, gyro, acc)
 ///
-/// Writes arrays as a EuRoC imu0 CSV (docs in `_native.pyi`).
+/// Writes arrays as a EuRoC imu0 CSV (docs in `_native.pyi`); non-finite values and
+/// timestamps out of order are refused before the file is opened (the readers would refuse
+/// the file).
 #[pyfunction]
 pub(crate) fn write_euroc_imu(
     py: Python<'_>,
@@ -358,6 +375,7 @@ pub(crate) fn write_euroc_imu(
     acc: &Bound<'_, PyAny>,
 ) -> PyResult<()> {
     let s = crate::convert::samples(t_ns, gyro, acc)?;
+    crate::checks::samples(&s)?;
     py.detach(|| preint_io::write_euroc_imu(&path, &s))
         .map_err(|e| raise(Class::Input, e))
 }

@@ -6,6 +6,7 @@ mod advise;
 mod allan;
 mod calib;
 mod calibration;
+mod checks;
 mod convert;
 mod errors;
 mod factor;

@@ -6,6 +6,7 @@
 //! [m/s] and Δp [m] are in body frame i and exclude gravity (Forster et al. 2017, eq. 33).
 
 use crate::convert::{mat_py, svec_py, vec_py};
+use crate::errors::preint_err;
 use crate::params::{PyBias, coriolis_name};
 use numpy::{PyArray1, PyArray2};
 use preint::PreintegratedImu;
@@ -129,19 +130,20 @@ impl PyMeasurement {
     }
 
     /// Deltas corrected to first order for the bias `bias`, additively (Forster eq. 44) or on
-    /// the group (`bias_correction`): `(ΔR 3×3, Δv [m/s], Δp [m])`.
+    /// the group (`bias_correction`): `(ΔR 3×3, Δv [m/s], Δp [m])`. At level "deltas" (no bias
+    /// Jacobians) a `bias` other than `bias_hat` raises `PreintError` (kind `NoBiasJacobians`).
     #[allow(clippy::type_complexity)]
     fn corrected<'py>(
         &self,
         py: Python<'py>,
         bias: PyRef<'_, PyBias>,
-    ) -> (
+    ) -> PyResult<(
         Bound<'py, PyArray2<f64>>,
         Bound<'py, PyArray1<f64>>,
         Bound<'py, PyArray1<f64>>,
-    ) {
-        let (r, v, p) = self.0.corrected(&bias.0);
-        (mat_py(py, r.matrix()), vec_py(py, &v), vec_py(py, &p))
+    )> {
+        let (r, v, p) = self.0.try_corrected(&bias.0).map_err(preint_err)?;
+        Ok((mat_py(py, r.matrix()), vec_py(py, &v), vec_py(py, &p)))
     }
 
     /// This measurement's deltas minus `reference`'s in [δφ, δv, δp]:

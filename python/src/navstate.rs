@@ -7,6 +7,7 @@
 //! frame). This is GTSAM's `NavState` order (pose first), **not** the [δφ, δv, δp] order of
 //! residuals and covariances.
 
+use crate::checks;
 use crate::convert::{mat_py, vec_py, vec3};
 use crate::errors::shape_err;
 use crate::measurement::PyMeasurement;
@@ -19,8 +20,9 @@ use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 
 /// A navigation state (Rust `NavState`): `NavState(rotation, position, velocity)` with
-/// `rotation` R_wb (body → world; a 3×3 rotation matrix or a unit quaternion (w, x, y, z)),
-/// `position` [m] and `velocity` [m/s] of the body origin in the world frame (z up).
+/// `rotation` R_wb (body → world; a 3×3 rotation matrix or a unit quaternion (w, x, y, z),
+/// within 1e-6: `crate::params::rotation`), `position` [m] and `velocity` [m/s] of the body
+/// origin in the world frame (z up), all finite.
 ///
 /// Tangent order **[δφ, δp, δv]** (`TANGENT_ORDER`; rad, m, m/s) with
 /// `R ← R·Exp(δφ)` (right, body frame), `p ← p + R·δp` (body frame), `v ← v + δv` (world
@@ -64,11 +66,13 @@ impl PyNavState {
             .unwrap_or_else(SO3::identity);
         let p = position.map(|p| vec3("position", p)).transpose()?;
         let v = velocity.map(|v| vec3("velocity", v)).transpose()?;
-        Ok(Self(NavState::new(
-            r,
+        let (p, v) = (
             p.unwrap_or_else(Vector3::zeros),
             v.unwrap_or_else(Vector3::zeros),
-        )))
+        );
+        checks::finite3("position", &p, "m")?;
+        checks::finite3("velocity", &v, "m/s")?;
+        Ok(Self(NavState::new(r, p, v)))
     }
 
     /// Identity attitude, zero position and velocity.
@@ -96,7 +100,14 @@ impl PyNavState {
     /// `self ⊕ delta` for `delta = [δφ, δp, δv]` (rad, m, m/s):
     /// `(R Exp(δφ), p + R δp, v + δv)`.
     fn retract(&self, delta: &Bound<'_, PyAny>) -> PyResult<Self> {
-        Ok(Self(self.0.retract(&vec9("delta", delta)?)))
+        let d = vec9("delta", delta)?;
+        if let Some(i) = d.iter().position(|x| !x.is_finite()) {
+            return Err(checks::invalid(format!(
+                "delta[{i}] must be finite (order [dphi rad, dp m, dv m/s]), got {:?}",
+                d[i]
+            )));
+        }
+        Ok(Self(self.0.retract(&d)))
     }
 
     /// `other ⊖ self = [Log(Rᵀ R_o), Rᵀ (p_o − p), v_o − v]` in [δφ, δp, δv], the inverse of
@@ -125,7 +136,13 @@ impl PyNavState {
     /// Inverse of `__reduce__`'s state (pickle).
     #[staticmethod]
     fn _from_state(state: &[u8]) -> PyResult<Self> {
-        decode_state(state).map(Self)
+        let s = decode_state(state)?;
+        if !s.is_finite() {
+            return Err(checks::invalid(
+                "NavState pickle state: non-finite rotation, position or velocity",
+            ));
+        }
+        Ok(Self(s))
     }
 }
 
@@ -171,14 +188,27 @@ pub(crate) fn bias_or_hat(b: Option<PyRef<'_, PyBias>>, pim: &preint::Preintegra
 /// with `g = pim.gravity` [m/s², world] and `Δt = pim.delta_t` [s]. `bias_i` (order [b_g, b_a])
 /// defaults to `pim.bias_hat`. With `pim.omega_coriolis` set the navigation frame rotates and
 /// the prediction follows `pim.coriolis` ("exact": GTSAM 4.3; "first"/"second": GTSAM ≤ 4.2).
-/// Equals GTSAM's `PreintegratedImuMeasurements.predict(state_i, bias_i)`.
+/// Equals GTSAM's `PreintegratedImuMeasurements.predict(state_i, bias_i)`. A measurement of
+/// level "deltas" has no bias Jacobians: a `bias_i` other than its `bias_hat` raises
+/// `PreintError` (kind `NoBiasJacobians`) instead of being ignored.
 #[pyfunction]
 #[pyo3(signature = (pim, state_i, bias_i=None))]
 pub(crate) fn predict(
     pim: PyRef<'_, PyMeasurement>,
     state_i: PyRef<'_, PyNavState>,
     bias_i: Option<PyRef<'_, PyBias>>,
-) -> PyNavState {
+) -> PyResult<PyNavState> {
     let b = bias_or_hat(bias_i, &pim.0);
-    PyNavState(preint::predict(&pim.0, &state_i.0, &b))
+    predict_checked(&pim.0, &state_i.0, &b)
+}
+
+/// `preint::try_predict`, its refusal as `PreintError`.
+pub(crate) fn predict_checked(
+    pim: &preint::PreintegratedImu,
+    state_i: &NavState,
+    bias: &ImuBias,
+) -> PyResult<PyNavState> {
+    preint::try_predict(pim, state_i, bias)
+        .map(PyNavState)
+        .map_err(crate::errors::preint_err)
 }

@@ -5,8 +5,9 @@
 //! `gyroscopeCovariance` semantics, the densities squared); biases [rad/s], [m/s²]; gravity
 //! [m/s²] in the world frame; times in integer nanoseconds.
 
+use crate::checks;
 use crate::convert::{cov3, mat_py, matrix, vec_py, vec3};
-use crate::errors::{preint_err, shape_err};
+use crate::errors::shape_err;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 use numpy::{PyArray1, PyArray2};
 use preint::lie::SO3;
@@ -22,7 +23,8 @@ type NoiseArgs = (f64, f64, f64, f64, f64);
 /// Kalibr-style IMU noise densities (`Noise(gyro_noise_density, gyro_random_walk,
 /// acc_noise_density, acc_random_walk, update_rate_hz=200.0)`): gyro [rad/s/√Hz], gyro bias
 /// random walk [rad/s²/√Hz], accelerometer [m/s²/√Hz], accelerometer bias random walk
-/// [m/s³/√Hz], rate [Hz].
+/// [m/s³/√Hz], rate [Hz]. White-noise densities and the rate must be finite and > 0, random
+/// walks finite and ≥ 0 (`crate::checks`); otherwise `PreintError` (kind `InvalidParameter`).
 #[pyclass(name = "Noise", module = "preint", from_py_object)]
 #[derive(Clone)]
 pub(crate) struct PyNoise(pub ImuNoise);
@@ -37,14 +39,16 @@ impl PyNoise {
         acc_noise_density: f64,
         acc_random_walk: f64,
         update_rate_hz: f64,
-    ) -> Self {
-        Self(ImuNoise {
+    ) -> PyResult<Self> {
+        let n = ImuNoise {
             gyro_noise_density,
             gyro_random_walk,
             acc_noise_density,
             acc_random_walk,
             update_rate_hz,
-        })
+        };
+        checks::noise("Noise", &n)?;
+        Ok(Self(n))
     }
 
     /// The EuRoC MAV dataset's ADIS16448 densities (its `imu0.yaml`).
@@ -112,7 +116,7 @@ impl PyNoise {
 
 /// An IMU bias estimate: gyro [rad/s] and accelerometer [m/s²], each in the sensor frame.
 /// Vector order everywhere in preint: **[b_g, b_a]** (GTSAM's `ConstantBias` stores
-/// [b_a, b_g]).
+/// [b_a, b_g]). Components must be finite.
 #[pyclass(name = "ImuBias", module = "preint", from_py_object)]
 #[derive(Clone)]
 pub(crate) struct PyBias(pub ImuBias);
@@ -124,10 +128,12 @@ impl PyBias {
     fn new(gyro: Option<&Bound<'_, PyAny>>, acc: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
         let g = gyro.map(|g| vec3("gyro", g)).transpose()?;
         let a = acc.map(|a| vec3("acc", a)).transpose()?;
-        Ok(Self(ImuBias::new(
+        let b = ImuBias::new(
             g.unwrap_or_else(Vector3::zeros),
             a.unwrap_or_else(Vector3::zeros),
-        )))
+        );
+        checks::bias("ImuBias", &b)?;
+        Ok(Self(b))
     }
 
     /// Gyro bias [rad/s].
@@ -180,6 +186,8 @@ pub(crate) fn bias_or_zero(b: Option<PyRef<'_, PyBias>>) -> ImuBias {
 /// The parameters of a preintegration (Rust `PreintParams`). `Params(noise=None)` starts from
 /// `noise` (default `Noise.euroc()`): `Σ = density² I` for the four densities, gravity
 /// `(0, 0, −9.81)` m/s², scheme `"midpoint"`, level `"combined"`; every field can then be set.
+/// Every setter checks the new value (`crate::checks::params`: `PreintParams::validate`, gravity
+/// within 100 m/s², `omega_coriolis` below 100 rad/s) and keeps the old one on error.
 #[pyclass(name = "Params", module = "preint", from_py_object)]
 #[derive(Clone)]
 pub(crate) struct PyParams(pub PreintParams);
@@ -232,7 +240,10 @@ fn coriolis_from(name: &str) -> PyResult<CoriolisMode> {
     }
 }
 
-/// A rotation from a 3×3 matrix or a unit quaternion `(w, x, y, z)`.
+/// A rotation from a 3×3 matrix or a unit quaternion `(w, x, y, z)`. Tolerance 1e-6: a matrix
+/// with `‖RᵀR − I‖max ≤ 1e-6` and `det R > 0` is replaced by the nearest rotation
+/// (`SO3::from_matrix`), a quaternion with `|‖q‖ − 1| ≤ 1e-6` is normalised; anything else
+/// (NaN or infinite entries included) raises `ShapeError` naming `name`.
 pub(crate) fn rotation(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<SO3> {
     if let Ok(q) = obj.extract::<Vec<f64>>()
         && q.len() == 4
@@ -270,6 +281,7 @@ impl PyParams {
     #[pyo3(signature = (noise=None, *, scheme="midpoint", level="combined"))]
     fn new(noise: Option<PyRef<'_, PyNoise>>, scheme: &str, level: &str) -> PyResult<Self> {
         let n = noise.map(|n| n.0).unwrap_or_else(ImuNoise::euroc);
+        checks::noise("noise", &n)?;
         let p = PreintParams::from_noise(&n)
             .with_scheme(scheme_from(scheme)?)
             .with_level(level_from(level)?);
@@ -283,8 +295,8 @@ impl PyParams {
     }
     #[setter]
     fn set_gravity(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
-        self.0.gravity = vec3("gravity", v)?;
-        Ok(())
+        let g = vec3("gravity", v)?;
+        self.update(|p| p.gravity = g)
     }
 
     /// Gyro white-noise covariance Σ_g [rad²/s] (continuous-time; a number s means s·I).
@@ -294,8 +306,8 @@ impl PyParams {
     }
     #[setter]
     fn set_gyroscope_covariance(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
-        self.0.gyro_cov = cov3("gyroscope_covariance", v)?;
-        Ok(())
+        let c = cov3("gyroscope_covariance", v)?;
+        self.update(|p| p.gyro_cov = c)
     }
     /// Accelerometer white-noise covariance Σ_a [m²/s³] (continuous-time; a number s means s·I).
     #[getter]
@@ -304,8 +316,8 @@ impl PyParams {
     }
     #[setter]
     fn set_accelerometer_covariance(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
-        self.0.acc_cov = cov3("accelerometer_covariance", v)?;
-        Ok(())
+        let c = cov3("accelerometer_covariance", v)?;
+        self.update(|p| p.acc_cov = c)
     }
     /// Gyro bias random-walk covariance [rad²/s³] (continuous-time).
     #[getter]
@@ -314,8 +326,8 @@ impl PyParams {
     }
     #[setter]
     fn set_bias_gyro_covariance(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
-        self.0.gyro_bias_rw_cov = cov3("bias_gyro_covariance", v)?;
-        Ok(())
+        let c = cov3("bias_gyro_covariance", v)?;
+        self.update(|p| p.gyro_bias_rw_cov = c)
     }
     /// Accelerometer bias random-walk covariance [m²/s⁵] (continuous-time).
     #[getter]
@@ -324,8 +336,8 @@ impl PyParams {
     }
     #[setter]
     fn set_bias_acc_covariance(&mut self, v: &Bound<'_, PyAny>) -> PyResult<()> {
-        self.0.acc_bias_rw_cov = cov3("bias_acc_covariance", v)?;
-        Ok(())
+        let c = cov3("bias_acc_covariance", v)?;
+        self.update(|p| p.acc_bias_rw_cov = c)
     }
 
     /// Integration covariance [m²/s³] added to Δp per unit time (GTSAM's
@@ -336,8 +348,8 @@ impl PyParams {
     }
     #[setter]
     fn set_integration_covariance(&mut self, v: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
-        self.0.integration_cov = v.map(|v| cov3("integration_covariance", v)).transpose()?;
-        Ok(())
+        let c = v.map(|v| cov3("integration_covariance", v)).transpose()?;
+        self.update(|p| p.integration_cov = c)
     }
 
     /// Integration scheme: `"euler"` (GTSAM's Manifold), `"midpoint"`, `"hermite4"` or `"galilean"`
@@ -370,8 +382,8 @@ impl PyParams {
         self.0.reintegrate_gyro_threshold
     }
     #[setter]
-    fn set_reintegrate_gyro_threshold(&mut self, v: f64) {
-        self.0.reintegrate_gyro_threshold = v;
+    fn set_reintegrate_gyro_threshold(&mut self, v: f64) -> PyResult<()> {
+        self.update(|p| p.reintegrate_gyro_threshold = v)
     }
 
     /// Accelerometer-bias change [m/s²] above which `measurement_for_bias` re-integrates.
@@ -380,8 +392,8 @@ impl PyParams {
         self.0.reintegrate_acc_threshold
     }
     #[setter]
-    fn set_reintegrate_acc_threshold(&mut self, v: f64) {
-        self.0.reintegrate_acc_threshold = v;
+    fn set_reintegrate_acc_threshold(&mut self, v: f64) -> PyResult<()> {
+        self.update(|p| p.reintegrate_acc_threshold = v)
     }
 
     /// Largest allowed gap between samples [ns].
@@ -390,8 +402,8 @@ impl PyParams {
         self.0.max_gap_ns
     }
     #[setter]
-    fn set_max_gap_ns(&mut self, v: i64) {
-        self.0.max_gap_ns = v;
+    fn set_max_gap_ns(&mut self, v: i64) -> PyResult<()> {
+        self.update(|p| p.max_gap_ns = v)
     }
 
     /// Whether a `Preintegrator` stores its samples (needed for re-integration).
@@ -422,17 +434,18 @@ impl PyParams {
         rotation: Option<&Bound<'_, PyAny>>,
         translation: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
-        self.0.body_p_sensor = match rotation {
+        let pose = match rotation {
             None => None,
             Some(r) => {
                 let t = translation
                     .map(|t| vec3("translation", t))
                     .transpose()?
                     .unwrap_or_else(Vector3::zeros);
+                checks::finite3("translation", &t, "m")?;
                 Some(SensorPose::new(self::rotation("rotation", r)?, t))
             }
         };
-        Ok(())
+        self.update(|p| p.body_p_sensor = pose)
     }
 
     /// Lever-arm model with `body_p_sensor`: `"exact"` (default) or `"centripetal"` (GTSAM's).
@@ -479,8 +492,8 @@ impl PyParams {
     }
     #[setter]
     fn set_omega_coriolis(&mut self, v: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
-        self.0.omega_coriolis = v.map(|v| vec3("omega_coriolis", v)).transpose()?;
-        Ok(())
+        let w = v.map(|v| vec3("omega_coriolis", v)).transpose()?;
+        self.update(|p| p.omega_coriolis = w)
     }
 
     /// How `omega_coriolis` enters prediction and factors: `"exact"` (default, GTSAM 4.3),
@@ -497,7 +510,7 @@ impl PyParams {
 
     /// Raises `PreintError` if a parameter is invalid (non-finite, not a covariance, …).
     fn validate(&self) -> PyResult<()> {
-        self.0.validate().map_err(preint_err)
+        checks::params(&self.0)
     }
 
     fn __repr__(&self) -> String {
@@ -521,6 +534,20 @@ impl PyParams {
     /// Inverse of `__reduce__`'s state (pickle).
     #[staticmethod]
     fn _from_state(state: &[u8]) -> PyResult<Self> {
-        crate::state::decode_params(state).map(Self)
+        let p = crate::state::decode_params(state)?;
+        checks::params(&p)?;
+        Ok(Self(p))
+    }
+}
+
+impl PyParams {
+    /// Applies `f` to a copy of the parameters and keeps the copy if it passes
+    /// [`checks::params`] (the error names the property; nothing changes on error).
+    fn update(&mut self, f: impl FnOnce(&mut PreintParams)) -> PyResult<()> {
+        let mut p = self.0.clone();
+        f(&mut p);
+        checks::params(&p)?;
+        self.0 = p;
+        Ok(())
     }
 }

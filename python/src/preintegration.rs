@@ -16,7 +16,8 @@ use pyo3::prelude::*;
 /// `Preintegrator(params, bias=None, capacity=0)`; `integrate(t_ns, gyro, acc)` adds one
 /// sample, `integrate_arrays(t_ns, gyro, acc)` many in one call; `finish()` returns the
 /// `PreintegratedImu` over [first sample, last sample]. A rejected sample raises
-/// `PreintError` naming it and leaves the preintegrator unchanged.
+/// `PreintError` naming it and leaves the preintegrator unchanged. `capacity` (samples stored
+/// without reallocating) is at most the readers' bound of 50 million samples.
 #[pyclass(name = "Preintegrator", module = "preint")]
 pub(crate) struct PyPreintegrator(Preintegrator);
 
@@ -29,6 +30,13 @@ impl PyPreintegrator {
         bias: Option<PyRef<'_, PyBias>>,
         capacity: usize,
     ) -> PyResult<Self> {
+        let most = preint_io::reader::DEFAULT_MAX_SAMPLES;
+        if capacity > most {
+            return Err(crate::checks::invalid(format!(
+                "capacity must be at most {most} samples (the readers' bound), got {capacity}; \
+                 the stored samples grow as needed beyond it"
+            )));
+        }
         Preintegrator::with_capacity(params.0.clone(), bias_or_zero(bias), capacity)
             .map(Self)
             .map_err(preint_err)
@@ -83,7 +91,9 @@ impl PyPreintegrator {
 
     /// The measurement for a new bias estimate: first-order corrected, or re-integrated from
     /// the stored samples when the change exceeds the thresholds. Returns
-    /// `(PreintegratedImu, reintegrated: bool)`.
+    /// `(PreintegratedImu, reintegrated: bool)`. At level "deltas" (no bias Jacobians) any
+    /// change re-integrates, and without `keep_samples` raises `PreintError` (kind
+    /// `NoBiasJacobians`).
     fn measurement_for_bias(
         &self,
         py: Python<'_>,

@@ -95,7 +95,8 @@ type Estimate<'py> = (
 /// [δφ rad, δv m/s, δp m] (the chart of `PreintegratedImu.delta_error`), `method` "hermite4
 /// companion" (euler, midpoint, galilean) or "richardson 2h" (hermite4), and `companion_cov`
 /// float64[9, 9] the companion's covariance (for hermite4 `pim.cov`), which `inflate` weights
-/// with.
+/// with. `bias` defaults to `pim.bias_hat`; another bias raises `PreintError` (the window must
+/// be re-integrated with the bias `pim` was integrated with).
 #[pyfunction]
 #[pyo3(signature = (params, t_ns, gyro, acc, pim, bias=None))]
 pub(crate) fn truncation_estimate<'py>(
@@ -108,7 +109,16 @@ pub(crate) fn truncation_estimate<'py>(
     bias: Option<PyRef<'_, PyBias>>,
 ) -> PyResult<Estimate<'py>> {
     let arrays = SampleArrays::new(t_ns, gyro, acc)?;
-    let (v, p, b, m) = (arrays.views(), &params.0, bias_or_zero(bias), &pim.0);
+    let b = bias.map_or(pim.0.bias_hat, |b| b.0);
+    if b != pim.0.bias_hat {
+        return Err(crate::checks::invalid(format!(
+            "bias: truncation_estimate re-integrates the window of pim, which was integrated at \
+             {}, not {}; omit bias (or give pim.bias_hat)",
+            crate::checks::show_bias(&pim.0.bias_hat),
+            crate::checks::show_bias(&b)
+        )));
+    }
+    let (v, p, m) = (arrays.views(), &params.0, &pim.0);
     // Twice the margin: the Richardson companion integrates every other sample, whose window
     // reads as many samples of its own beyond the edges; the other companion's interpolating
     // stencils read `CONTEXT_SAMPLES`.

@@ -386,12 +386,11 @@ def test_bad_scalars_windows_and_names_raise_typed_errors():
     with pytest.raises(preint.ShapeError, match="keyframes_ns"):
         preint.preintegrate_windows(p, t, g, a, [int(t[0]), int(t[9])])
     bad = preint.Params()
-    bad.gyroscope_covariance = -1.0
     with pytest.raises(preint.PreintError) as e:
-        bad.validate()
-    assert e.value.kind == "InvalidParameter"
-    with pytest.raises(preint.PreintError):
-        preint.Preintegrator(bad)
+        bad.gyroscope_covariance = -1.0
+    assert e.value.kind == "InvalidParameter" and "gyroscope_covariance" in str(e.value)
+    assert bad == preint.Params()  # unchanged
+    bad.validate()
 
 
 # ---------------------------------------------------------------- closed form

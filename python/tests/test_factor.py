@@ -393,8 +393,11 @@ def test_factor_errors_are_typed(pim):
     with pytest.raises(preint.FactorError) as e:
         preint.CombinedImuFactor(measurement(level="covariance"))
     assert e.value.kind == "LevelTooLow"
-    # zero noise: no square-root information
-    p = preint.Params(preint.Noise(0.0, 0.0, 0.0, 0.0, float(RATE_HZ)))
+    # zero noise (covariances set to 0; a Noise refuses zero densities): no square-root
+    # information
+    p = preint.Params()
+    for name in ("gyroscope_covariance", "accelerometer_covariance", "bias_gyro_covariance", "bias_acc_covariance"):
+        setattr(p, name, 0.0)
     t_ns, gyro, acc = scene_samples()
     zero = preint.preintegrate(p, t_ns, gyro, acc, int(t_ns[0]), int(t_ns[-1]))
     with pytest.raises(preint.FactorError) as e:
@@ -428,7 +431,7 @@ def test_bias_defaults_and_non_finite_states(pim, states):
     b = preint.ImuBias([0.01, 0, 0], [0, 0.1, 0])
     assert np.array_equal(c.residual(xi, xj, b), c.residual(xi, xj, b, b))
     assert np.abs(c.residual(xi, xj, b)[9:]).max() == 0.0
-    # a non-finite state gives a non-finite residual, not an exception
-    bad = preint.NavState(xj.rotation, [np.nan, 0.0, 0.0], xj.velocity)
-    assert not np.isfinite(f.residual(xi, bad)).all()
-    assert not np.isfinite(f.chi2(xi, bad))
+    # a non-finite state cannot be made (so no factor sees one)
+    with pytest.raises(preint.PreintError, match=r"position\[0\] must be finite") as e:
+        preint.NavState(xj.rotation, [np.nan, 0.0, 0.0], xj.velocity)
+    assert e.value.kind == "InvalidParameter"

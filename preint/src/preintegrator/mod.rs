@@ -451,6 +451,11 @@ impl Preintegrator {
     /// accuracy of re-integration above the thresholds must keep the samples; the size of the
     /// first-order error is documented at [`crate::params::DEFAULT_REINTEGRATE_GYRO`]).
     ///
+    /// At [`Level::Deltas`] there are no bias Jacobians, so no first-order correction: any
+    /// `bias ≠ bias_hat` re-integrates the stored samples, and without `keep_samples` it is
+    /// [`PreintError::NoBiasJacobians`] ([`PreintegratedImu::check_bias`]). `bias == bias_hat`
+    /// returns the measurement unchanged at every level.
+    ///
     /// ```
     /// use preint::nalgebra::Vector3;
     /// use preint::{ImuBias, ImuSample, PreintParams, Preintegrator};
@@ -470,7 +475,8 @@ impl Preintegrator {
         let dba = (bias.acc - self.bias_hat.acc).norm();
         let small = dbg <= self.params.reintegrate_gyro_threshold
             && dba <= self.params.reintegrate_acc_threshold;
-        if small || !self.params.keep_samples {
+        let first_order = self.params.level != Level::Deltas || *bias == self.bias_hat;
+        if first_order && (small || !self.params.keep_samples) {
             let mut m = self.finish()?;
             let (r, v, p) = m.corrected(bias);
             m.delta_r = r;
@@ -480,6 +486,12 @@ impl Preintegrator {
             return Ok(BiasUpdate {
                 measurement: m,
                 reintegrated: false,
+            });
+        }
+        if !self.params.keep_samples {
+            return Err(PreintError::NoBiasJacobians {
+                bias: *bias,
+                bias_hat: self.bias_hat,
             });
         }
         let mut other = self.clone();
