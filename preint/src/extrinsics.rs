@@ -62,7 +62,7 @@
 
 use crate::measurement::{BiasJacobians, Cov9, EdgeSource, PreintegratedImu};
 use crate::noise::white_scale;
-use crate::params::{Level, PreintParams};
+use crate::params::Level;
 use crate::sample::ImuSample;
 use nalgebra::{Matrix3, SMatrix, Vector3};
 use preint_lie::{SO3, hat};
@@ -128,29 +128,63 @@ impl SensorPose {
     }
 }
 
-/// How `params` removes the lever arm of its `body_p_sensor`: the lever arm in sensor axes
-/// \[m\] when it is taken off every sample ([`LeverArm::Centripetal`] with a non-zero arm), and
-/// the pose whose map turns the sensor's measurement into the body's (rotation only in that
-/// case, since the samples lost the arm already). `(None, None)` without a sensor pose.
-pub(crate) fn plan(params: &PreintParams) -> (Option<Vector3<f64>>, Option<SensorPose>) {
-    match (&params.body_p_sensor, params.lever_arm) {
+/// How `params` removes the lever arm of its `body_p_sensor`: the arm taken off every sample
+/// before the loop ([`LeverArm::Centripetal`] with a non-zero arm), and the pose whose map
+/// turns the sensor's measurement into the body's (rotation only in that case, since the
+/// samples lost the arm already). `(None, None)` without a sensor pose.
+pub(crate) fn plan(
+    pose: Option<&SensorPose>,
+    mode: LeverArm,
+) -> (Option<CentripetalArm>, Option<SensorPose>) {
+    match (pose, mode) {
         (Some(pose), LeverArm::Centripetal) if pose.translation != Vector3::zeros() => (
-            Some(pose.rotation.inverse().act(&pose.translation)),
+            Some(CentripetalArm {
+                r: pose.rotation.inverse().act(&pose.translation),
+            }),
             Some(SensorPose::new(pose.rotation, Vector3::zeros())),
         ),
-        (pose, _) => (None, *pose),
+        (pose, _) => (None, pose.copied()),
     }
 }
 
-/// Sample `s` with `ω × (ω × r)` taken off its specific force (`ω = ω_m − b_g` [rad/s], `r`
-/// the lever arm in sensor axes \[m\]): GTSAM's per-sample lever-arm correction.
-pub(crate) fn without_centripetal(
-    s: &ImuSample,
-    r: &Vector3<f64>,
-    b_g: &Vector3<f64>,
-) -> ImuSample {
-    let w = s.gyro - b_g;
-    ImuSample::new(s.t_ns, s.gyro, s.acc - w.cross(&w.cross(r)))
+/// GTSAM's per-sample lever-arm model ([`LeverArm::Centripetal`]) as a transform of the
+/// samples before the loop: each specific force loses `c(ω) = ω × (ω × r)`, with `ω = ω_m − b̂_g`
+/// [rad/s] and `r` the lever arm in sensor axes \[m\]. The transformed sample's accelerometer
+/// input then depends on its rate through `D(ω) = −∂c/∂ω` ([`CentripetalArm::coupling`]),
+/// which the loop's gains carry: the gyroscope noise and bias move the specific force.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct CentripetalArm {
+    /// The lever arm in sensor axes \[m\].
+    pub r: Vector3<f64>,
+}
+
+impl CentripetalArm {
+    /// Sample `s` with `ω × (ω × r)` taken off its specific force, `ω = ω_m − b_g`.
+    #[inline(always)]
+    pub(crate) fn map(&self, s: &ImuSample, b_g: &Vector3<f64>) -> ImuSample {
+        let (w, r) = (s.gyro - b_g, &self.r);
+        ImuSample::new(s.t_ns, s.gyro, s.acc - w.cross(&w.cross(r)))
+    }
+
+    /// `D = ∂a_node/∂ω_node` of a node whose specific force lost `c(ω) = ω × (ω × r)`:
+    /// `−∂c/∂ω = [ω × r]× + [ω]×[r]× = [ω × r]× + r ωᵀ − (ω·r) I`.
+    #[inline(always)]
+    pub(crate) fn coupling(&self, w: &Vector3<f64>) -> Matrix3<f64> {
+        let r = &self.r;
+        let (x, wr) = (w.cross(r), w.dot(r));
+        let o = r * w.transpose();
+        Matrix3::new(
+            o[(0, 0)] - wr,
+            o[(0, 1)] - x.z,
+            o[(0, 2)] + x.y,
+            o[(1, 0)] + x.z,
+            o[(1, 1)] - wr,
+            o[(1, 2)] - x.x,
+            o[(2, 0)] - x.y,
+            o[(2, 1)] + x.x,
+            o[(2, 2)] - wr,
+        )
+    }
 }
 
 /// The body's deltas `(ΔR, Δv [m/s], Δp [m])` from the sensor's `(ΔR_s, Δv_s, Δp_s)` over
@@ -325,21 +359,21 @@ pub(crate) fn to_body(m: &mut PreintegratedImu, pose: &SensorPose, ends: &EndRat
     }
 }
 
-/// `D = ∂a_node/∂ω_node` of a node whose specific force lost `c(ω) = ω × (ω × r)`:
-/// `−∂c/∂ω = [ω × r]× + [ω]×[r]× = [ω × r]× + r ωᵀ − (ω·r) I`.
-#[inline(always)]
-pub(crate) fn centripetal_d(w: &Vector3<f64>, r: &Vector3<f64>) -> Matrix3<f64> {
-    let (x, wr) = (w.cross(r), w.dot(r));
-    let o = r * w.transpose();
-    Matrix3::new(
-        o[(0, 0)] - wr,
-        o[(0, 1)] - x.z,
-        o[(0, 2)] + x.y,
-        o[(1, 0)] + x.z,
-        o[(1, 1)] - wr,
-        o[(1, 2)] - x.x,
-        o[(2, 0)] - x.y,
-        o[(2, 1)] + x.x,
-        o[(2, 2)] - wr,
-    )
+/// The time-offset column of a sensor measurement mapped into the body by a rotation-only
+/// `body_p_sensor` (`R_bs`): `diag(R_bs, R_bs, R_bs) j`. With a lever arm the body column is
+/// unknown from the end samples ([`crate::time_offset`]) and this returns zero.
+pub(crate) fn time_offset_to_body(
+    j: &nalgebra::SVector<f64, 9>,
+    pose: &SensorPose,
+) -> nalgebra::SVector<f64, 9> {
+    if pose.translation != Vector3::zeros() {
+        return nalgebra::SVector::zeros();
+    }
+    let rm = pose.rotation.matrix();
+    let mut out = nalgebra::SVector::<f64, 9>::zeros();
+    for k in 0..3 {
+        let b = rm * j.fixed_rows::<3>(3 * k);
+        out.fixed_rows_mut::<3>(3 * k).copy_from(&b);
+    }
+    out
 }

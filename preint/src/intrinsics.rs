@@ -70,6 +70,7 @@
 //! ```
 
 use crate::error::PreintError;
+use crate::fast::correction::Columns;
 use crate::sample::{ImuBias, ImuSample};
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
@@ -336,29 +337,8 @@ pub struct Correction {
     pub k_wa: Matrix3<f64>,
     /// `K_a = R_ACCtoIMU T_a⁻¹`.
     pub k_a: Matrix3<f64>,
-    /// The columns of `M = [[K_w, K_wa], [0, K_a]]` as the vector path loads them.
-    columns: Columns,
-}
-
-/// The columns of `M = [[K_w, K_wa], [0, K_a]]` (6×6): rows 0–3 of each column (`lo`) and rows
-/// 4–5 of the last three (`hi`; the first three are zero there).
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Columns {
-    lo: [[f64; 4]; 6],
-    hi: [[f64; 2]; 3],
-}
-
-impl Columns {
-    fn of(k_w: &Matrix3<f64>, k_wa: &Matrix3<f64>, k_a: &Matrix3<f64>) -> Self {
-        let mut lo = [[0.0; 4]; 6];
-        let mut hi = [[0.0; 2]; 3];
-        for c in 0..3 {
-            lo[c] = [k_w[(0, c)], k_w[(1, c)], k_w[(2, c)], 0.0];
-            lo[3 + c] = [k_wa[(0, c)], k_wa[(1, c)], k_wa[(2, c)], k_a[(0, c)]];
-            hi[c] = [k_a[(1, c)], k_a[(2, c)]];
-        }
-        Self { lo, hi }
-    }
+    /// `M = [[K_w, K_wa], [0, K_a]]` as the correction loads it.
+    pub(crate) columns: Columns,
 }
 
 impl Correction {
@@ -367,127 +347,20 @@ impl Correction {
     /// `ω'_r = fma(K_wa[r,2], a_z, fma(K_wa[r,1], a_y, fma(K_wa[r,0], a_x, fma(K_w[r,2], ω_z,
     /// fma(K_w[r,1], ω_y, K_w[r,0] ω_x)))))` and `a'_r = fma(K_a[r,2], a_z, fma(K_a[r,1], a_y,
     /// K_a[r,0] a_x))`, one rounding per step. With AVX2 and FMA it runs as four- and two-lane
-    /// vector instructions (the private module `avx2`), with the same roundings.
+    /// vector instructions, with the same roundings.
     #[inline(always)]
     pub fn apply(&self, s: &ImuSample) -> ImuSample {
-        #[cfg(target_arch = "x86_64")]
-        if avx2::available() {
-            // SAFETY: the CPU supports AVX2 and FMA (checked above).
-            return unsafe { avx2::apply_one(self, s) };
-        }
-        self.apply_plain(s)
-    }
-
-    /// [`Correction::apply`] as a function chosen once for this CPU (the vector path or the
-    /// plain one), for callers that correct one sample at a time in a loop.
-    ///
-    /// # Safety
-    /// The function returned may only be called on the CPU this was called on (the vector
-    /// path needs AVX2 and FMA).
-    pub(crate) unsafe fn kernel(&self) -> unsafe fn(&Correction, &ImuSample) -> ImuSample {
-        #[cfg(target_arch = "x86_64")]
-        if avx2::available() {
-            return avx2::apply_one;
-        }
-        Correction::apply_plain
+        self.columns.apply(s)
     }
 
     /// [`Correction::apply`] without vector instructions: the arithmetic as written there.
     pub fn apply_plain(&self, s: &ImuSample) -> ImuSample {
-        let (w, a) = (&s.gyro, &s.acc);
-        let (kw, kwa, ka) = (&self.k_w, &self.k_wa, &self.k_a);
-        let gyro = Vector3::from_fn(|r, _| {
-            let g = kw[(r, 2)].mul_add(w.z, kw[(r, 1)].mul_add(w.y, kw[(r, 0)] * w.x));
-            kwa[(r, 2)].mul_add(a.z, kwa[(r, 1)].mul_add(a.y, kwa[(r, 0)].mul_add(a.x, g)))
-        });
-        let acc = Vector3::from_fn(|r, _| {
-            ka[(r, 2)].mul_add(a.z, ka[(r, 1)].mul_add(a.y, ka[(r, 0)] * a.x))
-        });
-        ImuSample::new(s.t_ns, gyro, acc)
+        self.columns.apply_plain(s)
     }
 
     /// [`Correction::apply`] to every sample of `src` into `dst` (the shorter length).
     pub fn apply_all(&self, src: &[ImuSample], dst: &mut [ImuSample]) {
-        #[cfg(target_arch = "x86_64")]
-        if avx2::available() {
-            // SAFETY: the CPU supports AVX2 and FMA (checked above).
-            unsafe { avx2::apply_all(self, src, dst) };
-            return;
-        }
-        for (d, s) in dst.iter_mut().zip(src) {
-            *d = self.apply_plain(s);
-        }
-    }
-}
-
-/// [`Correction::apply`] in AVX2 and FMA instructions: a reader can skip this module. The
-/// corrected sample is the 6-vector `[ω'; a'] = M [ω; a]`, `M = [[K_w, K_wa], [0, K_a]]`; its
-/// first four rows `(ω'_x, ω'_y, ω'_z, a'_x)` are one four-lane register and the last two one
-/// two-lane register, each built column by column with the fused multiply-adds of the plain
-/// path in its order (the zero columns of `M` add exact zeros), so every entry is the plain
-/// path's bit for bit (`preint/tests/intrinsics.rs`); the only difference is the sign of an
-/// `a'_x` that is exactly zero (`+0` where the plain path may give `−0`). About 22 instructions
-/// per sample against about 32 for the compiler's own vectorisation of the plain loop.
-#[cfg(target_arch = "x86_64")]
-mod avx2 {
-    use super::Correction;
-    use crate::sample::ImuSample;
-    use std::arch::x86_64::*;
-
-    /// Whether the CPU has AVX2 and FMA (cached by the standard library).
-    #[inline(always)]
-    pub(super) fn available() -> bool {
-        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-    }
-
-    // `gyro` and `acc` are six consecutive f64 (`ImuSample` is `repr(C)`).
-    const GYRO: usize = std::mem::offset_of!(ImuSample, gyro);
-    const _: () = assert!(std::mem::offset_of!(ImuSample, acc) == GYRO + 24);
-
-    /// # Safety
-    /// The CPU must support AVX2 and FMA.
-    #[target_feature(enable = "avx2,fma")]
-    pub(super) unsafe fn apply_all(c: &Correction, src: &[ImuSample], dst: &mut [ImuSample]) {
-        for (d, s) in dst.iter_mut().zip(src) {
-            // SAFETY: this function's own requirement.
-            *d = unsafe { apply_one(c, s) };
-        }
-    }
-
-    /// # Safety
-    /// The CPU must support AVX2 and FMA.
-    #[target_feature(enable = "avx2,fma")]
-    #[inline]
-    pub(super) unsafe fn apply_one(c: &Correction, s: &ImuSample) -> ImuSample {
-        let m = &c.columns;
-        // SAFETY (both): four and two in-bounds f64 of `m`; unaligned loads.
-        let lo = |k: usize| unsafe { _mm256_loadu_pd(m.lo[k].as_ptr()) };
-        let hi = |k: usize| unsafe { _mm_loadu_pd(m.hi[k].as_ptr()) };
-        let b = _mm256_broadcast_sd;
-        let (w, a) = (&s.gyro, &s.acc);
-        let (w0, w1, w2) = (b(&w.x), b(&w.y), b(&w.z));
-        let (a0, a1, a2) = (b(&a.x), b(&a.y), b(&a.z));
-        let mut l = _mm256_mul_pd(lo(0), w0);
-        l = _mm256_fmadd_pd(lo(1), w1, l);
-        l = _mm256_fmadd_pd(lo(2), w2, l);
-        l = _mm256_fmadd_pd(lo(3), a0, l);
-        l = _mm256_fmadd_pd(lo(4), a1, l);
-        l = _mm256_fmadd_pd(lo(5), a2, l);
-        let mut h = _mm_mul_pd(hi(0), _mm256_castpd256_pd128(a0));
-        h = _mm_fmadd_pd(hi(1), _mm256_castpd256_pd128(a1), h);
-        h = _mm_fmadd_pd(hi(2), _mm256_castpd256_pd128(a2), h);
-        let mut d = *s;
-        // SAFETY: `d.gyro` and `d.acc` are six consecutive f64 (the layout asserted above)
-        // inside `d`; unaligned stores.
-        unsafe {
-            let y = (&mut d as *mut ImuSample)
-                .cast::<u8>()
-                .add(GYRO)
-                .cast::<f64>();
-            _mm256_storeu_pd(y, l);
-            _mm_storeu_pd(y.add(4), h);
-        }
-        d
+        self.columns.apply_all(src, dst)
     }
 }
 

@@ -59,6 +59,7 @@ pub mod scheme;
 pub mod second_order;
 pub mod time_offset;
 pub mod truncation;
+pub(crate) mod validation;
 pub mod window;
 
 pub use bias_correction::BiasCorrection;

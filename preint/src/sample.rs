@@ -32,6 +32,18 @@ pub fn dt_seconds(t0_ns: i64, t1_ns: i64) -> f64 {
     (t1_ns - t0_ns) as f64 * 1e-9
 }
 
+/// `(t1 − t0)·1e-9` \[s\] computed in i128 when the i64 difference overflows, so any pair of
+/// i64 timestamps is safe.
+#[inline(always)]
+pub(crate) fn span_s(t0_ns: i64, t1_ns: i64) -> f64 {
+    // Same integer, same rounding: the i64 → f64 conversion is a single instruction, the
+    // i128 one a library call.
+    match t1_ns.checked_sub(t0_ns) {
+        Some(d) => d as f64 * 1e-9,
+        None => (t1_ns as i128 - t0_ns as i128) as f64 * 1e-9,
+    }
+}
+
 /// IMU bias estimate. Tangent order everywhere in this project is **[b_g, b_a]**.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct ImuBias {

@@ -92,46 +92,10 @@ use crate::error::PreintError;
 use crate::measurement::PreintegratedImu;
 use crate::params::PreintParams;
 use crate::sample::{ImuBias, ImuSample};
-use nalgebra::{Matrix3, SVector, Vector3};
+use nalgebra::Vector3;
 use preint_lie::SO3;
 
-/// `∂[δφ, δv, δp]/∂t_d` of deltas `(ΔR, Δv [m/s], Δp [m])` over `delta_t` \[s\] with the
-/// bias-corrected end samples `(ω_i, a_i)`, `(ω_j, a_j)` [rad/s, m/s²] (module docs). Units of
-/// the rows: rad/s, m/s², m/s.
-pub fn jacobian(
-    (w_i, a_i): (&Vector3<f64>, &Vector3<f64>),
-    (w_j, a_j): (&Vector3<f64>, &Vector3<f64>),
-    (delta_r, delta_v, delta_p): (&Matrix3<f64>, &Vector3<f64>, &Vector3<f64>),
-    delta_t: f64,
-) -> SVector<f64, 9> {
-    let phi = w_j - delta_r.transpose() * w_i;
-    let v = delta_r * a_j - a_i - w_i.cross(delta_v);
-    let p = delta_v - a_i * delta_t - w_i.cross(delta_p);
-    let mut j = SVector::<f64, 9>::zeros();
-    j.fixed_rows_mut::<3>(0).copy_from(&phi);
-    j.fixed_rows_mut::<3>(3).copy_from(&v);
-    j.fixed_rows_mut::<3>(6).copy_from(&p);
-    j
-}
-
-/// The time-offset column of a sensor measurement mapped into the body by a rotation-only
-/// `body_p_sensor` (`R_bs`): `diag(R_bs, R_bs, R_bs) j`. With a lever arm the body column is
-/// unknown from the end samples (module docs) and this returns zero.
-pub(crate) fn to_body(
-    j: &SVector<f64, 9>,
-    pose: &crate::extrinsics::SensorPose,
-) -> SVector<f64, 9> {
-    if pose.translation != Vector3::zeros() {
-        return SVector::zeros();
-    }
-    let rm = pose.rotation.matrix();
-    let mut out = SVector::<f64, 9>::zeros();
-    for k in 0..3 {
-        let b = rm * j.fixed_rows::<3>(3 * k);
-        out.fixed_rows_mut::<3>(3 * k).copy_from(&b);
-    }
-    out
-}
+pub use crate::preintegrator::time_offset_jacobian as jacobian;
 
 /// The offset `td_s` \[s\] as integer nanoseconds (rounded to the nearest).
 pub fn offset_ns(td_s: f64) -> i64 {

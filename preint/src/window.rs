@@ -56,10 +56,10 @@
 use crate::error::PreintError;
 use crate::measurement::PreintegratedImu;
 use crate::params::{PreintParams, Scheme};
-use crate::preintegrator::validation::check_sample;
+use crate::validation::check_sample;
 use crate::preintegrator::{Preintegrator, Side, Src, WindowSpec};
 use crate::sample::{ImuBias, ImuSample};
-use crate::scheme::span_s;
+use crate::sample::span_s;
 use nalgebra::Vector3;
 
 /// Sample at `t_ns` on the straight line through `s0` and `s1` (`s0.t_ns < s1.t_ns`);

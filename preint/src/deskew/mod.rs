@@ -49,8 +49,9 @@ use crate::measurement::{BiasJacobians, Cov9, Cov15, EdgeNoise, PreintegratedImu
 use crate::navstate::{NavState, predict};
 use crate::params::{PreintParams, Scheme};
 use crate::preintegrator::Preintegrator;
-use crate::sample::{ImuBias, ImuSample};
-use crate::scheme::{span_s, with_scheme};
+use crate::preintegrator::Maps;
+use crate::sample::{ImuBias, ImuSample, span_s};
+use crate::scheme::with_scheme;
 use crate::window::{boundary, bracket, inner_samples};
 use nalgebra::Vector3;
 use preint_lie::SO3;
@@ -139,14 +140,16 @@ impl<'a> WindowDeltas<'a> {
         let (bi, node_i, _) = boundary(scheme, samples, t_i_ns, lo);
         let (bj, _, _) = boundary(scheme, samples, t_j_ns, mj);
         let inner = inner_samples(scheme, samples, (t_i_ns, bi), (t_j_ns, bj));
-        let (centripetal, body) = crate::extrinsics::plan(params);
+        let (arm, body) = crate::extrinsics::plan(params.body_p_sensor.as_ref(), params.lever_arm);
         let corr = Corr {
             bias: *bias,
-            centripetal,
-            intrinsics: params
-                .intrinsics
-                .filter(|x| !x.model.is_identity())
-                .map(|x| x.model.correction()),
+            maps: Maps::new(
+                params
+                    .intrinsics
+                    .filter(|x| !x.model.is_identity())
+                    .map(|x| x.model.correction()),
+                arm.map(|a| (a, bias.gyro)),
+            ),
         };
         let ctx = inner.ctx_before.map(|k| corr.node(&samples[k]));
         let c = usize::from(ctx.is_some());

@@ -2,33 +2,22 @@
 //! window's node sequence, the engine's stencil, and the deltas and carry kept at the pass's
 //! last nodes (the method is in the module docs of [`super`]).
 
+use crate::preintegrator::Maps;
+use crate::propagation::linearisation::MAX_STENCIL;
 use crate::sample::{ImuBias, ImuSample};
-use crate::scheme::{Deltas, IntervalScheme, MAX_STENCIL, Node, RENORM_EVERY, Stencil};
-use nalgebra::Vector3;
+use crate::scheme::{Deltas, IntervalScheme, Node, RENORM_EVERY, Stencil};
 
-/// A stream sample as the loop sees it: corrected by the IMU intrinsics (the preintegrator's
-/// `Corrected` wrapper), bias-corrected and, with GTSAM's per-sample lever-arm model, without
-/// `ω × (ω × r)` (as the preintegrator's `Centripetal` wrapper does).
+/// A stream sample as the loop sees it: through the preintegrator's transforms in front of
+/// the loop (the IMU intrinsics, GTSAM's per-sample lever arm), then bias-corrected.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Corr {
     pub bias: ImuBias,
-    pub centripetal: Option<Vector3<f64>>,
-    pub intrinsics: Option<crate::intrinsics::Correction>,
+    pub maps: Maps,
 }
 
 impl Corr {
     pub(super) fn node(&self, s: &ImuSample) -> Node {
-        let s = &match &self.intrinsics {
-            Some(c) => c.apply(s),
-            None => *s,
-        };
-        match &self.centripetal {
-            Some(r) => Node::corrected(
-                &crate::extrinsics::without_centripetal(s, r, &self.bias.gyro),
-                &self.bias,
-            ),
-            None => Node::corrected(s, &self.bias),
-        }
+        Node::corrected(&self.maps.map(s), &self.bias)
     }
 }
 

@@ -13,19 +13,28 @@
 //!   depend on ΔR, the rest prepared for blocks of intervals several at a time in SIMD lanes
 //!   ([`lanes`]: SSE2 pairs, AVX2 quadruples detected at run time; no fused multiply-add, so
 //!   every lane width gives the one-by-one bits).
+//! - The IMU intrinsics' correction of each sample in AVX2 and FMA instructions
+//!   ([`correction`]), the same fused multiply-adds as the plain path.
 //!
-//! A scheme without a fast path names [`Plain`] and runs its plain step at every level.
+//! Every `unsafe` block of the crate is in this module: the vector instructions, each behind a
+//! run-time test of the processor's features.
+//!
+//! The fast paths attach themselves to the schemes ([`Attached::of`]): a scheme's file does not
+//! name its fast path, and a scheme without one runs its plain step at every level.
 
+pub(crate) mod correction;
 pub(crate) mod hermite4;
 pub(crate) mod lanes;
 pub(crate) mod quat;
 pub(crate) mod two_point;
 
-use crate::preintegrator::validation::common_case;
 use crate::propagation::blocks::{M3, V3};
 use crate::sample::{ImuBias, ImuSample};
-use crate::scheme::{Node, RENORM_EVERY, Stencil};
+use crate::scheme::{Node, RENORM_EVERY, Scheme, Stencil};
+use crate::validation::common_case;
+use hermite4::HermiteDeltas;
 use quat::Quat;
+use two_point::{EulerDeltas, MidpointDeltas};
 
 /// What the slice path reads: the samples, the bias estimate, the timestamp of the last sample
 /// before them \[ns\] and the largest gap \[ns\].
@@ -38,8 +47,6 @@ pub(crate) struct SliceInput<'a> {
 
 /// A scheme's deltas alone, faster than its plain step.
 pub(crate) trait FastDeltas: Copy + Default + std::fmt::Debug {
-    /// False for [`Plain`]: the scheme has no fast path.
-    const ENABLED: bool;
     /// Window samples after which [`FastDeltas::run_slice`] can take over (the steady state of
     /// the engine, with every interval but the last one or two integrated).
     const SLICE_FROM: usize;
@@ -53,35 +60,87 @@ pub(crate) trait FastDeltas: Copy + Default + std::fmt::Debug {
     fn run_slice(&mut self, last: &[Node; 2], input: &SliceInput, done: &mut usize) -> usize;
     /// The running deltas.
     fn quat(&mut self) -> &mut QuatDeltas;
-
-    /// Re-orthonormalises ΔR.
-    fn renormalize(&mut self) {
-        self.quat().q.renormalize();
-    }
-
-    /// `(ΔR, Δv [m/s], Δp [m])`.
-    fn deltas(&self) -> (M3, V3, V3) {
-        let mut copy = *self;
-        copy.quat().deltas()
-    }
 }
 
-/// No fast path: the scheme's plain step runs at every level. The built-in schemes all have
-/// one; a new scheme starts with this (the engine's tests run one).
+/// The fast path attached to a scheme, if it has one: the registry of this module.
 #[derive(Clone, Copy, Debug, Default)]
-#[cfg_attr(not(test), allow(dead_code))]
-pub(crate) struct Plain(QuatDeltas);
+pub(crate) enum Attached {
+    /// No fast path: the scheme's plain step runs at every level.
+    #[default]
+    None,
+    Euler(EulerDeltas),
+    Midpoint(MidpointDeltas),
+    Hermite4(HermiteDeltas),
+}
 
-impl FastDeltas for Plain {
-    const ENABLED: bool = false;
-    const SLICE_FROM: usize = usize::MAX;
-    fn start(&mut self, _: &Node) {}
-    fn step(&mut self, _: &Stencil) {}
-    fn run_slice(&mut self, _: &[Node; 2], _: &SliceInput, _: &mut usize) -> usize {
-        0
+/// `body` with `f` the attached path's [`FastDeltas`] (`$none` without one).
+macro_rules! each {
+    ($self:expr, $f:ident => $body:expr, $none:expr) => {
+        match $self {
+            Attached::None => $none,
+            Attached::Euler($f) => $body,
+            Attached::Midpoint($f) => $body,
+            Attached::Hermite4($f) => $body,
+        }
+    };
+}
+
+impl Attached {
+    /// The fast path of `scheme` (none for a scheme this module does not list).
+    pub(crate) fn of(scheme: Scheme) -> Self {
+        match scheme {
+            Scheme::Euler => Attached::Euler(EulerDeltas::default()),
+            Scheme::Midpoint => Attached::Midpoint(MidpointDeltas::default()),
+            Scheme::Hermite4 => Attached::Hermite4(HermiteDeltas::default()),
+            _ => Attached::None,
+        }
     }
-    fn quat(&mut self) -> &mut QuatDeltas {
-        &mut self.0
+
+    /// Whether there is a fast path.
+    #[inline(always)]
+    pub(crate) fn is_some(&self) -> bool {
+        !matches!(self, Attached::None)
+    }
+
+    /// [`FastDeltas::SLICE_FROM`] (`usize::MAX` without a fast path).
+    #[inline(always)]
+    pub(crate) fn slice_from(&self) -> usize {
+        fn of<F: FastDeltas>(_: &F) -> usize {
+            F::SLICE_FROM
+        }
+        each!(self, f => of(f), usize::MAX)
+    }
+
+    /// [`FastDeltas::start`].
+    pub(crate) fn start(&mut self, first: &Node) {
+        each!(self, f => f.start(first), ())
+    }
+
+    /// [`FastDeltas::step`]; false without a fast path.
+    #[inline(always)]
+    pub(crate) fn step(&mut self, st: &Stencil) -> bool {
+        each!(self, f => { f.step(st); true }, false)
+    }
+
+    /// [`FastDeltas::run_slice`]; 0 without a fast path.
+    pub(crate) fn run_slice(
+        &mut self,
+        last: &[Node; 2],
+        input: &SliceInput,
+        done: &mut usize,
+    ) -> usize {
+        each!(self, f => f.run_slice(last, input, done), 0)
+    }
+
+    /// Re-orthonormalises ΔR.
+    pub(crate) fn renormalize(&mut self) {
+        each!(self, f => f.quat().q.renormalize(), ())
+    }
+
+    /// `(ΔR, Δv [m/s], Δp [m])` (identity and zeros without a fast path).
+    pub(crate) fn deltas(&self) -> (M3, V3, V3) {
+        let mut copy = *self;
+        each!(&mut copy, f => f.quat().deltas(), QuatDeltas::default().deltas())
     }
 }
 

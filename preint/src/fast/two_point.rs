@@ -4,7 +4,8 @@
 
 use super::{FastDeltas, QuatDeltas, SliceInput, slice_loop};
 use crate::propagation::blocks::V3;
-use crate::scheme::{Node, Stencil, span_s};
+use crate::sample::span_s;
+use crate::scheme::{Node, Stencil};
 
 /// Euler: `Δp += Δv h + ½ ΔR_k a_k h²`, `Δv += ΔR_k a_k h`, `ΔR ← ΔR_k Exp(ω_k h)`.
 #[inline(always)]
@@ -57,7 +58,6 @@ impl<const MID: bool> TwoPointDeltas<MID> {
 }
 
 impl<const MID: bool> FastDeltas for TwoPointDeltas<MID> {
-    const ENABLED: bool = true;
     const SLICE_FROM: usize = 2;
 
     fn start(&mut self, first: &Node) {

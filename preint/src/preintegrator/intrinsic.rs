@@ -1,6 +1,6 @@
-//! IMU intrinsics in the preintegrator ([`crate::intrinsics`]): a wrapper in front of the
-//! scheme's loop that corrects every raw sample, and the accumulator of the deltas' Jacobians
-//! with respect to the intrinsics' parameters.
+//! IMU intrinsics in the preintegrator ([`crate::intrinsics`]; the samples reach the loop
+//! corrected, `front.rs`): the accumulator of the deltas' Jacobians with respect to the
+//! intrinsics' parameters.
 //!
 //! # Jacobians
 //!
@@ -14,81 +14,16 @@
 //! `Σ_c [S_gω[c], 0] B_ω,c + [S_ga[c], S_aa[c]] B_a,c`, pushes the result forward (`Φ_N`) and
 //! takes its rotation rows into the chart (`δφ = ΔRᵀ ψ`), as for the bias Jacobians.
 
-use super::{Engine, Preintegrator, checked};
+use super::{Preintegrator, checked};
 use crate::error::PreintError;
-use crate::intrinsics::{Correction, ImuIntrinsics, IntrinsicJacobian};
+use crate::intrinsics::{ImuIntrinsics, IntrinsicJacobian};
 use crate::measurement::PreintegratedImu;
 use crate::propagation::SampleGain;
 use crate::propagation::blocks::{Cols6, Cols9, Gain96, M3};
 use crate::propagation::transition::Transition;
-use crate::sample::{ImuBias, ImuSample};
+use crate::sample::ImuBias;
 use crate::scheme::Node;
 use nalgebra::{SMatrix, Vector3};
-
-/// A loop whose samples are corrected by the intrinsics first.
-#[derive(Clone, Debug)]
-pub(super) struct Corrected<E> {
-    inner: E,
-    c: Correction,
-    /// `c.kernel()`, chosen once for this CPU.
-    apply: unsafe fn(&Correction, &ImuSample) -> ImuSample,
-    /// The slice path's chunk of corrected samples (allocated at the slice path's first use:
-    /// only `Level::Deltas` takes it).
-    buf: Vec<ImuSample>,
-}
-
-impl<E> Corrected<E> {
-    /// Samples corrected per chunk of the slice path: large, because the inner slice path
-    /// pays a fixed cost per call (hermite4 clears a block buffer).
-    const CHUNK: usize = 2048;
-
-    pub(super) fn new(inner: E, c: Correction) -> Self {
-        Self {
-            inner,
-            // SAFETY: called here and used in this process, on this CPU.
-            apply: unsafe { c.kernel() },
-            c,
-            buf: Vec::new(),
-        }
-    }
-}
-
-impl<E: Engine + Clone + 'static> Engine for Corrected<E> {
-    fn push(&mut self, s: &ImuSample) {
-        // SAFETY: `apply` was chosen for this CPU (`Correction::kernel`).
-        self.inner.push(&unsafe { (self.apply)(&self.c, s) });
-    }
-    /// The slice fast path on the corrected samples, a stack chunk at a time.
-    fn run_slice(&mut self, samples: &[ImuSample], last_t_ns: i64, gap_limit: u64) -> usize {
-        let c = self.c;
-        if self.buf.is_empty() {
-            let zero = ImuSample::new(0, Vector3::zeros(), Vector3::zeros());
-            self.buf = vec![zero; Self::CHUNK];
-        }
-        super::run_mapped(
-            samples,
-            last_t_ns,
-            &mut self.buf,
-            |src, dst| c.apply_all(src, dst),
-            |buf, last| self.inner.run_slice(buf, last, gap_limit),
-        )
-    }
-    fn len(&self) -> usize {
-        self.inner.len()
-    }
-    fn measurement(&self) -> PreintegratedImu {
-        self.inner.measurement()
-    }
-    fn measurement_and_intrinsics(&self) -> (PreintegratedImu, Option<IntrinsicJacobian>) {
-        self.inner.measurement_and_intrinsics()
-    }
-    fn end_rates(&self) -> (Vector3<f64>, Vector3<f64>, f64) {
-        self.inner.end_rates()
-    }
-    fn boxed_clone(&self) -> Box<dyn Engine> {
-        Box::new(self.clone())
-    }
-}
 
 /// Where the loop's retirements send each sample's total gain: nowhere (`()`, zero-sized: the
 /// default loop is unchanged) or the intrinsics' sums.

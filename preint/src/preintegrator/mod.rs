@@ -12,27 +12,28 @@
 //! | `edges.rs` | the samples near the window's edges, collected for exact merges |
 //! | `output.rs` | the measurement in the documented chart |
 //! | `intrinsic.rs` | IMU intrinsics: the samples corrected in front of the loop, the Jacobians |
-//! | `validation.rs` | the sample checks shared with the window path |
 
 mod edges;
 mod engine;
+mod front;
 mod intrinsic;
 mod output;
 mod retire;
-pub(crate) mod validation;
 
 pub(crate) use edges::{Side, Src, WindowSpec};
+pub use output::time_offset_jacobian;
 
 use crate::error::PreintError;
-use crate::extrinsics::{EndRates, EndSource, without_centripetal};
+use crate::extrinsics::{EndRates, EndSource};
 use crate::measurement::PreintegratedImu;
 use crate::params::{CovShape, Level, PreintParams};
 use crate::propagation::{AnisotropicNoise, BiasWalk, IsotropicNoise};
 use crate::sample::{ImuBias, ImuSample};
 use crate::scheme::{IntervalScheme, with_scheme};
 use engine::{Core, Fixed, NoiseKind};
-use intrinsic::Corrected;
-use validation::{check_sample, common_case};
+pub(crate) use front::Maps;
+use front::Front;
+use crate::validation::{check_sample, common_case};
 
 /// What the preintegrator needs of a scheme's interval loop ([`Core`]), behind one pointer so
 /// that the public type does not depend on the scheme.
@@ -57,7 +58,6 @@ trait Engine: std::fmt::Debug + Send + Sync {
 impl<S: IntervalScheme + Send + Sync> Engine for Core<S>
 where
     S::Carry: Send + Sync,
-    S::Fast: Send + Sync,
 {
     fn push(&mut self, s: &ImuSample) {
         Core::push(self, s);
@@ -81,55 +81,6 @@ where
     }
     fn end_rates(&self) -> (nalgebra::Vector3<f64>, nalgebra::Vector3<f64>, f64) {
         Core::end_rates(self)
-    }
-    fn boxed_clone(&self) -> Box<dyn Engine> {
-        Box::new(self.clone())
-    }
-}
-
-/// GTSAM's per-sample lever-arm model in front of a scheme's loop
-/// ([`crate::extrinsics::LeverArm::Centripetal`]): each sample's specific force loses
-/// `ω × (ω × r)` (ω bias-corrected, `r` the lever arm in sensor axes) before the loop sees it;
-/// the loop's gains then carry the gyro noise and bias that term moves. No slice fast path.
-#[derive(Clone, Debug)]
-struct Centripetal<S: IntervalScheme> {
-    core: Core<S>,
-    r: nalgebra::Vector3<f64>,
-    b_g: nalgebra::Vector3<f64>,
-}
-
-impl<S: IntervalScheme + Send + Sync> Engine for Centripetal<S>
-where
-    S::Carry: Send + Sync,
-    S::Fast: Send + Sync,
-{
-    fn push(&mut self, s: &ImuSample) {
-        self.core.push(&without_centripetal(s, &self.r, &self.b_g));
-    }
-    /// The slice fast path on the corrected samples, a stack chunk at a time.
-    fn run_slice(&mut self, samples: &[ImuSample], last_t_ns: i64, gap_limit: u64) -> usize {
-        let (r, b_g) = (self.r, self.b_g);
-        let mut buf = [ImuSample::new(0, Default::default(), Default::default()); 128];
-        run_mapped(
-            samples,
-            last_t_ns,
-            &mut buf,
-            |src, dst| {
-                for (d, s) in dst.iter_mut().zip(src) {
-                    *d = without_centripetal(s, &r, &b_g);
-                }
-            },
-            |buf, last| self.core.run_slice(buf, last, gap_limit),
-        )
-    }
-    fn len(&self) -> usize {
-        self.core.len()
-    }
-    fn measurement(&self) -> PreintegratedImu {
-        self.core.measurement()
-    }
-    fn end_rates(&self) -> (nalgebra::Vector3<f64>, nalgebra::Vector3<f64>, f64) {
-        self.core.end_rates()
     }
     fn boxed_clone(&self) -> Box<dyn Engine> {
         Box::new(self.clone())
@@ -233,44 +184,27 @@ impl Preintegrator {
             });
         }
         let mut fixed = fixed(&params, bias_hat, spec);
-        // The intrinsics correct every raw sample first (identity: nothing to do), then a lever
-        // arm corrected per sample takes its term off.
-        let corr = params
-            .intrinsics
-            .filter(|x| !x.model.is_identity())
-            .map(|x| x.model.correction());
-        if let Some(c) = &corr {
-            for side in [&mut fixed.spec.start, &mut fixed.spec.end] {
-                side.ctx = side.ctx.map(|s| c.apply(&s));
-            }
+        // The samples' transforms before the loop (the context samples too): the intrinsics'
+        // correction (identity: nothing to do), then a lever arm taken off per sample.
+        let maps = Maps::new(
+            params
+                .intrinsics
+                .filter(|x| !x.model.is_identity())
+                .map(|x| x.model.correction()),
+            fixed.coupling.map(|arm| (arm, bias_hat.gyro)),
+        );
+        for side in [&mut fixed.spec.start, &mut fixed.spec.end] {
+            side.ctx = side.ctx.map(|s| maps.map(&s));
         }
         let jac_model = params.intrinsics.filter(|x| x.jacobians).map(|x| x.model);
-        let engine: Box<dyn Engine> = match (fixed.centripetal, corr) {
-            (Some(r), corr) => {
-                let b_g = bias_hat.gyro;
-                for side in [&mut fixed.spec.start, &mut fixed.spec.end] {
-                    side.ctx = side.ctx.map(|c| without_centripetal(&c, &r, &b_g));
-                }
-                match corr {
-                    Some(c) => with_scheme!(params.scheme, S => Box::new(Corrected::new(
-                        Centripetal { core: Core::<S>::new(fixed).with_intrinsics(jac_model), r, b_g },
-                        c,
-                    ))),
-                    None => with_scheme!(params.scheme, S => Box::new(Centripetal {
-                        core: Core::<S>::new(fixed).with_intrinsics(jac_model),
-                        r,
-                        b_g,
-                    })),
-                }
+        let engine: Box<dyn Engine> = with_scheme!(params.scheme, S => {
+            let core = Core::<S>::new(fixed).with_intrinsics(jac_model);
+            if maps.is_identity() {
+                Box::new(core)
+            } else {
+                Box::new(Front::new(core, maps))
             }
-            (None, Some(c)) => with_scheme!(params.scheme, S => Box::new(Corrected::new(
-                Core::<S>::new(fixed).with_intrinsics(jac_model),
-                c,
-            ))),
-            (None, None) => {
-                with_scheme!(params.scheme, S => Box::new(Core::<S>::new(fixed).with_intrinsics(jac_model)))
-            }
-        };
+        });
         let samples = if params.keep_samples {
             Vec::with_capacity(capacity)
         } else {
@@ -391,10 +325,11 @@ impl Preintegrator {
             return Err(PreintError::TooFewSamples { count });
         }
         let mut m = self.engine.measurement();
-        if let (_, Some(pose)) = crate::extrinsics::plan(&self.params) {
+        let p = &self.params;
+        if let (_, Some(pose)) = crate::extrinsics::plan(p.body_p_sensor.as_ref(), p.lever_arm) {
             let ends = self.end_rates(m.t_i_ns);
             crate::extrinsics::to_body(&mut m, &pose, &ends);
-            m.jac_td = crate::time_offset::to_body(&m.jac_td, &pose);
+            m.jac_td = crate::extrinsics::time_offset_to_body(&m.jac_td, &pose);
         }
         checked(m)
     }
@@ -586,7 +521,8 @@ fn fixed(params: &PreintParams, bias_hat: ImuBias, spec: WindowSpec) -> Fixed {
             .map(CovShape::of)
             .filter(|c| *c != CovShape::Isotropic(0.0)),
         spec,
-        centripetal: crate::extrinsics::plan(params).0,
+        scheme: params.scheme,
+        coupling: crate::extrinsics::plan(params.body_p_sensor.as_ref(), params.lever_arm).0,
     }
 }
 
@@ -597,28 +533,4 @@ pub struct BiasUpdate {
     pub measurement: PreintegratedImu,
     /// True if the samples were re-integrated, false for the first-order correction.
     pub reintegrated: bool,
-}
-
-/// `run` on `map` of every sample, `buf.len()` samples at a time through `buf` (the slice
-/// paths of the per-sample wrappers): `map(src, dst)` writes the mapped chunk `src` into `dst`
-/// (same length); stops at the first chunk `run` does not take whole and returns how many
-/// samples were taken; `run` gets each chunk and the time of the sample before it.
-pub(crate) fn run_mapped(
-    samples: &[ImuSample],
-    last_t_ns: i64,
-    buf: &mut [ImuSample],
-    map: impl Fn(&[ImuSample], &mut [ImuSample]),
-    mut run: impl FnMut(&[ImuSample], i64) -> usize,
-) -> usize {
-    let (mut used, mut last) = (0, last_t_ns);
-    for chunk in samples.chunks(buf.len()) {
-        map(chunk, &mut buf[..chunk.len()]);
-        let n = run(&buf[..chunk.len()], last);
-        used += n;
-        if n < chunk.len() {
-            break;
-        }
-        last = chunk[n - 1].t_ns;
-    }
-    used
 }

@@ -3,7 +3,8 @@
 //! columns taken from rotated coordinates `ψ = ΔR δφ` to `δφ`.
 
 use crate::measurement::{BiasJacobians, Cov9, Cov15};
-use crate::propagation::blocks::{M3, PackedSym9};
+use crate::propagation::blocks::{M3, PackedSym9, V3};
+use nalgebra::SVector;
 use crate::propagation::transition::Transition;
 use crate::propagation::{BiasWalk, ErrorState};
 
@@ -87,4 +88,23 @@ impl Chart {
             .copy_from(&(walk.a * e.walk_t));
         Self { cov, cov15, jac }
     }
+}
+
+/// `∂[δφ, δv, δp]/∂t_d` of deltas `(ΔR, Δv [m/s], Δp [m])` over `delta_t` \[s\] with the
+/// bias-corrected end samples `(ω_i, a_i)`, `(ω_j, a_j)` [rad/s, m/s²] ([`crate::time_offset`]:
+/// the end-sample algebra, no re-integration). Units of the rows: rad/s, m/s², m/s.
+pub fn time_offset_jacobian(
+    (w_i, a_i): (&V3, &V3),
+    (w_j, a_j): (&V3, &V3),
+    (delta_r, delta_v, delta_p): (&M3, &V3, &V3),
+    delta_t: f64,
+) -> SVector<f64, 9> {
+    let phi = w_j - delta_r.transpose() * w_i;
+    let v = delta_r * a_j - a_i - w_i.cross(delta_v);
+    let p = delta_v - a_i * delta_t - w_i.cross(delta_p);
+    let mut j = SVector::<f64, 9>::zeros();
+    j.fixed_rows_mut::<3>(0).copy_from(&phi);
+    j.fixed_rows_mut::<3>(3).copy_from(&v);
+    j.fixed_rows_mut::<3>(6).copy_from(&p);
+    j
 }

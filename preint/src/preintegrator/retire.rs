@@ -1,21 +1,22 @@
 //! Retiring a sample: once no later interval reads it, its noise enters the covariance with
 //! its total gain, or (near a window's edge) its gain is collected for exact merges; with a
-//! lever arm corrected per sample, the gain first carries the gyro noise and bias that the
-//! centripetal term moves into the specific force; with the intrinsics' Jacobians requested,
-//! each gain is also accumulated for them (`intrinsic.rs`).
+//! rate coupling (samples whose specific force was corrected with their rate before the loop),
+//! the gain first carries the gyro noise and bias that the correction moves into the specific
+//! force; with the intrinsics' Jacobians requested, each gain is also accumulated for them
+//! (`intrinsic.rs`).
 
 use super::edges::EdgeGains;
 use super::engine::RING;
 use super::intrinsic::Sink;
-use crate::extrinsics::centripetal_d;
+use crate::extrinsics::CentripetalArm;
 use crate::noise::white_scale;
-use crate::propagation::blocks::PackedSym9;
-use crate::propagation::{NoiseCov, SampleGain};
-use crate::scheme::{IntervalScheme, Node, span_s};
-use nalgebra::Vector3;
+use crate::propagation::blocks::{Cols9, PackedSym9, add_cols, sub_cols};
+use crate::propagation::{AccGain, NoiseCov, SampleGain, add_acc_through};
+use crate::sample::span_s;
+use crate::scheme::{IntervalScheme, Node};
 
 /// Hands retired samples' noise to the covariance, or their gains to the edge store.
-pub(super) struct Retirer<'a, N, const LEVER: bool, K> {
+pub(super) struct Retirer<'a, N, K> {
     ring: &'a [Node; RING],
     ctx_after: Option<&'a Node>,
     edges: &'a mut EdgeGains,
@@ -23,14 +24,14 @@ pub(super) struct Retirer<'a, N, const LEVER: bool, K> {
     ctx_before: usize,
     n: usize,
     at_end: bool,
-    /// Lever arm in sensor axes and the bias-Jacobian accumulator, when the centripetal term
-    /// is removed per sample.
-    lever: Option<(Vector3<f64>, &'a mut crate::propagation::blocks::Cols9)>,
+    /// The rate coupling of the nodes and the bias-Jacobian accumulator, when the samples
+    /// were corrected with their rate before the loop.
+    coupling: Option<(CentripetalArm, &'a mut Cols9)>,
     /// Where each total gain goes for the intrinsics' Jacobians (`()`: nowhere).
     intr: K,
 }
 
-impl<'a, N, const LEVER: bool, K> Retirer<'a, N, LEVER, K> {
+impl<'a, N, K> Retirer<'a, N, K> {
     /// For a window with `(ctx_before, n, at_end)`: context samples before it, samples, and
     /// whether it is complete.
     #[inline(always)]
@@ -40,7 +41,7 @@ impl<'a, N, const LEVER: bool, K> Retirer<'a, N, LEVER, K> {
         edges: &'a mut EdgeGains,
         noise: &'a N,
         (ctx_before, n, at_end): (usize, usize, bool),
-        lever: Option<(Vector3<f64>, &'a mut crate::propagation::blocks::Cols9)>,
+        coupling: Option<(CentripetalArm, &'a mut Cols9)>,
         intr: K,
     ) -> Self {
         Self {
@@ -51,13 +52,13 @@ impl<'a, N, const LEVER: bool, K> Retirer<'a, N, LEVER, K> {
             ctx_before,
             n,
             at_end,
-            lever,
+            coupling,
             intr,
         }
     }
 }
 
-impl<N: NoiseCov, const LEVER: bool, K: Sink> Retirer<'_, N, LEVER, K> {
+impl<N: NoiseCov, K: Sink> Retirer<'_, N, K> {
     /// Node at extended index `i`.
     #[inline(always)]
     fn ext(&self, i: usize) -> &Node {
@@ -77,33 +78,30 @@ impl<N: NoiseCov, const LEVER: bool, K: Sink> Retirer<'_, N, LEVER, K> {
     ) {
         if K::ON {
             // Every sample's total gain passes here once (edge samples too); the intrinsics'
-            // Jacobians take it before the lever arm (the two are not combined).
+            // Jacobians take it before the rate coupling (the two are not combined).
             let node = *self.ext(id);
             self.intr.add(gain, &node);
         }
-        if LEVER {
-            self.retire_lever::<S>(p, id, gain);
-        } else {
-            self.retire_gain::<S>(p, id, gain);
+        match self.coupling {
+            Some((c, _)) => self.retire_coupled::<S>(p, id, gain, &c),
+            None => self.retire_gain::<S>(p, id, gain),
         }
     }
 
-    /// [`Retirer::retire`] with a lever arm corrected per sample: the raw gyro noise also moves
-    /// the node's specific force, so its gain is `G_g + G_a D` (and the bias Jacobian takes
-    /// `−G_a D`).
-    #[inline(always)]
-    fn retire_lever<S: IntervalScheme>(
+    /// [`Retirer::retire`] with a rate coupling `c`: the raw gyro noise also moves the node's
+    /// specific force, so its gain is `G_g + G_a D` (and the bias Jacobian takes `−G_a D`).
+    #[inline(never)]
+    fn retire_coupled<S: IntervalScheme>(
         &mut self,
         p: &mut PackedSym9,
         id: usize,
         gain: &SampleGain,
+        c: &CentripetalArm,
     ) {
-        let w = self.ext(id).w;
-        let Some((r, _)) = &self.lever else { return };
-        let d = centripetal_d(&w, r);
+        let d = c.coupling(&self.ext(id).w);
         let mut through = [[0.0; 9]; 3];
         match gain.acc {
-            crate::propagation::AccGain::Rot { r: rot, cv, cp } => {
+            AccGain::Rot { r: rot, cv, cp } => {
                 let m = rot * d;
                 for (c, col) in through.iter_mut().enumerate() {
                     for i in 0..3 {
@@ -112,15 +110,13 @@ impl<N: NoiseCov, const LEVER: bool, K: Sink> Retirer<'_, N, LEVER, K> {
                     }
                 }
             }
-            crate::propagation::AccGain::Full(a) => {
-                crate::propagation::add_acc_through(&mut through, a, &d);
-            }
+            AccGain::Full(a) => add_acc_through(&mut through, a, &d),
         }
-        if let Some((_, j)) = &mut self.lever {
-            crate::propagation::blocks::sub_cols(j, &through);
+        if let Some((_, j)) = &mut self.coupling {
+            sub_cols(j, &through);
         }
         let mut g = *gain.g;
-        crate::propagation::blocks::add_cols(&mut g, &through);
+        add_cols(&mut g, &through);
         self.retire_gain::<S>(
             p,
             id,

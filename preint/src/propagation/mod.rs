@@ -58,17 +58,49 @@
 //! ([`blocks::Gain96`]), the ψ rows of the accelerometer columns being identically zero.
 
 pub(crate) mod blocks;
+pub(crate) mod linearisation;
 pub(crate) mod transition;
 
-use crate::scheme::linearisation::GainBasis;
-use crate::scheme::linearisation::{
-    BOTH, FIRST, GyroColumns, NodeColumns, OUTER, SECOND, add_acc, add_gyro,
+use linearisation::{
+    BOTH, FIRST, GainBasis, GainCoef, GainForm, GyroColumns, Linearisation, MAX_STENCIL,
+    NodeColumns, NodeTermsOf, OUTER, SECOND, add_acc, add_gyro,
 };
-use crate::scheme::{GainCoef, IntervalScheme, Linearisation, NodeTermsOf};
 use blocks::{
-    Cols6, Cols9, Gain96, M3, PackedSym9, V3, add_cols, mul_cols, rot_cols, scale_cols, sub_cols,
+    Cols6, Cols9, Gain96, M3, PackedSym9, add_cols, mul_cols, rot_cols, scale_cols, sub_cols,
 };
 use transition::{PullBack, Transition, rotated_sym};
+
+/// The shape of a scheme's linearisation, which is all the propagator needs to know of the
+/// scheme: which stencil samples an interval reads, whether the end node's noise enters it,
+/// and which parts of the gain basis its gains use ([`linearisation`]). Every
+/// [`IntervalScheme`](crate::scheme::IntervalScheme) has one.
+pub(crate) trait Shape {
+    /// Samples interval k reads before node k and after node k+1: its stencil is
+    /// `k − NODES_BEFORE … k + 1 + NODES_AFTER`. A keyframe between samples gets a boundary
+    /// sample interpolated through as many stream samples (linear for two, cubic Lagrange for
+    /// four), and a wider stencil reads context samples beyond the window's edges
+    /// ([`crate::window`]).
+    const NODES_BEFORE: usize;
+    /// See [`Shape::NODES_BEFORE`].
+    const NODES_AFTER: usize;
+    /// Whether sample k+1's noise enters interval k (false for a scheme that holds sample k
+    /// over the interval).
+    const END_NODE_NOISE: bool;
+    /// Which parts of the gain basis the gains use.
+    const GAIN_FORM: GainForm;
+    /// The node terms of the gains: `()`, `[NodeTerms; 2]` for gains that depend on the
+    /// rates' derivatives at the nodes, or a held sample's whole gain ([`linearisation`]).
+    type NodeTerms: NodeTermsOf;
+
+    /// Number of stencil samples.
+    const STENCIL: usize = Self::NODES_BEFORE + 2 + Self::NODES_AFTER;
+}
+
+/// The rate coupling of an interval's stencil samples: `D_j = ∂a_j/∂ω_j`, how each node's
+/// accelerometer input moves with its rate when the samples were transformed before the loop
+/// (a lever arm corrected per sample, [`crate::extrinsics`]). The combined terms carry the gyro
+/// bias through it.
+pub(crate) type RateCoupling = [M3; MAX_STENCIL];
 
 /// Per-sample white-noise covariance `Q_j = s_j · diag(Σ_g, Σ_a)` with
 /// `s_j = white_scale(c_j)` [1/s] ([`crate::noise`]). Monomorphised once per noise shape.
@@ -231,7 +263,7 @@ impl ErrorState {
     /// bias Jacobian.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    pub(crate) fn interval<S: IntervalScheme>(
+    pub(crate) fn interval<S: Shape>(
         &mut self,
         lin: &Linearisation<S::NodeTerms>,
         pb: &PullBack,
@@ -239,11 +271,11 @@ impl ErrorState {
         k_pos: usize,
         len: usize,
         walk: &BiasWalk,
-        lever: Option<&([V3; crate::scheme::MAX_STENCIL], V3)>,
+        coupling: Option<&RateCoupling>,
         retire: impl Retire,
     ) {
         if S::NodeTerms::HELD {
-            self.held::<S>(lin, pb, first_id, walk, lever, retire);
+            self.held::<S>(lin, pb, first_id, walk, coupling, retire);
             return;
         }
         let form = S::GAIN_FORM;
@@ -256,7 +288,7 @@ impl ErrorState {
             self.wide::<S>(lin, &f, node.as_ref(), pb, first_id, k_pos, len);
         }
         if walk.combined {
-            self.walk_step::<S>(lin, &f, node.as_ref(), pb, (k_pos, len), walk, lever);
+            self.walk_step::<S>(lin, &f, node.as_ref(), pb, (k_pos, len), walk, coupling);
         }
         self.walk_t += crate::noise::walk_scale(lin.tr.h);
     }
@@ -265,13 +297,13 @@ impl ErrorState {
     /// is complete and retired now (the interval reads no other sample's noise); with the
     /// combined terms, it is also the interval's total gain `Γ_Σ`.
     #[inline(always)]
-    fn held<S: IntervalScheme>(
+    fn held<S: Shape>(
         &mut self,
         lin: &Linearisation<S::NodeTerms>,
         pb: &PullBack,
         id: usize,
         walk: &BiasWalk,
-        lever: Option<&([V3; crate::scheme::MAX_STENCIL], V3)>,
+        coupling: Option<&RateCoupling>,
         mut retire: impl Retire,
     ) {
         // A whole gain is sample k's only: no end-node noise, no wider stencil.
@@ -295,14 +327,10 @@ impl ErrorState {
         );
         if walk.combined {
             let (mut gsum, mut rot) = (g, *rot);
-            if let Some((w, r)) = lever {
-                // `Γ_a,k D_k`: sample k's accelerometer gain through its centripetal term.
+            if let Some(d) = coupling {
+                // `Γ_a,k D_k`: sample k's accelerometer gain through its rate coupling.
                 let mut extra = Gain96::default();
-                add_acc_through(
-                    &mut extra.g,
-                    &g.a,
-                    &crate::extrinsics::centripetal_d(&w[0], r),
-                );
+                add_acc_through(&mut extra.g, &g.a, &d[0]);
                 let fwd = pb.forward().apply(&extra);
                 add_cols(&mut gsum.g, &extra.g);
                 add_cols(&mut rot.g, &fwd.g);
@@ -316,7 +344,7 @@ impl ErrorState {
     /// plus this interval's), so it is retired now; sample k+1's part becomes pending.
     #[inline(always)]
     #[allow(clippy::needless_range_loop)] // parallel arrays
-    fn two_point<S: IntervalScheme>(
+    fn two_point<S: Shape>(
         &mut self,
         lin: &Linearisation<S::NodeTerms>,
         f: &GyroColumns,
@@ -392,7 +420,7 @@ impl ErrorState {
     /// [`ErrorState::retire_below`]).
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn wide<S: IntervalScheme>(
+    fn wide<S: Shape>(
         &mut self,
         lin: &Linearisation<S::NodeTerms>,
         f: &GyroColumns,
@@ -457,7 +485,7 @@ impl ErrorState {
     /// Stencils `{k, k+1}`, end of the window: retires the last sample `id`, whose pending
     /// gain is complete (`r`: its node's ΔR).
     #[inline]
-    pub(crate) fn retire_last<S: IntervalScheme>(
+    pub(crate) fn retire_last<S: Shape>(
         &mut self,
         id: usize,
         r: &M3,
@@ -486,7 +514,7 @@ impl ErrorState {
     /// (`f`, `node`, `pb`) and in rotated coordinates.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn walk_step<S: IntervalScheme>(
+    fn walk_step<S: Shape>(
         &mut self,
         lin: &Linearisation<S::NodeTerms>,
         f: &GyroColumns,
@@ -494,7 +522,7 @@ impl ErrorState {
         pb: &PullBack,
         (k_pos, len): (usize, usize),
         walk: &BiasWalk,
-        lever: Option<&([V3; crate::scheme::MAX_STENCIL], V3)>,
+        coupling: Option<&RateCoupling>,
     ) {
         let form = S::GAIN_FORM;
         let mut sum = GainCoef::default();
@@ -533,9 +561,9 @@ impl ErrorState {
                 total(basis.gyro_columns(form, None), 0.0),
             )
         };
-        let (gsum, rot) = match lever {
+        let (gsum, rot) = match coupling {
             Some(d) => {
-                let extra = self.lever_walk::<S>(lin, node, pb, (k_pos, len), d);
+                let extra = self.coupled_walk::<S>(lin, node, pb, (k_pos, len), d);
                 let fwd = pb.forward().apply(&extra);
                 let (mut gsum, mut rot) = (gsum, rot);
                 add_cols(&mut gsum.g, &extra.g);
@@ -576,17 +604,16 @@ impl ErrorState {
 }
 
 impl ErrorState {
-    /// The gyro columns a lever arm corrected per sample adds to an interval's total gain:
-    /// `Σ_j Γ_a,kj D_j`, pulled back (each stencil sample's accelerometer gain through its
-    /// `D_j = ∂a_node/∂ω_node`, from the stencil's rates `w` and the lever arm `r`).
+    /// The gyro columns a rate coupling adds to an interval's total gain: `Σ_j Γ_a,kj D_j`,
+    /// pulled back (each stencil sample's accelerometer gain through its `D_j`).
     #[inline(never)]
-    fn lever_walk<S: IntervalScheme>(
+    fn coupled_walk<S: Shape>(
         &self,
         lin: &Linearisation<S::NodeTerms>,
         node: Option<&NodeColumns>,
         pb: &PullBack,
         (k_pos, len): (usize, usize),
-        (w, r): &([V3; crate::scheme::MAX_STENCIL], V3),
+        d: &RateCoupling,
     ) -> Gain96 {
         let acc = lin.basis.acc_columns(pb.tau);
         let n = if S::NODES_BEFORE + S::NODES_AFTER == 0 {
@@ -595,12 +622,11 @@ impl ErrorState {
             len
         };
         let mut extra = Gain96::default();
-        for (j, (c, wj)) in lin.coef.iter().zip(w).take(n).enumerate() {
+        for (j, (c, dj)) in lin.coef.iter().zip(d).take(n).enumerate() {
             // A sample without an accelerometer gain in this interval (Euler's k+1).
             if !S::NodeTerms::PRESENT && c.a == (0.0, 0.0) && c.b == (0.0, 0.0) {
                 continue;
             }
-            let dj = &crate::extrinsics::centripetal_d(wj, r);
             let mut a = [[0.0; 6]; 3];
             if j == k_pos {
                 add_acc::<FIRST, true>(&mut a, &acc, node, c);
@@ -616,7 +642,7 @@ impl ErrorState {
 }
 
 /// `g += a·D` on the v and p rows: an accelerometer gain `a` carried into gyro columns through
-/// `D = ∂a_node/∂ω_node` (a lever arm corrected per sample, [`crate::extrinsics`]).
+/// a rate coupling `D = ∂a_node/∂ω_node` ([`RateCoupling`]).
 #[inline]
 pub(crate) fn add_acc_through(g: &mut Cols9, a: &Cols6, d: &M3) {
     for (c, col) in g.iter_mut().enumerate() {

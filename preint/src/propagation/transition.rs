@@ -8,7 +8,7 @@
 //! [`PullBack`] carry a gain between node k and the origin.
 
 use super::blocks::{Gain96, M3, PackedSym9, SymBlocks9, V3, cross, mul_skew, skew_mul};
-use crate::scheme::span_s;
+use crate::sample::span_s;
 
 /// The transition `Φ` between two nodes (module docs): duration `h` \[s\], `U1` [m/s],
 /// `U2` \[m\].

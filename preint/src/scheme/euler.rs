@@ -10,9 +10,10 @@
 //! `p ← ½ ΔR_k h²` (accelerometer). Sample k is read by interval k only; its noise cell is the
 //! interval it is held over ([`CellRule::Held`]), so its noise is `Σ / h`, as GTSAM's.
 
-use super::linearisation::{GainBasis, GainCoef, GainForm, Linearisation, MAX_STENCIL};
+use crate::propagation::linearisation::{GainBasis, GainCoef, GainForm, Linearisation, MAX_STENCIL};
 use super::{Deltas, IntervalScheme, Node, Stencil, s_plus_hat_hat2};
 use crate::noise::CellRule;
+use crate::propagation::Shape;
 use crate::propagation::blocks::{M3, V3};
 use crate::propagation::transition::Transition;
 use preint_lie::so3::{RodriguesCoeffs, i_plus_hat_hat2};
@@ -32,19 +33,21 @@ pub(crate) struct EulerStep {
     h2: f64,
 }
 
-impl IntervalScheme for Euler {
+impl Shape for Euler {
     const NODES_BEFORE: usize = 0;
     const NODES_AFTER: usize = 0;
     const END_NODE_NOISE: bool = false;
-    const CELL_RULE: CellRule = CellRule::Held;
     const GAIN_FORM: GainForm = GainForm {
         psi_vp: false,
         acc_on_own_node: true,
     };
+    type NodeTerms = ();
+}
+
+impl IntervalScheme for Euler {
+    const CELL_RULE: CellRule = CellRule::Held;
     type Carry = ();
     type Step = EulerStep;
-    type NodeTerms = ();
-    type Fast = crate::fast::two_point::EulerDeltas;
 
     fn start(_: &mut (), _: &Node) {}
 

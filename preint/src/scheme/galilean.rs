@@ -36,9 +36,10 @@
 //! t = 2, accurate to round-off; `∂(Jl(θ)a)/∂θ` equals Barfoot's `Q(a, θ) − [Jl(θ)a]× Jl(θ)`).
 //! Sample k's noise cell is the interval it is held over ([`CellRule::Held`]), as GTSAM's.
 
-use super::linearisation::{GainBasis, GainCoef, GainForm, HeldGain, Linearisation, MAX_STENCIL};
+use crate::propagation::linearisation::{GainBasis, GainCoef, GainForm, HeldGain, Linearisation, MAX_STENCIL};
 use super::{Deltas, IntervalScheme, Node, Stencil, s_plus_hat_hat2};
 use crate::noise::CellRule;
+use crate::propagation::Shape;
 use crate::propagation::blocks::{Gain96, M3, V3};
 use crate::propagation::transition::Transition;
 use preint_lie::so3::{RodriguesCoeffs, i_plus_hat_hat2};
@@ -191,19 +192,21 @@ pub(crate) struct GalileanStep {
     h: f64,
 }
 
-impl IntervalScheme for Galilean {
+impl Shape for Galilean {
     const NODES_BEFORE: usize = 0;
     const NODES_AFTER: usize = 0;
     const END_NODE_NOISE: bool = false;
-    const CELL_RULE: CellRule = CellRule::Held;
     const GAIN_FORM: GainForm = GainForm {
         psi_vp: false,
         acc_on_own_node: false,
     };
+    type NodeTerms = HeldGain;
+}
+
+impl IntervalScheme for Galilean {
+    const CELL_RULE: CellRule = CellRule::Held;
     type Carry = ();
     type Step = GalileanStep;
-    type NodeTerms = HeldGain;
-    type Fast = crate::fast::Plain;
 
     fn start(_: &mut (), _: &Node) {}
 

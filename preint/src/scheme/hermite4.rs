@@ -43,9 +43,11 @@
 //! h³/24)`, and `F_k+1 = h²/12 F[ω_k]×`, `E_k+1 = [u_k+1]×ΔR_k+1·(h²/12, h³/24)`,
 //! `W_k+1 = ΔR_k+1[ω_k+1]×·(−h²/12, −h³/24)`.
 
-use super::linearisation::{GainBasis, GainCoef, GainForm, Linearisation, MAX_STENCIL, NodeTerms};
-use super::{Deltas, IntervalScheme, Node, Stencil, s_plus_hat_hat2, span_s};
+use crate::propagation::linearisation::{GainBasis, GainCoef, GainForm, Linearisation, MAX_STENCIL, NodeTerms};
+use super::{Deltas, IntervalScheme, Node, Stencil, s_plus_hat_hat2, };
 use crate::noise::CellRule;
+use crate::propagation::Shape;
+use crate::sample::span_s;
 use crate::propagation::blocks::{M3, V3, skew_mul};
 use crate::propagation::transition::Transition;
 use preint_lie::hat;
@@ -249,19 +251,21 @@ impl Hermite4 {
     }
 }
 
-impl IntervalScheme for Hermite4 {
+impl Shape for Hermite4 {
     const NODES_BEFORE: usize = 1;
     const NODES_AFTER: usize = 1;
     const END_NODE_NOISE: bool = true;
-    const CELL_RULE: CellRule = CellRule::Centered;
     const GAIN_FORM: GainForm = GainForm {
         psi_vp: true,
         acc_on_own_node: false,
     };
+    type NodeTerms = [NodeTerms; 2];
+}
+
+impl IntervalScheme for Hermite4 {
+    const CELL_RULE: CellRule = CellRule::Centered;
     type Carry = HermiteCarry;
     type Step = HermiteStep;
-    type NodeTerms = [NodeTerms; 2];
-    type Fast = crate::fast::hermite4::HermiteDeltas;
 
     fn start(c: &mut HermiteCarry, first: &Node) {
         c.u_last = first.a;

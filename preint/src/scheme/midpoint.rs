@@ -14,9 +14,10 @@
 //! k and `(h/2, h²/4)·ΔR_k+1` for sample k+1. Sample k+1's noise also enters the next
 //! interval, with the same `ΔR_k+1`; the propagator adds it once, with the sum of both gains.
 
-use super::linearisation::{GainBasis, GainCoef, GainForm, Linearisation, MAX_STENCIL};
+use crate::propagation::linearisation::{GainBasis, GainCoef, GainForm, Linearisation, MAX_STENCIL};
 use super::{Deltas, IntervalScheme, Node, Stencil, s_plus_hat_hat2};
 use crate::noise::CellRule;
+use crate::propagation::Shape;
 use crate::propagation::blocks::{M3, V3};
 use crate::propagation::transition::Transition;
 use preint_lie::so3::{RodriguesCoeffs, i_plus_hat_hat2};
@@ -44,19 +45,21 @@ pub(crate) struct MidpointStep {
     hh: f64,
 }
 
-impl IntervalScheme for Midpoint {
+impl Shape for Midpoint {
     const NODES_BEFORE: usize = 0;
     const NODES_AFTER: usize = 0;
     const END_NODE_NOISE: bool = true;
-    const CELL_RULE: CellRule = CellRule::Centered;
     const GAIN_FORM: GainForm = GainForm {
         psi_vp: true,
         acc_on_own_node: true,
     };
+    type NodeTerms = ();
+}
+
+impl IntervalScheme for Midpoint {
+    const CELL_RULE: CellRule = CellRule::Centered;
     type Carry = MidpointCarry;
     type Step = MidpointStep;
-    type NodeTerms = ();
-    type Fast = crate::fast::two_point::MidpointDeltas;
 
     fn start(c: &mut MidpointCarry, first: &Node) {
         // ΔR_0 a_0 = a_0.

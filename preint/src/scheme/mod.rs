@@ -24,46 +24,24 @@
 pub mod euler;
 pub mod galilean;
 pub mod hermite4;
-pub(crate) mod linearisation;
 pub mod midpoint;
 
-use crate::fast::FastDeltas;
 use crate::noise::CellRule;
+use crate::propagation::Shape;
 use crate::propagation::blocks::{M3, V3};
-use crate::sample::{ImuBias, ImuSample};
-pub(crate) use linearisation::{GainCoef, GainForm, Linearisation, MAX_STENCIL, NodeTermsOf};
+use crate::propagation::linearisation::{Linearisation, MAX_STENCIL};
+use crate::sample::{ImuBias, ImuSample, span_s};
 use nalgebra::Matrix3;
 
-/// One scheme: its stencil, noise cells, deltas step and linearisation (module docs).
-pub(crate) trait IntervalScheme: Copy + Default + std::fmt::Debug + 'static {
-    /// Samples interval k reads before node k and after node k+1: its stencil is
-    /// `k − NODES_BEFORE … k + 1 + NODES_AFTER`. A keyframe between samples gets a boundary
-    /// sample interpolated through as many stream samples (linear for two, cubic Lagrange for
-    /// four), and a wider stencil reads context samples beyond the window's edges
-    /// ([`crate::window`]).
-    const NODES_BEFORE: usize;
-    /// See [`IntervalScheme::NODES_BEFORE`].
-    const NODES_AFTER: usize;
-    /// Whether sample k+1's noise enters interval k (false for a scheme that holds sample k
-    /// over the interval).
-    const END_NODE_NOISE: bool;
+/// One scheme: its stencil and the shape of its linearisation ([`Shape`], what the propagator
+/// consumes), its noise cells, deltas step and linearisation (module docs).
+pub(crate) trait IntervalScheme: Shape + Copy + Default + std::fmt::Debug + 'static {
     /// How a sample's noise cell follows from its neighbours ([`crate::noise`]).
     const CELL_RULE: CellRule;
-    /// Which parts of the gain basis this scheme uses.
-    const GAIN_FORM: GainForm;
     /// What the scheme carries from one interval to the next (e.g. `ΔR_k a_k`).
     type Carry: Copy + Default + std::fmt::Debug;
     /// What [`IntervalScheme::step`] hands to [`IntervalScheme::linearise`].
     type Step: Copy;
-    /// The node terms of its gains: `()`, or `[NodeTerms; 2]` for a scheme whose gains depend on
-    /// the rates' derivatives at the nodes ([`linearisation`]).
-    type NodeTerms: NodeTermsOf;
-    /// Its deltas alone at [`crate::Level::Deltas`] (the `fast` module), or
-    /// [`crate::fast::Plain`] for none.
-    type Fast: FastDeltas;
-
-    /// Number of stencil samples.
-    const STENCIL: usize = Self::NODES_BEFORE + 2 + Self::NODES_AFTER;
 
     /// Prepares the carry for a window whose first node is `first`.
     fn start(carry: &mut Self::Carry, first: &Node);
@@ -276,18 +254,6 @@ impl Deltas {
     pub(crate) fn renormalize(&mut self) {
         let r = self.r;
         self.r = r * (M3::identity() * 3.0 - r.transpose() * r) * 0.5;
-    }
-}
-
-/// `(t1 − t0)·1e-9` \[s\] computed in i128 when the i64 difference overflows, so any pair of
-/// i64 timestamps is safe.
-#[inline(always)]
-pub(crate) fn span_s(t0_ns: i64, t1_ns: i64) -> f64 {
-    // Same integer, same rounding: the i64 → f64 conversion is a single instruction, the
-    // i128 one a library call.
-    match t1_ns.checked_sub(t0_ns) {
-        Some(d) => d as f64 * 1e-9,
-        None => (t1_ns as i128 - t0_ns as i128) as f64 * 1e-9,
     }
 }
 

@@ -24,7 +24,7 @@ use super::lanes::F2;
 #[cfg(target_arch = "x86_64")]
 use super::lanes::quad::F4;
 use super::{FastDeltas, QuatDeltas, SliceInput, slice_loop};
-use crate::preintegrator::validation::common_case;
+use crate::validation::common_case;
 use crate::propagation::blocks::V3;
 use crate::scheme::hermite4::{Hermite4, Rule, Weights};
 use crate::scheme::{Node, RENORM_EVERY, Stencil};
@@ -78,7 +78,6 @@ pub(crate) struct HermiteDeltas {
 }
 
 impl FastDeltas for HermiteDeltas {
-    const ENABLED: bool = true;
     const SLICE_FROM: usize = 3;
 
     fn start(&mut self, _: &Node) {}
