@@ -150,8 +150,10 @@ pub(crate) fn plan(
 /// GTSAM's per-sample lever-arm model ([`LeverArm::Centripetal`]) as a transform of the
 /// samples before the loop: each specific force loses `c(ω) = ω × (ω × r)`, with `ω = ω_m − b̂_g`
 /// [rad/s] and `r` the lever arm in sensor axes \[m\]. The transformed sample's accelerometer
-/// input then depends on its rate through `D(ω) = −∂c/∂ω` ([`CentripetalArm::coupling`]),
-/// which the loop's gains carry: the gyroscope noise and bias move the specific force.
+/// input then depends on its rate through `D(ω) = −∂c/∂ω` (its [`RateMap`]), which the loop's
+/// gains carry: the gyroscope noise and bias move the specific force.
+///
+/// [`RateMap`]: crate::propagation::RateMap
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct CentripetalArm {
     /// The lever arm in sensor axes \[m\].
@@ -166,10 +168,13 @@ impl CentripetalArm {
         ImuSample::new(s.t_ns, s.gyro, s.acc - w.cross(&w.cross(r)))
     }
 
+}
+
+impl crate::propagation::RateMap for CentripetalArm {
     /// `D = ∂a_node/∂ω_node` of a node whose specific force lost `c(ω) = ω × (ω × r)`:
     /// `−∂c/∂ω = [ω × r]× + [ω]×[r]× = [ω × r]× + r ωᵀ − (ω·r) I`.
     #[inline(always)]
-    pub(crate) fn coupling(&self, w: &Vector3<f64>) -> Matrix3<f64> {
+    fn d(&self, w: &Vector3<f64>) -> Matrix3<f64> {
         let r = &self.r;
         let (x, wr) = (w.cross(r), w.dot(r));
         let o = r * w.transpose();

@@ -85,6 +85,11 @@ macro_rules! each {
     };
 }
 
+/// Whether `scheme` has a fast path (a constant for the loop of each scheme).
+pub(crate) const fn attached(scheme: Scheme) -> bool {
+    matches!(scheme, Scheme::Euler | Scheme::Midpoint | Scheme::Hermite4)
+}
+
 impl Attached {
     /// The fast path of `scheme` (none for a scheme this module does not list).
     pub(crate) fn of(scheme: Scheme) -> Self {

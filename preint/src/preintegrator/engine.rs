@@ -23,10 +23,10 @@ use crate::propagation::blocks::{Cols9, Gain96, PackedSym9};
 use crate::propagation::linearisation::MAX_STENCIL;
 use crate::propagation::transition::Origin;
 use crate::propagation::{
-    AnisotropicNoise, BiasWalk, ErrorState, IsotropicNoise, NoiseCov, RateCoupling,
+    AnisotropicNoise, BiasWalk, Coupled, ErrorState, IsotropicNoise, NoiseCov, RateCoupling,
 };
 use crate::sample::{ImuBias, ImuSample, span_s};
-use crate::scheme::{Deltas, IntervalScheme, Node, RENORM_EVERY, Scheme, Stencil};
+use crate::scheme::{Deltas, IntervalScheme, Node, RENORM_EVERY, Stencil};
 use nalgebra::{Matrix3, Vector3};
 
 /// Nodes kept: enough for every stencil and for the slice path's write-back.
@@ -64,12 +64,11 @@ pub(crate) struct Fixed {
     pub walk: BiasWalk,
     pub int_cov: Option<CovShape>,
     pub spec: WindowSpec,
-    /// The scheme (for its fast path at [`Level::Deltas`]).
-    pub scheme: Scheme,
     /// The rate coupling of samples transformed before the loop: a lever arm corrected per
     /// sample (GTSAM's model, [`crate::LeverArm::Centripetal`]; the preintegrator's front takes
     /// `ω × (ω × r)` off each specific force), whose `D(ω) = ∂a/∂ω` moves the gyro noise and
-    /// bias into the specific force. The gains carry it.
+    /// bias into the specific force. The loop runs with the noise of such samples
+    /// ([`Coupled`]), whose gains carry it.
     pub coupling: Option<CentripetalArm>,
 }
 
@@ -100,12 +99,18 @@ pub(crate) struct Core<S: IntervalScheme> {
     coupled_j: Cols9,
     /// The intrinsics' Jacobian sums (when requested and linearising).
     intr: Option<Box<IntrAcc>>,
+    /// A rate coupling or the intrinsics' Jacobians: the loop's variants other than the
+    /// default.
+    special: bool,
     /// The first window node's specific force [m/s²] (bias-corrected), for the time-offset
     /// column (last, away from the fields the interval loop reads).
     first_a: Vector3<f64>,
 }
 
 impl<S: IntervalScheme> Core<S> {
+    /// Whether the scheme has a fast path ([`crate::fast::attached`]).
+    const FAST: bool = crate::fast::attached(S::SCHEME);
+
     /// An empty loop; the context samples of `fixed.spec` are used if `S`'s stencil reaches
     /// beyond the window.
     pub(crate) fn new(fixed: Fixed) -> Self {
@@ -131,7 +136,7 @@ impl<S: IntervalScheme> Core<S> {
             d: Deltas::default(),
             carry: S::Carry::default(),
             fast: if fixed.level == Level::Deltas {
-                Attached::of(fixed.scheme)
+                Attached::of(S::SCHEME)
             } else {
                 Attached::None
             },
@@ -139,6 +144,7 @@ impl<S: IntervalScheme> Core<S> {
             edges: EdgeGains::default(),
             coupled_j: [[0.0; 9]; 3],
             intr: None,
+            special: fixed.coupling.is_some(),
             first_a: Vector3::zeros(),
             fixed,
         }
@@ -152,6 +158,7 @@ impl<S: IntervalScheme> Core<S> {
     ) -> Self {
         if let Some(x) = model.filter(|_| self.linearise()) {
             self.intr = Some(Box::new(IntrAcc::new(x, self.fixed.bias_hat)));
+            self.special = true;
         }
         self
     }
@@ -197,14 +204,14 @@ impl<S: IntervalScheme> Core<S> {
 
     #[inline(always)]
     fn advance(&mut self, at_end: bool) {
-        let intr = || self.intr.is_some();
+        let special = || self.special;
         match (self.linearise(), self.fixed.noise) {
             (false, _) => self.advance_with::<IsotropicNoise, false, NoIntr>(
                 &IsotropicNoise { g: 0.0, a: 0.0 },
                 at_end,
             ),
-            (true, NoiseKind::Isotropic(q)) if intr() => self.advance_intr(&q, at_end),
-            (true, NoiseKind::Anisotropic(q)) if intr() => self.advance_intr(&q, at_end),
+            (true, NoiseKind::Isotropic(q)) if special() => self.advance_special(q, at_end),
+            (true, NoiseKind::Anisotropic(q)) if special() => self.advance_special(q, at_end),
             (true, NoiseKind::Isotropic(q)) => self.advance_with::<_, true, NoIntr>(&q, at_end),
             (true, NoiseKind::Anisotropic(q)) => {
                 self.advance_with::<_, true, NoIntr>(&q, at_end)
@@ -212,10 +219,14 @@ impl<S: IntervalScheme> Core<S> {
         }
     }
 
-    /// [`Core::advance`] accumulating the intrinsics' Jacobians.
+    /// [`Core::advance`] for samples with a rate coupling, whose noise is then [`Coupled`], or
+    /// accumulating the intrinsics' Jacobians (never both: [`crate::PreintParams::validate`]).
     #[inline(never)]
-    fn advance_intr<N: NoiseCov>(&mut self, noise: &N, at_end: bool) {
-        self.advance_with::<N, true, WithIntr>(noise, at_end)
+    fn advance_special<N: NoiseCov>(&mut self, noise: N, at_end: bool) {
+        match self.fixed.coupling {
+            Some(map) => self.advance_with::<_, true, NoIntr>(&Coupled { noise, map }, at_end),
+            None => self.advance_with::<N, true, WithIntr>(&noise, at_end),
+        }
     }
 
     /// Whether interval `k` can be integrated while samples are still arriving: its stencil
@@ -259,7 +270,7 @@ impl<S: IntervalScheme> Core<S> {
     }
 
     fn renormalize(&mut self) {
-        if self.fast.is_some() {
+        if Self::FAST && self.fast.is_some() {
             self.fast.renormalize();
         } else {
             self.d.renormalize();
@@ -274,7 +285,6 @@ impl<S: IntervalScheme> Core<S> {
         at_end: bool,
     ) -> (&'a mut ErrorState, Retirer<'a, N, I::Sink<'a>>) {
         let Self {
-            fixed,
             ring,
             ctx_after,
             edges,
@@ -286,11 +296,10 @@ impl<S: IntervalScheme> Core<S> {
             ..
         } = self;
         let window = (*ctx_before, *n, at_end);
-        let coupling = fixed.coupling.map(|c| (c, coupled_j));
         let intr = I::sink(intr);
         (
             e,
-            Retirer::new(ring, ctx_after.as_ref(), edges, noise, window, coupling, intr),
+            Retirer::new(ring, ctx_after.as_ref(), edges, noise, window, coupled_j, intr),
         )
     }
 
@@ -320,10 +329,9 @@ impl<S: IntervalScheme> Core<S> {
             ..
         } = self;
         let (first_id, st) = stencil::<S>(ring, ctx_after.as_ref(), *ctx_before, *n, k, at_end);
-        if !LINEARISE && fast.step(&st) {
+        if !LINEARISE && Self::FAST && fast.step(&st) {
             return;
         }
-        let coupling = fixed.coupling.map(|c| (c, coupled_j));
         let intr = I::sink(intr);
         let mut r = Retirer::<N, _>::new(
             ring,
@@ -331,7 +339,7 @@ impl<S: IntervalScheme> Core<S> {
             edges,
             noise,
             (*ctx_before, *n, at_end),
-            coupling,
+            coupled_j,
             intr,
         );
         if LINEARISE && S::NODES_BEFORE + S::NODES_AFTER > 0 {
@@ -343,10 +351,7 @@ impl<S: IntervalScheme> Core<S> {
         }
         let lin = S::linearise(&step, &st);
         let pb = origin.pull_back(st.n1().t_ns, &d.v, &d.p);
-        let rates = fixed
-            .coupling
-            .filter(|_| fixed.walk.combined)
-            .map(|c| stencil_coupling(&c, &st));
+        let rates = (N::COUPLED && fixed.walk.combined).then(|| stencil_coupling(noise, &st));
         e.interval::<S>(
             &lin,
             &pb,
@@ -360,6 +365,13 @@ impl<S: IntervalScheme> Core<S> {
         int_cov(fixed, e, d, lin.tr.h);
     }
 
+    /// Whether [`Core::run_slice`] can take samples: a fast path, in its steady state.
+    #[inline]
+    pub(crate) fn slice_ready(&self) -> bool {
+        let n = self.n;
+        Self::FAST && self.fast.is_some() && n >= self.fast.slice_from() && self.done + 2 == n
+    }
+
     /// The slice path of [`crate::Level::Deltas`] (the `fast` module), when the loop is in its
     /// steady state: integrates the leading samples of `samples` that pass the common-case
     /// test and returns how many; 0 when not applicable.
@@ -369,10 +381,10 @@ impl<S: IntervalScheme> Core<S> {
         last_t_ns: i64,
         gap_limit: u64,
     ) -> usize {
-        let n = self.n;
-        if !self.fast.is_some() || n < self.fast.slice_from() || self.done + 2 != n {
+        if !self.slice_ready() {
             return 0;
         }
+        let n = self.n;
         let last = [*self.node(n - 2), *self.node(n - 1)];
         let bias = self.fixed.bias_hat;
         let input = SliceInput {
@@ -420,7 +432,7 @@ impl<S: IntervalScheme> Core<S> {
 
     fn output(&self) -> PreintegratedImu {
         let fixed = &self.fixed;
-        let (r, v, p) = if self.fast.is_some() {
+        let (r, v, p) = if Self::FAST && self.fast.is_some() {
             self.fast.deltas()
         } else {
             (self.d.r, self.d.v, self.d.p)
@@ -530,10 +542,10 @@ fn stencil<'a, S: IntervalScheme>(
 
 /// The rate coupling `D_j` of each node of the stencil `st` (zero beyond its length).
 #[inline(never)]
-fn stencil_coupling(c: &CentripetalArm, st: &Stencil) -> RateCoupling {
+fn stencil_coupling<N: NoiseCov>(noise: &N, st: &Stencil) -> RateCoupling {
     let mut d = [nalgebra::Matrix3::zeros(); MAX_STENCIL];
     for (x, node) in d.iter_mut().zip(&st.nodes).take(st.len) {
-        *x = c.coupling(&node.w);
+        *x = noise.coupling(&node.w);
     }
     d
 }
@@ -580,7 +592,7 @@ mod tests {
     /// without one runs).
     fn run(level: Level, attached: bool) -> PreintegratedImu {
         let p = PreintParams::from_noise(&ImuNoise::euroc())
-            .with_scheme(Scheme::Midpoint)
+            .with_scheme(crate::Scheme::Midpoint)
             .with_level(level);
         let mut core = Core::<Midpoint>::new(fixed(&p, ImuBias::zero(), WindowSpec::default()));
         assert_eq!(core.fast.is_some(), level == Level::Deltas);

@@ -92,8 +92,12 @@ impl<E: Engine + Clone + 'static> Engine for Front<E> {
     fn push(&mut self, s: &ImuSample) {
         self.inner.push(&self.maps.map(s));
     }
-    /// The slice fast path on the transformed samples, a chunk at a time.
+    /// The slice fast path on the transformed samples, a chunk at a time (nothing is
+    /// transformed when the loop cannot take a slice).
     fn run_slice(&mut self, samples: &[ImuSample], last_t_ns: i64, gap_limit: u64) -> usize {
+        if !self.inner.slice_ready() {
+            return 0;
+        }
         let maps = self.maps;
         if self.buf.is_empty() {
             let zero = ImuSample::new(0, Vector3::zeros(), Vector3::zeros());
@@ -106,6 +110,9 @@ impl<E: Engine + Clone + 'static> Engine for Front<E> {
             |src, dst| maps.map_all(src, dst),
             |buf, last| self.inner.run_slice(buf, last, gap_limit),
         )
+    }
+    fn slice_ready(&self) -> bool {
+        self.inner.slice_ready()
     }
     fn len(&self) -> usize {
         self.inner.len()

@@ -40,6 +40,8 @@ use crate::validation::{check_sample, common_case};
 trait Engine: std::fmt::Debug + Send + Sync {
     fn push(&mut self, s: &ImuSample);
     fn run_slice(&mut self, samples: &[ImuSample], last_t_ns: i64, gap_limit: u64) -> usize;
+    /// Whether `run_slice` can take samples now (a fast path in its steady state).
+    fn slice_ready(&self) -> bool;
     fn len(&self) -> usize;
     fn measurement(&self) -> PreintegratedImu;
     /// The measurement and the intrinsics' Jacobians, when they are accumulated.
@@ -64,6 +66,9 @@ where
     }
     fn run_slice(&mut self, samples: &[ImuSample], last_t_ns: i64, gap_limit: u64) -> usize {
         Core::run_slice(self, samples, last_t_ns, gap_limit)
+    }
+    fn slice_ready(&self) -> bool {
+        Core::slice_ready(self)
     }
     fn len(&self) -> usize {
         Core::len(self)
@@ -521,7 +526,6 @@ fn fixed(params: &PreintParams, bias_hat: ImuBias, spec: WindowSpec) -> Fixed {
             .map(CovShape::of)
             .filter(|c| *c != CovShape::Isotropic(0.0)),
         spec,
-        scheme: params.scheme,
         coupling: crate::extrinsics::plan(params.body_p_sensor.as_ref(), params.lever_arm).0,
     }
 }

@@ -8,7 +8,6 @@
 use super::edges::EdgeGains;
 use super::engine::RING;
 use super::intrinsic::Sink;
-use crate::extrinsics::CentripetalArm;
 use crate::noise::white_scale;
 use crate::propagation::blocks::{Cols9, PackedSym9, add_cols, sub_cols};
 use crate::propagation::{AccGain, NoiseCov, SampleGain, add_acc_through};
@@ -24,9 +23,8 @@ pub(super) struct Retirer<'a, N, K> {
     ctx_before: usize,
     n: usize,
     at_end: bool,
-    /// The rate coupling of the nodes and the bias-Jacobian accumulator, when the samples
-    /// were corrected with their rate before the loop.
-    coupling: Option<(CentripetalArm, &'a mut Cols9)>,
+    /// The bias Jacobian's share through the nodes' rate coupling (`N::COUPLED`).
+    coupled_j: &'a mut Cols9,
     /// Where each total gain goes for the intrinsics' Jacobians (`()`: nowhere).
     intr: K,
 }
@@ -41,7 +39,7 @@ impl<'a, N, K> Retirer<'a, N, K> {
         edges: &'a mut EdgeGains,
         noise: &'a N,
         (ctx_before, n, at_end): (usize, usize, bool),
-        coupling: Option<(CentripetalArm, &'a mut Cols9)>,
+        coupled_j: &'a mut Cols9,
         intr: K,
     ) -> Self {
         Self {
@@ -52,7 +50,7 @@ impl<'a, N, K> Retirer<'a, N, K> {
             ctx_before,
             n,
             at_end,
-            coupling,
+            coupled_j,
             intr,
         }
     }
@@ -82,23 +80,24 @@ impl<N: NoiseCov, K: Sink> Retirer<'_, N, K> {
             let node = *self.ext(id);
             self.intr.add(gain, &node);
         }
-        match self.coupling {
-            Some((c, _)) => self.retire_coupled::<S>(p, id, gain, &c),
-            None => self.retire_gain::<S>(p, id, gain),
+        if N::COUPLED {
+            self.retire_coupled::<S>(p, id, gain);
+        } else {
+            self.retire_gain::<S>(p, id, gain);
         }
     }
 
-    /// [`Retirer::retire`] with a rate coupling `c`: the raw gyro noise also moves the node's
-    /// specific force, so its gain is `G_g + G_a D` (and the bias Jacobian takes `−G_a D`).
-    #[inline(never)]
+    /// [`Retirer::retire`] for samples with a rate coupling ([`NoiseCov::COUPLED`]): the raw
+    /// gyro noise also moves the node's specific force, so its gain is `G_g + G_a D` (and the
+    /// bias Jacobian takes `−G_a D`).
+    #[inline(always)]
     fn retire_coupled<S: IntervalScheme>(
         &mut self,
         p: &mut PackedSym9,
         id: usize,
         gain: &SampleGain,
-        c: &CentripetalArm,
     ) {
-        let d = c.coupling(&self.ext(id).w);
+        let d = self.noise.coupling(&self.ext(id).w);
         let mut through = [[0.0; 9]; 3];
         match gain.acc {
             AccGain::Rot { r: rot, cv, cp } => {
@@ -112,9 +111,7 @@ impl<N: NoiseCov, K: Sink> Retirer<'_, N, K> {
             }
             AccGain::Full(a) => add_acc_through(&mut through, a, &d),
         }
-        if let Some((_, j)) = &mut self.coupling {
-            sub_cols(j, &through);
-        }
+        sub_cols(self.coupled_j, &through);
         let mut g = *gain.g;
         add_cols(&mut g, &through);
         self.retire_gain::<S>(

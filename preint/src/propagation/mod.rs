@@ -66,7 +66,7 @@ use linearisation::{
     NodeColumns, NodeTermsOf, OUTER, SECOND, add_acc, add_gyro,
 };
 use blocks::{
-    Cols6, Cols9, Gain96, M3, PackedSym9, add_cols, mul_cols, rot_cols, scale_cols, sub_cols,
+    Cols6, Cols9, Gain96, M3, PackedSym9, V3, add_cols, mul_cols, rot_cols, scale_cols, sub_cols,
 };
 use transition::{PullBack, Transition, rotated_sym};
 
@@ -103,8 +103,17 @@ pub(crate) trait Shape {
 pub(crate) type RateCoupling = [M3; MAX_STENCIL];
 
 /// Per-sample white-noise covariance `Q_j = s_j · diag(Σ_g, Σ_a)` with
-/// `s_j = white_scale(c_j)` [1/s] ([`crate::noise`]). Monomorphised once per noise shape.
+/// `s_j = white_scale(c_j)` [1/s] ([`crate::noise`]), and the samples' rate coupling if they
+/// have one ([`Coupled`]). Monomorphised once per noise shape.
 pub(crate) trait NoiseCov: Copy {
+    /// Whether the samples have a rate coupling ([`NoiseCov::coupling`]).
+    const COUPLED: bool = false;
+    /// `D(ω) = ∂a_node/∂ω_node` of a node whose rate is `w` (only called when
+    /// [`NoiseCov::COUPLED`]).
+    #[inline(always)]
+    fn coupling(&self, _w: &V3) -> M3 {
+        M3::zeros()
+    }
     /// `P += Γ Q Γᵀ` for a gain with gyro columns `g` and accelerometer columns `R·(cv, cp)`
     /// (v and p rows), `R` a rotation.
     fn add_rot(&self, p: &mut PackedSym9, g: &Cols9, r: &M3, cv: f64, cp: f64, s: f64);
@@ -132,6 +141,39 @@ impl NoiseCov for IsotropicNoise {
     fn add_full(&self, p: &mut PackedSym9, g: &Gain96, s: f64) {
         p.add_outer(&g.g, &g.g, self.g * s);
         p.add_outer_vp(&g.a, &g.a, self.a * s);
+    }
+}
+
+/// How a transform of the samples before the loop makes a node's accelerometer input depend on
+/// its rate (a lever arm taken off each specific force, [`crate::extrinsics`]).
+pub(crate) trait RateMap: Copy {
+    /// `D(ω) = ∂a_node/∂ω_node` at the rate `w` [rad/s].
+    fn d(&self, w: &V3) -> M3;
+}
+
+/// The noise `N` of samples transformed by `C` before the loop: the same white noise on the
+/// raw readings, which the transform couples (`δa_node = δa + D(ω) δω`), so the raw gyroscope
+/// noise and bias also move the specific force. The loop carries `D` in every gain it retires
+/// and in the combined terms (`G_g + G_a D`).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Coupled<N, C> {
+    pub noise: N,
+    pub map: C,
+}
+
+impl<N: NoiseCov, C: RateMap> NoiseCov for Coupled<N, C> {
+    const COUPLED: bool = true;
+    #[inline(always)]
+    fn coupling(&self, w: &V3) -> M3 {
+        self.map.d(w)
+    }
+    #[inline(always)]
+    fn add_rot(&self, p: &mut PackedSym9, g: &Cols9, r: &M3, cv: f64, cp: f64, s: f64) {
+        self.noise.add_rot(p, g, r, cv, cp, s);
+    }
+    #[inline(always)]
+    fn add_full(&self, p: &mut PackedSym9, g: &Gain96, s: f64) {
+        self.noise.add_full(p, g, s);
     }
 }
 

@@ -35,7 +35,7 @@ use nalgebra::Matrix3;
 
 /// One scheme: its stencil and the shape of its linearisation ([`Shape`], what the propagator
 /// consumes), its noise cells, deltas step and linearisation (module docs).
-pub(crate) trait IntervalScheme: Shape + Copy + Default + std::fmt::Debug + 'static {
+pub(crate) trait IntervalScheme: Shape + Variant + Copy + Default + std::fmt::Debug + 'static {
     /// How a sample's noise cell follows from its neighbours ([`crate::noise`]).
     const CELL_RULE: CellRule;
     /// What the scheme carries from one interval to the next (e.g. `ΔR_k a_k`).
@@ -50,6 +50,12 @@ pub(crate) trait IntervalScheme: Shape + Copy + Default + std::fmt::Debug + 'sta
     /// The interval's transition and its stencil samples' gains, in rotated coordinates at
     /// node k+1.
     fn linearise(step: &Self::Step, st: &Stencil) -> Linearisation<Self::NodeTerms>;
+}
+
+/// The [`Scheme`] of an [`IntervalScheme`] type (given by the registry).
+pub(crate) trait Variant {
+    /// The scheme.
+    const SCHEME: Scheme;
 }
 
 /// The registry: one line per scheme (its `Scheme` variant, type, name and accepted aliases).
@@ -99,6 +105,10 @@ macro_rules! registry {
                 }
             }
         }
+
+        $( impl Variant for $ty {
+            const SCHEME: Scheme = Scheme::$variant;
+        } )*
 
         /// `with_scheme!(value, S => body)`: `body` with `S` the [`IntervalScheme`] type of
         /// the scheme `value`.
