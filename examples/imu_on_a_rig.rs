@@ -12,7 +12,7 @@ use preint_sim::{SimConfig, scene_by_name, simulate, t_s};
 fn main() {
     // The IMU: 0.3 m from the body origin, rotated by 60° about (1, 1, 1) (sensor → body).
     let rotation =
-        preint::SO3::exp(&(Vector3::new(1.0, 1.0, 1.0).normalize() * 60f64.to_radians()));
+        preint::lie::SO3::exp(&(Vector3::new(1.0, 1.0, 1.0).normalize() * 60f64.to_radians()));
     let pose = SensorPose::new(rotation, Vector3::new(0.1, -0.2, 0.2));
     // Noise-free readings of that IMU on the `aggressive` scene at 45° N (the scene is the
     // body's motion in the local east-north-up frame).

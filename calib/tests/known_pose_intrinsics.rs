@@ -194,8 +194,7 @@ fn with_calibration_cov(
 ) -> (preint::PreintegratedImu, preint::Cov9) {
     let mut pj = p.clone();
     pj.intrinsics = pj.intrinsics.map(|a| a.with_jacobians());
-    let (m, ji) =
-        preint::window::preintegrate_with_intrinsic_jacobian(&pj, b, &t.samples, ti, tj).unwrap();
+    let (m, ji) = preint::preintegrate_with_intrinsic_jacobian(&pj, b, &t.samples, ti, tj).unwrap();
     let excited: Vec<Param> = c
         .parameters
         .iter()

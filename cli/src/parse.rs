@@ -3,7 +3,7 @@
 //! `value_delimiter`).
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
-use preint::{SO3, SensorPose};
+use preint::{SensorPose, lie::SO3};
 
 /// Parses exactly `N` comma-separated finite numbers; `expected` names them in the error
 /// (e.g. "three comma-separated numbers x,y,z").

@@ -317,7 +317,7 @@ pub fn read_span(
     let bar = crate::progress::ReadingBar::start(stream.progress(), command);
     let samples = hold_span(stream, from, to, MAX_HELD_SAMPLES, args.path())?;
     drop(bar);
-    checks::no_gaps(&samples, args.path(), preint::params::DEFAULT_MAX_GAP_NS)?;
+    checks::no_gaps(&samples, args.path(), preint::DEFAULT_MAX_GAP_NS)?;
     Ok(samples)
 }
 

@@ -149,7 +149,7 @@ fn midpoint_exactness_on_its_input_class() {
     });
     let m = integrate(Scheme::Midpoint, &s);
     // ∫ω over [0, 1 s] for ω(t) = (6 t − 1) rad/s along `axis`: 3 − 1 = 2 rad.
-    let r = preint::SO3::exp(&(axis * 2.0));
+    let r = preint::lie::SO3::exp(&(axis * 2.0));
     assert!((m.delta_r.matrix() - r.matrix()).norm() <= 1e-12);
     let s = stream(20, 50_000_000, |_| (V3::zeros(), V3::from(A0)));
     let m = integrate(Scheme::Midpoint, &s);

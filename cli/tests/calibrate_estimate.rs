@@ -11,7 +11,7 @@ mod common;
 use common::{json, run, tmp, write_imu_csv};
 use nalgebra::{Matrix3, Vector3};
 use preint::intrinsics::{ImuIntrinsics, IntrinsicsModel};
-use preint::{ImuNoise, SO3};
+use preint::{ImuNoise, lie::SO3};
 use preint_sim::{EulerScene, SimConfig, simulate};
 use std::path::{Path, PathBuf};
 

@@ -8,8 +8,8 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use preint::deskew::deltas_at;
-use preint::sample::synthetic_stream;
 use preint::{ImuBias, Level, PreintParams, Scheme, preintegrate};
+use preint_sim::synthetic_stream;
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {

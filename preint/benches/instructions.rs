@@ -1,6 +1,6 @@
 //! The loop whose instructions per sample `tools/instructions.sh` counts with valgrind's
 //! callgrind: `integrate_slice` over the stream of `preint speed` and the criterion bench
-//! (`preint::sample::synthetic_stream`, 200 Hz, EuRoC densities, `keep_samples` off).
+//! (`preint_sim::synthetic_stream`, 200 Hz, EuRoC densities, `keep_samples` off).
 //!
 //! `cargo bench -p preint --bench instructions -- SCHEME LEVEL N [push]` runs it once (SCHEME:
 //! euler | midpoint | hermite4 | galilean, LEVEL: deltas | covariance | combined; `push`: one sample at a
@@ -13,8 +13,8 @@
 //! 2 mrad misalignment, g-sensitivity 1e-3 (rad/s)/(m/s²)); with `INTR=jacobians` their
 //! Jacobians are accumulated too.
 
-use preint::sample::synthetic_stream;
 use preint::{ImuBias, ImuNoise, Level, PreintParams, Preintegrator, Scheme};
+use preint_sim::synthetic_stream;
 use std::hint::black_box;
 
 fn main() {
@@ -45,7 +45,7 @@ fn main() {
             prm.lever_arm = preint::LeverArm::Centripetal;
         }
         prm.body_p_sensor = Some(preint::SensorPose::new(
-            preint::SO3::exp(&preint::nalgebra::Vector3::new(0.3, -0.5, 0.8)),
+            preint::lie::SO3::exp(&preint::nalgebra::Vector3::new(0.3, -0.5, 0.8)),
             preint::nalgebra::Vector3::new(0.1, -0.2, 0.2),
         ));
     }

@@ -8,8 +8,8 @@
 //! Throughput is reported per sample (elements/s ⇒ ns/sample = 1e9 / rate).
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use preint::sample::synthetic_stream;
 use preint::{ImuBias, ImuNoise, Level, PreintParams, Preintegrator, Scheme};
+use preint_sim::synthetic_stream;
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {

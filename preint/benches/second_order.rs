@@ -5,8 +5,8 @@
 //! `CARGO_TARGET_DIR=… cargo bench -p preint --bench second_order -- --warm-up-time 1 --measurement-time 3`
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use preint::sample::synthetic_stream;
 use preint::{ImuBias, ImuNoise, Level, PreintParams, Scheme, preintegrate, second_order};
+use preint_sim::synthetic_stream;
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {

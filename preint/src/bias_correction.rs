@@ -45,48 +45,42 @@
 //! The rotation is the same in both forms. Checked against central differences at `δb ≠ 0` in
 //! `preint/tests/factor.rs` and `preint/tests/factor_logmap.rs`.
 
+use crate::choices::BiasCorrection;
+use crate::error::PreintError;
 use crate::measurement::{BiasJacobians, PreintegratedImu};
-use crate::params::Scheme;
 use crate::sample::ImuBias;
 use nalgebra::{Matrix3, SVector, Vector3};
 use preint_lie::se3::q_block;
 use preint_lie::{SO3, hat, jl};
 
-/// How [`PreintegratedImu::corrected`] applies the first-order bias correction (module docs).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum BiasCorrection {
-    /// Forster eq. 44: `ΔR Exp(c_φ)`, `Δv + c_v`, `Δp + c_p`.
-    Additive,
-    /// On the group, as GTSAM 4.3's Galilean and SE₂(3) backends: `Γ Exp(c_φ, ΔRᵀc_v, ΔRᵀc_p)`.
-    Group,
-}
-
-impl BiasCorrection {
-    /// Every correction, in a fixed order.
-    pub const ALL: [BiasCorrection; 2] = [BiasCorrection::Additive, BiasCorrection::Group];
-
-    /// The name on the command line and in printed output: `additive` or `group`.
-    pub fn name(self) -> &'static str {
-        match self {
-            BiasCorrection::Additive => "additive",
-            BiasCorrection::Group => "group",
-        }
+impl PreintegratedImu {
+    /// Deltas corrected to first order for a new bias estimate `bias`, `δb = bias − bias_hat`,
+    /// as [`bias_correction`](Self::bias_correction) says (module docs):
+    /// [`BiasCorrection::Additive`] (Forster eq. 44) `ΔR·Exp(c_φ)`, `Δv + c_v`, `Δp + c_p` with
+    /// `c_φ = ∂ΔR/∂b_g δb_g`, `c_v = ∂Δv/∂b_g δb_g + ∂Δv/∂b_a δb_a`, `c_p` likewise;
+    /// [`BiasCorrection::Group`] `ΔR·Exp(c_φ)`, `Δv + ΔR Jl(c_φ) ΔRᵀ c_v`, `Δp + ΔR Jl(c_φ) ΔRᵀ c_p`
+    /// (GTSAM 4.3's Galilean `biasCorrectedDelta`). Returns `(ΔR(b), Δv(b) [m/s], Δp(b) [m])`.
+    ///
+    /// # Panics
+    ///
+    /// If the bias cannot be applied ([`check_bias`](Self::check_bias): a [`Level::Deltas`]
+    /// measurement and `bias ≠ bias_hat`); [`try_corrected`](Self::try_corrected) returns the
+    /// error instead.
+    pub fn corrected(&self, bias: &ImuBias) -> (SO3, Vector3<f64>, Vector3<f64>) {
+        self.assert_bias(bias);
+        let c = correct(self, bias);
+        (c.r, c.v, c.p)
     }
 
-    /// The correction called `name` ([`BiasCorrection::name`]).
-    pub fn parse(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|m| m.name() == name)
-    }
-
-    /// The default for a scheme: [`Group`](Self::Group) for [`Scheme::Galilean`], whose deltas
-    /// are a Gal(3) product and whose reference (GTSAM 4.3's `GalileanPreintegration`) corrects
-    /// on the group, so that its bias-corrected deltas equal GTSAM's; [`Additive`](Self::Additive)
-    /// for the others, which equal GTSAM's Manifold/Tangent backends (Forster eq. 44).
-    pub fn default_for(scheme: Scheme) -> Self {
-        match scheme {
-            Scheme::Galilean => BiasCorrection::Group,
-            _ => BiasCorrection::Additive,
-        }
+    /// [`corrected`](Self::corrected), or [`PreintError::NoBiasJacobians`] when the bias cannot
+    /// be applied ([`check_bias`](Self::check_bias)).
+    pub fn try_corrected(
+        &self,
+        bias: &ImuBias,
+    ) -> Result<(SO3, Vector3<f64>, Vector3<f64>), PreintError> {
+        self.check_bias(bias)?;
+        let c = correct(self, bias);
+        Ok((c.r, c.v, c.p))
     }
 }
 
@@ -180,7 +174,7 @@ pub(crate) fn correct_with_time_offset(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use crate::{BiasCorrection, Scheme};
 
     #[test]
     fn names_parse_and_scheme_defaults() {
@@ -194,7 +188,6 @@ mod tests {
             } else {
                 BiasCorrection::Additive
             };
-            assert_eq!(BiasCorrection::default_for(*s), want);
             let p = crate::PreintParams::default().with_scheme(*s);
             assert_eq!(p.resolved_bias_correction(), want);
             let p = p.with_bias_correction(Some(BiasCorrection::Additive));

@@ -49,29 +49,9 @@
 //!
 //! Their error grows as `|ω| T` times the motion (reported in `docs/EVIDENCE.md`).
 
-use crate::measurement::PreintegratedImu;
-use crate::navstate::NavState;
-use crate::sample::ImuBias;
+use crate::choices::CoriolisMode;
 use nalgebra::{Matrix3, Vector3};
 use preint_lie::{SO3, hat, jl};
-
-/// How a navigation-frame rotation rate enters prediction and the factors (module docs for the
-/// equations). Default [`CoriolisMode::Exact`].
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum CoriolisMode {
-    /// The first-order Coriolis correction of Forster et al.'s factor as implemented by
-    /// GTSAM ≤ 4.2 (`use2ndOrderCoriolis = false`): attitude `Exp(Log ΔR − T R_iᵀω)`, Coriolis
-    /// terms `−T² ω×v_i` (position) and `−2T ω×v_i` (velocity); no centrifugal term.
-    FirstOrder,
-    /// [`CoriolisMode::FirstOrder`] plus the centrifugal terms `−½T² ω×(ω×p_i)` and
-    /// `−T ω×(ω×p_i)` (GTSAM ≤ 4.2 `use2ndOrderCoriolis = true`).
-    SecondOrder,
-    /// The exact transition for a navigation frame rotating at a constant rate with gravity
-    /// fixed in it (what GTSAM 4.3 does with `omegaCoriolis`; `use2ndOrderCoriolis` has no
-    /// effect there).
-    #[default]
-    Exact,
-}
 
 /// Earth's rotation rate Ω_E [rad/s] (WGS-84).
 pub const EARTH_RATE_RAD_S: f64 = 7.292_115e-5;
@@ -130,46 +110,6 @@ impl Transport {
             a: SO3::exp(&w),
             vg: gamma_v(&w) * g * dt,
             pg: gamma_p(&w) * g * (dt * dt),
-        }
-    }
-}
-
-/// `state_i` propagated by the bias-corrected deltas `(ΔR, Δv, Δp)` over `T = pim.delta_t`
-/// with the Earth rate `omega` [rad/s, navigation frame] in mode `mode` (module docs).
-pub(crate) fn predict_rotating(
-    pim: &PreintegratedImu,
-    s: &NavState,
-    bias: &ImuBias,
-    omega: &Vector3<f64>,
-    mode: CoriolisMode,
-) -> NavState {
-    let c = crate::bias_correction::correct(pim, bias);
-    let (dr, dv, dp) = (c.r, c.v, c.p);
-    let t = pim.delta_t;
-    let g = pim.gravity;
-    match mode {
-        CoriolisMode::Exact => {
-            let tr = Transport::new(omega, t, &g);
-            let vbar = s.v + omega.cross(&s.p);
-            let p = tr.a.act(&(s.p + vbar * t + s.r.act(&dp))) + tr.pg;
-            let vbar_j = tr.a.act(&(vbar + s.r.act(&dv))) + tr.vg;
-            NavState {
-                r: tr.a.compose(&s.r).compose(&dr),
-                p,
-                v: vbar_j - omega.cross(&p),
-            }
-        }
-        CoriolisMode::FirstOrder | CoriolisMode::SecondOrder => {
-            let c = centrifugal(omega, &s.p, mode);
-            let wv = omega.cross(&s.v);
-            let xi_r = dr.log() - s.r.inverse().act(omega) * t;
-            NavState {
-                r: s.r.compose(&SO3::exp(&xi_r)),
-                p: s.p + s.v * t + g * (0.5 * t * t) + s.r.act(&dp)
-                    - wv * (t * t)
-                    - c * (0.5 * t * t),
-                v: s.v + g * t + s.r.act(&dv) - wv * (2.0 * t) - c * t,
-            }
         }
     }
 }

@@ -60,73 +60,14 @@
 //! `e = A e_s + B_j R δb_g + …` and `[e; δb]` maps by `[[A, B_j R S_g], [0, I]]`
 //! (`S_g` selects `δb_g`).
 
-use crate::measurement::{BiasJacobians, Cov9, EdgeSource, PreintegratedImu};
+use crate::choices::{Level, LeverArm};
+use crate::edges::{EdgeNoise, EdgeSource};
+use crate::measurement::{BiasJacobians, Cov9, PreintegratedImu};
 use crate::noise::white_scale;
-use crate::params::Level;
+use crate::params::SensorPose;
 use crate::sample::ImuSample;
 use nalgebra::{Matrix3, SMatrix, Vector3};
 use preint_lie::{SO3, hat};
-
-/// How the lever arm of a [`SensorPose`] is removed.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum LeverArm {
-    /// The closed form of the module docs, from the window's end rates: exact whatever `ω̇`,
-    /// no per-sample cost. The default.
-    #[default]
-    Exact,
-    /// GTSAM's model (`PreintegrationBase::correctMeasurementsBySensorPose`): `ω × (ω × r)`
-    /// subtracted from every sample's specific force, `ω̇ × r` ignored, the gyroscope noise
-    /// and bias the centripetal term carries into the specific force propagated per sample.
-    /// Exact only at a constant rate (there, with Euler, it also cancels Euler's error on the
-    /// sensor's circular motion); otherwise it leaves out `∫ ΔR (ω̇ × r) dt`. For agreeing with
-    /// GTSAM's numbers.
-    Centripetal,
-}
-
-impl LeverArm {
-    /// The model's name on the command line and in printed output: `exact` or `centripetal`.
-    pub fn name(self) -> &'static str {
-        match self {
-            LeverArm::Exact => "exact",
-            LeverArm::Centripetal => "centripetal",
-        }
-    }
-
-    /// The model called `name` ([`LeverArm::name`]).
-    pub fn parse(name: &str) -> Option<Self> {
-        [LeverArm::Exact, LeverArm::Centripetal]
-            .into_iter()
-            .find(|m| m.name() == name)
-    }
-}
-
-/// Pose of the IMU in the body frame, GTSAM's `body_P_sensor`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SensorPose {
-    /// `R_bs`: rotates sensor vectors into the body frame (`x_b = R_bs x_s`).
-    pub rotation: SO3,
-    /// The sensor origin in body coordinates \[m\] (the lever arm).
-    pub translation: Vector3<f64>,
-}
-
-impl SensorPose {
-    /// The pose from `R_bs` (sensor → body) and the sensor origin in the body frame \[m\].
-    pub fn new(rotation: SO3, translation: Vector3<f64>) -> Self {
-        Self {
-            rotation,
-            translation,
-        }
-    }
-
-    /// True if every entry is finite and the rotation is orthonormal to 1e-9.
-    pub fn is_valid(&self) -> bool {
-        let m = self.rotation.matrix();
-        m.iter().all(|x| x.is_finite())
-            && self.translation.iter().all(|x| x.is_finite())
-            && (m.transpose() * m - Matrix3::identity()).amax() < 1e-9
-            && m.determinant() > 0.0
-    }
-}
 
 /// How `params` removes the lever arm of its `body_p_sensor`: the arm taken off every sample
 /// before the loop ([`LeverArm::Centripetal`] with a non-zero arm), and the pose whose map
@@ -167,7 +108,6 @@ impl CentripetalArm {
         let (w, r) = (s.gyro - b_g, &self.r);
         ImuSample::new(s.t_ns, s.gyro, s.acc - w.cross(&w.cross(r)))
     }
-
 }
 
 impl crate::propagation::RateMap for CentripetalArm {
@@ -304,7 +244,7 @@ pub(crate) fn to_body(m: &mut PreintegratedImu, pose: &SensorPose, ends: &EndRat
     // `(A G) Q (A G)ᵀ` of `A Σ_s Aᵀ` for `G' Q G'ᵀ`, `G' = A G + [E, 0]`: the difference is
     // `X + Xᵀ + E Q_g Eᵀ` with `X = (A G)_g Q_g Eᵀ`.
     let sensor = &m.edge_noise;
-    let mut noise = crate::EdgeNoise::new(sensor.gyro_cov, sensor.acc_cov, sensor.cell_rule);
+    let mut noise = EdgeNoise::new(sensor.gyro_cov, sensor.acc_cov, sensor.cell_rule);
     let mut extra = Cov9::zeros();
     let mut add = |s: &EdgeSource| {
         let mut g = a * s.gain;

@@ -32,57 +32,57 @@
 
 #![deny(missing_docs)]
 
-pub mod bias_correction;
+mod bias_correction;
+mod choices;
 pub mod deskew;
 pub mod earth;
-pub mod factor;
-pub mod measurement;
-pub mod merge;
-pub mod navstate;
-pub mod noise;
-pub mod sample;
-
-pub use measurement::{
-    BiasJacobians, Cov9, Cov15, EdgeNoise, EdgeSource, PreintegratedImu, negate_delta_bias_blocks,
-};
-pub use noise::{CellRule, ImuNoise};
-pub use sample::{ImuBias, ImuSample, dt_seconds};
-
-pub mod error;
-pub mod extrinsics;
-pub(crate) mod fast;
+pub mod edges;
+mod error;
+mod extrinsics;
+mod factor;
+mod fast;
 pub mod intrinsics;
-pub mod params;
-pub mod preintegrator;
-pub(crate) mod propagation;
-pub mod scheme;
+mod measurement;
+mod merge;
+mod navstate;
+mod noise;
+mod params;
+mod preintegrator;
+pub mod prelude;
+mod propagation;
+mod sample;
+mod scheme;
 pub mod second_order;
 pub mod time_offset;
 pub mod truncation;
-pub(crate) mod validation;
-pub mod window;
+mod validation;
+mod window;
 
-pub use bias_correction::BiasCorrection;
-pub use deskew::{DeltasAt, DeskewTarget, StateAt, WindowDeltas};
-pub use earth::CoriolisMode;
+pub use choices::{BiasCorrection, CoriolisMode, Level, LeverArm};
 pub use error::PreintError;
-pub use extrinsics::{LeverArm, SensorPose};
-pub use factor::{CombinedImuFactor, FactorError, ImuFactor, ResidualMode};
+pub use factor::{
+    CombinedImuFactor, CombinedImuFactorJacobians, FactorError, FactorJacobians, ImuFactor,
+    ImuFactorJacobians, ResidualMode, sqrt_information,
+};
+pub use measurement::{BiasJacobians, Cov9, Cov15, PreintegratedImu};
 pub use merge::{MergeError, merge};
-pub use navstate::{NavState, predict, try_predict};
-pub use params::{Level, PreintParams, Scheme};
+pub use navstate::{NavState, NavTangent, predict, try_predict};
+pub use noise::{CellRule, ImuNoise};
+pub use params::{
+    DEFAULT_MAX_GAP_NS, DEFAULT_REINTEGRATE_ACC, DEFAULT_REINTEGRATE_GYRO,
+    DEFAULT_REINTEGRATE_TIME_OFFSET, PreintParams, SensorPose,
+};
 pub use preintegrator::{BiasUpdate, Preintegrator};
-pub use time_offset::{TimeOffsetUpdate, preintegrate_with_offset};
-pub use truncation::TruncationEstimate;
-pub use window::preintegrate;
+pub use sample::{ImuBias, ImuSample, dt_seconds};
+pub use scheme::{Scheme, SchemeInfo, TruncationCompanion};
+pub use window::{
+    check_samples, preintegrate, preintegrate_with_intrinsic_jacobian, window_samples,
+};
 
-pub use factor::{CombinedImuFactorJacobians, FactorJacobians, ImuFactorJacobians};
 /// The linear algebra of every public type (vectors, matrices).
 pub use nalgebra;
-pub use navstate::NavTangent;
-/// SO(3) and SE(3): the `ΔR` of a measurement is a [`SO3`].
+/// SO(3) and SE(3): the `ΔR` of a measurement is a [`lie::SO3`].
 pub use preint_lie as lie;
-pub use preint_lie::SO3;
 
 /// The README's code blocks, compiled and run as doctests.
 #[cfg(doctest)]

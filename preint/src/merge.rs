@@ -30,7 +30,7 @@
 //! Consecutive windows of one stream share the samples around their common keyframe `t_k`:
 //! the sample at `t_k`, or the samples an interpolated boundary sample is made of, and for hermite4
 //! the stencil neighbours ([`crate::window`]). Each window records those samples with their
-//! gains `G` on its error ([`crate::measurement::EdgeNoise`]); for a sample `s` in both,
+//! gains `G` on its error ([`crate::edges::EdgeNoise`]); for a sample `s` in both,
 //! the white part of the merged covariance gains
 //!
 //! ```text
@@ -71,8 +71,9 @@
 //! composition equals the whole stream with the boundary sample inserted
 //! ([`crate::window`]).
 
-use crate::measurement::{BiasJacobians, Cov9, Cov15, EdgeNoise, EdgeSource, PreintegratedImu};
-use crate::params::Level;
+use crate::choices::Level;
+use crate::edges::{EdgeNoise, EdgeSource};
+use crate::measurement::{BiasJacobians, Cov9, Cov15, PreintegratedImu};
 use nalgebra::{Matrix3, SMatrix};
 use preint_lie::hat;
 use thiserror::Error;

@@ -20,6 +20,8 @@
 //! (pose first, then velocity); it is **not** the preintegration order [δφ, δv, δp] of
 //! residuals and covariances — the factor exposes named blocks so the two cannot be confused.
 
+use crate::choices::CoriolisMode;
+use crate::earth::{Transport, centrifugal};
 use crate::error::PreintError;
 use crate::measurement::PreintegratedImu;
 use crate::sample::ImuBias;
@@ -148,7 +150,7 @@ pub fn try_predict(
 /// [`predict`] for a bias [`PreintegratedImu::check_bias`] accepts.
 fn predict_checked(pim: &PreintegratedImu, state_i: &NavState, bias: &ImuBias) -> NavState {
     if let Some(w) = &pim.omega_coriolis {
-        return crate::earth::predict_rotating(pim, state_i, bias, w, pim.coriolis);
+        return predict_rotating(pim, state_i, bias, w, pim.coriolis);
     }
     let c = crate::bias_correction::correct(pim, bias);
     let (dr, dv, dp) = (c.r, c.v, c.p);
@@ -158,5 +160,45 @@ fn predict_checked(pim: &PreintegratedImu, state_i: &NavState, bias: &ImuBias) -
         r: state_i.r.compose(&dr),
         v: state_i.v + g * dt + state_i.r.act(&dv),
         p: state_i.p + state_i.v * dt + g * (0.5 * dt * dt) + state_i.r.act(&dp),
+    }
+}
+
+/// `state_i` propagated by the bias-corrected deltas `(ΔR, Δv, Δp)` over `T = pim.delta_t`
+/// with the Earth rate `omega` [rad/s, navigation frame] in mode `mode` ([`crate::earth`]).
+pub(crate) fn predict_rotating(
+    pim: &PreintegratedImu,
+    s: &NavState,
+    bias: &ImuBias,
+    omega: &Vector3<f64>,
+    mode: CoriolisMode,
+) -> NavState {
+    let c = crate::bias_correction::correct(pim, bias);
+    let (dr, dv, dp) = (c.r, c.v, c.p);
+    let t = pim.delta_t;
+    let g = pim.gravity;
+    match mode {
+        CoriolisMode::Exact => {
+            let tr = Transport::new(omega, t, &g);
+            let vbar = s.v + omega.cross(&s.p);
+            let p = tr.a.act(&(s.p + vbar * t + s.r.act(&dp))) + tr.pg;
+            let vbar_j = tr.a.act(&(vbar + s.r.act(&dv))) + tr.vg;
+            NavState {
+                r: tr.a.compose(&s.r).compose(&dr),
+                p,
+                v: vbar_j - omega.cross(&p),
+            }
+        }
+        CoriolisMode::FirstOrder | CoriolisMode::SecondOrder => {
+            let c = centrifugal(omega, &s.p, mode);
+            let wv = omega.cross(&s.v);
+            let xi_r = dr.log() - s.r.inverse().act(omega) * t;
+            NavState {
+                r: s.r.compose(&SO3::exp(&xi_r)),
+                p: s.p + s.v * t + g * (0.5 * t * t) + s.r.act(&dp)
+                    - wv * (t * t)
+                    - c * (0.5 * t * t),
+                v: s.v + g * t + s.r.act(&dv) - wv * (2.0 * t) - c * t,
+            }
+        }
     }
 }

@@ -49,28 +49,28 @@ impl CellRule {
 /// whose time cell is `cell_s` \[s\]: `1/c` [1/s] (a sample is the mean of the continuous noise
 /// over its cell). The one definition of the white-noise conversion in the crate.
 #[inline(always)]
-pub fn white_scale(cell_s: f64) -> f64 {
+pub(crate) fn white_scale(cell_s: f64) -> f64 {
     1.0 / cell_s
 }
 
 /// Discrete variance of one sample: `psd·white_scale(cell_s)` = `σ²/c` for a density `σ`
 /// (`psd = σ²`, e.g. [rad²/s] for the gyro) and a cell `c` \[s\].
 #[inline(always)]
-pub fn white_sample_variance(psd: f64, cell_s: f64) -> f64 {
+pub(crate) fn white_sample_variance(psd: f64, cell_s: f64) -> f64 {
     psd * white_scale(cell_s)
 }
 
 /// The factor turning a random-walk density into the variance added over a step of `h_s`
 /// \[s\]: `h` \[s\]. The one definition of the random-walk conversion in the crate.
 #[inline(always)]
-pub fn walk_scale(h_s: f64) -> f64 {
+pub(crate) fn walk_scale(h_s: f64) -> f64 {
     h_s
 }
 
 /// Variance of one random-walk step: `psd·walk_scale(h_s)` = `σ_b² h` for a density `σ_b`
 /// (`psd = σ_b²`, e.g. [rad²/s³] for the gyro bias) over `h` \[s\].
 #[inline(always)]
-pub fn walk_step_variance(psd: f64, h_s: f64) -> f64 {
+pub(crate) fn walk_step_variance(psd: f64, h_s: f64) -> f64 {
     psd * walk_scale(h_s)
 }
 
@@ -137,5 +137,29 @@ impl ImuNoise {
     #[inline]
     pub fn acc_bias_step_std(&self, dt_s: f64) -> f64 {
         walk_step_variance(self.acc_random_walk.powi(2), dt_s).sqrt()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: f64, b: f64) -> bool {
+        (a - b).abs() <= 4.0 * f64::EPSILON * b.abs()
+    }
+
+    /// The conversions against the formulas written out: `σ²/c`, `σ_b² h`, `1/c`, `h`; a
+    /// sample without a neighbour gets no noise (scale 0), never a division by zero.
+    #[test]
+    fn white_and_walk_conversions() {
+        for dt in [1e-3, 5e-3, 0.0123, 0.1] {
+            assert!(close(white_sample_variance(4e-6, dt), 4e-6 / dt));
+            assert!(close(walk_step_variance(9e-6, dt), 9e-6 * dt));
+            assert_eq!(white_scale(dt), 1.0 / dt);
+            assert_eq!(walk_scale(dt), dt);
+        }
+        for rule in [CellRule::Held, CellRule::Centered] {
+            assert_eq!(white_scale(rule.cell_s(0.0, 0.0)), 0.0);
+        }
     }
 }

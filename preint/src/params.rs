@@ -1,24 +1,39 @@
 //! Preintegration parameters: gravity, continuous-time noise covariances, integration scheme,
 //! what to compute, bias re-integration thresholds and the largest allowed sample gap.
 
-use crate::bias_correction::BiasCorrection;
-use crate::earth::CoriolisMode;
+use crate::choices::{BiasCorrection, CoriolisMode, Level, LeverArm};
 use crate::error::PreintError;
-use crate::extrinsics::{LeverArm, SensorPose};
 use crate::noise::ImuNoise;
-pub use crate::scheme::Scheme;
+use crate::scheme::Scheme;
 use nalgebra::{Matrix3, Vector3};
+use preint_lie::SO3;
 
-/// What the preintegrator computes per sample. Ordered: `Deltas < Covariance < Combined`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum Level {
-    /// ΔR, Δv, Δp only (covariance and Jacobians are returned as zeros).
-    Deltas,
-    /// Deltas, the 9×9 covariance [δφ, δv, δp] and the five bias Jacobians.
-    Covariance,
-    /// Everything in `Covariance` plus the 15×15 combined covariance with bias random walk
-    /// (GTSAM `CombinedImuFactor` semantics).
-    Combined,
+/// Pose of the IMU in the body frame, GTSAM's `body_P_sensor` ([`crate::extrinsics`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SensorPose {
+    /// `R_bs`: rotates sensor vectors into the body frame (`x_b = R_bs x_s`).
+    pub rotation: SO3,
+    /// The sensor origin in body coordinates \[m\] (the lever arm).
+    pub translation: Vector3<f64>,
+}
+
+impl SensorPose {
+    /// The pose from `R_bs` (sensor → body) and the sensor origin in the body frame \[m\].
+    pub fn new(rotation: SO3, translation: Vector3<f64>) -> Self {
+        Self {
+            rotation,
+            translation,
+        }
+    }
+
+    /// True if every entry is finite and the rotation is orthonormal to 1e-9.
+    pub fn is_valid(&self) -> bool {
+        let m = self.rotation.matrix();
+        m.iter().all(|x| x.is_finite())
+            && self.translation.iter().all(|x| x.is_finite())
+            && (m.transpose() * m - Matrix3::identity()).amax() < 1e-9
+            && m.determinant() > 0.0
+    }
 }
 
 /// Shape of a 3×3 covariance, decided once when the preintegrator is built.
@@ -110,7 +125,8 @@ pub struct PreintParams {
     /// `GalileanPreintegration` does (its bias-corrected deltas then equal GTSAM's, and the
     /// correction is more accurate at large bias changes, `docs/EVIDENCE.md`),
     /// [`BiasCorrection::Additive`] (Forster eq. 44, GTSAM's Manifold/Tangent backends)
-    /// otherwise; see [`BiasCorrection::default_for`].
+    /// otherwise: the scheme's
+    /// [`SchemeInfo::bias_correction`](crate::SchemeInfo::bias_correction).
     pub bias_correction: Option<BiasCorrection>,
     /// IMU intrinsics applied to every raw sample before integration, and whether the deltas'
     /// Jacobians with respect to them are accumulated ([`crate::intrinsics`]; the bias
@@ -220,10 +236,10 @@ impl PreintParams {
     }
 
     /// The bias correction the measurements carry: `bias_correction`, or the scheme's default
-    /// ([`BiasCorrection::default_for`]).
+    /// ([`SchemeInfo::bias_correction`](crate::SchemeInfo::bias_correction)).
     pub fn resolved_bias_correction(&self) -> BiasCorrection {
         self.bias_correction
-            .unwrap_or_else(|| BiasCorrection::default_for(self.scheme))
+            .unwrap_or(self.scheme.info().bias_correction)
     }
 
     /// Same parameters with another [`CoriolisMode`].

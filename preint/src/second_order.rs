@@ -62,8 +62,9 @@
 
 use crate::error::PreintError;
 use crate::measurement::PreintegratedImu;
-use crate::params::{PreintParams, Scheme};
+use crate::params::PreintParams;
 use crate::sample::ImuSample;
+use crate::scheme::Scheme;
 use crate::window::window_samples;
 use nalgebra::{Matrix3, SMatrix, Vector3};
 use preint_lie::{SO3, hat};

@@ -5,10 +5,12 @@
 //!
 //! The deltas of a scheme of order `q` on samples `h` apart differ from the exact ones by its
 //! truncation error `e = D_h ⊖ D ≈ C hᑫ`. A companion integration of the same window estimates
-//! it ([`estimate`]):
+//! it ([`estimate`]), the one the scheme's registry row names
+//! ([`SchemeInfo::truncation`](crate::SchemeInfo::truncation)):
 //!
-//! - **euler** and **galilean** (order 1 on smooth input) and **midpoint** (order 2): the
-//!   4th-order `hermite4` scheme on the same samples upsampled four times, `e ≈ D_h ⊖ D_fine`.
+//! - [`TruncationCompanion::Hermite4Upsampled`] (**euler** and **galilean**, order 1 on smooth
+//!   input, and **midpoint**, order 2): the 4th-order `hermite4` scheme on the same samples
+//!   upsampled four times, `e ≈ D_h ⊖ D_fine`.
 //!   Each inserted sample is the value of the degree-11 polynomial through the 12 nearest
 //!   samples (centred on its interval): a smooth signal sampled a few times per period of its
 //!   fastest component is interpolated to high order where a cubic, or Richardson's estimate
@@ -18,10 +20,11 @@
 //!   companion cuts the window itself, so a keyframe between samples is interpolated finely
 //!   there and by a line in the scheme's window: the estimate includes the error of that line,
 //!   as it should.
-//! - **hermite4**: Richardson's estimate from the same scheme on every other sample: with
-//!   `e_2h ≈ 2⁴ e_h`, `D_h ⊖ D_2h ≈ e_h − e_2h`, so `e ≈ −(D_h ⊖ D_2h) / (2⁴ − 1)`.
+//! - [`TruncationCompanion::Richardson`] (**hermite4**): Richardson's estimate from the same
+//!   scheme on every other sample: with `e_2h ≈ 2ᑫ e_h`, `D_h ⊖ D_2h ≈ e_h − e_2h`, so
+//!   `e ≈ −(D_h ⊖ D_2h) / (2ᑫ − 1)` (`q = 4`: 15).
 //!
-//! `⊖` is the chart of [`crate::measurement`], order [δφ, δv, δp]. The estimate is as good as
+//! `⊖` is the chart of [`PreintegratedImu`], order [δφ, δv, δp]. The estimate is as good as
 //! the motion is smooth at the scale of the samples; the evidence suite measures it against the
 //! true error on every scene and rate of `preint bench-steps`.
 //!
@@ -41,11 +44,13 @@
 //! first order in the Logmap residual would leave several σ for Euler at 20 Hz
 //! (`docs/EVIDENCE.md`).
 
+use crate::choices::Level;
 use crate::error::PreintError;
 use crate::factor::ResidualMode;
 use crate::measurement::PreintegratedImu;
-use crate::params::{Level, PreintParams, Scheme};
+use crate::params::PreintParams;
 use crate::sample::{ImuBias, ImuSample};
+use crate::scheme::{Scheme, TruncationCompanion};
 use crate::window::preintegrate;
 use nalgebra::{SMatrix, SVector, Vector3};
 use preint_lie::jl_inv;
@@ -78,8 +83,9 @@ pub fn estimate(
         ..params.clone()
     };
     let (t_i, t_j) = (m.t_i_ns, m.t_j_ns);
-    match params.scheme {
-        Scheme::Euler | Scheme::Midpoint | Scheme::Galilean => {
+    let info = params.scheme.info();
+    match info.truncation {
+        TruncationCompanion::Hermite4Upsampled => {
             let h4 = deltas.with_scheme(Scheme::Hermite4);
             // With covariance when the measurement has one: `inflate` weights with it.
             let level = match params.level {
@@ -98,25 +104,26 @@ pub fn estimate(
                 companion_cov: companion.cov,
             })
         }
-        Scheme::Hermite4 => Ok(TruncationEstimate {
-            error: richardson(&deltas, bias, samples, m)?,
+        TruncationCompanion::Richardson => Ok(TruncationEstimate {
+            error: richardson(&deltas, bias, samples, m, info.order)?,
             method: "richardson 2h",
             companion_cov: m.cov,
         }),
     }
 }
 
-/// Richardson's estimate of the error of the 4th-order window `m`: `−(D_h ⊖ D_2h) / 15`, the
-/// coarse window on every other sample.
+/// Richardson's estimate of the error of the window `m` of a scheme of order `q`:
+/// `−(D_h ⊖ D_2h) / (2^q − 1)` (15 for hermite4), the coarse window on every other sample.
 fn richardson(
     params: &PreintParams,
     bias: &ImuBias,
     samples: &[ImuSample],
     m: &PreintegratedImu,
+    q: u32,
 ) -> Result<SVector<f64, 9>, PreintError> {
     let half = every_other(samples, m.t_i_ns, m.t_j_ns);
     let coarse = preintegrate(params, bias, &half, m.t_i_ns, m.t_j_ns)?;
-    Ok(-m.delta_error(&coarse) / 15.0)
+    Ok(-m.delta_error(&coarse) / f64::from((1u32 << q) - 1))
 }
 
 /// Samples the companion inserts per interval.

@@ -50,21 +50,22 @@
 //! for keyframes 1 µs before a sample, hermite4 up to +2.1 %, Euler −0.9 % (position) for
 //! keyframes mid-interval. The stream samples
 //! around a keyframe are shared by the two windows that meet there; each window records their
-//! gains ([`crate::measurement::EdgeNoise`]), so [`merge`](crate::merge()) adds their
+//! gains ([`crate::edges::EdgeNoise`]), so [`merge`](crate::merge()) adds their
 //! covariance and merging the two windows is exact.
 
 use crate::error::PreintError;
 use crate::measurement::PreintegratedImu;
-use crate::params::{PreintParams, Scheme};
-use crate::validation::check_sample;
+use crate::params::PreintParams;
 use crate::preintegrator::{Preintegrator, Side, Src, WindowSpec};
-use crate::sample::{ImuBias, ImuSample};
 use crate::sample::span_s;
+use crate::sample::{ImuBias, ImuSample};
+use crate::scheme::Scheme;
+use crate::validation::check_sample;
 use nalgebra::Vector3;
 
 /// Sample at `t_ns` on the straight line through `s0` and `s1` (`s0.t_ns < s1.t_ns`);
 /// `λ = (t − t0)/(t1 − t0)` from integer-ns differences.
-pub fn interpolate_linear(s0: &ImuSample, s1: &ImuSample, t_ns: i64) -> ImuSample {
+pub(crate) fn interpolate_linear(s0: &ImuSample, s1: &ImuSample, t_ns: i64) -> ImuSample {
     let lam = linear_weight(s0.t_ns, s1.t_ns, t_ns);
     ImuSample {
         t_ns,
@@ -101,7 +102,7 @@ fn lagrange_weights(times: &[i64], t_ns: i64) -> [f64; 4] {
 
 /// Sample at `t_ns` on the Lagrange polynomial through `nodes` (1–4 samples with distinct
 /// times; degree `nodes.len() − 1`). Times are taken relative to `nodes[0]` in seconds.
-pub fn interpolate_lagrange(nodes: &[ImuSample], t_ns: i64) -> ImuSample {
+pub(crate) fn interpolate_lagrange(nodes: &[ImuSample], t_ns: i64) -> ImuSample {
     let mut times = [0i64; 4];
     for (t, s) in times.iter_mut().zip(nodes) {
         *t = s.t_ns;

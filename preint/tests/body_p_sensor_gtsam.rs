@@ -18,7 +18,7 @@
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
 use preint::{
-    ImuBias, ImuSample, Level, LeverArm, PreintParams, Preintegrator, SO3, Scheme, SensorPose,
+    ImuBias, ImuSample, Level, LeverArm, PreintParams, Preintegrator, Scheme, SensorPose, lie::SO3,
 };
 use preint_io::parse_euroc_imu;
 use serde_json::Value;

@@ -24,7 +24,7 @@ use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
 use preint::ResidualMode;
 use preint::{
     CombinedImuFactor, ImuBias, ImuNoise, Level, NavState, PreintParams, PreintegratedImu, Scheme,
-    factor::sqrt_information, preintegrate,
+    preintegrate, sqrt_information,
 };
 use preint_io::read_euroc_imu;
 use preint_lie::SO3;

@@ -22,8 +22,8 @@
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
 use preint::{
-    BiasJacobians, CombinedImuFactor, CombinedImuFactorJacobians, Cov9, Cov15, EdgeNoise, ImuBias,
-    Level, NavState, PreintegratedImu, ResidualMode,
+    BiasJacobians, CombinedImuFactor, CombinedImuFactorJacobians, Cov9, Cov15, ImuBias, Level,
+    NavState, PreintegratedImu, ResidualMode, edges::EdgeNoise,
 };
 use preint_lie::{SO3, hat};
 use serde_json::Value;

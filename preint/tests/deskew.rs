@@ -9,7 +9,7 @@ use common::*;
 use preint::deskew::{DeskewTarget, deltas_at, deskew_points, states_at};
 use preint::{
     ImuBias, ImuSample, Level, LeverArm, NavState, PreintError, PreintParams, Scheme, SensorPose,
-    WindowDeltas, predict, preintegrate,
+    deskew::WindowDeltas, predict, preintegrate,
 };
 use preint_lie::SO3;
 

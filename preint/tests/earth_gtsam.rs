@@ -27,8 +27,8 @@
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
 use preint::ResidualMode;
 use preint::{
-    BiasJacobians, CombinedImuFactor, CoriolisMode, Cov9, Cov15, EdgeNoise, ImuBias, ImuFactor,
-    Level, NavState, PreintegratedImu, predict,
+    BiasJacobians, CombinedImuFactor, CoriolisMode, Cov9, Cov15, ImuBias, ImuFactor, Level,
+    NavState, PreintegratedImu, edges::EdgeNoise, predict,
 };
 use preint_lie::{SO3, hat, jl_inv, jr};
 use serde_json::Value;

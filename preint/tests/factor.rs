@@ -3,10 +3,10 @@
 
 use nalgebra::{DMatrix, DVector, Matrix3, SVector, Vector3};
 use preint::ResidualMode;
-use preint::factor::sqrt_information;
+use preint::sqrt_information;
 use preint::{
-    BiasJacobians, CombinedImuFactor, Cov9, Cov15, EdgeNoise, FactorError, ImuBias, ImuFactor,
-    Level, NavState, PreintegratedImu, predict,
+    BiasJacobians, CombinedImuFactor, Cov9, Cov15, FactorError, ImuBias, ImuFactor, Level,
+    NavState, PreintegratedImu, edges::EdgeNoise, predict,
 };
 use preint_lie::{Manifold, SO3};
 

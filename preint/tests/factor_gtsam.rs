@@ -23,8 +23,8 @@
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
 use preint::{
-    BiasJacobians, Cov9, Cov15, EdgeNoise, ImuBias, ImuFactor, Level, NavState, PreintegratedImu,
-    ResidualMode, predict,
+    BiasJacobians, Cov9, Cov15, ImuBias, ImuFactor, Level, NavState, PreintegratedImu,
+    ResidualMode, edges::EdgeNoise, predict,
 };
 use preint_lie::{SO3, hat, jl_inv};
 use std::path::PathBuf;

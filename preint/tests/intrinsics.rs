@@ -18,7 +18,7 @@ fn realistic(model: IntrinsicsModel) -> ImuIntrinsics {
 }
 
 fn stream() -> Vec<ImuSample> {
-    preint::sample::synthetic_stream(400)
+    preint_sim::synthetic_stream(400)
 }
 
 fn with(params: &PreintParams, x: ImuIntrinsics, jacobians: bool) -> PreintParams {
@@ -246,7 +246,7 @@ fn deskew_deltas_apply_the_intrinsics_as_preintegrate_does() {
 #[test]
 fn the_slice_path_with_intrinsics_equals_pushing_one_by_one() {
     // 5 000 samples: several of the wrapper's chunks (2 048).
-    let s = preint::sample::synthetic_stream(5000);
+    let s = preint_sim::synthetic_stream(5000);
     for &scheme in Scheme::ALL {
         for level in [Level::Deltas, Level::Covariance] {
             let p = with(

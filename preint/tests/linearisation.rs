@@ -22,7 +22,7 @@
 //! merge without the shared samples by ≥ 1e-3.
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
-use preint::window::window_samples;
+use preint::window_samples;
 use preint::{
     ImuBias, ImuSample, Level, PreintParams, PreintegratedImu, Preintegrator, Scheme, merge,
     preintegrate,
@@ -95,7 +95,7 @@ fn direct(p: &PreintParams, s: &[ImuSample]) -> PreintegratedImu {
     pi.finish().unwrap()
 }
 
-/// The documented cell of stream sample k [s] (`preint::noise::CellRule`), written out.
+/// The documented cell of stream sample k [s] (`preint::CellRule`), written out.
 fn cell(scheme: Scheme, s: &[ImuSample], k: usize) -> f64 {
     let h = |i: usize| (s[i + 1].t_ns - s[i].t_ns) as f64 * 1e-9;
     let n = s.len();
@@ -301,7 +301,7 @@ fn merged_covariance_equals_linearisation_of_the_composition() {
                 );
                 // Independence would be wrong by more than the tolerance (the test has power).
                 let mut indep = w(&prm, &s, ta, tb);
-                indep.edge_noise = preint::EdgeNoise::default();
+                indep.edge_noise = preint::edges::EdgeNoise::default();
                 let mi = merge(&indep, &w(&prm, &s, tb, tc)).unwrap();
                 let e = block_rel(&mi.cov, &exact);
                 eprintln!("{scheme:?}   … merged as independent windows: block rel {e:.2e}");

@@ -7,8 +7,8 @@
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 use preint::{
-    BiasJacobians, Cov9, Cov15, EdgeNoise, ImuBias, ImuNoise, ImuSample, Level, MergeError,
-    PreintParams, PreintegratedImu, Scheme, merge, preintegrate,
+    BiasJacobians, Cov9, Cov15, ImuBias, ImuNoise, ImuSample, Level, MergeError, PreintParams,
+    PreintegratedImu, Scheme, edges::EdgeNoise, merge, preintegrate,
 };
 use preint_lie::{SO3, hat, jr};
 

@@ -2,8 +2,8 @@
 //! module of `preint/src` (a file or a directory: `scheme/`, `fast/`, `propagation/`,
 //! `preintegrator/`, the data types `measurement`, `params`, `navstate`, …) with an edge to each
 //! module its non-test code names (`use crate::…`, `crate::…` paths, the root's re-exports
-//! resolved to the module that defines them) forms a directed acyclic graph, and so do the files
-//! inside each directory. A loop is printed as the chain of modules that closes it.
+//! resolved to the module that defines them) forms a directed acyclic graph. A loop is printed
+//! as the chain of modules that closes it, with the whole graph.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -181,7 +181,12 @@ fn root_reexports() -> BTreeMap<String, String> {
 /// `src/params.rs`.
 fn top_of(file: &Path) -> String {
     let rel = file.strip_prefix(src()).unwrap();
-    let first = rel.components().next().unwrap().as_os_str().to_string_lossy();
+    let first = rel
+        .components()
+        .next()
+        .unwrap()
+        .as_os_str()
+        .to_string_lossy();
     first.trim_end_matches(".rs").to_string()
 }
 
@@ -260,61 +265,16 @@ fn top_level_graph() -> BTreeMap<String, BTreeSet<String>> {
     g
 }
 
-/// The graph of the files of directory `dir` (`src/scheme`): an edge from each file's module
-/// to every sibling it names through `super::` or `crate::dir::`.
-fn directory_graph(dir: &str) -> BTreeMap<String, BTreeSet<String>> {
-    let root = src().join(dir);
-    let name = |f: &Path| -> String {
-        let rel = f.strip_prefix(&root).unwrap();
-        let first = rel.components().next().unwrap().as_os_str().to_string_lossy();
-        first.trim_end_matches(".rs").to_string()
-    };
-    let siblings: BTreeSet<String> = files(&root).iter().map(|f| name(f)).collect();
-    let mut g: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
-    for f in files(&root) {
-        let from = name(&f);
-        let code = code_of(&std::fs::read_to_string(&f).unwrap());
-        let entry = g.entry(from.clone()).or_default();
-        let nested = f.parent() != Some(root.as_path());
-        let mut names = Vec::new();
-        for p in crate_paths(&code) {
-            if let Some(rest) = p.strip_prefix(&format!("{dir}::")) {
-                names.push(rest.to_string());
-            } else if p == dir {
-                names.push("mod".to_string());
-            }
-        }
-        // `super::x` in a direct child names sibling `x` (or `mod` for an item of `mod.rs`);
-        // in a nested file (`fast/hermite4/carry.rs`) it stays inside its own sibling.
-        if !nested && from != "mod" {
-            for (at, _) in code.match_indices("super::") {
-                let rest = &code[at + "super::".len()..];
-                let end = rest
-                    .find(|c: char| !(c.is_alphanumeric() || c == '_'))
-                    .unwrap_or(rest.len());
-                names.push(rest[..end].to_string());
-            }
-        }
-        for n in names {
-            let head = n.split("::").next().unwrap().trim_start_matches('{');
-            let to = if siblings.contains(head) {
-                head.to_string()
-            } else {
-                "mod".to_string()
-            };
-            if to != from {
-                entry.insert(to);
-            }
-        }
-    }
-    g
-}
-
 fn assert_acyclic(what: &str, g: &BTreeMap<String, BTreeSet<String>>) {
     if let Some(c) = cycle(g) {
         let edges: Vec<String> = g
             .iter()
-            .map(|(k, v)| format!("  {k} → {}", v.iter().cloned().collect::<Vec<_>>().join(", ")))
+            .map(|(k, v)| {
+                format!(
+                    "  {k} → {}",
+                    v.iter().cloned().collect::<Vec<_>>().join(", ")
+                )
+            })
             .collect();
         panic!(
             "{what}: import cycle {}\nthe graph:\n{}",
@@ -330,18 +290,16 @@ fn assert_acyclic(what: &str, g: &BTreeMap<String, BTreeSet<String>>) {
 #[test]
 fn top_level_modules_form_no_import_cycle() {
     let g = top_level_graph();
-    for dir in ["scheme", "fast", "propagation", "preintegrator", "measurement"] {
+    for dir in [
+        "scheme",
+        "fast",
+        "propagation",
+        "preintegrator",
+        "measurement",
+    ] {
         assert!(g.contains_key(dir), "{dir} not found in {:?}", g.keys());
     }
     assert_acyclic("preint/src", &g);
-}
-
-/// Inside each directory of the core the files import each other without a loop.
-#[test]
-fn files_inside_each_core_directory_form_no_import_cycle() {
-    for dir in ["scheme", "fast", "propagation", "preintegrator"] {
-        assert_acyclic(&format!("preint/src/{dir}"), &directory_graph(dir));
-    }
 }
 
 /// The reader finds what it must: paths in code, groups, re-exports; not paths in comments,

@@ -155,7 +155,8 @@ fn queries_inside_a_window_do_not_allocate() {
     for &scheme in Scheme::ALL {
         let prm = PreintParams::default().with_scheme(scheme);
         let (t_i, t_j) = (12_345_678, 9_000_000_000);
-        let mut w = preint::WindowDeltas::new(&prm, &ImuBias::zero(), &samples, t_i, t_j).unwrap();
+        let mut w =
+            preint::deskew::WindowDeltas::new(&prm, &ImuBias::zero(), &samples, t_i, t_j).unwrap();
         let times: Vec<i64> = (1..=3000).map(|k| t_i + k * 2_990_001).collect();
         let (last, count) = counted(|| {
             let mut last = None;

@@ -131,7 +131,7 @@ fn first_order_gyro_error_against_noise_sigma() {
         eprintln!("{scheme:?}: first-order gyro error reaches 1σ at |δb_g| = {c:.4} rad/s");
         assert!((0.0295..0.0320).contains(&c), "{c}");
         assert!(c_group > 1.2 * c, "group {c_group} additive {c}");
-        let at_default = n(preint::params::DEFAULT_REINTEGRATE_GYRO);
+        let at_default = n(preint::DEFAULT_REINTEGRATE_GYRO);
         assert!((0.100..0.112).contains(&at_default), "{at_default}");
     }
 }
@@ -149,7 +149,7 @@ fn first_order_gyro_error_against_noise_sigma() {
 fn first_order_acc_error_against_noise_sigma() {
     let dg = V3::new(1.0, -2.0, 0.5).normalize();
     let da = V3::new(-0.3, 0.8, 1.0).normalize();
-    let bg = preint::params::DEFAULT_REINTEGRATE_GYRO;
+    let bg = preint::DEFAULT_REINTEGRATE_GYRO;
     let group = setup_with(Scheme::Galilean, Some(BiasCorrection::Group));
     let c_group = crossing(0.05, 5.0, |a| {
         first_order_error(&group, &ImuBias::new(dg * bg, da * a)).0
@@ -159,11 +159,11 @@ fn first_order_acc_error_against_noise_sigma() {
         let pi = setup_with(scheme, Some(BiasCorrection::Additive));
         let n = |g: f64, a: f64| first_order_error(&pi, &ImuBias::new(dg * g, da * a)).0;
         let c = crossing(0.05, 5.0, |a| n(bg, a));
-        let at_default = n(bg, preint::params::DEFAULT_REINTEGRATE_ACC);
+        let at_default = n(bg, preint::DEFAULT_REINTEGRATE_ACC);
         let c_small = crossing(0.05, 20.0, |a| n(0.003, a));
         eprintln!(
             "{scheme:?}: with |δb_g| = {bg} rad/s the first-order error reaches 1σ at |δb_a| = {c:.3} m/s²; at the default {} m/s² it is {at_default:.3}σ; with |δb_g| = 0.003 the crossing is {c_small:.3} m/s²",
-            preint::params::DEFAULT_REINTEGRATE_ACC
+            preint::DEFAULT_REINTEGRATE_ACC
         );
         assert!((0.385..0.42).contains(&c), "{c}");
         assert!(c_group > 1.5 * c, "group {c_group} additive {c}");

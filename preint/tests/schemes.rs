@@ -356,7 +356,7 @@ fn delta_error_reads_back_a_known_perturbation() {
     assert_eq!(m0.delta_error(&m0), nalgebra::SVector::<f64, 9>::zeros());
 }
 
-/// hermite4's rules are exact for cubics (module doc of `preint::scheme::hermite4`), which two
+/// hermite4's rules are exact for cubics (module doc of `preint::hermite4`), which two
 /// polynomial motions check against closed forms written out here, on a uniform 100 Hz grid
 /// through `preint::preintegrate` (window [0.1 s, 0.9 s] inside [0, 1 s], so every node has
 /// a centred stencil):

@@ -214,9 +214,9 @@ fn window_path_errors_name_the_stream_sample() {
     // check_samples on its own, with a range.
     let mut dup = stream.clone();
     dup[30].t_ns = dup[29].t_ns;
-    assert_eq!(preint::window::check_samples(&dup, 0..29, i64::MAX), Ok(()));
+    assert_eq!(preint::check_samples(&dup, 0..29, i64::MAX), Ok(()));
     assert_eq!(
-        preint::window::check_samples(&dup, 25..35, i64::MAX),
+        preint::check_samples(&dup, 25..35, i64::MAX),
         Err(PreintError::DuplicateTimestamp {
             index: 30,
             t_ns: dup[30].t_ns

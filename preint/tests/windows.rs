@@ -3,7 +3,7 @@
 mod common;
 
 use common::*;
-use preint::window::window_samples;
+use preint::window_samples;
 use preint::{ImuBias, ImuSample, Level, PreintError, PreintParams, Scheme, preintegrate};
 
 fn prm(scheme: Scheme) -> PreintParams {

@@ -68,7 +68,7 @@ pub(crate) fn advise_py<'py>(
     };
     let json = py
         .detach(|| {
-            preint_cli::checks::no_gaps(&s, label, preint::params::DEFAULT_MAX_GAP_NS)?;
+            preint_cli::checks::no_gaps(&s, label, preint::DEFAULT_MAX_GAP_NS)?;
             // As the command line: held input is not low-passed.
             let (signal, cutoffs) = match class {
                 InputClass::Smooth => {

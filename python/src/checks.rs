@@ -1,7 +1,7 @@
 //! The value checks of the Python surface: what the command line refuses in a flag, refused in
 //! an argument, before anything is computed or written. A bad value raises `PreintError` of
 //! kind `"InvalidParameter"` (a `ValueError`) whose message names the argument, the value and
-//! the fix; sample arrays are checked by `preint::window::check_samples` (kinds `NonFinite`,
+//! the fix; sample arrays are checked by `preint::check_samples` (kinds `NonFinite`,
 //! `DuplicateTimestamp`, `DecreasingTimestamp`, naming the sample index).
 //!
 //! The rules:
@@ -185,5 +185,5 @@ pub(crate) fn params(p: &PreintParams) -> PyResult<()> {
 /// Every sample finite, timestamps strictly increasing (the error names the index and time:
 /// `PreintError` of kind `NonFinite`, `DuplicateTimestamp` or `DecreasingTimestamp`).
 pub(crate) fn samples(s: &[ImuSample]) -> PyResult<()> {
-    preint::window::check_samples(s, 0..s.len(), i64::MAX).map_err(preint_err)
+    preint::check_samples(s, 0..s.len(), i64::MAX).map_err(preint_err)
 }

@@ -4,11 +4,8 @@
 use crate::errors::shape_err;
 use nalgebra::{Matrix3, SMatrix, Vector3};
 use preint::lie::SO3;
-use preint::measurement::EdgeSource;
-use preint::{
-    BiasCorrection, BiasJacobians, CellRule, CoriolisMode, EdgeNoise, ImuBias, Level, LeverArm,
-    PreintParams, PreintegratedImu, Scheme, SensorPose,
-};
+use preint::edges::EdgeSource;
+use preint::{BiasCorrection, BiasJacobians, CellRule, CoriolisMode, ImuBias, Level, LeverArm, PreintParams, PreintegratedImu, Scheme, SensorPose, edges::EdgeNoise};
 use pyo3::PyResult;
 
 /// Format version written first.

@@ -16,11 +16,13 @@
 //!   (EuRoC `imu.csv`, `groundtruth.csv`, Kalibr `imu.yaml`).
 //! - [`rotating`]: the ideal readings in a navigation frame rotating at ω_ie (Earth rotation,
 //!   [`SimConfig::earth_rate`]).
+//! - [`bench`]: [`synthetic_stream`], the stream every speed figure is measured on.
 //! - [`deadreckon`]: [`dead_reckon`] with Euler / midpoint rules and quaternion / matrix-Exp /
 //!   ZYX-Euler-angle attitude; [`euler_zyx_angles`], the raw Euler-angle states.
 
 #![deny(missing_docs)]
 
+pub mod bench;
 pub mod deadreckon;
 pub mod deltas;
 pub mod imu;
@@ -28,6 +30,7 @@ pub mod rotating;
 pub mod scene;
 pub mod scenes;
 
+pub use bench::synthetic_stream;
 pub use deadreckon::{Attitude, Rule, dead_reckon, euler_zyx_angles, euler_zyx_of, rotation_error};
 pub use deltas::exact_deltas;
 pub use imu::{

@@ -31,7 +31,7 @@
 
 use evidence::write_json;
 use nalgebra::{SVector, Vector3};
-use preint::params::DEFAULT_REINTEGRATE_TIME_OFFSET;
+use preint::DEFAULT_REINTEGRATE_TIME_OFFSET;
 use preint::time_offset::preintegrate_with_offset;
 use preint::{ImuBias, ImuNoise, ImuSample, PreintParams, Scheme};
 use preint_sim::{scene_by_name, t_s};

@@ -28,7 +28,7 @@ pub use fit::{BIAS_INSTABILITY_FACTOR, CAP_SIGMAS, NoiseFit, WHITE_NOISE_MIN_TAU
 pub use stillness::{Stillness, StillnessMonitor, StillnessOptions};
 pub use stream::{AllanStream, MAX_BASE_BLOCKS};
 
-use preint::noise::ImuNoise;
+use preint::ImuNoise;
 use preint::{ImuSample, dt_seconds};
 
 /// Errors of the Allan analysis.

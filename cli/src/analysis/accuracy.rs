@@ -89,7 +89,7 @@ pub fn measure(scene_name: &str, rates: &[f64], window_s: f64) -> Result<Vec<Row
             // The grid is uniform: its interval is the rate asked about, not a gap of a
             // recording (below 4 Hz it exceeds the default gap limit).
             let params = PreintParams {
-                max_gap_ns: step.max(preint::params::DEFAULT_MAX_GAP_NS),
+                max_gap_ns: step.max(preint::DEFAULT_MAX_GAP_NS),
                 ..PreintParams::from_noise(&ImuNoise::euroc())
                     .with_scheme(scheme)
                     .with_level(Level::Deltas)

@@ -294,7 +294,7 @@ pub fn decimation_in_range(dt_s: f64, d: usize, window_s: f64) -> bool {
 }
 
 /// The longest interval the evaluation at decimation `d` preintegrates over, when it exceeds
-/// preintegration's gap limit ([`preint::params::DEFAULT_MAX_GAP_NS`]): `(that interval [ns],
+/// preintegration's gap limit ([`preint::DEFAULT_MAX_GAP_NS`]): `(that interval [ns],
 /// the recording's longest interval [ns], the index of the sample that ends it)`. The
 /// embedded estimate of hermite4 (Richardson's, [`preint::truncation`]) integrates every
 /// other sample of the candidate's stream, so the stream that counts is every `2d`-th sample.
@@ -310,7 +310,7 @@ pub fn gap_beyond_limit(samples: &[ImuSample], d: usize) -> Option<(i64, i64, us
             .max()
     };
     let (wide, _) = longest(2 * d)?;
-    if wide <= preint::params::DEFAULT_MAX_GAP_NS {
+    if wide <= preint::DEFAULT_MAX_GAP_NS {
         return None;
     }
     let (gap, at) = longest(1)?;

@@ -9,7 +9,7 @@
 
 use crate::CliError;
 use nalgebra::{SMatrix, SVector};
-use preint::factor::sqrt_information;
+use preint::sqrt_information;
 
 /// The standard deviations of the ground truth's own errors (0: exact).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

@@ -7,8 +7,8 @@
 //! `cargo bench -p preint` measures the same loop.
 
 use crate::{CliError, scheme};
-pub use preint::sample::synthetic_stream;
 use preint::{ImuBias, ImuNoise, ImuSample, Level, PreintParams, Preintegrator, Scheme};
+pub use preint_sim::synthetic_stream;
 use std::time::Instant;
 
 /// One run: the ns/sample of `scheme` at `level` over `samples`.

@@ -131,7 +131,7 @@ pub fn gap_note(args: &Args, samples: &[ImuSample], candidates: &[Candidate]) ->
         samples[at].t_ns,
         2 * next,
         wide as f64 * 1e-9,
-        preint::params::DEFAULT_MAX_GAP_NS as f64 * 1e-9
+        preint::DEFAULT_MAX_GAP_NS as f64 * 1e-9
     ))
 }
 

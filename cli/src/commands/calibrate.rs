@@ -188,8 +188,8 @@ fn distinct_attitudes(samples: &[ImuSample], ivs: &[StillInterval]) -> usize {
 }
 
 /// Longest accepted interval between consecutive samples \[s\] (that of preintegration,
-/// [`preint::params::DEFAULT_MAX_GAP_NS`]).
-pub const MAX_GAP_S: f64 = preint::params::DEFAULT_MAX_GAP_NS as f64 * 1e-9;
+/// [`preint::DEFAULT_MAX_GAP_NS`]).
+pub const MAX_GAP_S: f64 = preint::DEFAULT_MAX_GAP_NS as f64 * 1e-9;
 
 /// Reads the samples in `[--from, --to]` (only those are held, at most
 /// [`stream::MAX_HELD_SAMPLES`]; reading stops after `--to`) and checks their units and that

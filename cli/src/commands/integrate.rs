@@ -10,8 +10,8 @@ use crate::{CliError, Output, input, noise, stream};
 use nalgebra::Vector3;
 use preint::deskew::{deltas_at, states_at};
 use preint::{
-    DeltasAt, ImuBias, ImuNoise, Level, NavState, PreintError, PreintParams, PreintegratedImu,
-    Preintegrator, predict, preintegrate,
+    ImuBias, ImuNoise, Level, NavState, PreintError, PreintParams, PreintegratedImu, Preintegrator,
+    deskew::DeltasAt, predict, preintegrate,
 };
 use preint_io::SourceInfo;
 use serde_json::{Value, json};
@@ -100,7 +100,7 @@ pub struct Integration {
     /// ([`preint::deskew`]).
     pub at: Vec<(DeltasAt, Option<NavState>)>,
     /// The estimated truncation error of the deltas (`--truncation`).
-    pub truncation: Option<preint::TruncationEstimate>,
+    pub truncation: Option<preint::truncation::TruncationEstimate>,
     /// The second-order covariance term, [δφ, δv, δp] (`--second-order`).
     pub second_order: Option<preint::nalgebra::SMatrix<f64, 9, 9>>,
     /// The calibration file applied (`--calibration`): its path, intrinsics and the time

@@ -12,9 +12,9 @@ use crate::error::Location;
 /// missing).
 pub const GAP_FACTOR: f64 = 1.5;
 
-/// A gap longer than this is refused by the integrator (`preint::params::DEFAULT_MAX_GAP_NS`,
+/// A gap longer than this is refused by the integrator (`preint::DEFAULT_MAX_GAP_NS`,
 /// 0.25 s) and is a defect; shorter gaps are warnings.
-pub const LONG_GAP_NS: i64 = preint::params::DEFAULT_MAX_GAP_NS;
+pub const LONG_GAP_NS: i64 = preint::DEFAULT_MAX_GAP_NS;
 
 /// Upper edges of the Δt histogram in multiples of the reference interval: bin `k` counts the
 /// intervals with Δt/reference in `(EDGES[k-1], EDGES[k]]` (`(0, 0.5]` for the first); the

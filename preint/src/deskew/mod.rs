@@ -43,14 +43,16 @@
 //! (a constant yaw rate at constant velocity) and otherwise errs by the motion it leaves out
 //! (`docs/EVIDENCE.md`).
 
+use crate::edges::EdgeNoise;
 use crate::error::PreintError;
-use crate::extrinsics::SensorPose;
-use crate::measurement::{BiasJacobians, Cov9, Cov15, EdgeNoise, PreintegratedImu};
+use crate::measurement::{BiasJacobians, Cov9, Cov15, PreintegratedImu};
 use crate::navstate::{NavState, predict};
-use crate::params::{PreintParams, Scheme};
-use crate::preintegrator::Preintegrator;
+use crate::params::PreintParams;
+use crate::params::SensorPose;
 use crate::preintegrator::Maps;
+use crate::preintegrator::Preintegrator;
 use crate::sample::{ImuBias, ImuSample, span_s};
+use crate::scheme::Scheme;
 use crate::scheme::with_scheme;
 use crate::window::{boundary, bracket, inner_samples};
 use nalgebra::Vector3;

@@ -1,9 +1,9 @@
 //! [`CombinedImuFactor`]: the 15-dim factor with the bias change over the window.
 
 use super::{CombinedImuFactorJacobians, FactorError, ResidualMode, Weighted};
+use crate::choices::Level;
 use crate::measurement::PreintegratedImu;
 use crate::navstate::NavState;
-use crate::params::Level;
 use crate::sample::ImuBias;
 use nalgebra::{Matrix3, SMatrix, SVector};
 

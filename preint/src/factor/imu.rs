@@ -1,9 +1,9 @@
 //! [`ImuFactor`]: the 9-dim factor between two navigation states and the bias at i.
 
 use super::{FactorError, ImuFactorJacobians, ResidualMode, Weighted};
+use crate::choices::Level;
 use crate::measurement::PreintegratedImu;
 use crate::navstate::{NavState, predict};
-use crate::params::Level;
 use crate::sample::ImuBias;
 use nalgebra::{SMatrix, SVector};
 

@@ -93,8 +93,8 @@ pub use combined::CombinedImuFactor;
 pub use imu::ImuFactor;
 pub use logmap::ResidualMode;
 
+use crate::choices::Level;
 use crate::measurement::PreintegratedImu;
-use crate::params::Level;
 use nalgebra::{DMatrix, SMatrix, SVector};
 use thiserror::Error;
 

@@ -44,7 +44,8 @@
 //! are those without rotation. Checked against central differences in `preint/tests/earth.rs`.
 
 use super::ImuFactorJacobians;
-use crate::earth::{CoriolisMode, Transport, centrifugal};
+use crate::choices::CoriolisMode;
+use crate::earth::{Transport, centrifugal};
 use crate::measurement::PreintegratedImu;
 use crate::navstate::NavState;
 use nalgebra::{Matrix3, SVector, Vector3};

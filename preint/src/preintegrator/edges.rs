@@ -3,7 +3,7 @@
 //! windows), and their resolution into stream samples when the measurement is read
 //! ([`crate::window`] and [`crate::merge()`] describe the model).
 
-use crate::measurement::{EdgeNoise, EdgeSource};
+use crate::edges::{EdgeNoise, EdgeSource};
 use crate::noise::{CellRule, white_scale};
 use crate::propagation::blocks::{Gain96, M3, PackedSym9};
 use crate::propagation::transition::Transition;

@@ -11,14 +11,16 @@
 use super::edges::{EdgeGains, EdgeLayout, WindowSpec, resolve};
 use super::intrinsic::{IntrAcc, IntrMode, NoIntr, WithIntr};
 use super::output::Chart;
-use super::retire::{Retirer, edge_count};
 use super::output::time_offset_jacobian;
+use super::retire::{Retirer, edge_count};
+use crate::choices::Level;
+use crate::edges::EdgeNoise;
 use crate::extrinsics::CentripetalArm;
 use crate::fast::{Attached, SliceInput};
 use crate::intrinsics::IntrinsicJacobian;
-use crate::measurement::{EdgeNoise, PreintegratedImu};
+use crate::measurement::PreintegratedImu;
 use crate::noise::walk_scale;
-use crate::params::{CovShape, Level};
+use crate::params::CovShape;
 use crate::propagation::blocks::{Cols9, Gain96, PackedSym9};
 use crate::propagation::linearisation::MAX_STENCIL;
 use crate::propagation::transition::Origin;
@@ -55,7 +57,7 @@ pub(crate) struct Fixed {
     pub bias_hat: ImuBias,
     pub gravity: Vector3<f64>,
     pub omega_coriolis: Option<Vector3<f64>>,
-    pub coriolis: crate::earth::CoriolisMode,
+    pub coriolis: crate::choices::CoriolisMode,
     pub bias_correction: crate::BiasCorrection,
     pub level: Level,
     pub gyro_cov: Matrix3<f64>,
@@ -213,9 +215,7 @@ impl<S: IntervalScheme> Core<S> {
             (true, NoiseKind::Isotropic(q)) if special() => self.advance_special(q, at_end),
             (true, NoiseKind::Anisotropic(q)) if special() => self.advance_special(q, at_end),
             (true, NoiseKind::Isotropic(q)) => self.advance_with::<_, true, NoIntr>(&q, at_end),
-            (true, NoiseKind::Anisotropic(q)) => {
-                self.advance_with::<_, true, NoIntr>(&q, at_end)
-            }
+            (true, NoiseKind::Anisotropic(q)) => self.advance_with::<_, true, NoIntr>(&q, at_end),
         }
     }
 
@@ -299,7 +299,15 @@ impl<S: IntervalScheme> Core<S> {
         let intr = I::sink(intr);
         (
             e,
-            Retirer::new(ring, ctx_after.as_ref(), edges, noise, window, coupled_j, intr),
+            Retirer::new(
+                ring,
+                ctx_after.as_ref(),
+                edges,
+                noise,
+                window,
+                coupled_j,
+                intr,
+            ),
         )
     }
 

@@ -23,17 +23,18 @@ mod retire;
 pub(crate) use edges::{Side, Src, WindowSpec};
 pub use output::time_offset_jacobian;
 
+use crate::choices::Level;
 use crate::error::PreintError;
 use crate::extrinsics::{EndRates, EndSource};
 use crate::measurement::PreintegratedImu;
-use crate::params::{CovShape, Level, PreintParams};
+use crate::params::{CovShape, PreintParams};
 use crate::propagation::{AnisotropicNoise, BiasWalk, IsotropicNoise};
 use crate::sample::{ImuBias, ImuSample};
 use crate::scheme::{IntervalScheme, with_scheme};
-use engine::{Core, Fixed, NoiseKind};
-pub(crate) use front::Maps;
-use front::Front;
 use crate::validation::{check_sample, common_case};
+use engine::{Core, Fixed, NoiseKind};
+use front::Front;
+pub(crate) use front::Maps;
 
 /// What the preintegrator needs of a scheme's interval loop ([`Core`]), behind one pointer so
 /// that the public type does not depend on the scheme.

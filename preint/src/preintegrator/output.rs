@@ -4,9 +4,9 @@
 
 use crate::measurement::{BiasJacobians, Cov9, Cov15};
 use crate::propagation::blocks::{M3, PackedSym9, V3};
-use nalgebra::SVector;
 use crate::propagation::transition::Transition;
 use crate::propagation::{BiasWalk, ErrorState};
+use nalgebra::SVector;
 
 /// Covariances and bias Jacobians in the chart.
 pub(crate) struct Chart {

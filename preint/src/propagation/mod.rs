@@ -61,12 +61,12 @@ pub(crate) mod blocks;
 pub(crate) mod linearisation;
 pub(crate) mod transition;
 
+use blocks::{
+    Cols6, Cols9, Gain96, M3, PackedSym9, V3, add_cols, mul_cols, rot_cols, scale_cols, sub_cols,
+};
 use linearisation::{
     BOTH, FIRST, GainBasis, GainCoef, GainForm, GyroColumns, Linearisation, MAX_STENCIL,
     NodeColumns, NodeTermsOf, OUTER, SECOND, add_acc, add_gyro,
-};
-use blocks::{
-    Cols6, Cols9, Gain96, M3, PackedSym9, V3, add_cols, mul_cols, rot_cols, scale_cols, sub_cols,
 };
 use transition::{PullBack, Transition, rotated_sym};
 
@@ -527,12 +527,7 @@ impl ErrorState {
     /// Stencils `{k, k+1}`, end of the window: retires the last sample `id`, whose pending
     /// gain is complete (`r`: its node's ΔR).
     #[inline]
-    pub(crate) fn retire_last<S: Shape>(
-        &mut self,
-        id: usize,
-        r: &M3,
-        mut retire: impl Retire,
-    ) {
+    pub(crate) fn retire_last<S: Shape>(&mut self, id: usize, r: &M3, mut retire: impl Retire) {
         if !S::END_NODE_NOISE {
             return;
         }

@@ -37,12 +37,40 @@
 //! Sample k's noise cell is the interval it is held over ([`CellRule::Held`]), as GTSAM's.
 
 use crate::propagation::linearisation::{GainBasis, GainCoef, GainForm, HeldGain, Linearisation, MAX_STENCIL};
-use super::{Deltas, IntervalScheme, Node, Stencil, s_plus_hat_hat2};
+use super::{Deltas, IntervalScheme, Node, SchemeInfo, Stencil, TruncationCompanion, s_plus_hat_hat2};
+use crate::choices::BiasCorrection;
 use crate::noise::CellRule;
 use crate::propagation::Shape;
 use crate::propagation::blocks::{Gain96, M3, V3};
 use crate::propagation::transition::Transition;
 use preint_lie::so3::{RodriguesCoeffs, i_plus_hat_hat2};
+
+/// Galilean's registry row ([`SchemeInfo`]).
+pub(crate) const INFO: SchemeInfo = SchemeInfo {
+    name: "galilean",
+    aliases: &[],
+    help: "First order on smooth input, exact when the input is constant over each interval (the sample at the start held, composed with the exact Gal(3) exponential; GTSAM 4.3's PreintegratedImuMeasurementsG).",
+    order: 1,
+    exact_on: "exact (ΔR, Δv, Δp) when ω and a are held over each interval: sample-and-hold streams, integrating IMUs (delta-angle/delta-velocity outputs)",
+    exact_when_held: true,
+    rank: 2,
+    bias_correction: BiasCorrection::Group,
+    truncation: TruncationCompanion::Hermite4Upsampled,
+    colour: "#cc79a7",
+};
+
+/// The documentation of [`Scheme::Galilean`](super::Scheme::Galilean).
+macro_rules! variant_docs {
+    () => {
+        "Delama et al., RA-L 2025 (= GTSAM 4.3 `PreintegratedImuMeasurementsG`): sample k held \
+         over interval k, composed with the exact Gal(3) exponential of `(ω_k, a_k)`; \
+         `ΔR_k+1 = ΔR_k Exp(θ)`, `Δv_k+1 = Δv_k + ΔR_k Jl(θ) a_k h`, \
+         `Δp_k+1 = Δp_k + Δv_k h + ΔR_k N(θ) a_k h²`, `θ = ω_k h`. Exact (ΔR, Δv, Δp) when \
+         the input is held constant over each interval (sample-and-hold streams, integrating \
+         IMUs); global error O(h) on smooth input, as Euler's."
+    };
+}
+pub(crate) use variant_docs;
 
 /// The Galilean scheme ([`crate::Scheme::Galilean`]).
 #[derive(Clone, Copy, Debug, Default)]

@@ -44,7 +44,10 @@
 //! `W_k+1 = ΔR_k+1[ω_k+1]×·(−h²/12, −h³/24)`.
 
 use crate::propagation::linearisation::{GainBasis, GainCoef, GainForm, Linearisation, MAX_STENCIL, NodeTerms};
-use super::{Deltas, IntervalScheme, Node, Stencil, s_plus_hat_hat2, };
+use super::{
+    Deltas, IntervalScheme, Node, SchemeInfo, Stencil, TruncationCompanion, s_plus_hat_hat2,
+};
+use crate::choices::BiasCorrection;
 use crate::noise::CellRule;
 use crate::propagation::Shape;
 use crate::sample::span_s;
@@ -52,6 +55,35 @@ use crate::propagation::blocks::{M3, V3, skew_mul};
 use crate::propagation::transition::Transition;
 use preint_lie::hat;
 use preint_lie::so3::{RodriguesCoeffs, i_plus_hat_hat2};
+
+/// Hermite4's registry row ([`SchemeInfo`]).
+pub(crate) const INFO: SchemeInfo = SchemeInfo {
+    name: "hermite4",
+    aliases: &["rk4", "high-order"],
+    help: "Fourth order, Hermite–Magnus (uses the neighbouring samples); also accepted as rk4 and high-order.",
+    order: 4,
+    exact_on: "ΔR exact for a cubic rate about a fixed axis (a constant ω included); Δv for a cubic a without rotation; not exact on held input",
+    exact_when_held: false,
+    rank: 3,
+    bias_correction: BiasCorrection::Additive,
+    truncation: TruncationCompanion::Richardson,
+    colour: "#009e73",
+};
+
+/// The documentation of [`Scheme::Hermite4`](super::Scheme::Hermite4).
+macro_rules! variant_docs {
+    () => {
+        "4th-order Hermite–Magnus scheme (the command line also accepts `rk4`, the name users \
+         look for, although it is not a Runge–Kutta method): each node's `ω̇`, `ȧ` from the \
+         quadratic through it and its two neighbours; \
+         `Ω = h/2(ω_k+ω_k+1) + h²/12(ω̇_k − ω̇_k+1 + ω_k×ω_k+1)` (4th-order Magnus); Δv by the \
+         corrected trapezoid on `u = ΔR a` with `u̇ = ΔR(ω×a + ȧ)`, Δp by the corrected trapezoid \
+         on `v`. One Exp per interval. Global error O(h⁴) on smooth input. ΔR exact for a cubic \
+         rate about a fixed axis, Δv for a cubic `a` without rotation; not exact on held input, \
+         whose steps its quadratics smooth over."
+    };
+}
+pub(crate) use variant_docs;
 
 /// The Hermite–Magnus scheme.
 #[derive(Clone, Copy, Debug, Default)]

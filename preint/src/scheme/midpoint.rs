@@ -15,12 +15,39 @@
 //! interval, with the same `ΔR_k+1`; the propagator adds it once, with the sum of both gains.
 
 use crate::propagation::linearisation::{GainBasis, GainCoef, GainForm, Linearisation, MAX_STENCIL};
-use super::{Deltas, IntervalScheme, Node, Stencil, s_plus_hat_hat2};
+use super::{Deltas, IntervalScheme, Node, SchemeInfo, Stencil, TruncationCompanion, s_plus_hat_hat2};
+use crate::choices::BiasCorrection;
 use crate::noise::CellRule;
 use crate::propagation::Shape;
 use crate::propagation::blocks::{M3, V3};
 use crate::propagation::transition::Transition;
 use preint_lie::so3::{RodriguesCoeffs, i_plus_hat_hat2};
+
+/// Midpoint's registry row ([`SchemeInfo`]).
+pub(crate) const INFO: SchemeInfo = SchemeInfo {
+    name: "midpoint",
+    aliases: &[],
+    help: "Second order (the mean of the samples at both ends of each interval).",
+    order: 2,
+    exact_on: "ΔR exact when ω is linear between samples about a fixed axis; Δv when nothing rotates and a is linear between samples, Δp when a is also constant; not exact on held input (it averages across a step)",
+    exact_when_held: false,
+    rank: 1,
+    bias_correction: BiasCorrection::Additive,
+    truncation: TruncationCompanion::Hermite4Upsampled,
+    colour: "#0072b2",
+};
+
+/// The documentation of [`Scheme::Midpoint`](super::Scheme::Midpoint).
+macro_rules! variant_docs {
+    () => {
+        "`ω̄ = ½(ω_k + ω_k+1)`, `ΔR_k+1 = ΔR_k Exp(ω̄ h)`, `ā = ½(ΔR_k a_k + ΔR_k+1 a_k+1)`, \
+         `Δv_k+1 = Δv_k + ā h`, `Δp_k+1 = Δp_k + Δv_k h + ½ ā h²`. Global error O(h²). ΔR \
+         exact for a rate linear between samples about a fixed axis; Δv without rotation for \
+         `a` linear between samples, Δp only for `a` constant; not exact on held input (its \
+         mean rate straddles each step)."
+    };
+}
+pub(crate) use variant_docs;
 
 /// The midpoint scheme ([`crate::Scheme::Midpoint`]).
 #[derive(Clone, Copy, Debug, Default)]

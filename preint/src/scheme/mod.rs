@@ -3,29 +3,23 @@
 //!
 //! Every scheme works on bias-corrected samples `ω = ω_m − b̂_g`, `a = a_m − b̂_a` (`Node`) and
 //! updates `ΔR_k+1 = ΔR_k Exp(Ω_k)`, `Δv`, `Δp` in frame i (gravity excluded, Forster et al.
-//! 2017, eq. 33). A scheme is one file implementing `IntervalScheme` (crate-internal):
+//! 2017, eq. 33). A scheme is one file, which holds
 //!
-//! - its stencil (which samples interval k reads) and its noise cell rule;
+//! - the shape of its linearisation (`propagation::Shape`: its stencil, whether the end node's
+//!   noise enters an interval, which parts of the gain basis it uses) and its noise cell rule;
 //! - `IntervalScheme::step`: the deltas over one interval;
 //! - `IntervalScheme::linearise`: the transition of the rotated error and the gain of each
 //!   stencil sample (`Linearisation`), from which the scheme-agnostic `propagation` module
 //!   builds the covariance, the bias Jacobians and the combined covariance;
-//! - optionally a faster implementation of its deltas alone (`Fast`, in the `fast` module).
+//! - its registry row (`INFO`, a [`SchemeInfo`]: everything the command line, `advise`, the
+//!   report, the charts and the Python package say about it) and the documentation of its
+//!   [`Scheme`] variant (`variant_docs!`, a macro because a `#[doc]` attribute takes a literal);
 //!
-//! and one line in the registry below, which makes it a [`Scheme`] of the public API.
-//!
-//! | scheme | stencil of interval k | order | file |
-//! |---|---|---|---|
-//! | [`Scheme::Euler`] | k (held over the interval) | 1 | [`euler`] |
-//! | [`Scheme::Midpoint`] | k, k+1 | 2 | [`midpoint`] |
-//! | [`Scheme::Hermite4`] | k−1 … k+2 | 4 | [`hermite4`] |
-//! | [`Scheme::Galilean`] | k (held, exact Gal(3) exponential) | 1 (exact for held input) | [`galilean`] |
+//! and one line in the registry below, which declares the file and makes it a [`Scheme`] of
+//! the public API. A faster implementation of its deltas alone attaches itself in the `fast`
+//! module; without one the scheme runs its plain step at every level.
 
-pub mod euler;
-pub mod galilean;
-pub mod hermite4;
-pub mod midpoint;
-
+use crate::choices::BiasCorrection;
 use crate::noise::CellRule;
 use crate::propagation::Shape;
 use crate::propagation::blocks::{M3, V3};
@@ -35,7 +29,9 @@ use nalgebra::Matrix3;
 
 /// One scheme: its stencil and the shape of its linearisation ([`Shape`], what the propagator
 /// consumes), its noise cells, deltas step and linearisation (module docs).
-pub(crate) trait IntervalScheme: Shape + Variant + Copy + Default + std::fmt::Debug + 'static {
+pub(crate) trait IntervalScheme:
+    Shape + Variant + Copy + Default + std::fmt::Debug + 'static
+{
     /// How a sample's noise cell follows from its neighbours ([`crate::noise`]).
     const CELL_RULE: CellRule;
     /// What the scheme carries from one interval to the next (e.g. `ΔR_k a_k`).
@@ -58,55 +54,87 @@ pub(crate) trait Variant {
     const SCHEME: Scheme;
 }
 
-/// The registry: one line per scheme (its `Scheme` variant, type, name and accepted aliases).
+/// What every face of the crate (the command line, `advise`, the report, the charts, the
+/// Python package) says about a scheme: one row per scheme, in its own file
+/// ([`Scheme::info`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SchemeInfo {
+    /// Its name on the command line, in printed output and in Python (`euler`).
+    pub name: &'static str,
+    /// Other names accepted for it (`rk4`, `high-order` for `hermite4`).
+    pub aliases: &'static [&'static str],
+    /// One line for `--help`.
+    pub help: &'static str,
+    /// Global order of its deltas' error on smooth input (error ∝ hᵒʳᵈᵉʳ, h the sample
+    /// period); checked by the evidence suite's measured slopes.
+    pub order: u32,
+    /// The input on which each of its deltas is exact.
+    pub exact_on: &'static str,
+    /// Whether its deltas are exact (to round-off) on held input: `(ω_k, a_k)` constant over
+    /// each interval (a sample-and-hold stream, an integrating IMU).
+    pub exact_when_held: bool,
+    /// Simplicity rank: among candidates of near-equal cost `preint advise` recommends the
+    /// lowest (model no more than the scene needs).
+    pub rank: u32,
+    /// The bias correction its measurements carry when
+    /// [`PreintParams::bias_correction`](crate::PreintParams::bias_correction) is `None`.
+    pub bias_correction: BiasCorrection,
+    /// How [`truncation::estimate`](crate::truncation::estimate) estimates its truncation
+    /// error.
+    pub truncation: TruncationCompanion,
+    /// Its colour in every chart and table, `#rrggbb`.
+    pub colour: &'static str,
+}
+
+/// The companion integration [`truncation::estimate`](crate::truncation::estimate) estimates a
+/// scheme's truncation error with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TruncationCompanion {
+    /// The 4th-order `hermite4` scheme on the window's samples upsampled four times:
+    /// `e ≈ D_h ⊖ D_fine`.
+    Hermite4Upsampled,
+    /// Richardson's estimate from the scheme itself on every other sample, with its order
+    /// `q`: `e ≈ −(D_h ⊖ D_2h) / (2^q − 1)`.
+    Richardson,
+}
+
+/// The registry: one line per scheme, `Variant => file::Type`, which declares the scheme's
+/// file, its [`Scheme`] variant (documented by the file's `variant_docs!`), its row
+/// (`file::INFO`) and its [`IntervalScheme`] type.
 macro_rules! registry {
-    ($d:tt $( $(#[$doc:meta])* $variant:ident => $ty:ty, $name:literal $(| $alias:literal)* ;)*) => {
+    ($d:tt $( $variant:ident => $m:ident :: $ty:ident, )*) => {
+        $( pub(crate) mod $m; )*
+
         /// Integration scheme. N samples in a window make N−1 intervals `[t_k, t_k+1]`,
         /// `h = t_k+1 − t_k`.
         ///
-        /// Which input each scheme integrates exactly, and its order otherwise. *Held* input:
-        /// `(ω_k, a_k)` constant over `[t_k, t_k+1]` (a sample-and-hold stream, an integrating
-        /// IMU's delta-angle and delta-velocity outputs divided by the interval). *Smooth*
-        /// input: point samples of a smooth signal (a MEMS IMU); the order is that of the
-        /// deltas' global error over a window, `O(hᵒʳᵈᵉʳ)`.
-        ///
-        /// | scheme | smooth input | exact when |
-        /// |---|---|---|
-        /// | `Euler` | order 1 | ΔR: ω held; Δv, Δp: held input with `a_k ∥ ω_k` (`Exp(θ)a = a` along the axis), e.g. no rotation while accelerating |
-        /// | `Midpoint` | order 2 | ΔR: ω linear between samples about a fixed axis (`Exp` of the trapezoid is then `Exp(∫ω)`); Δv: no rotation and `a` linear between samples; Δp: no rotation and `a` constant. Not on held input: it averages the samples on both sides of a step |
-        /// | `Hermite4` | order 4 | ΔR: a cubic rate about a fixed axis, a constant ω included; Δv: a cubic `a` without rotation. Not on held input |
-        /// | `Galilean` | order 1 | ΔR, Δv, Δp: held input (the Gal(3) exponential of each interval's constant `(ω_k, a_k)`) |
-        ///
-        /// Held-input exactness is not smooth-input accuracy: on smooth motion `Galilean` is as
-        /// far from the truth as `Euler` and `Hermite4` is orders of magnitude closer. The claims
-        /// are checked against closed forms (the product of the 5×5 exponentials of the held
-        /// inputs) and measured slopes in `cli/tests/advise_exact.rs`; `preint advise --input
-        /// smooth|held` chooses its reference by them.
+        /// Each scheme is exact on some input and of some order otherwise ([`SchemeInfo`]).
+        /// *Held* input: `(ω_k, a_k)` constant over `[t_k, t_k+1]` (a sample-and-hold stream,
+        /// an integrating IMU's delta-angle and delta-velocity outputs divided by the
+        /// interval). *Smooth* input: point samples of a smooth signal (a MEMS IMU); the order
+        /// is that of the deltas' global error over a window, `O(hᵒʳᵈᵉʳ)`. Held-input
+        /// exactness is not smooth-input accuracy: on smooth motion `Galilean` is as far from
+        /// the truth as `Euler` and `Hermite4` is orders of magnitude closer. The claims are
+        /// checked against closed forms (the product of the 5×5 exponentials of the held
+        /// inputs) and measured slopes in `cli/tests/advise_exact.rs` and
+        /// `preint/tests/scheme_contract.rs`; `preint advise --input smooth|held` chooses its
+        /// reference by them.
         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
         pub enum Scheme {
-            $( $(#[$doc])* $variant, )*
+            $( #[doc = $m::variant_docs!()] $variant, )*
         }
 
         impl Scheme {
-            /// Every scheme, in the order of the registry.
+            /// Every scheme, in the order of the registry (the order of every table and chart).
             pub const ALL: &'static [Scheme] = &[$(Scheme::$variant),*];
 
-            /// The scheme's name (`euler`, `midpoint`, `hermite4`, `galilean`).
-            pub fn name(self) -> &'static str {
-                match self { $(Scheme::$variant => $name,)* }
-            }
-
-            /// The scheme called `name` or one of its aliases (`rk4` and `high-order` for
-            /// `hermite4`).
-            pub fn from_name(name: &str) -> Option<Self> {
-                match name {
-                    $($name $(| $alias)* => Some(Scheme::$variant),)*
-                    _ => None,
-                }
+            /// The scheme's registry row.
+            pub fn info(self) -> &'static SchemeInfo {
+                match self { $(Scheme::$variant => &$m::INFO,)* }
             }
         }
 
-        $( impl Variant for $ty {
+        $( impl Variant for $m::$ty {
             const SCHEME: Scheme = Scheme::$variant;
         } )*
 
@@ -117,7 +145,7 @@ macro_rules! registry {
                 match $d value {
                     $( crate::scheme::Scheme::$variant => {
                         #[allow(dead_code)]
-                        type $d s = $ty;
+                        type $d s = crate::scheme::$m::$ty;
                         $d body
                     } )*
                 }
@@ -128,35 +156,26 @@ macro_rules! registry {
 }
 
 registry! { $
-    /// Forster et al. 2017 (= GTSAM `PreintegratedImuMeasurementsManifold`): sample k held
-    /// over interval k; `ΔR_k+1 = ΔR_k Exp(ω_k h)`, `Δv_k+1 = Δv_k + ΔR_k a_k h`,
-    /// `Δp_k+1 = Δp_k + Δv_k h + ½ ΔR_k a_k h²`. Global error O(h). ΔR exact when ω is
-    /// held over each interval, Δv and Δp only when also `a_k ∥ ω_k` (`Exp(θ)a = a` along the
-    /// axis; a held body accelerating across its rotation axis is missed at O(h): 0.0723 m/s
-    /// at 20 Hz on GTSAM's stress input). See [`euler`].
-    Euler => crate::scheme::euler::Euler, "euler";
-    /// `ω̄ = ½(ω_k + ω_k+1)`, `ΔR_k+1 = ΔR_k Exp(ω̄ h)`, `ā = ½(ΔR_k a_k + ΔR_k+1 a_k+1)`,
-    /// `Δv_k+1 = Δv_k + ā h`, `Δp_k+1 = Δp_k + Δv_k h + ½ ā h²`. Global error O(h²). ΔR
-    /// exact for a rate linear between samples about a fixed axis; Δv without rotation for
-    /// `a` linear between samples, Δp only for `a` constant; not exact on held input (its
-    /// mean rate straddles each step). See [`midpoint`].
-    Midpoint => crate::scheme::midpoint::Midpoint, "midpoint";
-    /// 4th-order Hermite–Magnus scheme (the command line also accepts `rk4`, the name users
-    /// look for, although it is not a Runge–Kutta method): each node's `ω̇`, `ȧ` from the
-    /// quadratic through it and its two neighbours;
-    /// `Ω = h/2(ω_k+ω_k+1) + h²/12(ω̇_k − ω̇_k+1 + ω_k×ω_k+1)` (4th-order Magnus); Δv by the
-    /// corrected trapezoid on `u = ΔR a` with `u̇ = ΔR(ω×a + ȧ)`, Δp by the corrected trapezoid
-    /// on `v`. One Exp per interval. Global error O(h⁴) on smooth input. ΔR exact for a cubic
-    /// rate about a fixed axis, Δv for a cubic `a` without rotation; not exact on held input,
-    /// whose steps its quadratics smooth over. See [`hermite4`].
-    Hermite4 => crate::scheme::hermite4::Hermite4, "hermite4" | "rk4" | "high-order";
-    /// Delama et al., RA-L 2025 (= GTSAM 4.3 `PreintegratedImuMeasurementsG`): sample k held
-    /// over interval k, composed with the exact Gal(3) exponential of `(ω_k, a_k)`;
-    /// `ΔR_k+1 = ΔR_k Exp(θ)`, `Δv_k+1 = Δv_k + ΔR_k Jl(θ) a_k h`,
-    /// `Δp_k+1 = Δp_k + Δv_k h + ΔR_k N(θ) a_k h²`, `θ = ω_k h`. Exact (ΔR, Δv, Δp) when
-    /// the input is held constant over each interval (sample-and-hold streams, integrating
-    /// IMUs); global error O(h) on smooth input, as Euler's. See [`galilean`].
-    Galilean => crate::scheme::galilean::Galilean, "galilean";
+    Euler => euler::Euler,
+    Midpoint => midpoint::Midpoint,
+    Hermite4 => hermite4::Hermite4,
+    Galilean => galilean::Galilean,
+}
+
+impl Scheme {
+    /// The scheme's name (`euler`, `midpoint`, `hermite4`, `galilean`): [`SchemeInfo::name`].
+    pub fn name(self) -> &'static str {
+        self.info().name
+    }
+
+    /// The scheme called `name` or one of its [`SchemeInfo::aliases`] (`rk4` and
+    /// `high-order` for `hermite4`).
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.iter().copied().find(|s| {
+            let info = s.info();
+            info.name == name || info.aliases.contains(&name)
+        })
+    }
 }
 
 impl Scheme {

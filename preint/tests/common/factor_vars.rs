@@ -2,9 +2,10 @@
 //! the variables' retraction, and the Jacobians by central differences and as one matrix.
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
-use preint::factor::FactorJacobians;
+use preint::FactorJacobians;
 use preint::{
-    BiasJacobians, CoriolisMode, EdgeNoise, ImuBias, Level, NavState, PreintegratedImu, SO3,
+    BiasJacobians, CoriolisMode, ImuBias, Level, NavState, PreintegratedImu, edges::EdgeNoise,
+    lie::SO3,
 };
 
 /// xorshift64* — deterministic, no dev-dependency.

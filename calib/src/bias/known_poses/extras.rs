@@ -285,7 +285,7 @@ pub(crate) fn window(
     let (ti, tj) = (t_i_ns.saturating_add(td), t_j_ns.saturating_add(td));
     let intrinsic = params.iter().any(|p| matches!(p, Param::Intrinsic(_)));
     let (pim, jac) = if intrinsic {
-        let (m, j) = preint::window::preintegrate_with_intrinsic_jacobian(
+        let (m, j) = preint::preintegrate_with_intrinsic_jacobian(
             &c.params(base, true),
             bias,
             samples,

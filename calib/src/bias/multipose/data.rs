@@ -21,7 +21,7 @@ use super::link_rotation::rotation_preintegration;
 use super::random_walk;
 use super::residuals::Whitening;
 use nalgebra::{Matrix3, Vector3};
-use preint::factor::sqrt_information;
+use preint::sqrt_information;
 use preint::{ImuBias, ImuNoise, ImuSample, PreintParams, Scheme, preintegrate};
 use preint_lie::SO3;
 

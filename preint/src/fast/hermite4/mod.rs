@@ -24,10 +24,10 @@ use super::lanes::F2;
 #[cfg(target_arch = "x86_64")]
 use super::lanes::quad::F4;
 use super::{FastDeltas, QuatDeltas, SliceInput, slice_loop};
-use crate::validation::common_case;
 use crate::propagation::blocks::V3;
 use crate::scheme::hermite4::{Hermite4, Rule, Weights};
 use crate::scheme::{Node, RENORM_EVERY, Stencil};
+use crate::validation::common_case;
 use carry::{Carry, LaneWeights, SteadyWeights};
 use interval::{Record, State, add, cross, l3, prepare, s_of, v3};
 
