@@ -10,8 +10,7 @@ use std::path::PathBuf;
 /// Scheme, noise file and gravity of a preintegration.
 #[derive(clap::Args, Clone, Debug)]
 pub struct PreintArgs {
-    /// Integration scheme: euler, midpoint, hermite4 or galilean (printed as hermite4; rk4
-    /// and high-order are accepted for it).
+    /// Integration scheme (an alias is printed as its scheme's name).
     #[arg(long, value_parser = SchemeParser, default_value = "midpoint")]
     pub scheme: Scheme,
     /// Kalibr imu.yaml with the noise densities (default: EuRoC figures).

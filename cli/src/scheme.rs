@@ -1,58 +1,49 @@
-//! The `--scheme` values and the labels printed for [`preint::Scheme`].
+//! The `--scheme` values and the labels printed for [`preint::Scheme`], all read from the
+//! scheme registry ([`preint::SchemeInfo`]): a scheme added there appears here, in `--help`,
+//! in every table, chart and report.
 
-use clap::builder::{EnumValueParser, PossibleValue, TypedValueParser};
+use clap::builder::{PossibleValue, TypedValueParser};
 use clap::error::ErrorKind;
 
-/// The integration scheme as given on the command line.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Scheme {
-    /// First order (the sample at the start of each interval held over it).
-    Euler,
-    /// Second order (the mean of the samples at both ends of each interval).
-    Midpoint,
-    /// Fourth order, Hermite–Magnus (uses the neighbouring samples); also accepted as rk4 and
-    /// high-order.
-    #[value(name = "hermite4", alias = "rk4", alias = "high-order")]
-    Hermite4,
-    /// First order on smooth input, exact when the input is constant over each interval (the
-    /// sample at the start held, composed with the exact Gal(3) exponential; GTSAM 4.3's
-    /// PreintegratedImuMeasurementsG).
-    Galilean,
+/// The integration scheme as given on the command line: [`preint::Scheme`] itself.
+pub use preint::Scheme;
+
+/// Every scheme, in the order of every table and chart (the registry's).
+pub const ALL: [Scheme; Scheme::ALL.len()] = {
+    let mut out = [Scheme::ALL[0]; Scheme::ALL.len()];
+    let mut i = 0;
+    while i < out.len() {
+        out[i] = Scheme::ALL[i];
+        i += 1;
+    }
+    out
+};
+
+/// The scheme's name as printed in JSON and text ([`preint::SchemeInfo::name`]).
+pub fn label(s: Scheme) -> &'static str {
+    s.info().name
 }
 
-impl From<Scheme> for preint::Scheme {
-    fn from(s: Scheme) -> Self {
-        match s {
-            Scheme::Euler => preint::Scheme::Euler,
-            Scheme::Midpoint => preint::Scheme::Midpoint,
-            Scheme::Hermite4 => preint::Scheme::Hermite4,
-            Scheme::Galilean => preint::Scheme::Galilean,
-        }
+/// The accepted names, for an error message: `euler, midpoint, hermite4 or galilean (also
+/// accepted: rk4, high-order)`.
+fn accepted() -> String {
+    let names: Vec<&str> = ALL.iter().map(|s| s.info().name).collect();
+    let list = match names.split_last() {
+        Some((last, [])) => last.to_string(),
+        Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+        None => String::new(),
+    };
+    let aliases: Vec<&str> = ALL.iter().flat_map(|s| s.info().aliases).copied().collect();
+    if aliases.is_empty() {
+        list
+    } else {
+        format!("{list} (also accepted: {})", aliases.join(", "))
     }
 }
 
-/// Every scheme, in the order of every table and chart: the three Forster-chart schemes by
-/// order, then the Lie-group one.
-pub const ALL: [preint::Scheme; 4] = [
-    preint::Scheme::Euler,
-    preint::Scheme::Midpoint,
-    preint::Scheme::Hermite4,
-    preint::Scheme::Galilean,
-];
-
-/// The scheme's name as printed in JSON and text: `euler`, `midpoint`, `hermite4` or
-/// `galilean`.
-pub fn label(s: preint::Scheme) -> &'static str {
-    match s {
-        preint::Scheme::Euler => "euler",
-        preint::Scheme::Midpoint => "midpoint",
-        preint::Scheme::Hermite4 => "hermite4",
-        preint::Scheme::Galilean => "galilean",
-    }
-}
-
-/// Parses `--scheme` as [`Scheme`] (so `--help` lists the values), and names an unknown value
-/// as an unknown scheme with the accepted names.
+/// Parses `--scheme` by the registry's names and aliases (so `--help` lists the values with
+/// their one-line help), and names an unknown value as an unknown scheme with the accepted
+/// names.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct SchemeParser;
 
@@ -62,37 +53,39 @@ impl TypedValueParser for SchemeParser {
     fn parse_ref(
         &self,
         cmd: &clap::Command,
-        arg: Option<&clap::Arg>,
+        _arg: Option<&clap::Arg>,
         value: &std::ffi::OsStr,
     ) -> Result<Scheme, clap::Error> {
-        EnumValueParser::<Scheme>::new()
-            .parse_ref(cmd, arg, value)
-            .map_err(|_| {
-                clap::Error::raw(
-                    ErrorKind::InvalidValue,
-                    format!(
-                        "unknown scheme `{}`: expected euler, midpoint, hermite4 or galilean \
-                         (also accepted: rk4, high-order)\n",
-                        value.to_string_lossy()
-                    ),
-                )
-                .with_cmd(cmd)
-            })
+        value.to_str().and_then(Scheme::from_name).ok_or_else(|| {
+            clap::Error::raw(
+                ErrorKind::InvalidValue,
+                format!(
+                    "unknown scheme `{}`: expected {}\n",
+                    value.to_string_lossy(),
+                    accepted()
+                ),
+            )
+            .with_cmd(cmd)
+        })
     }
 
     fn possible_values(&self) -> Option<Box<dyn Iterator<Item = PossibleValue> + '_>> {
-        Some(Box::new(
-            <Scheme as clap::ValueEnum>::value_variants()
-                .iter()
-                .filter_map(clap::ValueEnum::to_possible_value),
-        ))
+        Some(Box::new(ALL.iter().map(|s| {
+            let info = s.info();
+            PossibleValue::new(info.name)
+                .help(info.help)
+                .aliases(info.aliases.iter().copied())
+        })))
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use clap::ValueEnum;
+
+    fn parse(s: &str) -> Result<Scheme, clap::Error> {
+        SchemeParser.parse_ref(&clap::Command::new("t"), None, std::ffi::OsStr::new(s))
+    }
 
     #[test]
     fn names_aliases_and_labels() {
@@ -104,13 +97,21 @@ mod tests {
             ("high-order", Scheme::Hermite4),
             ("galilean", Scheme::Galilean),
         ] {
-            assert_eq!(Scheme::from_str(input, false).unwrap(), want, "{input}");
+            assert_eq!(parse(input).unwrap(), want, "{input}");
         }
-        assert!(Scheme::from_str("rk5", false).is_err());
-        for s in Scheme::value_variants() {
-            let name = s.to_possible_value().unwrap().get_name().to_string();
-            assert_eq!(label((*s).into()), name);
-        }
+        let err = parse("rk5").unwrap_err().to_string();
+        assert!(
+            err.contains(
+                "expected euler, midpoint, hermite4 or galilean (also accepted: rk4, high-order)"
+            ),
+            "{err}"
+        );
+        let values: Vec<String> = SchemeParser
+            .possible_values()
+            .unwrap()
+            .map(|v| v.get_name().to_string())
+            .collect();
+        assert_eq!(values, ["euler", "midpoint", "hermite4", "galilean"]);
         assert_eq!(
             ALL.map(label),
             ["euler", "midpoint", "hermite4", "galilean"]

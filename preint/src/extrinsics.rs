@@ -1,64 +1,6 @@
-//! An IMU that is not at the body origin: the sensor pose in the body frame and the exact map
-//! from the sensor's preintegrated deltas to the body's.
-//!
-//! # Model
-//!
-//! The IMU (frame s) is rigidly mounted at `body_P_sensor = (R, r)`: `R = R_bs` rotates sensor
-//! vectors into the body frame and `r` \[m\] is the sensor origin in body coordinates. Biases and
-//! noise are the sensor's, in the sensor frame (as in GTSAM's `body_P_sensor`). The sensor reads
-//! the body rate `ω_s = Rᵀ ω_b` and the specific force of the point it sits on,
-//!
-//! ```text
-//! f_s = Rᵀ (f_b + ω̇_b × r + ω_b × (ω_b × r)),
-//! ```
-//!
-//! where `f_b` is the specific force at the body origin: the lever arm adds the tangential
-//! (`ω̇ × r`) and centripetal (`ω × (ω × r)`) accelerations of the sensor's point.
-//!
-//! # The body deltas from the sensor's, exactly
-//!
-//! Preintegrating the sensor's samples gives the deltas of the sensor's point in frame s at
-//! keyframe i (`ΔR_s`, `Δv_s`, `Δp_s`, Forster et al. 2017, eq. 33). Writing the sensor's
-//! position and velocity through the body's (`p_s = p_b + R_wb r`, `v_s = v_b + R_wb (ω_b × r)`)
-//! gives the body's deltas without approximation:
-//!
-//! ```text
-//! ΔR = R ΔR_s Rᵀ
-//! Δv = R Δv_s + ω_i × r − ΔR (ω_j × r)
-//! Δp = R Δp_s + Δt (ω_i × r) + r − ΔR r
-//! ```
-//!
-//! with `ω_i = R ω_s,i`, `ω_j = R ω_s,j` the bias-corrected body rates at the window's first
-//! and last sample. This is the lever-arm correction of the specific force,
-//! `f_b = R f_s − ω̇ × r − ω × (ω × r)`, integrated in closed form: by parts,
-//! `∫ ΔR (ω̇ × r) dt = ΔR_j (ω_j × r) − ω_i × r − ∫ ΔR (ω × (ω × r)) dt`, so both terms together
-//! integrate to the end-point values above. No estimate of `ω̇` is needed and no term is
-//! dropped: the body deltas carry exactly the integration error the scheme makes on the
-//! sensor's own samples, whatever the scheme. (A per-sample correction needs `ω̇` from
-//! differences of neighbouring samples and carries that estimate's error; subtracting only the
-//! centripetal term, as GTSAM's `correctMeasurementsBySensorPose` does, leaves out
-//! `∫ ΔR (ω̇ × r) dt` entirely.)
-//!
-//! # Linearisation (chart of [`crate::measurement`], order [δφ, δv, δp])
-//!
-//! With `ΔR_s = ΔR°_s Exp(δφ_s)`, the body error is `e = A e_s + B_i δω_i + B_j δω_j` for the
-//! sensor error `e_s` and perturbations `δω = R δω_s` of the end rates:
-//!
-//! ```text
-//! A = [[R, 0, 0], [ΔR [ω_j × r]× R, R, 0], [ΔR [r]× R, 0, R]]
-//! B_i = [0; −[r]×; −Δt [r]×],   B_j = [0; ΔR [r]×; 0]
-//! ```
-//!
-//! The end rates are the bias-corrected readings of the first and last sample (for a window
-//! whose boundary sample is interpolated, the same combination of stream samples), so their
-//! noise is that of those samples, which also entered `e_s`: the covariance uses the gains the
-//! measurement keeps for its edge samples ([`crate::EdgeNoise`]) and is the exact first-order
-//! covariance of the body deltas, gyroscope noise moved into the velocity and position rows
-//! included. Bias Jacobians: `J = A J_s − (B_i + B_j) R` on the gyro columns (every sample sees
-//! `−δb_g`), `A J_s` on the accelerometer columns. Combined covariance: the gyro bias at the
-//! window's end, `b_g,i + δb_g`, is what `ω_j` should have been corrected with, so
-//! `e = A e_s + B_j R δb_g + …` and `[e; δb]` maps by `[[A, B_j R S_g], [0, I]]`
-//! (`S_g` selects `δb_g`).
+//! An IMU that is not at the body origin: the exact map from the sensor's preintegrated deltas
+//! to the body's, and GTSAM's per-sample lever-arm model (the model and its linearisation:
+//! [`SensorPose`](crate::SensorPose)).
 
 use crate::choices::{Level, LeverArm};
 use crate::edges::{EdgeNoise, EdgeSource};

@@ -138,7 +138,7 @@ impl Default for ImuIntrinsics {
 
 /// Jacobians of a window's deltas with respect to the intrinsics' parameters
 /// ([`ImuIntrinsics::PARAMS`] columns, module docs), rows `[δφ, δv, δp]` in the chart of
-/// [`crate::measurement`], at the frame-I bias estimate of the measurement.
+/// [`PreintegratedImu`](crate::PreintegratedImu), at the frame-I bias estimate of the measurement.
 pub type IntrinsicJacobian = SMatrix<f64, 9, { ImuIntrinsics::PARAMS }>;
 
 impl ImuIntrinsics {

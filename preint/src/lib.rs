@@ -22,7 +22,7 @@
 //!   threshold, and `evaluate_with_time_offset` on both factors.
 //! - Earth rotation: [`earth`] (`PreintParams::omega_coriolis`, [`CoriolisMode`]): a world frame
 //!   rotating at a constant rate in prediction and both factors.
-//! - Schemes: [`scheme`] (the mathematics of each). Reading and writing files is the
+//! - Schemes: [`Scheme`] (the mathematics of each, and its registry row [`SchemeInfo`]). Reading and writing files is the
 //!   `preint-io` crate's job; this crate does no I/O.
 //!
 //! Conventions: world frame z up, gravity `g = (0, 0, −9.81)` m/s² by default; the

@@ -1,14 +1,5 @@
-//! The preintegrated measurement: what a preintegrator produces and what a factor reads.
-//!
-//! Chart (Forster et al. 2017, eqs. 38–44): with `ΔR, Δv, Δp` the values integrated from noisy
-//! samples and `ΔR°, Δv°, Δp°` those of noise-free samples (same bias estimate),
-//! `ΔR = ΔR°·Exp(δφ)`, `Δv = Δv° + δv`, `Δp = Δp° + δp`, all expressed in body frame *i*.
-//! The covariance is that of **[δφ, δv, δp]** (rad, m/s, m), in this order.
-//!
-//! Bias Jacobians are w.r.t. the bias estimate `bias_hat` used during integration, bias order
-//! **[b_g, b_a]**: for a new bias `b = bias_hat + δb`,
-//! `ΔR(b) ≈ ΔR·Exp(∂ΔR/∂b_g·δb_g)`, `Δv(b) ≈ Δv + ∂Δv/∂b_g·δb_g + ∂Δv/∂b_a·δb_a`, and
-//! `Δp(b)` likewise (Forster eq. 44).
+//! The preintegrated measurement ([`PreintegratedImu`], whose documentation gives its chart
+//! and bias Jacobians) and its blocks.
 
 use crate::choices::BiasCorrection;
 use crate::choices::CoriolisMode;
@@ -112,6 +103,18 @@ impl Default for BiasJacobians {
 /// `delta_v` and `delta_p` are in body frame i and exclude gravity (Forster eq. 33):
 /// `R_j = R_i ΔR`, `v_j = v_i + gΔt + R_i Δv`, `p_j = p_i + v_iΔt + ½gΔt² + R_i Δp` in a
 /// non-rotating world frame; with `omega_coriolis` set, [`crate::earth`] gives the prediction.
+///
+/// # Chart
+///
+/// Forster et al. 2017, eqs. 38–44: with `ΔR, Δv, Δp` the values integrated from noisy
+/// samples and `ΔR°, Δv°, Δp°` those of noise-free samples (same bias estimate),
+/// `ΔR = ΔR°·Exp(δφ)`, `Δv = Δv° + δv`, `Δp = Δp° + δp`, all expressed in body frame *i*.
+/// The covariance is that of **[δφ, δv, δp]** (rad, m/s, m), in this order.
+///
+/// Bias Jacobians are w.r.t. the bias estimate `bias_hat` used during integration, bias order
+/// **[b_g, b_a]**: for a new bias `b = bias_hat + δb`,
+/// `ΔR(b) ≈ ΔR·Exp(∂ΔR/∂b_g·δb_g)`, `Δv(b) ≈ Δv + ∂Δv/∂b_g·δb_g + ∂Δv/∂b_a·δb_a`, and
+/// `Δp(b)` likewise (Forster eq. 44).
 #[derive(Clone, Debug, PartialEq)]
 pub struct PreintegratedImu {
     /// Keyframe i time \[ns\].

@@ -1,75 +1,4 @@
-//! Merging two consecutive preintegrations `a = [t_i, t_k]` and `b = [t_k, t_j]` into one
-//! over `[t_i, t_j]`.
-//!
-//! # Deltas (exact composition; `Δv`, `Δp` exclude gravity, see [`PreintegratedImu`])
-//!
-//! ```text
-//! ΔR = ΔR_a ΔR_b,   Δv = Δv_a + ΔR_a Δv_b,   Δp = Δp_a + Δv_a Δt_b + ΔR_a Δp_b,   Δt = Δt_a + Δt_b
-//! ```
-//!
-//! # Covariance (first order, chart of [`crate::measurement`], order [δφ, δv, δp])
-//!
-//! Linearising the composition in the errors of `a` and `b` (both expressed in their own start
-//! frame):
-//!
-//! ```text
-//! A = [[ΔR_bᵀ, 0, 0], [−ΔR_a [Δv_b]×, I, 0], [−ΔR_a [Δp_b]×, Δt_b I, I]]   (w.r.t. a's error)
-//! B = diag(I, ΔR_a, ΔR_a)                                                  (w.r.t. b's error)
-//! Σ = A Σ_a Aᵀ + B Σ_b Bᵀ
-//! ```
-//!
-//! plus, when the windows share stream samples, their covariance (below). Bias Jacobians
-//! (9×6, columns [b_g, b_a]) compose the same way: `J = A J_a + B J_b`, and so does the
-//! time-offset column [`PreintegratedImu::jac_td`]: `J_td = A J_td,a + B J_td,b`, because a
-//! common offset shifts the inner keyframe for both windows; its terms cancel and the result is
-//! the whole window's ([`crate::time_offset`], "Merge"). Windows integrated with different
-//! offsets do not share that shift, and their merged column means nothing.
-//!
-//! # Shared samples
-//!
-//! Consecutive windows of one stream share the samples around their common keyframe `t_k`:
-//! the sample at `t_k`, or the samples an interpolated boundary sample is made of, and for hermite4
-//! the stencil neighbours ([`crate::window`]). Each window records those samples with their
-//! gains `G` on its error ([`crate::edges::EdgeNoise`]); for a sample `s` in both,
-//! the white part of the merged covariance gains
-//!
-//! ```text
-//! A G_a Q G_bᵀ Bᵀ + B G_b Q G_aᵀ Aᵀ   (Q = the sample's noise covariance)
-//! ```
-//!
-//! and, if the two windows gave the sample different cells (samples pushed into two
-//! preintegrators directly: each saw only one of the sample's neighbours), the terms
-//! `A G_a (Q − Q_a) G_aᵀ Aᵀ + B G_b (Q − Q_b) G_bᵀ Bᵀ` replace each window's one-sided cell
-//! `Q_a`, `Q_b` by the cell from both neighbours, `Q`. Samples are identified by timestamp, so
-//! both windows must come from the same stream (and the same noise densities and cell rule;
-//! otherwise no sample is taken as shared).
-//!
-//! Combined 15×15 covariance [δφ, δv, δp, δb_g, δb_a] with `δb = b_t − b_i` (bias random walk):
-//! at `t_k` the bias has drifted by `δb_a` (a's last six components), which window b sees as
-//! an uncorrected bias error, moving its deltas by `−J_b δb_a` (first order, same sign as in
-//! the propagation). Hence
-//!
-//! ```text
-//! F_a = [[A, −B J_b], [0, I₆]],   G_b = [[B, 0], [0, I₆]],   Σ15 = F_a Σ15_a F_aᵀ + G_b Σ15_b G_bᵀ
-//! ```
-//!
-//! plus the shared-sample terms in its 9×9 block. For [`Level::Covariance`] measurements
-//! (`cov15` without the random walk's effect on the deltas) the result is
-//! `diag(Σ, Σ_bb,a + Σ_bb,b)`: no cross blocks are invented.
-//!
-//! # Exactness
-//!
-//! The merged covariance is the exact first-order covariance of the composed deltas under the
-//! noise model of [`crate::noise`] (tested against numeric differentiation with respect to
-//! every stream sample in `preint/tests/linearisation.rs`). For windows split at a stream
-//! sample, merging equals integrating the whole window at once to round-off — deltas,
-//! covariances and Jacobians — for every scheme when the windows come from
-//! [`crate::window::preintegrate`], and for Euler and midpoint also when the samples were
-//! pushed into preintegrators directly (direct hermite4 windows use one-sided edge stencils, so
-//! their composition differs from the whole window by the O(h⁴) integration error; the merge
-//! is still the exact covariance of that composition). For a split between samples the
-//! composition equals the whole stream with the boundary sample inserted
-//! ([`crate::window`]).
+//! Merging two consecutive preintegrated windows (the model: [`merge()`]).
 
 use crate::choices::Level;
 use crate::edges::{EdgeNoise, EdgeSource};
@@ -153,6 +82,78 @@ type M96 = SMatrix<f64, 9, 6>;
 /// a rate) `coriolis` differ, [`MergeError::BiasCorrectionMismatch`] if `bias_correction`
 /// differs, [`MergeError::LevelMismatch`] if `level` differs. The merged measurement keeps the
 /// two windows' `bias_correction`.
+///
+/// The merge of `a = [t_i, t_k]` and `b = [t_k, t_j]` is one window over `[t_i, t_j]`.
+///
+/// # Deltas (exact composition; `Δv`, `Δp` exclude gravity, see [`PreintegratedImu`])
+///
+/// ```text
+/// ΔR = ΔR_a ΔR_b,   Δv = Δv_a + ΔR_a Δv_b,   Δp = Δp_a + Δv_a Δt_b + ΔR_a Δp_b,   Δt = Δt_a + Δt_b
+/// ```
+///
+/// # Covariance (first order, chart of [`PreintegratedImu`](crate::PreintegratedImu), order [δφ, δv, δp])
+///
+/// Linearising the composition in the errors of `a` and `b` (both expressed in their own start
+/// frame):
+///
+/// ```text
+/// A = [[ΔR_bᵀ, 0, 0], [−ΔR_a [Δv_b]×, I, 0], [−ΔR_a [Δp_b]×, Δt_b I, I]]   (w.r.t. a's error)
+/// B = diag(I, ΔR_a, ΔR_a)                                                  (w.r.t. b's error)
+/// Σ = A Σ_a Aᵀ + B Σ_b Bᵀ
+/// ```
+///
+/// plus, when the windows share stream samples, their covariance (below). Bias Jacobians
+/// (9×6, columns [b_g, b_a]) compose the same way: `J = A J_a + B J_b`, and so does the
+/// time-offset column [`PreintegratedImu::jac_td`]: `J_td = A J_td,a + B J_td,b`, because a
+/// common offset shifts the inner keyframe for both windows; its terms cancel and the result is
+/// the whole window's ([`crate::time_offset`], "Merge"). Windows integrated with different
+/// offsets do not share that shift, and their merged column means nothing.
+///
+/// # Shared samples
+///
+/// Consecutive windows of one stream share the samples around their common keyframe `t_k`:
+/// the sample at `t_k`, or the samples an interpolated boundary sample is made of, and for hermite4
+/// the stencil neighbours ([`preintegrate`](crate::preintegrate())). Each window records those samples with their
+/// gains `G` on its error ([`crate::edges::EdgeNoise`]); for a sample `s` in both,
+/// the white part of the merged covariance gains
+///
+/// ```text
+/// A G_a Q G_bᵀ Bᵀ + B G_b Q G_aᵀ Aᵀ   (Q = the sample's noise covariance)
+/// ```
+///
+/// and, if the two windows gave the sample different cells (samples pushed into two
+/// preintegrators directly: each saw only one of the sample's neighbours), the terms
+/// `A G_a (Q − Q_a) G_aᵀ Aᵀ + B G_b (Q − Q_b) G_bᵀ Bᵀ` replace each window's one-sided cell
+/// `Q_a`, `Q_b` by the cell from both neighbours, `Q`. Samples are identified by timestamp, so
+/// both windows must come from the same stream (and the same noise densities and cell rule;
+/// otherwise no sample is taken as shared).
+///
+/// Combined 15×15 covariance [δφ, δv, δp, δb_g, δb_a] with `δb = b_t − b_i` (bias random walk):
+/// at `t_k` the bias has drifted by `δb_a` (a's last six components), which window b sees as
+/// an uncorrected bias error, moving its deltas by `−J_b δb_a` (first order, same sign as in
+/// the propagation). Hence
+///
+/// ```text
+/// F_a = [[A, −B J_b], [0, I₆]],   G_b = [[B, 0], [0, I₆]],   Σ15 = F_a Σ15_a F_aᵀ + G_b Σ15_b G_bᵀ
+/// ```
+///
+/// plus the shared-sample terms in its 9×9 block. For [`Level::Covariance`] measurements
+/// (`cov15` without the random walk's effect on the deltas) the result is
+/// `diag(Σ, Σ_bb,a + Σ_bb,b)`: no cross blocks are invented.
+///
+/// # Exactness
+///
+/// The merged covariance is the exact first-order covariance of the composed deltas under the
+/// noise model of [`ImuNoise`](crate::ImuNoise) (tested against numeric differentiation with respect to
+/// every stream sample in `preint/tests/linearisation.rs`). For windows split at a stream
+/// sample, merging equals integrating the whole window at once to round-off — deltas,
+/// covariances and Jacobians — for every scheme when the windows come from
+/// [`crate::window::preintegrate`], and for Euler and midpoint also when the samples were
+/// pushed into preintegrators directly (direct hermite4 windows use one-sided edge stencils, so
+/// their composition differs from the whole window by the O(h⁴) integration error; the merge
+/// is still the exact covariance of that composition). For a split between samples the
+/// composition equals the whole stream with the boundary sample inserted
+/// ([`preintegrate`](crate::preintegrate())).
 pub fn merge(a: &PreintegratedImu, b: &PreintegratedImu) -> Result<PreintegratedImu, MergeError> {
     check_mergeable(a, b)?;
     let ra = *a.delta_r.matrix();

@@ -5,7 +5,7 @@
 //! [`PreintegratedImu`], default `(0, 0, −9.81)` m/s²).
 //!
 //! **Tangent space and perturbation** (used by [`NavState::retract`], [`NavState::local`], the
-//! [`preint_lie::Manifold`] impl and every Jacobian of [`crate::factor`]): a 9-vector in the order
+//! [`preint_lie::Manifold`] impl and every Jacobian of [`ImuFactor`](crate::ImuFactor)): a 9-vector in the order
 //! **[δφ, δp, δv]** (rad, m, m/s) with
 //!
 //! ```text

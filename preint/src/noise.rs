@@ -1,20 +1,5 @@
-//! IMU noise parameters as continuous-time densities (Kalibr `imu.yaml` semantics), and the
-//! continuous → discrete conversion.
-//!
-//! Users confuse a noise *density* with a per-sample standard deviation more than anything
-//! else, so the unit is in every name and the discrete conversion lives in this module only:
-//! - white noise of power spectral density `Σ` (= σ², σ in unit/√Hz) carried by a sample whose
-//!   time cell is `c` \[s\] has covariance `Σ·white_scale(c) = Σ/c` ([`white_scale`],
-//!   [`white_sample_variance`]); for a uniform stream sampled every Δt, `c = Δt` and the
-//!   per-sample std is `σ/√Δt`;
-//! - a bias random walk of density `Σ_b` (= σ_b², σ_b in unit/s/√Hz) adds `Σ_b·walk_scale(h) =
-//!   Σ_b h` over a step of `h` \[s\] ([`walk_scale`], [`walk_step_variance`]); std `σ_b √h`;
-//! - the time cell of a sample follows from the intervals to its neighbours by the scheme's
-//!   [`CellRule`].
-//!
-//! The preintegrator multiplies the continuous covariances (fixed when it is built) by
-//! [`white_scale`] of each sample's cell and by [`walk_scale`] of each interval; nothing else
-//! in the crate converts densities.
+//! IMU noise parameters ([`ImuNoise`], whose documentation gives the continuous → discrete
+//! conversion) and the conversion itself.
 
 /// How the time cell `c` \[s\] of a sample follows from the intervals to its neighbours (its
 /// white noise then has covariance `Σ/c`, see the module docs).
@@ -32,7 +17,7 @@ pub enum CellRule {
 impl CellRule {
     /// The cell \[s\] from the intervals to the previous (`left_s`) and next (`right_s`) sample
     /// \[s\]; an interval is `0.0` when that neighbour does not exist (or is unknown). Returns
-    /// `f64::INFINITY` (so [`white_scale`] = 0) if neither neighbour is known.
+    /// `f64::INFINITY` (so `white_scale` = 0) if neither neighbour is known.
     #[inline(always)]
     pub fn cell_s(self, left_s: f64, right_s: f64) -> f64 {
         match (self, left_s > 0.0, right_s > 0.0) {
@@ -75,6 +60,23 @@ pub(crate) fn walk_step_variance(psd: f64, h_s: f64) -> f64 {
 }
 
 /// Continuous-time IMU noise densities, as in Kalibr's `imu.yaml`.
+///
+/// # The continuous → discrete conversion
+///
+/// Users confuse a noise *density* with a per-sample standard deviation more than anything
+/// else, so the unit is in every name and the discrete conversion lives in one place only:
+/// - white noise of power spectral density `Σ` (= σ², σ in unit/√Hz) carried by a sample whose
+///   time cell is `c` \[s\] has covariance `Σ·white_scale(c) = Σ/c` (`white_scale`,
+///   `white_sample_variance`); for a uniform stream sampled every Δt, `c = Δt` and the
+///   per-sample std is `σ/√Δt`;
+/// - a bias random walk of density `Σ_b` (= σ_b², σ_b in unit/s/√Hz) adds `Σ_b·walk_scale(h) =
+///   Σ_b h` over a step of `h` \[s\] (`walk_scale`, `walk_step_variance`); std `σ_b √h`;
+/// - the time cell of a sample follows from the intervals to its neighbours by the scheme's
+///   [`CellRule`].
+///
+/// The preintegrator multiplies the continuous covariances (fixed when it is built) by
+/// `white_scale` of each sample's cell and by `walk_scale` of each interval; nothing else
+/// in the crate converts densities.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ImuNoise {
     /// Gyroscope white-noise density σ_g [rad/s/√Hz] (`gyroscope_noise_density`).

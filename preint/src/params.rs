@@ -8,7 +8,67 @@ use crate::scheme::Scheme;
 use nalgebra::{Matrix3, Vector3};
 use preint_lie::SO3;
 
-/// Pose of the IMU in the body frame, GTSAM's `body_P_sensor` ([`crate::extrinsics`]).
+/// Pose of the IMU in the body frame, GTSAM's `body_P_sensor`: an IMU that is not at the body
+/// origin, and the exact map from the sensor's preintegrated deltas to the body's.
+///
+/// # Model
+///
+/// The IMU (frame s) is rigidly mounted at `body_P_sensor = (R, r)`: `R = R_bs` rotates sensor
+/// vectors into the body frame and `r` \[m\] is the sensor origin in body coordinates. Biases and
+/// noise are the sensor's, in the sensor frame (as in GTSAM's `body_P_sensor`). The sensor reads
+/// the body rate `ω_s = Rᵀ ω_b` and the specific force of the point it sits on,
+///
+/// ```text
+/// f_s = Rᵀ (f_b + ω̇_b × r + ω_b × (ω_b × r)),
+/// ```
+///
+/// where `f_b` is the specific force at the body origin: the lever arm adds the tangential
+/// (`ω̇ × r`) and centripetal (`ω × (ω × r)`) accelerations of the sensor's point.
+///
+/// # The body deltas from the sensor's, exactly
+///
+/// Preintegrating the sensor's samples gives the deltas of the sensor's point in frame s at
+/// keyframe i (`ΔR_s`, `Δv_s`, `Δp_s`, Forster et al. 2017, eq. 33). Writing the sensor's
+/// position and velocity through the body's (`p_s = p_b + R_wb r`, `v_s = v_b + R_wb (ω_b × r)`)
+/// gives the body's deltas without approximation:
+///
+/// ```text
+/// ΔR = R ΔR_s Rᵀ
+/// Δv = R Δv_s + ω_i × r − ΔR (ω_j × r)
+/// Δp = R Δp_s + Δt (ω_i × r) + r − ΔR r
+/// ```
+///
+/// with `ω_i = R ω_s,i`, `ω_j = R ω_s,j` the bias-corrected body rates at the window's first
+/// and last sample. This is the lever-arm correction of the specific force,
+/// `f_b = R f_s − ω̇ × r − ω × (ω × r)`, integrated in closed form: by parts,
+/// `∫ ΔR (ω̇ × r) dt = ΔR_j (ω_j × r) − ω_i × r − ∫ ΔR (ω × (ω × r)) dt`, so both terms together
+/// integrate to the end-point values above. No estimate of `ω̇` is needed and no term is
+/// dropped: the body deltas carry exactly the integration error the scheme makes on the
+/// sensor's own samples, whatever the scheme. (A per-sample correction needs `ω̇` from
+/// differences of neighbouring samples and carries that estimate's error; subtracting only the
+/// centripetal term, as GTSAM's `correctMeasurementsBySensorPose` does, leaves out
+/// `∫ ΔR (ω̇ × r) dt` entirely.)
+///
+/// # Linearisation (chart of [`PreintegratedImu`](crate::PreintegratedImu), order [δφ, δv, δp])
+///
+/// With `ΔR_s = ΔR°_s Exp(δφ_s)`, the body error is `e = A e_s + B_i δω_i + B_j δω_j` for the
+/// sensor error `e_s` and perturbations `δω = R δω_s` of the end rates:
+///
+/// ```text
+/// A = [[R, 0, 0], [ΔR [ω_j × r]× R, R, 0], [ΔR [r]× R, 0, R]]
+/// B_i = [0; −[r]×; −Δt [r]×],   B_j = [0; ΔR [r]×; 0]
+/// ```
+///
+/// The end rates are the bias-corrected readings of the first and last sample (for a window
+/// whose boundary sample is interpolated, the same combination of stream samples), so their
+/// noise is that of those samples, which also entered `e_s`: the covariance uses the gains the
+/// measurement keeps for its edge samples ([`EdgeNoise`](crate::edges::EdgeNoise)) and is the exact first-order
+/// covariance of the body deltas, gyroscope noise moved into the velocity and position rows
+/// included. Bias Jacobians: `J = A J_s − (B_i + B_j) R` on the gyro columns (every sample sees
+/// `−δb_g`), `A J_s` on the accelerometer columns. Combined covariance: the gyro bias at the
+/// window's end, `b_g,i + δb_g`, is what `ω_j` should have been corrected with, so
+/// `e = A e_s + B_j R δb_g + …` and `[e; δb]` maps by `[[A, B_j R S_g], [0, I]]`
+/// (`S_g` selects `δb_g`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SensorPose {
     /// `R_bs`: rotates sensor vectors into the body frame (`x_b = R_bs x_s`).
@@ -70,7 +130,7 @@ impl CovShape {
 /// Noise covariances are **continuous-time** (power spectral densities, the square of the Kalibr
 /// densities, GTSAM's `gyroscopeCovariance`/`accelerometerCovariance` semantics): a sample
 /// whose time cell is `c` carries white noise of covariance `Σ/c`, and a random walk adds
-/// `Σ_rw h` over a step `h`; the conversion and the cell rule are in [`crate::noise`]. An
+/// `Σ_rw h` over a step `h`; the conversion and the cell rule are in [`ImuNoise`](crate::ImuNoise). An
 /// exactly isotropic matrix `s·I` selects a closed-form fast path, decided once when the
 /// preintegrator is built.
 #[derive(Clone, Debug, PartialEq)]
@@ -106,7 +166,7 @@ pub struct PreintParams {
     /// ([`PreintError::SamplesNotKept`]).
     pub keep_samples: bool,
     /// Pose of the IMU in the body frame (GTSAM's `body_P_sensor`): with it the measurement is
-    /// the body's, lever arm and rotation included ([`crate::extrinsics`]); biases and noise
+    /// the body's, lever arm and rotation included ([`SensorPose`](crate::SensorPose)); biases and noise
     /// stay the sensor's. `None`: the IMU frame is the body frame. Default `None`.
     pub body_p_sensor: Option<SensorPose>,
     /// How the lever arm of `body_p_sensor` is removed; default [`LeverArm::Exact`].
@@ -217,7 +277,7 @@ impl PreintParams {
         self
     }
 
-    /// Same parameters with the IMU at `pose` in the body frame ([`crate::extrinsics`]).
+    /// Same parameters with the IMU at `pose` in the body frame ([`SensorPose`](crate::SensorPose)).
     pub fn with_body_p_sensor(mut self, pose: SensorPose) -> Self {
         self.body_p_sensor = Some(pose);
         self

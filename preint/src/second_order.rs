@@ -19,7 +19,7 @@
 //! (the log-linear property of group-affine systems, Barrau & Bonnabel 2017, Theorem 2; the
 //! IMU case is Brossard et al. 2022, "Associating Uncertainty to Extended Poses for on Lie
 //! Group IMU Preintegration With Rotating Earth"). At the true states `ξ` is the factor's Logmap
-//! residual ([`crate::factor::logmap`]). The first-order covariance `P_{k+1} = A P Aᵀ + Q`
+//! residual ([`ResidualMode`](crate::ResidualMode)). The first-order covariance `P_{k+1} = A P Aᵀ + Q`
 //! (`Q = E[w wᵀ] = diag(Σ_g h, Σ_a h, 0)`, `Σ` the continuous-time densities) is, mapped into
 //! this chart, the covariance every scheme propagates. The Baker–Campbell–Hausdorff series
 //! `BCH(y, w) = y + w + ½[y, w] + …` has a second-order term that it drops: zero-mean (`w_k` is
@@ -38,7 +38,7 @@
 //! window it does not shrink with the sample period. [`covariance`] propagates
 //! `P₂ = A P₂ Aᵀ + Q + ¼ C(A P₂ Aᵀ)` beside `P₁ = A P₁ Aᵀ + Q` and returns `P₂ − P₁`, mapped to
 //! the measurement's chart [δφ, δv, δp] by `T⁻¹ (·) T⁻ᵀ`, `T = diag(I, ΔRᵀ, ΔRᵀ)` (the map of
-//! [`crate::factor::logmap`]).
+//! [`ResidualMode`](crate::ResidualMode)).
 //!
 //! # Scope
 //!

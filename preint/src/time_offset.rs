@@ -12,7 +12,7 @@
 //! its `t_i_ns`, `t_j_ns` are on the IMU clock and its `delta_t` is the keyframes' `t_j − t_i`
 //! whatever the offset.
 //!
-//! # Derivatives (chart of [`crate::measurement`], order [δφ, δv, δp])
+//! # Derivatives (chart of [`PreintegratedImu`], order [δφ, δv, δp])
 //!
 //! With `ω`, `a` the bias-corrected body rate [rad/s] and specific force [m/s²], moving the window
 //! end `t_j` adds the end rate, `∂ΔR/∂t_j = ΔR [ω_j]×`, `∂Δv/∂t_j = ΔR a_j`, `∂Δp/∂t_j = Δv`;
@@ -27,7 +27,7 @@
 //! ```
 //!
 //! `ω_i, a_i, ω_j, a_j` are the window's first and last samples, i.e. the boundary samples at the
-//! keyframes, interpolated as the scheme interpolates them ([`crate::window`]: linear for
+//! keyframes, interpolated as the scheme interpolates them ([`preintegrate`](crate::preintegrate()): linear for
 //! euler, midpoint and galilean, cubic Lagrange for hermite4). This is the exact derivative of the
 //! continuous-time deltas of the interpolated signal; a scheme's discrete deltas follow it to
 //! the scheme's order in the sample period (their derivative with respect to an end differs
@@ -36,7 +36,7 @@
 //! The result is [`PreintegratedImu::jac_td`], computed once per measurement from the end
 //! samples (no per-sample cost). It is zero at [`Level::Deltas`](crate::Level::Deltas), for hand-made
 //! measurements, and with a `body_p_sensor` whose lever arm is removed in closed form
-//! ([`crate::extrinsics`]): the body deltas then depend on the end rates' derivatives, which the
+//! ([`SensorPose`](crate::SensorPose)): the body deltas then depend on the end rates' derivatives, which the
 //! end samples do not give (a rotation-only `body_p_sensor` maps the column by
 //! `diag(R_bs, R_bs, R_bs)`; GTSAM's per-sample centripetal model is covered, its samples being
 //! the ones integrated).
@@ -45,7 +45,7 @@
 //!
 //! Shifting `t_d` shifts all three keyframes of consecutive windows `a = [t_i, t_k]`,
 //! `b = [t_k, t_j]` together, so the merged derivative is the chain rule through the
-//! composition: `J_td = A J_td,a + B J_td,b` with the `A`, `B` of [`crate::merge`](mod@crate::merge). The inner
+//! composition: `J_td = A J_td,a + B J_td,b` with the `A`, `B` of [`crate::merge`](crate::merge()). The inner
 //! keyframe's terms (`+ω_k`, `+ΔR_a a_k` from a's end, `−ω_k`, `−a_k` from b's start) cancel and
 //! the result equals the closed form of the whole window. This holds only when both windows
 //! were integrated with the same offset: windows of different sensors (offsets) would not move
@@ -54,7 +54,7 @@
 //! # First-order correction
 //!
 //! For `t_d = t̂_d + δt_d` the deltas are corrected with the column `J_td δt_d` added to the
-//! bias correction of [`crate::bias_correction`] (`c = J_b δb + J_td δt_d`, applied additively
+//! bias correction of [`BiasCorrection`](crate::BiasCorrection) (`c = J_b δb + J_td δt_d`, applied additively
 //! or on the group as the measurement's `bias_correction` says):
 //! [`PreintegratedImu::corrected_with_time_offset`]. Its error against re-integration grows as
 //! `δt_d²` (the end samples' rates of change: `ω̇`, `ȧ`); above

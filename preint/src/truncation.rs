@@ -59,7 +59,7 @@ use preint_lie::jl_inv;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TruncationEstimate {
     /// `D_scheme ⊖ D_exact` estimated, order [δφ (rad), δv (m/s), δp (m)], the chart of
-    /// [`crate::measurement`] (the same as [`PreintegratedImu::delta_error`]).
+    /// [`PreintegratedImu`] (the same as [`PreintegratedImu::delta_error`]).
     pub error: SVector<f64, 9>,
     /// How it was estimated: `"hermite4 companion"` or `"richardson 2h"`.
     pub method: &'static str,
@@ -217,7 +217,7 @@ pub fn inflate(
 /// - [`ResidualMode::Logmap`]: with the exact deltas estimated as `ΔR_e = ΔR Exp(−ê_φ)`,
 ///   `Δv_e = Δv − ê_v`, `Δp_e = Δp − ê_p`, the residual at the truth is
 ///   `r_L = Log(D⁻¹ D_e) = [−ê_φ, −Jl(−ê_φ)⁻¹ ΔRᵀ ê_v, −Jl(−ê_φ)⁻¹ ΔRᵀ ê_p]`, and the weight is
-///   `T cov Tᵀ` with `T = diag(I, ΔRᵀ, ΔRᵀ)` ([`crate::factor::logmap`]), so
+///   `T cov Tᵀ` with `T = diag(I, ΔRᵀ, ΔRᵀ)` ([`ResidualMode`]), so
 ///   `u = −T⁻¹ r_L = [ê_φ, ΔR Jl(−ê_φ)⁻¹ ΔRᵀ ê_v, ΔR Jl(−ê_φ)⁻¹ ΔRᵀ ê_p]`. It differs from `ê` at
 ///   second order (`½ ê_φ × ê_v`), which for Euler at 20 Hz is several σ.
 pub fn offset_in_chart(

@@ -1,57 +1,5 @@
-//! Keyframe windows on a sample stream: boundary interpolation, splitting, and the noise model
-//! at the window edges.
-//!
-//! # Boundary samples
-//!
-//! A keyframe time `t` between samples `t_m−1 < t < t_m` gets a boundary sample interpolated
-//! from the stream, which ends one window and starts the next:
-//! - Euler and midpoint: linear between the two bracketing samples;
-//! - hermite4: cubic Lagrange through four surrounding stream samples (two on each side, one-sided
-//!   at the stream ends), so the window edge keeps 4th order.
-//!
-//! A keyframe time equal to a sample's time uses that sample.
-//!
-//! # Consecutive windows add up to the whole stream exactly
-//!
-//! Both windows use the *same* boundary sample, so the composition of consecutive windows
-//! `[a, b]`, `[b, c]` (`ΔR_ac = ΔR_ab ΔR_bc`, `Δv_ac = Δv_ab + ΔR_ab Δv_bc`,
-//! `Δp_ac = Δp_ab + Δv_ab Δt_bc + ΔR_ab Δp_bc`) equals, to round-off, the integration of `[a, c]`
-//! over the stream *with that boundary sample inserted*, for every scheme; durations add
-//! exactly (integer ns). For hermite4 this needs two more rules, both functions of the stream and
-//! `t` only, so that both windows apply them identically:
-//! - *Context samples.* The stencils of a window's edge intervals extend past the window to
-//!   the nearest stream sample on the other side (see [`crate::scheme::hermite4`]): the last
-//!   interval of `[a, b]` uses `{…, t_m−1, b, t_m}` and the first interval of `[b, c]` uses
-//!   `{t_m−1, b, t_m, …}`, exactly the stencils of the whole stream with `b` inserted. Only at
-//!   the stream ends are the stencils one-sided.
-//! - *Close samples.* Each of the two stream samples around an interpolated `t` (`t_m−1` and
-//!   `t_m`) is left out of the node sequence if it is closer to `t` than 1/8 of `t_m − t_m−1`
-//!   (its information is in the cubic boundary sample), because a stencil with two nodes that
-//!   close amplifies noise and round-off; the context sample is then the next one out. The
-//!   "whole stream with `b` inserted" then means: `b` inserted and such a sample removed.
-//!
-//! Without these rules (one-sided stencils at every window edge, as for samples pushed into
-//! preintegrators directly) hermite4 windows compose only to the scheme's O(h⁴) error: measured
-//! 8.4e-12 on the test scene at 200 Hz, against 5.6e-16 with them
-//! (`preint/tests/windows.rs`, which also checks the composition for every scheme and for
-//! keyframes mid-interval, 1 µs from a sample and on a sample, to 1e-13).
-//!
-//! # Noise model at the edges
-//!
-//! The noise sources are the stream samples ([`crate::noise`]): each carries independent white
-//! noise with the cell given by its *stream* neighbours, also for the samples next to a window
-//! edge. An interpolated boundary sample is not a noise source of its own: its noise is the
-//! interpolation weights times its stream samples' noise (`(1 − λ) n_m−1 + λ n_m`, or the four
-//! cubic weights), and the window covariance is the exact first-order covariance with respect
-//! to the stream samples (tested against numeric differentiation in
-//! `preint/tests/linearisation.rs`). Treating the boundary sample instead as an independent
-//! source with a cell of its own (a common simplification) misstates the variances; measured
-//! there (200 Hz, variance traces): midpoint +0.7 % (rotation, velocity) and +2.0 % (position)
-//! for keyframes 1 µs before a sample, hermite4 up to +2.1 %, Euler −0.9 % (position) for
-//! keyframes mid-interval. The stream samples
-//! around a keyframe are shared by the two windows that meet there; each window records their
-//! gains ([`crate::edges::EdgeNoise`]), so [`merge`](crate::merge()) adds their
-//! covariance and merging the two windows is exact.
+//! The keyframe window of a stream (the model: [`preintegrate`]): the stream samples a window
+//! integrates, its boundary samples and the context beyond its edges.
 
 use crate::error::PreintError;
 use crate::measurement::PreintegratedImu;
@@ -434,6 +382,58 @@ pub fn window_samples(
 /// assert_eq!((m.t_i_ns, m.t_j_ns, m.delta_t), (12_345_678, 512_345_678, 0.5));
 /// assert!((m.delta_r.log().z - 0.1).abs() < 1e-12);
 /// ```
+///
+/// # Boundary samples
+///
+/// A keyframe time `t` between samples `t_m−1 < t < t_m` gets a boundary sample interpolated
+/// from the stream, which ends one window and starts the next:
+/// - Euler and midpoint: linear between the two bracketing samples;
+/// - hermite4: cubic Lagrange through four surrounding stream samples (two on each side, one-sided
+///   at the stream ends), so the window edge keeps 4th order.
+///
+/// A keyframe time equal to a sample's time uses that sample.
+///
+/// # Consecutive windows add up to the whole stream exactly
+///
+/// Both windows use the *same* boundary sample, so the composition of consecutive windows
+/// `[a, b]`, `[b, c]` (`ΔR_ac = ΔR_ab ΔR_bc`, `Δv_ac = Δv_ab + ΔR_ab Δv_bc`,
+/// `Δp_ac = Δp_ab + Δv_ab Δt_bc + ΔR_ab Δp_bc`) equals, to round-off, the integration of `[a, c]`
+/// over the stream *with that boundary sample inserted*, for every scheme; durations add
+/// exactly (integer ns). For hermite4 this needs two more rules, both functions of the stream and
+/// `t` only, so that both windows apply them identically:
+/// - *Context samples.* The stencils of a window's edge intervals extend past the window to
+///   the nearest stream sample on the other side (see [`Scheme::Hermite4`](crate::Scheme::Hermite4)): the last
+///   interval of `[a, b]` uses `{…, t_m−1, b, t_m}` and the first interval of `[b, c]` uses
+///   `{t_m−1, b, t_m, …}`, exactly the stencils of the whole stream with `b` inserted. Only at
+///   the stream ends are the stencils one-sided.
+/// - *Close samples.* Each of the two stream samples around an interpolated `t` (`t_m−1` and
+///   `t_m`) is left out of the node sequence if it is closer to `t` than 1/8 of `t_m − t_m−1`
+///   (its information is in the cubic boundary sample), because a stencil with two nodes that
+///   close amplifies noise and round-off; the context sample is then the next one out. The
+///   "whole stream with `b` inserted" then means: `b` inserted and such a sample removed.
+///
+/// Without these rules (one-sided stencils at every window edge, as for samples pushed into
+/// preintegrators directly) hermite4 windows compose only to the scheme's O(h⁴) error: measured
+/// 8.4e-12 on the test scene at 200 Hz, against 5.6e-16 with them
+/// (`preint/tests/windows.rs`, which also checks the composition for every scheme and for
+/// keyframes mid-interval, 1 µs from a sample and on a sample, to 1e-13).
+///
+/// # Noise model at the edges
+///
+/// The noise sources are the stream samples ([`ImuNoise`](crate::ImuNoise)): each carries independent white
+/// noise with the cell given by its *stream* neighbours, also for the samples next to a window
+/// edge. An interpolated boundary sample is not a noise source of its own: its noise is the
+/// interpolation weights times its stream samples' noise (`(1 − λ) n_m−1 + λ n_m`, or the four
+/// cubic weights), and the window covariance is the exact first-order covariance with respect
+/// to the stream samples (tested against numeric differentiation in
+/// `preint/tests/linearisation.rs`). Treating the boundary sample instead as an independent
+/// source with a cell of its own (a common simplification) misstates the variances; measured
+/// there (200 Hz, variance traces): midpoint +0.7 % (rotation, velocity) and +2.0 % (position)
+/// for keyframes 1 µs before a sample, hermite4 up to +2.1 %, Euler −0.9 % (position) for
+/// keyframes mid-interval. The stream samples
+/// around a keyframe are shared by the two windows that meet there; each window records their
+/// gains ([`crate::edges::EdgeNoise`]), so [`merge`](crate::merge()) adds their
+/// covariance and merging the two windows is exact.
 pub fn preintegrate(
     params: &PreintParams,
     bias: &ImuBias,

@@ -240,10 +240,11 @@ pub fn evaluate_input(
                 .map(|&s| preintegrate(&params(s, Level::Covariance), &bias, &dec, t_i, t_j))
                 .collect::<Result<Vec<_>, _>>()
                 .map_err(fail)?;
-            // Held input: galilean on the candidate's own samples is exact for them.
+            // Held input: the scheme exact on it, on the candidate's own samples, is exact for
+            // them.
             let held_exact = scheme::ALL
                 .iter()
-                .position(|&s| s == Scheme::Galilean)
+                .position(|&s| Some(s) == InputClass::Held.exact_scheme())
                 .map(|k| &ms[k]);
             for (ks, (&s, m)) in scheme::ALL.iter().zip(&ms).enumerate() {
                 let est = match (input, held_exact) {
@@ -322,19 +323,15 @@ pub fn gap_beyond_limit(samples: &[ImuSample], d: usize) -> Option<(i64, i64, us
 pub const COST_TIE: f64 = 1.15;
 
 /// The cheapest acceptable candidate, if any; among those within [`COST_TIE`] of the cheapest,
-/// the simplest scheme (euler, then midpoint, then galilean, then hermite4), then the cheapest:
-/// model no more than the scene needs, and do not let timing noise decide between near-equal
-/// costs. Galilean ranks after midpoint: it is first order on smooth input and exact only when
-/// the input is held over each interval, which the distance to the reference already measures.
+/// the simplest scheme (the registry's rank, [`preint::SchemeInfo::rank`]: euler, then
+/// midpoint, then galilean, then hermite4), then the cheapest: model no more than the scene
+/// needs, and do not let timing noise decide between near-equal costs. Galilean ranks after
+/// midpoint: it is first order on smooth input and exact only when the input is held over each
+/// interval, which the distance to the reference already measures.
 pub fn recommend(c: &[Candidate]) -> Option<&Candidate> {
     let ok = || c.iter().filter(|c| c.acceptable);
     let best = ok().map(|c| c.cost_ns_per_s).min_by(f64::total_cmp)?;
-    let rank = |s: Scheme| match s {
-        Scheme::Euler => 0,
-        Scheme::Midpoint => 1,
-        Scheme::Galilean => 2,
-        Scheme::Hermite4 => 3,
-    };
+    let rank = |s: Scheme| s.info().rank;
     ok().filter(|c| c.cost_ns_per_s <= COST_TIE * best)
         .min_by(|a, b| {
             rank(a.scheme)

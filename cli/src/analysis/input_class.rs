@@ -35,19 +35,29 @@ impl InputClass {
         }
     }
 
-    /// The reference scheme at the recording's rate.
+    /// The reference scheme at the recording's rate: the scheme exact on this class if there
+    /// is one, else the one of highest order on smooth input (the first of the registry among
+    /// equals).
     pub fn reference(self) -> Scheme {
-        match self {
-            InputClass::Smooth => Scheme::Hermite4,
-            InputClass::Held => Scheme::Galilean,
-        }
+        self.exact_scheme().unwrap_or_else(|| {
+            let order = |s: &Scheme| s.info().order;
+            let best = Scheme::ALL.iter().map(order).max().unwrap_or(0);
+            *Scheme::ALL
+                .iter()
+                .find(|s| order(s) == best)
+                .expect("a registered scheme")
+        })
     }
 
-    /// The scheme whose deltas are exact (to round-off) on every input of this class, if any.
+    /// The scheme whose deltas are exact (to round-off) on every input of this class, if any
+    /// (the registry's [`preint::SchemeInfo::exact_when_held`]).
     pub fn exact_scheme(self) -> Option<Scheme> {
         match self {
             InputClass::Smooth => None,
-            InputClass::Held => Some(Scheme::Galilean),
+            InputClass::Held => Scheme::ALL
+                .iter()
+                .copied()
+                .find(|s| s.info().exact_when_held),
         }
     }
 
@@ -70,8 +80,8 @@ impl InputClass {
 }
 
 /// A scheme's accuracy: its global order on smooth input and the input on which each delta is
-/// exact (derived from its rule, `preint::Scheme`'s docs; `cli/tests/advise_exact.rs` checks
-/// each claim against closed forms and measured slopes).
+/// exact (its registry row, [`preint::SchemeInfo`]; `cli/tests/advise_exact.rs` checks each
+/// claim against closed forms and measured slopes).
 #[derive(Clone, Copy, Debug)]
 pub struct Exactness {
     /// Global order of the deltas' error on smooth input (error ∝ hᵒʳᵈᵉʳ).
@@ -82,32 +92,10 @@ pub struct Exactness {
 
 /// [`Exactness`] of `s`.
 pub fn exactness(s: Scheme) -> Exactness {
-    let (order_smooth, exact_on) = match s {
-        Scheme::Euler => (
-            1,
-            "ΔR exact when ω is held over each interval; Δv and Δp only where additionally a ∥ ω \
-             (no rotation while accelerating across the rotation axis)",
-        ),
-        Scheme::Midpoint => (
-            2,
-            "ΔR exact when ω is linear between samples about a fixed axis; Δv when nothing \
-             rotates and a is linear between samples, Δp when a is also constant; not exact on \
-             held input (it averages across a step)",
-        ),
-        Scheme::Hermite4 => (
-            4,
-            "ΔR exact for a cubic rate about a fixed axis (a constant ω included); Δv for a cubic \
-             a without rotation; not exact on held input",
-        ),
-        Scheme::Galilean => (
-            1,
-            "exact (ΔR, Δv, Δp) when ω and a are held over each interval: sample-and-hold \
-             streams, integrating IMUs (delta-angle/delta-velocity outputs)",
-        ),
-    };
+    let info = s.info();
     Exactness {
-        order_smooth,
-        exact_on,
+        order_smooth: info.order,
+        exact_on: info.exact_on,
     }
 }
 

@@ -22,17 +22,14 @@ impl Color {
     pub fn hex(self) -> String {
         format!("#{:02x}{:02x}{:02x}", self.0, self.1, self.2)
     }
-}
 
-/// The colour of each scheme, in the order of [`crate::scheme::ALL`] (euler, midpoint,
-/// hermite4, galilean): vermilion, blue, bluish green, reddish purple (Okabe–Ito,
-/// distinguishable with the common colour vision deficiencies).
-pub const SCHEME_COLORS: [Color; 4] = [
-    Color(213, 94, 0),
-    Color(0, 114, 178),
-    Color(0, 158, 115),
-    Color(204, 121, 167),
-];
+    /// The colour written `#rrggbb`, if it is.
+    pub fn parse_hex(s: &str) -> Option<Self> {
+        let h = s.strip_prefix('#').filter(|h| h.len() == 6)?;
+        let byte = |i: usize| u8::from_str_radix(h.get(i..i + 2)?, 16).ok();
+        Some(Color(byte(0)?, byte(2)?, byte(4)?))
+    }
+}
 
 /// Colours of curves that are not schemes (sensor axes, attitude representations): orange, sky
 /// blue, yellow, near-black; none of them is a scheme's colour.
@@ -46,14 +43,12 @@ pub const OTHER_COLORS: [Color; 4] = [
 /// The neutral colour of reference lines (Pareto front, thresholds, style keys).
 pub const NEUTRAL: Color = Color(110, 110, 110);
 
-/// The colour of a scheme in every chart and table.
+/// The colour of a scheme in every chart and table: its registry row's
+/// ([`preint::SchemeInfo::colour`]; euler, midpoint, hermite4, galilean: vermilion, blue,
+/// bluish green, reddish purple, Okabe–Ito, distinguishable with the common colour vision
+/// deficiencies).
 pub fn scheme_color(s: Scheme) -> Color {
-    match s {
-        Scheme::Euler => SCHEME_COLORS[0],
-        Scheme::Midpoint => SCHEME_COLORS[1],
-        Scheme::Hermite4 => SCHEME_COLORS[2],
-        Scheme::Galilean => SCHEME_COLORS[3],
-    }
+    Color::parse_hex(s.info().colour).unwrap_or(NEUTRAL)
 }
 
 /// How a series' line is drawn.
@@ -283,7 +278,11 @@ mod tests {
                 x: Axis::log("x [s]"),
                 y: Axis::log("y [m]"),
                 series: vec![
-                    Series::line("a", vec![(1.0, 1.0), (10.0, 0.1)], SCHEME_COLORS[0]),
+                    Series::line(
+                        "a",
+                        vec![(1.0, 1.0), (10.0, 0.1)],
+                        scheme_color(Scheme::Euler),
+                    ),
                     Series::reference("b", vec![(2.0, 0.5), (3.0, 0.4)], NEUTRAL).drawn_behind(),
                 ],
             }],
@@ -298,5 +297,21 @@ mod tests {
         let (a, b) = (svg.find("#d55e00").unwrap(), svg.find("#6e6e6e").unwrap());
         assert!(b < a);
         assert!(svg.contains(">a</text>") && svg.contains(">b</text>"));
+    }
+
+    /// Every registered scheme's colour is a `#rrggbb` colour of its own, none of them a
+    /// colour of the curves that are not schemes.
+    #[test]
+    fn every_scheme_has_a_colour_of_its_own() {
+        let mut seen: Vec<Color> = OTHER_COLORS.to_vec();
+        seen.push(NEUTRAL);
+        for s in Scheme::ALL {
+            let c = Color::parse_hex(s.info().colour).expect("a #rrggbb colour");
+            assert_eq!(c.hex(), s.info().colour, "{s:?}");
+            assert!(!seen.contains(&c), "{s:?}: {} is taken", c.hex());
+            seen.push(c);
+        }
+        assert_eq!(Color::parse_hex("#d55e0"), None);
+        assert_eq!(Color::parse_hex("d55e00"), None);
     }
 }

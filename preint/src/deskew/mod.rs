@@ -7,7 +7,7 @@
 //! The deltas at a query time `t` ∈ (t_i, t_j] are those [`preintegrate`](crate::preintegrate)
 //! gives for the window `[t_i, t]`: the same boundary sample at `t` (linear for Euler and
 //! midpoint, cubic for hermite4), the same context sample after `t` and close-sample rule
-//! ([`crate::window`]), the same stencils, renormalisation and `body_p_sensor` map. That window's
+//! ([`preintegrate`](crate::preintegrate())), the same stencils, renormalisation and `body_p_sensor` map. That window's
 //! node sequence (context before, boundary sample at `t_i`, the stream samples, boundary sample
 //! at `t`, context after) agrees with the stream's (context before, boundary at `t_i`, every
 //! later stream sample) up to a position `P` just before `t`, and every interval whose stencil
@@ -30,7 +30,7 @@
 //!
 //! Times are integer ns. Deltas are in body frame i (Forster et al. 2017, eq. 33): the body
 //! is the sensor unless `PreintParams::body_p_sensor` is set, then the body map of
-//! [`crate::extrinsics`] is applied at every query with the end rate at `t` (its boundary
+//! [`SensorPose`] is applied at every query with the end rate at `t` (its boundary
 //! sample's). States follow [`predict`] (gravity, `omega_coriolis`). A lidar point `x` \[m\]
 //! given in the body frame at its own time `t` is the world point `p(t) + R(t) x`; deskewing
 //! expresses it in the body frame at `t_i` or `t_j`: `R_refᵀ (p(t) + R(t) x − p_ref)`. Points

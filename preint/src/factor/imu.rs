@@ -7,14 +7,96 @@ use crate::navstate::{NavState, predict};
 use crate::sample::ImuBias;
 use nalgebra::{SMatrix, SVector};
 
-/// Forster's IMU factor between `(NavState_i, NavState_j, bias_i)` (module docs for the
-/// residual [r_φ, r_v, r_p], perturbations and Jacobians). It reads only a
+/// Forster's IMU factor between `(NavState_i, NavState_j, bias_i)` (below: the residual
+/// [r_φ, r_v, r_p], its perturbations and Jacobians). It reads only a
 /// [`PreintegratedImu`] and weights the residual with its 9×9 covariance `cov` (the residual
 /// is `−[δφ, δv, δp]` to first order, whose covariance is `cov`); in
 /// [`ResidualMode::Logmap`] (the default) the residual is its SE₂(3) form and the weight
-/// `T cov Tᵀ` ([`logmap`](super::logmap)). The bias is held constant
+/// `T cov Tᵀ` ([`ResidualMode::Logmap`](crate::ResidualMode::Logmap)). The bias is held constant
 /// over the window: on data whose bias drifts noticeably within a window, use
 /// [`CombinedImuFactor`](super::CombinedImuFactor), whose covariance includes the random walk.
+///
+/// Each factor evaluates one of two residuals ([`ResidualMode`], set when it is built): the
+/// SE₂(3) **Logmap** residual ([`ResidualMode::Logmap`](crate::ResidualMode::Logmap), the default, as in GTSAM 4.3, chosen on NEES
+/// evidence) or Forster's **component-wise** residual below. The Logmap one is computed from the
+/// component-wise residual and Jacobians described here.
+///
+/// # Residual (Forster et al. 2017, T-RO, eq. 45)
+///
+/// With `ΔR(b), Δv(b), Δp(b)` the deltas corrected to first order for the bias `b` at keyframe i
+/// ([`PreintegratedImu::corrected`]: eq. 44, or on the group for
+/// [`BiasCorrection::Group`](crate::BiasCorrection::Group)), `g` the world gravity and
+/// `Δt = t_j − t_i`:
+///
+/// ```text
+/// r_φ = Log(ΔR(b)ᵀ R_iᵀ R_j)                                   [rad]
+/// r_v = R_iᵀ (v_j − v_i − g Δt) − Δv(b)                        [m/s]
+/// r_p = R_iᵀ (p_j − p_i − v_i Δt − ½ g Δt²) − Δp(b)            [m]
+/// ```
+///
+/// in the order **[r_φ, r_v, r_p]**, the order of the preintegration covariance
+/// [δφ, δv, δp] (see [`PreintegratedImu`](crate::PreintegratedImu)), so `rᵀ Σ⁻¹ r` is the Mahalanobis cost.
+///
+/// # Perturbations (one per Jacobian block)
+///
+/// Each block `∂r/∂δx` is the derivative at `δx = 0` of `r(x ⊕ δx)`, with ([`NavState`](crate::NavState)):
+///
+/// | block | perturbation |
+/// |---|---|
+/// | `phi_i`, `phi_j` | `R ← R·Exp(δφ)` (right, body frame) \[rad\] |
+/// | `p_i`, `p_j` | `p ← p + R·δp` (body frame — to first order GTSAM's `Pose3` retract `[dw, dt]`, `dt` in body) \[m\] |
+/// | `v_i`, `v_j` | `v ← v + δv` (world frame, GTSAM's `ImuFactor` velocity) [m/s] |
+/// | `bg_i`, `ba_i` | `b_g,i ← b_g,i + δb_g` [rad/s], `b_a,i ← b_a,i + δb_a` [m/s²] |
+/// | `bg_j`, `ba_j` | same for the bias at j (combined factor only; zero in [`ImuFactor`]) |
+///
+/// Analytic blocks (Forster 2017, supplementary material, Sec. "Jacobians of the residual"),
+/// with `E = Exp(r_φ)`, `Jr⁻¹ = Jr⁻¹(r_φ)`, `δb_g = b_g − b̂_g` (w.r.t. the integration bias
+/// `bias_hat`) and `J_R^g = ∂ΔR/∂b_g` etc.:
+///
+/// ```text
+/// ∂r_φ/∂δφ_i = −Jr⁻¹ R_jᵀ R_i          ∂r_φ/∂δφ_j = Jr⁻¹
+/// ∂r_φ/∂δb_g = −Jr⁻¹ Eᵀ Jr(J_R^g δb_g) J_R^g
+/// ∂r_v/∂δφ_i = [R_iᵀ (v_j − v_i − g Δt)]×
+/// ∂r_v/∂δv_i = −R_iᵀ   ∂r_v/∂δv_j = R_iᵀ   ∂r_v/∂δb_g = −J_v^g   ∂r_v/∂δb_a = −J_v^a
+/// ∂r_p/∂δφ_i = [R_iᵀ (p_j − p_i − v_i Δt − ½ g Δt²)]×
+/// ∂r_p/∂δp_i = −I   ∂r_p/∂δv_i = −R_iᵀ Δt   ∂r_p/∂δp_j = R_iᵀ R_j
+/// ∂r_p/∂δb_g = −J_p^g   ∂r_p/∂δb_a = −J_p^a
+/// ```
+///
+/// (with [`BiasCorrection::Group`](crate::BiasCorrection::Group), `J_v`, `J_p` in the velocity
+/// and position rows are the derivatives of the group-corrected `Δv(b)`, `Δp(b)`,
+/// [`BiasCorrection`](crate::BiasCorrection)); all other blocks are zero. Every block is checked against central differences on the
+/// manifold in `preint/tests/factor.rs` (both bias corrections). With an Earth rate (`pim.omega_coriolis`) the residual
+/// compares the deltas the states imply in the rotating frame instead (`rotating.rs`, each
+/// [`CoriolisMode`](crate::CoriolisMode); Jacobians checked in `preint/tests/earth.rs`); its
+/// covariance is the same.
+///
+/// # Time offset
+///
+/// `evaluate_with_time_offset` (both factors) evaluates the residual at a change `δt_d` \[s\]
+/// of the IMU–keyframe time offset relative to the one the measurement was integrated with
+/// ([`crate::time_offset`]): the deltas corrected by `J_b δb + J_td δt_d` in the measurement's
+/// bias correction, every Jacobian block at that point, and the column `∂r/∂δt_d`
+/// (`[−Jr⁻¹(r_φ) Eᵀ Jr(c_φ) j_φ, −∂Δv(b)/∂t_d, −∂Δp(b)/∂t_d]`, mapped to the Logmap chart as the
+/// gyro-bias columns are). At `δt_d = 0` the residual and blocks are those of `evaluate`.
+/// Checked against central differences in `preint/tests/time_offset_factor.rs`.
+///
+/// # Whitening
+///
+/// The square-root information `U` is the **upper** Cholesky factor of `Σ⁻¹` (`Σ⁻¹ = UᵀU`,
+/// positive diagonal; GTSAM's `noiseModel::Gaussian` convention). It is computed without
+/// forming `Σ⁻¹`: with `P` the order-reversing permutation, `P Σ P = L Lᵀ` and `U = P L⁻¹ P`.
+/// Whitened residual `U r`, whitened Jacobians `U J`, and `chi2 = ‖U r‖² = rᵀ Σ⁻¹ r`.
+///
+/// # Relation to GTSAM (`ImuFactor`, `ImuFactorErrorMode::ComponentWise`)
+///
+/// GTSAM's error is `e = [Log(R_jᵀ R̂_j), R_jᵀ(p̂_j − p_j), R_jᵀ(v̂_j − v_j)]` in the order
+/// [rot, pos, vel] with `(R̂_j, p̂_j, v̂_j)` = [`predict`](crate::predict). Hence, with `M = R_jᵀ R_i`,
+/// `e_rot = −r_φ`, `e_pos = −M r_p`, `e_vel = −M r_v`, i.e.
+/// `r = −diag(I, Mᵀ, Mᵀ) e` after reordering. Jacobians map as
+/// `∂e/∂x = −diag(I, M, M)·∂r/∂x` except for the rotations, which also move `M`:
+/// `∂e_{pos,vel}/∂δφ_i += M [r_{p,v}]×` and `∂e_{pos,vel}/∂δφ_j −= [M r_{p,v}]×`; GTSAM's bias
+/// order is [b_a, b_g]. Tested against GTSAM 4.3 fixtures in `preint/tests/factor_gtsam.rs`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImuFactor(Weighted<9>);
 
@@ -49,7 +131,7 @@ impl ImuFactor {
 
     /// Builds the factor with the given [`ResidualMode`]: [`ResidualMode::ComponentWise`]
     /// weights `[r_φ, r_v, r_p]` by `pim.cov`, [`ResidualMode::Logmap`] weights the SE₂(3)
-    /// residual by `T cov Tᵀ` ([`logmap`](super::logmap) module docs). Errors as [`new`](Self::new).
+    /// residual by `T cov Tᵀ` ([`ResidualMode::Logmap`](crate::ResidualMode::Logmap) module docs). Errors as [`new`](Self::new).
     pub fn with_mode(pim: PreintegratedImu, mode: ResidualMode) -> Result<Self, FactorError> {
         let cov = pim.cov;
         Weighted::new(pim, Level::Covariance, "cov", cov, mode).map(Self)

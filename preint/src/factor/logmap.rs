@@ -1,67 +1,5 @@
-//! The SE₂(3) **Logmap** residual of both factors ([`ResidualMode::Logmap`]), its analytic
-//! Jacobians and the covariance that weights it.
-//!
-//! # Definition
-//!
-//! Write a triple `(R, v, p)` as the SE₂(3) element `[[R, v, p], [0, 1, 0], [0, 0, 1]]`, with
-//! `Log(R, v, p) = [φ, Jl(φ)⁻¹ v, Jl(φ)⁻¹ p]`, `φ = Log(R)` (`Jl` the SO(3) left Jacobian;
-//! Barrau & Bonnabel 2017, Brossard et al. 2022). With `D(b) = (ΔR(b), Δv(b), Δp(b))` the
-//! bias-corrected deltas (Forster 2017 eq. 44) and `Y = (Y_R, w_v, w_p)` the deltas the two
-//! states imply (`Y_R = R_iᵀR_j`, `w_v = R_iᵀ(v_j − v_i − gΔt)`, `w_p = R_iᵀ(p_j − p_i − v_iΔt −
-//! ½gΔt²)`; with an Earth rate the rotating-frame ones of `rotating.rs`), the residual is
-//!
-//! ```text
-//! r_L = Log(D(b)⁻¹ Y) = [r_φ, Jl(r_φ)⁻¹ ΔR(b)ᵀ r_v, Jl(r_φ)⁻¹ ΔR(b)ᵀ r_p]     [rad, m/s, m]
-//! ```
-//!
-//! in the order **[φ, v, p]** of the component-wise residual `r = [r_φ, r_v, r_p]`
-//! ([`crate::factor`]), which it reuses: `r_φ` is unchanged, the velocity and position rows are
-//! rotated into the frame of the predicted attitude and sheared by `Jl(r_φ)⁻¹`. Without an
-//! Earth rate, `D(b)⁻¹ Y = X̂_j⁻¹ X_j` (the prediction [`predict`](crate::predict) of `X_j`
-//! compared with `X_j` on SE₂(3)), so `r_L = Log(X̂_j⁻¹ X_j)`.
-//!
-//! # Relation to GTSAM (`ImuFactorErrorMode::Logmap`)
-//!
-//! GTSAM 4.3's error is `e = Log(X_j⁻¹ X̂_j) = −Log(X̂_j⁻¹ X_j)` in the order [rot, pos, vel], so
-//! **exactly** (no first-order step) `e = −P r_L` with `P` the reordering [φ, v, p] → [φ, p, v];
-//! the Jacobians map the same way (`∂e/∂x = −P ∂r_L/∂x`), with GTSAM's pose perturbation
-//! `[dw, dt]` and world velocity equal to the [`NavState`](crate::NavState) tangent
-//! [δφ, δp, δv] to first order and its bias order [b_a, b_g]. Tested against GTSAM 4.3
-//! fixtures in `preint/tests/factor_gtsam.rs` (9-dim) and
-//! `preint/tests/combined_modes_gtsam.rs` (15-dim). With an Earth rate (`rotating.rs`) GTSAM
-//! compares the states in body frame j with the physical velocity `v − ω×p`; its Logmap error is
-//! then, exactly, `e = −P r_L + [0, 0, Jl(w)⁻¹ N r_p]` with `w = −r_φ`,
-//! `N = R_jᵀ[ω]× Exp(−ωΔt) R_i` and `r_p` the component-wise position row — the same `δp → δv`
-//! term as in the component-wise mode (GTSAM PR #2806's whitening), checked against GTSAM 4.3
-//! in `preint/tests/earth_gtsam.rs`.
-//!
-//! # Jacobians
-//!
-//! With `φ = r_φ`, `Q = ΔR(b)ᵀ`, `u = Q r_k` and `ρ = Jl(φ)⁻¹ u` for `k ∈ {v, p}`, and the SE(3)
-//! block `Q(ρ, φ)` (Barfoot 2017 eq. 7.86, [`preint_lie::se3::q_block`]): from
-//! `Exp([ρ, φ]) = (Exp(φ), Jl(φ)ρ)` and the SE(3) left Jacobian,
-//! `∂(Jl(φ)ρ)/∂φ = Q(ρ, φ) − [u]× Jl(φ)`, hence
-//!
-//! ```text
-//! ∂ρ/∂φ = G_k = −Jl(φ)⁻¹ (Q(ρ, φ) − [u]× Jl(φ)),      ∂ρ/∂u = Jl(φ)⁻¹
-//! ∂r_L,k/∂x = Jl(φ)⁻¹ Q ∂r_k/∂x + G_k ∂r_φ/∂x  (+ Jl(φ)⁻¹ [u]× Jr(θ) J_R^g for x = δb_g,i)
-//! ```
-//!
-//! where the last term is `ΔR(b)ᵀ = Exp(−θ)ΔRᵀ` moving with the bias (`θ = J_R^g δb_g`). The
-//! component-wise blocks `∂r/∂x` are those of [`crate::factor`] (or `rotating.rs`), so every
-//! perturbation is the same; all blocks are checked against central differences in
-//! `preint/tests/factor_logmap.rs`.
-//!
-//! # Weighting
-//!
-//! To first order in the residual, `Jl(r_φ)⁻¹ → I` and `r_L = T r` with
-//! `T = diag(I, ΔRᵀ, ΔRᵀ)` (`ΔR` at the integration bias `bias_hat`), a linear map of the
-//! component-wise residual whose covariance is `cov` (resp. `residual_cov15()`), so `r_L` is
-//! weighted by `T cov Tᵀ` (resp. `diag(T, I₆) residual_cov15() diag(T, I₆)ᵀ`). This is GTSAM's
-//! weighting too: its `residualCovariance()` is the same in both error modes and lives in the
-//! `ΔRᵀ`-rotated chart. The two residuals therefore have the same χ² to first order; they differ
-//! in how the non-linear part of the error (rotation error coupling into velocity and position
-//! over long windows) is charted, which is what the NEES evidence in `docs/EVIDENCE.md` measures.
+//! The SE₂(3) Logmap residual of both factors (its definition, Jacobians and weight:
+//! [`ResidualMode`]).
 
 use super::FactorJacobians;
 use crate::bias_correction::Corrected;
@@ -71,9 +9,74 @@ use preint_lie::se3::q_block;
 use preint_lie::{hat, jl, jl_inv};
 
 /// Which residual a factor evaluates (GTSAM's `ImuFactorErrorMode`, without its `Legacy`).
+///
+/// [`ResidualMode::Logmap`] below: the SE₂(3) residual of both factors, its analytic
+/// Jacobians and its weight.
+///
+/// # Definition
+///
+/// Write a triple `(R, v, p)` as the SE₂(3) element `[[R, v, p], [0, 1, 0], [0, 0, 1]]`, with
+/// `Log(R, v, p) = [φ, Jl(φ)⁻¹ v, Jl(φ)⁻¹ p]`, `φ = Log(R)` (`Jl` the SO(3) left Jacobian;
+/// Barrau & Bonnabel 2017, Brossard et al. 2022). With `D(b) = (ΔR(b), Δv(b), Δp(b))` the
+/// bias-corrected deltas (Forster 2017 eq. 44) and `Y = (Y_R, w_v, w_p)` the deltas the two
+/// states imply (`Y_R = R_iᵀR_j`, `w_v = R_iᵀ(v_j − v_i − gΔt)`, `w_p = R_iᵀ(p_j − p_i − v_iΔt −
+/// ½gΔt²)`; with an Earth rate the rotating-frame ones of `rotating.rs`), the residual is
+///
+/// ```text
+/// r_L = Log(D(b)⁻¹ Y) = [r_φ, Jl(r_φ)⁻¹ ΔR(b)ᵀ r_v, Jl(r_φ)⁻¹ ΔR(b)ᵀ r_p]     [rad, m/s, m]
+/// ```
+///
+/// in the order **[φ, v, p]** of the component-wise residual `r = [r_φ, r_v, r_p]`
+/// ([`ImuFactor`](crate::ImuFactor)), which it reuses: `r_φ` is unchanged, the velocity and position rows are
+/// rotated into the frame of the predicted attitude and sheared by `Jl(r_φ)⁻¹`. Without an
+/// Earth rate, `D(b)⁻¹ Y = X̂_j⁻¹ X_j` (the prediction [`predict`](crate::predict) of `X_j`
+/// compared with `X_j` on SE₂(3)), so `r_L = Log(X̂_j⁻¹ X_j)`.
+///
+/// # Relation to GTSAM (`ImuFactorErrorMode::Logmap`)
+///
+/// GTSAM 4.3's error is `e = Log(X_j⁻¹ X̂_j) = −Log(X̂_j⁻¹ X_j)` in the order [rot, pos, vel], so
+/// **exactly** (no first-order step) `e = −P r_L` with `P` the reordering [φ, v, p] → [φ, p, v];
+/// the Jacobians map the same way (`∂e/∂x = −P ∂r_L/∂x`), with GTSAM's pose perturbation
+/// `[dw, dt]` and world velocity equal to the [`NavState`](crate::NavState) tangent
+/// [δφ, δp, δv] to first order and its bias order [b_a, b_g]. Tested against GTSAM 4.3
+/// fixtures in `preint/tests/factor_gtsam.rs` (9-dim) and
+/// `preint/tests/combined_modes_gtsam.rs` (15-dim). With an Earth rate (`rotating.rs`) GTSAM
+/// compares the states in body frame j with the physical velocity `v − ω×p`; its Logmap error is
+/// then, exactly, `e = −P r_L + [0, 0, Jl(w)⁻¹ N r_p]` with `w = −r_φ`,
+/// `N = R_jᵀ[ω]× Exp(−ωΔt) R_i` and `r_p` the component-wise position row — the same `δp → δv`
+/// term as in the component-wise mode (GTSAM PR #2806's whitening), checked against GTSAM 4.3
+/// in `preint/tests/earth_gtsam.rs`.
+///
+/// # Jacobians
+///
+/// With `φ = r_φ`, `Q = ΔR(b)ᵀ`, `u = Q r_k` and `ρ = Jl(φ)⁻¹ u` for `k ∈ {v, p}`, and the SE(3)
+/// block `Q(ρ, φ)` (Barfoot 2017 eq. 7.86, [`preint_lie::se3::q_block`]): from
+/// `Exp([ρ, φ]) = (Exp(φ), Jl(φ)ρ)` and the SE(3) left Jacobian,
+/// `∂(Jl(φ)ρ)/∂φ = Q(ρ, φ) − [u]× Jl(φ)`, hence
+///
+/// ```text
+/// ∂ρ/∂φ = G_k = −Jl(φ)⁻¹ (Q(ρ, φ) − [u]× Jl(φ)),      ∂ρ/∂u = Jl(φ)⁻¹
+/// ∂r_L,k/∂x = Jl(φ)⁻¹ Q ∂r_k/∂x + G_k ∂r_φ/∂x  (+ Jl(φ)⁻¹ [u]× Jr(θ) J_R^g for x = δb_g,i)
+/// ```
+///
+/// where the last term is `ΔR(b)ᵀ = Exp(−θ)ΔRᵀ` moving with the bias (`θ = J_R^g δb_g`). The
+/// component-wise blocks `∂r/∂x` are those of [`ImuFactor`](crate::ImuFactor) (or `rotating.rs`), so every
+/// perturbation is the same; all blocks are checked against central differences in
+/// `preint/tests/factor_logmap.rs`.
+///
+/// # Weighting
+///
+/// To first order in the residual, `Jl(r_φ)⁻¹ → I` and `r_L = T r` with
+/// `T = diag(I, ΔRᵀ, ΔRᵀ)` (`ΔR` at the integration bias `bias_hat`), a linear map of the
+/// component-wise residual whose covariance is `cov` (resp. `residual_cov15()`), so `r_L` is
+/// weighted by `T cov Tᵀ` (resp. `diag(T, I₆) residual_cov15() diag(T, I₆)ᵀ`). This is GTSAM's
+/// weighting too: its `residualCovariance()` is the same in both error modes and lives in the
+/// `ΔRᵀ`-rotated chart. The two residuals therefore have the same χ² to first order; they differ
+/// in how the non-linear part of the error (rotation error coupling into velocity and position
+/// over long windows) is charted, which is what the NEES evidence in `docs/EVIDENCE.md` measures.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum ResidualMode {
-    /// Forster's component-wise residual `[r_φ, r_v, r_p]` ([`crate::factor`]), weighted by
+    /// Forster's component-wise residual `[r_φ, r_v, r_p]` ([`ImuFactor`](crate::ImuFactor)), weighted by
     /// `cov` (GTSAM `ComponentWise`).
     ComponentWise,
     /// The SE₂(3) residual `Log(D(b)⁻¹ Y)` (module docs), weighted by `T cov Tᵀ`

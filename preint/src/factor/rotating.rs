@@ -28,7 +28,7 @@
 //! ```
 //!
 //! (`c = ω×(ω×p_i)` for second order, else 0). Jacobians of `Y` (right perturbation), `w_v`
-//! and `w_p` w.r.t. the state blocks (perturbations of [`crate::factor`]), `θ = Log(R_iᵀR_j)`:
+//! and `w_p` w.r.t. the state blocks (perturbations of [`ImuFactor`](crate::ImuFactor)), `θ = Log(R_iᵀR_j)`:
 //!
 //! ```text
 //! Exact:  ∂Y/∂δφ_i = −Yᵀ, ∂Y/∂δφ_j = I

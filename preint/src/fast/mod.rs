@@ -1,6 +1,6 @@
 //! Deltas-only fast paths ([`crate::Level::Deltas`]): a reader of the mathematics can skip
 //! this module. Everything here computes what the schemes' plain steps
-//! ([`crate::scheme`]) compute, faster, and is checked against them:
+//! ([`Scheme`](crate::Scheme)) compute, faster, and is checked against them:
 //!
 //! - ΔR as a unit quaternion ([`quat`]): a product is 28 flops instead of 45, a rotation of a
 //!   vector 30 instead of 15 plus the 20 of Exp's matrix, and the rotation takes 4 registers

@@ -1,7 +1,7 @@
 //! Window edges: what the window path knows about the stream beyond each edge, the gains of
 //! the samples near the edges (collected instead of added, so that a merge can correlate two
 //! windows), and their resolution into stream samples when the measurement is read
-//! ([`crate::window`] and [`crate::merge()`] describe the model).
+//! ([`preintegrate`](crate::preintegrate()) and [`crate::merge()`] describe the model).
 
 use crate::edges::{EdgeNoise, EdgeSource};
 use crate::noise::{CellRule, white_scale};
@@ -18,7 +18,7 @@ pub(crate) struct Src {
     pub right_s: f64,
 }
 
-/// What the window path knows about one edge of a window (see [`crate::window`]).
+/// What the window path knows about one edge of a window (see [`preintegrate`](crate::preintegrate())).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct Side {
     /// Stream samples referenced here: the boundary sample's stencil first, then the context

@@ -93,7 +93,7 @@ where
     }
 }
 
-/// Incremental on-manifold preintegrator (Forster 2017 chart, see [`crate::measurement`]).
+/// Incremental on-manifold preintegrator (Forster 2017 chart, see [`PreintegratedImu`](crate::PreintegratedImu)).
 ///
 /// ```
 /// use preint::{ImuBias, ImuSample, PreintParams, Preintegrator, Scheme};
@@ -109,7 +109,7 @@ where
 /// assert!((m.delta_r.log().z - 0.1).abs() < 1e-12);
 /// ```
 ///
-/// Noise model ([`crate::noise`]): sample j carries independent white noise of covariance
+/// Noise model ([`ImuNoise`](crate::ImuNoise)): sample j carries independent white noise of covariance
 /// `diag(Σ_g, Σ_a)·white_scale(c_j)`, where the cell `c_j` follows from the intervals to its
 /// neighbours by the scheme's [`CellRule`](crate::noise::CellRule): the interval held by the
 /// sample for Euler (GTSAM), the mean length of its adjacent intervals for midpoint and

@@ -1,4 +1,4 @@
-//! The measurement in the documented chart ([`crate::measurement`]) from the pulled-back
+//! The measurement in the documented chart ([`PreintegratedImu`](crate::PreintegratedImu)) from the pulled-back
 //! error state: pushed forward to the window's end (`Φ_N`), then the rotation rows and
 //! columns taken from rotated coordinates `ψ = ΔR δφ` to `δφ`.
 

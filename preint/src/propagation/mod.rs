@@ -1,7 +1,7 @@
 //! Error-state propagation, the same for every scheme: the covariance, the bias Jacobians and
 //! the combined covariance from each interval's [`Linearisation`].
 //!
-//! Chart (documented in [`crate::measurement`]): `ΔR = ΔR°·Exp(δφ)`, `Δv = Δv° + δv`,
+//! Chart (documented in [`PreintegratedImu`](crate::PreintegratedImu)): `ΔR = ΔR°·Exp(δφ)`, `Δv = Δv° + δv`,
 //! `Δp = Δp° + δp`. The rotation error is handled as `ψ = ΔR_k δφ` (the same error as a left
 //! perturbation, in frame i), the *rotated* error `e_k = [ψ, δv, δp]`. With that choice the
 //! rotation block of every transition is the identity and `ΔR_k[a]×δφ = [u]×ψ` with
@@ -33,7 +33,7 @@
 //! to 4), so its noise must not be added once per interval. Its total pulled-back gain is the
 //! sum `G'_j = Σ_k Γ'_kj` over the intervals that read it; while a later interval may still
 //! read it the sample is *pending*, and once none does it is *retired*:
-//! `P' += G'_j Q_j G'_jᵀ`, `Q_j = diag(Σ_g, Σ_a)·white_scale(c_j)` ([`crate::noise`]). The
+//! `P' += G'_j Q_j G'_jᵀ`, `Q_j = diag(Σ_g, Σ_a)·white_scale(c_j)` ([`ImuNoise`](crate::ImuNoise)). The
 //! result is the exact first-order covariance `Φ_N (Σ_j G'_j Q_j G'_jᵀ) Φ_Nᵀ`. A scheme whose
 //! stencil is `{k, k+1}` retires sample k in interval k (its gain is then complete) and keeps
 //! one pending sample (none when sample k+1's noise does not enter interval k; a held scheme
@@ -79,7 +79,7 @@ pub(crate) trait Shape {
     /// `k − NODES_BEFORE … k + 1 + NODES_AFTER`. A keyframe between samples gets a boundary
     /// sample interpolated through as many stream samples (linear for two, cubic Lagrange for
     /// four), and a wider stencil reads context samples beyond the window's edges
-    /// ([`crate::window`]).
+    /// ([`preintegrate`](crate::preintegrate())).
     const NODES_BEFORE: usize;
     /// See [`Shape::NODES_BEFORE`].
     const NODES_AFTER: usize;
@@ -98,12 +98,12 @@ pub(crate) trait Shape {
 
 /// The rate coupling of an interval's stencil samples: `D_j = ∂a_j/∂ω_j`, how each node's
 /// accelerometer input moves with its rate when the samples were transformed before the loop
-/// (a lever arm corrected per sample, [`crate::extrinsics`]). The combined terms carry the gyro
+/// (a lever arm corrected per sample, [`SensorPose`](crate::SensorPose)). The combined terms carry the gyro
 /// bias through it.
 pub(crate) type RateCoupling = [M3; MAX_STENCIL];
 
 /// Per-sample white-noise covariance `Q_j = s_j · diag(Σ_g, Σ_a)` with
-/// `s_j = white_scale(c_j)` [1/s] ([`crate::noise`]), and the samples' rate coupling if they
+/// `s_j = white_scale(c_j)` [1/s] ([`ImuNoise`](crate::ImuNoise)), and the samples' rate coupling if they
 /// have one ([`Coupled`]). Monomorphised once per noise shape.
 pub(crate) trait NoiseCov: Copy {
     /// Whether the samples have a rate coupling ([`NoiseCov::coupling`]).
@@ -145,7 +145,7 @@ impl NoiseCov for IsotropicNoise {
 }
 
 /// How a transform of the samples before the loop makes a node's accelerometer input depend on
-/// its rate (a lever arm taken off each specific force, [`crate::extrinsics`]).
+/// its rate (a lever arm taken off each specific force, [`SensorPose`](crate::SensorPose)).
 pub(crate) trait RateMap: Copy {
     /// `D(ω) = ∂a_node/∂ω_node` at the rate `w` [rad/s].
     fn d(&self, w: &V3) -> M3;

@@ -6,7 +6,7 @@
 //! `{m, m+1, m+2}` or `{m−2, m−1, m}`, at the ends of what is available; with two samples in all,
 //! the difference quotient). An interval `[t_k, t_k+1]` of length `h` therefore reads the
 //! samples `{k−1, …, k+2}`, the same stencil as a cubic, and the window edges use the context
-//! samples just outside the window ([`crate::window`]). Each node's derivatives are computed
+//! samples just outside the window ([`preintegrate`](crate::preintegrate())). Each node's derivatives are computed
 //! once, by the interval that ends there (by the first interval for node 0), and carried.
 //!
 //! With `u(t) = ΔR(t) a(t)` (frame i), `u̇ = ΔR (ω × a + ȧ)`, and the corrected trapezoidal

@@ -32,7 +32,7 @@ use nalgebra::Matrix3;
 pub(crate) trait IntervalScheme:
     Shape + Variant + Copy + Default + std::fmt::Debug + 'static
 {
-    /// How a sample's noise cell follows from its neighbours ([`crate::noise`]).
+    /// How a sample's noise cell follows from its neighbours ([`ImuNoise`](crate::ImuNoise)).
     const CELL_RULE: CellRule;
     /// What the scheme carries from one interval to the next (e.g. `ΔR_k a_k`).
     type Carry: Copy + Default + std::fmt::Debug;
@@ -180,7 +180,7 @@ impl Scheme {
 
 impl Scheme {
     /// How a sample's noise cell follows from its neighbours in this scheme (see
-    /// [`crate::noise`]): [`CellRule::Held`] for Euler and Galilean, [`CellRule::Centered`]
+    /// [`ImuNoise`](crate::ImuNoise)): [`CellRule::Held`] for Euler and Galilean, [`CellRule::Centered`]
     /// otherwise.
     pub fn cell_rule(self) -> CellRule {
         with_scheme!(self, S => S::CELL_RULE)
