@@ -25,10 +25,7 @@ wrong with a recording and `preint convert` writes any of them as EuRoC CSV.
 Noise file (Kalibr imu.yaml): continuous-time densities, not per-sample standard deviations:
   gyroscope_noise_density [rad/s/sqrt(Hz)], gyroscope_random_walk [rad/s^2/sqrt(Hz)],
   accelerometer_noise_density [m/s^2/sqrt(Hz)], accelerometer_random_walk [m/s^3/sqrt(Hz)], update_rate [Hz].
-Schemes: euler (1st order), midpoint (2nd order), hermite4 (4th-order Hermite-Magnus, uses the \
-neighbouring samples; printed as hermite4, also accepted as rk4 or high-order), galilean (the \
-held sample through the exact Gal(3) exponential: exact for input held over each interval, 1st \
-order on smooth input; GTSAM 4.3's PreintegratedImuMeasurementsG).
+{schemes}
 Exit status: 0 on success, 2 on an error (the message names the file, line or flag) or a refusal \
 (e.g. audit --strict on a defect); output cut short by a closed pipe (`| head`) ends quietly, \
 with the command's own status.
@@ -37,10 +34,19 @@ Examples:
   preint integrate --imu sim/imu.csv --noise sim/imu.yaml --from 0 --to 1000000000
   preint factor --imu sim/imu.csv --poses sim/groundtruth.csv --from 0 --to 1000000000";
 
+/// [`CONVENTIONS`] with its `{schemes}` line: every scheme of the registry, its one-line help
+/// and its aliases ([`crate::scheme::describe`]).
+fn conventions() -> String {
+    CONVENTIONS.replace(
+        "{schemes}",
+        &format!("Schemes: {}.", crate::scheme::describe()),
+    )
+}
+
 /// On-manifold IMU preintegration: simulate, integrate, calibrate, measure noise, and chart
 /// accuracy against cost.
 #[derive(Parser, Debug)]
-#[command(name = "preint", version, about, after_help = CONVENTIONS)]
+#[command(name = "preint", version, about, after_help = conventions())]
 pub struct Cli {
     /// Print one JSON object on stdout instead of the human summary.
     #[arg(long, global = true)]

@@ -10,8 +10,8 @@ use std::path::PathBuf;
 /// Scheme, noise file and gravity of a preintegration.
 #[derive(clap::Args, Clone, Debug)]
 pub struct PreintArgs {
-    /// Integration scheme (an alias is printed as its scheme's name).
-    #[arg(long, value_parser = SchemeParser, default_value = "midpoint")]
+    /// Integration scheme: the registry's (`crate::scheme::flag_help`).
+    #[arg(long, value_parser = SchemeParser, default_value = "midpoint", help = crate::scheme::flag_help())]
     pub scheme: Scheme,
     /// Kalibr imu.yaml with the noise densities (default: EuRoC figures).
     #[arg(long)]

@@ -41,6 +41,47 @@ fn accepted() -> String {
     }
 }
 
+/// Every scheme with its one-line help and its aliases, for `preint --help`: `euler: first
+/// order (…); …; hermite4: fourth order, Hermite–Magnus (…), printed as hermite4, also accepted
+/// as rk4 or high-order; …`.
+pub fn describe() -> String {
+    let one = |s: &Scheme| {
+        let info = s.info();
+        let mut help = info.help.trim_end_matches('.').to_string();
+        if let Some(first) = help.get(..1) {
+            help = first.to_lowercase() + &help[1..];
+        }
+        let aliases = match info.aliases {
+            [] => String::new(),
+            a => format!(
+                ", printed as {}, also accepted as {}",
+                info.name,
+                a.join(" or ")
+            ),
+        };
+        format!("{}: {help}{aliases}", info.name)
+    };
+    ALL.iter().map(one).collect::<Vec<_>>().join("; ")
+}
+
+/// The help of `--scheme`: the aliases each scheme also accepts (the values and their help are
+/// listed by clap from [`SchemeParser`]).
+pub fn flag_help() -> String {
+    let aliases: Vec<String> = ALL
+        .iter()
+        .filter(|s| !s.info().aliases.is_empty())
+        .map(|s| format!("{} for {}", s.info().aliases.join(" and "), s.info().name))
+        .collect();
+    if aliases.is_empty() {
+        "Integration scheme".to_string()
+    } else {
+        format!(
+            "Integration scheme (also accepted: {}; printed as the scheme's name)",
+            aliases.join(", ")
+        )
+    }
+}
+
 /// Parses `--scheme` by the registry's names and aliases (so `--help` lists the values with
 /// their one-line help), and names an unknown value as an unknown scheme with the accepted
 /// names.

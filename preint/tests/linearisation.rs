@@ -7,7 +7,8 @@
 //! `e = [Log(ΔR₀ᵀ ΔR), Δv − Δv₀, Δp − Δp₀]` the chart of `preint::measurement`. Here `J_k` is
 //! computed by central differences of the *deltas only* (`Level::Deltas`, so nothing of the
 //! covariance recursion is used), for every sample and channel, and `c_k` is written out from
-//! the rustdoc rule. The code's covariance must agree with that sum.
+//! the rustdoc rule. The code's covariance must agree with that sum. (Windows pushed directly
+//! into a preintegrator: the generic scheme contract, `scheme_contract.rs`.)
 //!
 //! Accuracy of the reference. Central differences with step ε have truncation error
 //! `ε²/6·|∂³e/∂n³|` and round-off `≈ u·|e₀|/ε` per column (u = 1.1e-16). A sample's noise moves
@@ -21,205 +22,11 @@
 //! (midpoint, hermite4, last test), a
 //! merge without the shared samples by ≥ 1e-3.
 
-use nalgebra::{Matrix3, SMatrix, Vector3};
+mod common;
+
+use common::linearisation::*;
 use preint::window_samples;
-use preint::{
-    ImuBias, ImuSample, Level, PreintParams, PreintegratedImu, Preintegrator, Scheme, merge,
-    preintegrate,
-};
-use preint_lie::SO3;
-
-type V3 = Vector3<f64>;
-type M9 = SMatrix<f64, 9, 9>;
-type M96 = SMatrix<f64, 9, 6>;
-
-const TOL: f64 = 1e-9;
-const EPS: f64 = 1e-3;
-const SCHEMES: [Scheme; 4] = [
-    Scheme::Euler,
-    Scheme::Midpoint,
-    Scheme::Hermite4,
-    Scheme::Galilean,
-];
-
-/// Smooth motion sampled from t = 1 s every 5 ms (± 1.5 ms uniform jitter if asked).
-fn stream(n: usize, jitter: bool) -> Vec<ImuSample> {
-    let mut t: i64 = 1_000_000_000;
-    let mut st: u64 = 12345;
-    let mut out = Vec::with_capacity(n);
-    for _ in 0..n {
-        let x = t as f64 * 1e-9;
-        out.push(ImuSample::new(
-            t,
-            V3::new(
-                0.8 * (1.3 * x).sin() + 0.2,
-                -0.5 * (0.7 * x).cos(),
-                1.1 * (2.1 * x).sin(),
-            ),
-            V3::new(
-                (0.9 * x).sin(),
-                0.5 + 0.3 * (1.7 * x).cos(),
-                9.81 + 0.7 * (2.5 * x).sin(),
-            ),
-        ));
-        let mut dt = 5_000_000i64;
-        if jitter {
-            st = st
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            dt += ((st >> 33) % 3_000_000) as i64 - 1_500_000;
-        }
-        t += dt;
-    }
-    out
-}
-
-fn bias() -> ImuBias {
-    ImuBias::new(V3::new(0.01, -0.02, 0.005), V3::new(0.1, 0.05, -0.2))
-}
-
-fn params(scheme: Scheme, aniso: bool) -> PreintParams {
-    let mut p = PreintParams::default()
-        .with_scheme(scheme)
-        .with_level(Level::Covariance);
-    if aniso {
-        p.acc_cov = Matrix3::new(4.0, 1.0, 0.5, 1.0, 2.0, -0.3, 0.5, -0.3, 1.0) * 1e-4;
-        p.gyro_cov = Matrix3::new(3.0, 0.2, 0.1, 0.2, 2.0, -0.1, 0.1, -0.1, 1.0) * 1e-7;
-    }
-    p
-}
-
-fn direct(p: &PreintParams, s: &[ImuSample]) -> PreintegratedImu {
-    let mut pi = Preintegrator::new(p.clone(), bias()).unwrap();
-    pi.integrate_slice(s).unwrap();
-    pi.finish().unwrap()
-}
-
-/// The documented cell of stream sample k [s] (`preint::CellRule`), written out.
-fn cell(scheme: Scheme, s: &[ImuSample], k: usize) -> f64 {
-    let h = |i: usize| (s[i + 1].t_ns - s[i].t_ns) as f64 * 1e-9;
-    let n = s.len();
-    match scheme {
-        Scheme::Euler | Scheme::Galilean => {
-            if k + 1 < n {
-                h(k)
-            } else {
-                h(k - 1)
-            }
-        }
-        _ => {
-            if k == 0 {
-                h(0)
-            } else if k + 1 == n {
-                h(n - 2)
-            } else {
-                0.5 * (h(k - 1) + h(k))
-            }
-        }
-    }
-}
-
-/// `[Log(ΔR₀ᵀΔR), Δv − Δv₀, Δp − Δp₀]` as a 9-vector.
-fn err9(r: &SO3, v: &V3, p: &V3, r0: &SO3, v0: &V3, p0: &V3) -> SMatrix<f64, 9, 1> {
-    let e = r0.inverse().compose(r).log();
-    let (dv, dp) = (v - v0, p - p0);
-    SMatrix::<f64, 9, 1>::from_iterator(e.iter().chain(dv.iter()).chain(dp.iter()).copied())
-}
-
-/// Deltas of one evaluation: `(ΔR, Δv, Δp)`.
-type Deltas = (SO3, V3, V3);
-
-fn of(m: &PreintegratedImu) -> Deltas {
-    (m.delta_r, m.delta_v, m.delta_p)
-}
-
-/// `Σ_k J_k Q_k J_kᵀ` over the samples `range` of `s`, `J_k` by central differences of `f`.
-fn brute(
-    scheme: Scheme,
-    prm: &PreintParams,
-    s: &[ImuSample],
-    range: std::ops::Range<usize>,
-    f: &dyn Fn(&[ImuSample]) -> Deltas,
-) -> M9 {
-    let (r0, v0, p0) = f(s);
-    let mut cov = M9::zeros();
-    let mut buf = s.to_vec();
-    for k in range {
-        let mut jk = M96::zeros();
-        for c in 0..6 {
-            let mut eval = |e: f64| {
-                buf[k] = s[k];
-                if c < 3 {
-                    buf[k].gyro[c] += e;
-                } else {
-                    buf[k].acc[c - 3] += e;
-                }
-                let (r, v, p) = f(&buf);
-                err9(&r, &v, &p, &r0, &v0, &p0)
-            };
-            let col = (eval(EPS) - eval(-EPS)) / (2.0 * EPS);
-            buf[k] = s[k];
-            jk.fixed_view_mut::<9, 1>(0, c).copy_from(&col);
-        }
-        let sc = 1.0 / cell(scheme, s, k);
-        let mut q = SMatrix::<f64, 6, 6>::zeros();
-        q.fixed_view_mut::<3, 3>(0, 0)
-            .copy_from(&(prm.gyro_cov * sc));
-        q.fixed_view_mut::<3, 3>(3, 3)
-            .copy_from(&(prm.acc_cov * sc));
-        cov += jk * q * jk.transpose();
-    }
-    cov
-}
-
-/// Largest over the 3×3 blocks of `‖A_rc − B_rc‖ / √(‖B_rr‖ ‖B_cc‖)` (Frobenius).
-fn block_rel(a: &M9, b: &M9) -> f64 {
-    let mut w: f64 = 0.0;
-    for r in 0..3 {
-        for c in 0..3 {
-            let x = a.fixed_view::<3, 3>(3 * r, 3 * c).into_owned();
-            let y = b.fixed_view::<3, 3>(3 * r, 3 * c).into_owned();
-            let dr = b.fixed_view::<3, 3>(3 * r, 3 * r).norm();
-            let dc = b.fixed_view::<3, 3>(3 * c, 3 * c).norm();
-            w = w.max((x - y).norm() / (dr * dc).sqrt());
-        }
-    }
-    w
-}
-
-fn check(what: &str, code: &M9, exact: &M9) -> f64 {
-    let e = block_rel(code, exact);
-    eprintln!("{what:58} block rel {e:.2e}");
-    assert!(
-        e < TOL,
-        "{what}: covariance differs from the linearisation by {e:e}"
-    );
-    e
-}
-
-/// Samples pushed into a preintegrator: n = 2, 3, 5, 60, uniform and jittered, isotropic and
-/// anisotropic noise (the two noise paths of the code), every scheme.
-#[test]
-fn direct_covariance_equals_linearisation() {
-    for scheme in SCHEMES {
-        for aniso in [false, true] {
-            let prm = params(scheme, aniso);
-            let fast = prm.clone().with_level(Level::Deltas);
-            for jitter in [false, true] {
-                for n in [2usize, 3, 5, 60] {
-                    let s = stream(n, jitter);
-                    let code = direct(&prm, &s).cov;
-                    let exact = brute(scheme, &prm, &s, 0..n, &|x| of(&direct(&fast, x)));
-                    check(
-                        &format!("{scheme:?} direct n={n} jitter={jitter} aniso={aniso}"),
-                        &code,
-                        &exact,
-                    );
-                }
-            }
-        }
-    }
-}
+use preint::{ImuSample, Level, PreintParams, PreintegratedImu, Scheme, merge, preintegrate};
 
 /// Keyframes between samples, 1 µs from a sample on either side, and on a sample, through
 /// `preintegrate`: the noise sources are the stream samples (the boundary samples are
@@ -238,7 +45,7 @@ fn window_covariance_equals_linearisation_of_the_stream() {
             (t(20) + 1_200_000, t(20) + 3_000_000),
             (t(20) + 1_000, t(21)),
         ];
-        for scheme in SCHEMES {
+        for scheme in Scheme::ALL.iter().copied() {
             for aniso in [false, true] {
                 let prm = params(scheme, aniso);
                 let fast = prm.clone().with_level(Level::Deltas);
@@ -279,7 +86,7 @@ fn merged_covariance_equals_linearisation_of_the_composition() {
             a.delta_p + a.delta_v * b.delta_t + a.delta_r.act(&b.delta_p),
         )
     };
-    for scheme in SCHEMES {
+    for scheme in Scheme::ALL.iter().copied() {
         for aniso in [false, true] {
             let prm = params(scheme, aniso);
             let fast = prm.clone().with_level(Level::Deltas);
@@ -357,7 +164,7 @@ fn merged_covariance_equals_linearisation_of_the_composition() {
 #[test]
 fn merged_direct_windows_equal_linearisation() {
     let s = stream(41, true);
-    for scheme in SCHEMES {
+    for scheme in Scheme::ALL.iter().copied() {
         let prm = params(scheme, true);
         let fast = prm.clone().with_level(Level::Deltas);
         for k in [1usize, 2, 17, 39] {
@@ -389,7 +196,7 @@ fn merged_direct_windows_equal_linearisation() {
 fn independent_boundary_model_is_measurably_off() {
     let s = stream(80, false);
     let t = |k: usize| s[k].t_ns;
-    for scheme in SCHEMES {
+    for scheme in Scheme::ALL.iter().copied() {
         let prm = params(scheme, false);
         let fast = prm.clone().with_level(Level::Deltas);
         let mut worst: f64 = 0.0;

@@ -60,7 +60,7 @@ use preint_lie::so3::{RodriguesCoeffs, i_plus_hat_hat2};
 pub(crate) const INFO: SchemeInfo = SchemeInfo {
     name: "hermite4",
     aliases: &["rk4", "high-order"],
-    help: "Fourth order, Hermite–Magnus (uses the neighbouring samples); also accepted as rk4 and high-order.",
+    help: "Fourth order, Hermite–Magnus (uses the neighbouring samples).",
     order: 4,
     exact_on: "ΔR exact for a cubic rate about a fixed axis (a constant ω included); Δv for a cubic a without rotation; not exact on held input",
     exact_when_held: false,
