@@ -22,8 +22,13 @@
 //!   threshold, and `evaluate_with_time_offset` on both factors.
 //! - Earth rotation: [`earth`] (`PreintParams::omega_coriolis`, [`CoriolisMode`]): a world frame
 //!   rotating at a constant rate in prediction and both factors.
-//! - Schemes: [`Scheme`] (the mathematics of each, and its registry row [`SchemeInfo`]). Reading and writing files is the
-//!   `preint-io` crate's job; this crate does no I/O.
+//! - An IMU away from the body origin: [`SensorPose`], [`LeverArm`]; IMU intrinsics:
+//!   [`intrinsics`]; a window's own discretisation error: [`truncation`].
+//! - Schemes: [`Scheme`] (the mathematics of each) and its registry row [`SchemeInfo`].
+//! - [`prelude`]: the types and functions most programs use. Every public type has one path:
+//!   the types are here, the functions of a subject in its module.
+//!
+//! Reading and writing files is the `preint-io` crate's job; this crate does no I/O.
 //!
 //! Conventions: world frame z up, gravity `g = (0, 0, −9.81)` m/s² by default; the
 //! accelerometer measures specific force; rotations are perturbed on the right
@@ -88,3 +93,8 @@ pub use preint_lie as lie;
 #[cfg(doctest)]
 #[doc = include_str!("../../README.md")]
 pub struct ReadmeDoctests;
+
+/// The crate's own README (its crates.io page), compiled and run as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct CrateReadmeDoctests;
