@@ -3,7 +3,8 @@
 //! `value_delimiter`).
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
-use preint::{SensorPose, lie::SO3};
+use preint::SensorPose;
+use preint::lie::SO3;
 
 /// Parses exactly `N` comma-separated finite numbers; `expected` names them in the error
 /// (e.g. "three comma-separated numbers x,y,z").

@@ -53,7 +53,7 @@ impl PreintArgs {
         checks::non_negative("--gravity", self.gravity)?;
         let noise = noise::or_default(self.noise.as_deref())?;
         let params = PreintParams::from_noise(&noise)
-            .with_scheme(self.scheme.into())
+            .with_scheme(self.scheme)
             .with_level(level)
             .with_gravity(Vector3::new(0.0, 0.0, -self.gravity));
         let params = PreintParams {

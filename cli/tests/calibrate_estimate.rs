@@ -10,8 +10,9 @@ mod common;
 
 use common::{json, run, tmp, write_imu_csv};
 use nalgebra::{Matrix3, Vector3};
+use preint::ImuNoise;
 use preint::intrinsics::{ImuIntrinsics, IntrinsicsModel};
-use preint::{ImuNoise, lie::SO3};
+use preint::lie::SO3;
 use preint_sim::{EulerScene, SimConfig, simulate};
 use std::path::{Path, PathBuf};
 

@@ -7,7 +7,8 @@ mod common;
 use common::{json, run, tmp, write_imu_csv};
 use nalgebra::{Matrix3, Vector3};
 use preint::intrinsics::AppliedIntrinsics;
-use preint::{ImuBias, ImuNoise, Level, PreintParams, lie::SO3, preintegrate};
+use preint::lie::SO3;
+use preint::{ImuBias, ImuNoise, Level, PreintParams, preintegrate};
 use preint_sim::{MultiPoseStaticScene, SimConfig, simulate};
 
 /// 12 attitudes, 4 s still each, 2 s moves (the calibration suite's layout).

@@ -17,8 +17,9 @@
 //!   crate's measured here with its own seeded noise, 2 000 realisations each).
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
+use preint::lie::SO3;
 use preint::{
-    ImuBias, ImuSample, Level, LeverArm, PreintParams, Preintegrator, Scheme, SensorPose, lie::SO3,
+    ImuBias, ImuSample, Level, LeverArm, PreintParams, Preintegrator, Scheme, SensorPose,
 };
 use preint_io::parse_euroc_imu;
 use serde_json::Value;

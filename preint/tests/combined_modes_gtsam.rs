@@ -21,9 +21,10 @@
 //! columns [acc, gyro].
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
+use preint::edges::EdgeNoise;
 use preint::{
     BiasJacobians, CombinedImuFactor, CombinedImuFactorJacobians, Cov9, Cov15, ImuBias, Level,
-    NavState, PreintegratedImu, ResidualMode, edges::EdgeNoise,
+    NavState, PreintegratedImu, ResidualMode,
 };
 use preint_lie::{SO3, hat};
 use serde_json::Value;

@@ -6,10 +6,11 @@ mod common;
 
 use common::gtsam_fixture::{json, mat, v3};
 use common::*;
+use preint::deskew::WindowDeltas;
 use preint::deskew::{DeskewTarget, deltas_at, deskew_points, states_at};
 use preint::{
     ImuBias, ImuSample, Level, LeverArm, NavState, PreintError, PreintParams, Scheme, SensorPose,
-    deskew::WindowDeltas, predict, preintegrate,
+    predict, preintegrate,
 };
 use preint_lie::SO3;
 

@@ -26,9 +26,10 @@
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
 use preint::ResidualMode;
+use preint::edges::EdgeNoise;
 use preint::{
     BiasJacobians, CombinedImuFactor, CoriolisMode, Cov9, Cov15, ImuBias, ImuFactor, Level,
-    NavState, PreintegratedImu, edges::EdgeNoise, predict,
+    NavState, PreintegratedImu, predict,
 };
 use preint_lie::{SO3, hat, jl_inv, jr};
 use serde_json::Value;

@@ -3,10 +3,11 @@
 
 use nalgebra::{DMatrix, DVector, Matrix3, SVector, Vector3};
 use preint::ResidualMode;
+use preint::edges::EdgeNoise;
 use preint::sqrt_information;
 use preint::{
     BiasJacobians, CombinedImuFactor, Cov9, Cov15, FactorError, ImuBias, ImuFactor, Level,
-    NavState, PreintegratedImu, edges::EdgeNoise, predict,
+    NavState, PreintegratedImu, predict,
 };
 use preint_lie::{Manifold, SO3};
 

@@ -22,9 +22,10 @@
 //! from `tests/fixtures/gtsam/` (see `factor_README.md` there).
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
+use preint::edges::EdgeNoise;
 use preint::{
     BiasJacobians, Cov9, Cov15, ImuBias, ImuFactor, Level, NavState, PreintegratedImu,
-    ResidualMode, edges::EdgeNoise, predict,
+    ResidualMode, predict,
 };
 use preint_lie::{SO3, hat, jl_inv};
 use std::path::PathBuf;

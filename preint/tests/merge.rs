@@ -6,9 +6,10 @@
 //! `tests/linearisation.rs` checks merges between samples against numeric differentiation.
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
+use preint::edges::EdgeNoise;
 use preint::{
     BiasJacobians, Cov9, Cov15, ImuBias, ImuNoise, ImuSample, Level, MergeError, PreintParams,
-    PreintegratedImu, Scheme, edges::EdgeNoise, merge, preintegrate,
+    PreintegratedImu, Scheme, merge, preintegrate,
 };
 use preint_lie::{SO3, hat, jr};
 

@@ -6,9 +6,10 @@ mod common;
 
 use common::Scene;
 use nalgebra::{Matrix3, Vector3};
+use preint::lie::SO3;
 use preint::{
-    ImuBias, ImuSample, Level, PreintError, PreintParams, Scheme, SensorPose, lie::SO3,
-    preintegrate, second_order,
+    ImuBias, ImuSample, Level, PreintError, PreintParams, Scheme, SensorPose, preintegrate,
+    second_order,
 };
 
 fn params(sigma_g: f64, sigma_a: f64) -> PreintParams {

@@ -3,9 +3,13 @@
 
 use crate::errors::shape_err;
 use nalgebra::{Matrix3, SMatrix, Vector3};
-use preint::lie::SO3;
+use preint::edges::EdgeNoise;
 use preint::edges::EdgeSource;
-use preint::{BiasCorrection, BiasJacobians, CellRule, CoriolisMode, ImuBias, Level, LeverArm, PreintParams, PreintegratedImu, Scheme, SensorPose, edges::EdgeNoise};
+use preint::lie::SO3;
+use preint::{
+    BiasCorrection, BiasJacobians, CellRule, CoriolisMode, ImuBias, Level, LeverArm, PreintParams,
+    PreintegratedImu, Scheme, SensorPose,
+};
 use pyo3::PyResult;
 
 /// Format version written first.

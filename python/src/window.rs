@@ -11,7 +11,8 @@ use crate::params::{PyBias, PyParams, bias_or_zero};
 use nalgebra::{SVector, Vector3};
 use numpy::ndarray::{Array1, Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
-use preint::{deskew::{DeltasAt, DeskewTarget}, truncation::TruncationEstimate};
+use preint::deskew::{DeltasAt, DeskewTarget};
+use preint::truncation::TruncationEstimate;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 

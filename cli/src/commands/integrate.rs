@@ -8,10 +8,11 @@ use crate::progress::ReadingBar;
 use crate::scheme::{self};
 use crate::{CliError, Output, input, noise, stream};
 use nalgebra::Vector3;
+use preint::deskew::DeltasAt;
 use preint::deskew::{deltas_at, states_at};
 use preint::{
     ImuBias, ImuNoise, Level, NavState, PreintError, PreintParams, PreintegratedImu, Preintegrator,
-    deskew::DeltasAt, predict, preintegrate,
+    predict, preintegrate,
 };
 use preint_io::SourceInfo;
 use serde_json::{Value, json};

@@ -3,10 +3,9 @@
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
 use preint::FactorJacobians;
-use preint::{
-    BiasJacobians, CoriolisMode, ImuBias, Level, NavState, PreintegratedImu, edges::EdgeNoise,
-    lie::SO3,
-};
+use preint::edges::EdgeNoise;
+use preint::lie::SO3;
+use preint::{BiasJacobians, CoriolisMode, ImuBias, Level, NavState, PreintegratedImu};
 
 /// xorshift64* — deterministic, no dev-dependency.
 pub struct Rng(pub u64);
