@@ -11,7 +11,7 @@ use preint_lie::{SO3, hat, jl};
 
 impl PreintegratedImu {
     /// Deltas corrected to first order for a new bias estimate `bias`, `δb = bias − bias_hat`,
-    /// as [`bias_correction`](Self::bias_correction) says (module docs):
+    /// as [`bias_correction`](Self::bias_correction) says ([`BiasCorrection`]):
     /// [`BiasCorrection::Additive`] (Forster eq. 44) `ΔR·Exp(c_φ)`, `Δv + c_v`, `Δp + c_p` with
     /// `c_φ = ∂ΔR/∂b_g δb_g`, `c_v = ∂Δv/∂b_g δb_g + ∂Δv/∂b_a δb_a`, `c_p` likewise;
     /// [`BiasCorrection::Group`] `ΔR·Exp(c_φ)`, `Δv + ΔR Jl(c_φ) ΔRᵀ c_v`, `Δp + ΔR Jl(c_φ) ΔRᵀ c_p`
@@ -55,13 +55,13 @@ pub(crate) struct Corrected {
     pub jac: BiasJacobians,
 }
 
-/// The corrected deltas of `pim` for the bias `bias` (module docs).
+/// The corrected deltas of `pim` for the bias `bias` ([`BiasCorrection`]).
 pub(crate) fn correct(pim: &PreintegratedImu, bias: &ImuBias) -> Corrected {
     correct_with_time_offset(pim, bias, 0.0).0
 }
 
 /// The deltas of `pim` corrected for `bias` and a time-offset change `dtd_s` \[s\] along the
-/// tangent `J_b δb + J_td δt_d` (module docs; [`crate::time_offset`] for `J_td`), and `ζ`, the
+/// tangent `J_b δb + J_td δt_d` ([`BiasCorrection`]; [`crate::time_offset`] for `J_td`), and `ζ`, the
 /// derivative
 /// of the corrected deltas with respect to `dtd_s`: rows 0..3 the rotation direction `u` with
 /// `ΔR(b, t_d + ε) ≈ ΔR(b, t_d) Exp(ε Jr(c_φ) u)` (`Jr(c_φ)` is the returned `jr`), rows 3..9

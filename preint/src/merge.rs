@@ -55,7 +55,7 @@ type M96 = SMatrix<f64, 9, 6>;
 
 /// Merges two consecutive preintegrations `a` over `[t_i, t_k]` and `b` over `[t_k, t_j]`
 /// into one over `[t_i, t_j]`: deltas, 9×9 and 15×15 covariances and bias Jacobians, by the
-/// formulas of the module docs. `Δt` is recomputed from the integer timestamps
+/// formulas below. `Δt` is recomputed from the integer timestamps
 /// (`(t_j − t_i)·1e-9` s) when both inputs' `delta_t` agree with theirs, else summed.
 ///
 /// The result's `edge_noise` holds a's start-side and b's end-side samples (with their gains
@@ -223,7 +223,7 @@ fn check_mergeable(a: &PreintegratedImu, b: &PreintegratedImu) -> Result<(), Mer
     Ok(())
 }
 
-/// `A` and `B` of the module docs: the composed error's derivatives with respect to a's and
+/// `A` and `B` of [`merge()`]: the composed error's derivatives with respect to a's and
 /// b's errors.
 fn transitions(a: &PreintegratedImu, b: &PreintegratedImu) -> (M9, M9) {
     let ra = *a.delta_r.matrix();
@@ -242,7 +242,7 @@ fn transitions(a: &PreintegratedImu, b: &PreintegratedImu) -> (M9, M9) {
     (am, bm)
 }
 
-/// The merged 15×15 error-state covariance (module docs): `F_a Σ15_a F_aᵀ + G_b Σ15_b G_bᵀ`
+/// The merged 15×15 error-state covariance ([`merge()`]): `F_a Σ15_a F_aᵀ + G_b Σ15_b G_bᵀ`
 /// plus the shared samples' terms for [`Level::Combined`]; `diag(Σ, Σ_bb,a + Σ_bb,b)` for
 /// [`Level::Covariance`].
 #[allow(clippy::too_many_arguments)]
@@ -280,7 +280,7 @@ fn combined_cov(
 
 type M9 = SMatrix<f64, 9, 9>;
 
-/// The covariance added by the samples `a` and `b` share (module docs) and the merged
+/// The covariance added by the samples `a` and `b` share ([`merge()`]) and the merged
 /// window's edge sources.
 fn shared_noise(a: &PreintegratedImu, b: &PreintegratedImu, am: &M9, bm: &M9) -> (M9, EdgeNoise) {
     let (ea, eb) = (&a.edge_noise, &b.edge_noise);

@@ -1,24 +1,5 @@
-//! Navigation state `(R, p, v)` and its prediction from a preintegrated measurement.
-//!
-//! Frames: `R` rotates body → world (`x_w = R x_b`); `p` \[m\] and `v` [m/s] are the body origin's
-//! position and velocity in the world frame (z up; gravity is carried by the
-//! [`PreintegratedImu`], default `(0, 0, −9.81)` m/s²).
-//!
-//! **Tangent space and perturbation** (used by [`NavState::retract`], [`NavState::local`], the
-//! [`preint_lie::Manifold`] impl and every Jacobian of [`ImuFactor`](crate::ImuFactor)): a 9-vector in the order
-//! **[δφ, δp, δv]** (rad, m, m/s) with
-//!
-//! ```text
-//! R ← R·Exp(δφ)      (right, body-frame rotation perturbation)
-//! p ← p + R·δp       (body-frame position perturbation)
-//! v ← v + δv         (world-frame velocity perturbation)
-//! ```
-//!
-//! This is Forster et al. 2017 (T-RO), Sec. VI-B, and to first order GTSAM's: its `Pose3`
-//! retract perturbs `[dw, dt]` with `dt` in the body frame, and its `ImuFactor` velocity
-//! variable is a world-frame vector. The order [δφ, δp, δv] is that of GTSAM's `NavState`
-//! (pose first, then velocity); it is **not** the preintegration order [δφ, δv, δp] of
-//! residuals and covariances — the factor exposes named blocks so the two cannot be confused.
+//! Navigation state `(R, p, v)` (its frames and tangent order: [`NavState`]) and its prediction
+//! from a preintegrated measurement.
 
 use crate::choices::CoriolisMode;
 use crate::earth::{Transport, centrifugal};
@@ -32,7 +13,27 @@ use preint_lie::SO3;
 pub type NavTangent = SVector<f64, 9>;
 
 /// Navigation state: attitude `r` (body → world), position `p` [m, world], velocity
-/// `v` [m/s, world]. See the module docs for the tangent order [δφ, δp, δv] and perturbations.
+/// `v` [m/s, world]. The tangent order [δφ, δp, δv] and the perturbations are below.
+///
+/// Frames: `R` rotates body → world (`x_w = R x_b`); `p` \[m\] and `v` [m/s] are the body origin's
+/// position and velocity in the world frame (z up; gravity is carried by the
+/// [`PreintegratedImu`], default `(0, 0, −9.81)` m/s²).
+///
+/// **Tangent space and perturbation** (used by [`NavState::retract`], [`NavState::local`], the
+/// [`preint_lie::Manifold`] impl and every Jacobian of [`ImuFactor`](crate::ImuFactor)): a 9-vector in the order
+/// **[δφ, δp, δv]** (rad, m, m/s) with
+///
+/// ```text
+/// R ← R·Exp(δφ)      (right, body-frame rotation perturbation)
+/// p ← p + R·δp       (body-frame position perturbation)
+/// v ← v + δv         (world-frame velocity perturbation)
+/// ```
+///
+/// This is Forster et al. 2017 (T-RO), Sec. VI-B, and to first order GTSAM's: its `Pose3`
+/// retract perturbs `[dw, dt]` with `dt` in the body frame, and its `ImuFactor` velocity
+/// variable is a world-frame vector. The order [δφ, δp, δv] is that of GTSAM's `NavState`
+/// (pose first, then velocity); it is **not** the preintegration order [δφ, δv, δp] of
+/// residuals and covariances — the factor exposes named blocks so the two cannot be confused.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NavState {
     /// Attitude, rotation body → world.
@@ -64,7 +65,7 @@ impl NavState {
         }
     }
 
-    /// `self ⊕ d` for `d = [δφ, δp, δv]`: `(R·Exp(δφ), p + R·δp, v + δv)` (module docs).
+    /// `self ⊕ d` for `d = [δφ, δp, δv]`: `(R·Exp(δφ), p + R·δp, v + δv)` ([`NavState`]).
     pub fn retract(&self, d: &NavTangent) -> Self {
         let dphi = d.fixed_rows::<3>(0).into_owned();
         let dp = d.fixed_rows::<3>(3).into_owned();

@@ -2,7 +2,7 @@
 //! conversion) and the conversion itself.
 
 /// How the time cell `c` \[s\] of a sample follows from the intervals to its neighbours (its
-/// white noise then has covariance `Σ/c`, see the module docs).
+/// white noise then has covariance `Σ/c`, see [`ImuNoise`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum CellRule {
     /// The sample is held over the interval that follows it (`euler`, GTSAM): `c = right`; a

@@ -161,7 +161,7 @@ pub(crate) fn boundary(
     (Err(m), b, side)
 }
 
-/// Cuts the window `[t_i_ns, t_j_ns]` from a time-ordered stream (module docs).
+/// Cuts the window `[t_i_ns, t_j_ns]` from a time-ordered stream ([`preintegrate`]).
 fn plan(
     scheme: Scheme,
     samples: &[ImuSample],
@@ -358,7 +358,7 @@ pub fn window_samples(
 }
 
 /// Preintegrates the keyframe window `[t_i_ns, t_j_ns]` of a time-ordered sample stream with
-/// bias estimate `bias` (see the module docs for the boundary treatment and the noise model).
+/// bias estimate `bias` (the boundary treatment and the noise model are below).
 /// The result has `t_i_ns`, `t_j_ns` and `delta_t = (t_j − t_i)·1e-9 s` exactly.
 ///
 /// Errors (indices and times name the offending stream sample): the stream's values and order

@@ -35,7 +35,7 @@ impl CombinedImuFactor {
     /// Builds the factor with the given [`ResidualMode`]: the first nine rows of the residual
     /// are those of [`ImuFactor`](super::ImuFactor) in that mode, the bias rows unchanged;
     /// [`ResidualMode::Logmap`] weights with `diag(T, I₆) residual_cov15() diag(T, I₆)ᵀ`
-    /// ([`ResidualMode::Logmap`](crate::ResidualMode::Logmap) module docs). Errors as [`new`](Self::new).
+    /// ([`ResidualMode::Logmap`](crate::ResidualMode::Logmap)). Errors as [`new`](Self::new).
     pub fn with_mode(pim: PreintegratedImu, mode: ResidualMode) -> Result<Self, FactorError> {
         let cov = pim.residual_cov15();
         Weighted::new(pim, Level::Combined, "cov15", cov, mode).map(Self)

@@ -131,7 +131,7 @@ impl ImuFactor {
 
     /// Builds the factor with the given [`ResidualMode`]: [`ResidualMode::ComponentWise`]
     /// weights `[r_φ, r_v, r_p]` by `pim.cov`, [`ResidualMode::Logmap`] weights the SE₂(3)
-    /// residual by `T cov Tᵀ` ([`ResidualMode::Logmap`](crate::ResidualMode::Logmap) module docs). Errors as [`new`](Self::new).
+    /// residual by `T cov Tᵀ` ([`ResidualMode::Logmap`](crate::ResidualMode::Logmap)). Errors as [`new`](Self::new).
     pub fn with_mode(pim: PreintegratedImu, mode: ResidualMode) -> Result<Self, FactorError> {
         let cov = pim.cov;
         Weighted::new(pim, Level::Covariance, "cov", cov, mode).map(Self)
@@ -176,7 +176,8 @@ impl ImuFactor {
         self.evaluate(state_i, state_j, bias_i).0
     }
 
-    /// Residual and its analytic Jacobians (blocks and perturbations in the module docs).
+    /// Residual and its analytic Jacobians (blocks and perturbations in [`ImuFactor`]'s
+    /// documentation).
     pub fn evaluate(
         &self,
         state_i: &NavState,
@@ -188,7 +189,7 @@ impl ImuFactor {
 
     /// Residual, Jacobians and `∂r/∂δt_d` [per s] at a time-offset change `dtd_s` \[s\] relative
     /// to the offset the measurement was integrated with (`t_imu = t_cam + t_d`;
-    /// [`crate::time_offset`], and the module docs): the deltas corrected by
+    /// [`crate::time_offset`], and [`ImuFactor`]'s documentation): the deltas corrected by
     /// `J_b δb + J_td δt_d` ([`PreintegratedImu::corrected_with_time_offset`]). With
     /// `dtd_s = 0` the residual and blocks are [`evaluate`](Self::evaluate)'s.
     pub fn evaluate_with_time_offset(

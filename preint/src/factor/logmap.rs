@@ -79,7 +79,7 @@ pub enum ResidualMode {
     /// Forster's component-wise residual `[r_φ, r_v, r_p]` ([`ImuFactor`](crate::ImuFactor)), weighted by
     /// `cov` (GTSAM `ComponentWise`).
     ComponentWise,
-    /// The SE₂(3) residual `Log(D(b)⁻¹ Y)` (module docs), weighted by `T cov Tᵀ`
+    /// The SE₂(3) residual `Log(D(b)⁻¹ Y)` (the enum's documentation), weighted by `T cov Tᵀ`
     /// (GTSAM `Logmap`, its default in 4.3).
     Logmap,
 }
@@ -119,7 +119,7 @@ impl ResidualMode {
 }
 
 /// `T = diag(I, ΔRᵀ, ΔRᵀ)`, the first-order map from the component-wise residual to the
-/// Logmap one (module docs), at the integration bias.
+/// Logmap one ([`ResidualMode`]), at the integration bias.
 pub(crate) fn chart_map9(pim: &PreintegratedImu) -> SMatrix<f64, 9, 9> {
     let rt = pim.delta_r.matrix().transpose();
     let mut t = SMatrix::<f64, 9, 9>::identity();
@@ -141,7 +141,7 @@ pub(super) fn logmap_cov<const R: usize>(
 
 /// Maps a component-wise residual and its Jacobians (first nine rows [r_φ, r_v, r_p]; any
 /// further rows, the bias rows of the combined factor, are left as they are) to the Logmap
-/// residual and its Jacobians, in place (module docs for the formulas), at the corrected deltas
+/// residual and its Jacobians, in place ([`ResidualMode`] for the formulas), at the corrected deltas
 /// `c`. `td`, if given, is a further column `∂r/∂δt_d` (the time offset,
 /// [`crate::time_offset`]) with the rotation direction `u` its correction moves `ΔR(b)` along
 /// (`ΔR(b) Exp(Jr(c_φ) u ε)`); it maps as the gyro-bias columns do, `ΔR(b)ᵀ` moving with it.

@@ -60,7 +60,7 @@ pub enum FactorError {
 }
 
 /// Upper Cholesky factor `U` of `Σ⁻¹` (`Σ⁻¹ = UᵀU`, positive diagonal), computed as
-/// `U = P L⁻¹ P` from `P Σ P = L Lᵀ` (`P` reverses the order), see the module docs.
+/// `U = P L⁻¹ P` from `P Σ P = L Lᵀ` (`P` reverses the order), see [`ImuFactor`].
 ///
 /// `Σ` is symmetrised (`½(Σ + Σᵀ)`) first. Errors: [`FactorError::NonFinite`] for NaN/∞,
 /// [`FactorError::CovarianceNotPositiveDefinite`] if a pivot is not strictly positive.
@@ -114,7 +114,7 @@ pub fn sqrt_information<const N: usize>(
 
 /// Jacobians of an `R`-dimensional IMU residual (rows in the residual's order: [r_φ, r_v, r_p]
 /// for [`ImuFactor`], [r_φ, r_v, r_p, r_bg, r_ba] for [`CombinedImuFactor`]), one `R×3` block
-/// per perturbation; the perturbation of each block is in the module docs.
+/// per perturbation; the perturbation of each block is in [`ImuFactor`]'s documentation.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FactorJacobians<const R: usize> {
     /// `∂r/∂δφ_i`, `R_i ← R_i Exp(δφ_i)` [1/rad].

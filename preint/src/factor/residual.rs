@@ -7,7 +7,7 @@ use crate::navstate::NavState;
 use nalgebra::{Matrix3, SVector};
 use preint_lie::hat;
 
-/// The 9-dim residual and its Jacobians (module docs) at the corrected deltas `c` (for the bias `bias_i`,
+/// The 9-dim residual and its Jacobians ([`ImuFactor`](crate::ImuFactor)) at the corrected deltas `c` (for the bias `bias_i`,
 /// and a time-offset change when `c` comes from [`crate::time_offset`]), and
 /// `rot = Jr⁻¹(r_φ) Eᵀ Jr(c_φ)`: `∂r_φ/∂u = −rot` for a rotation correction moving along `u`
 /// (`ΔR(b) ≈ ΔR(b) Exp(Jr(c_φ) u ε)`; [`td_column`]).

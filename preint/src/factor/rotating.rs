@@ -166,7 +166,7 @@ fn implied_approx(
 }
 
 /// The 9-dim residual and its Jacobians with the Earth rate `w` [rad/s, navigation frame]
-/// (module docs).
+/// ([`ImuFactor`](crate::ImuFactor)).
 pub(super) fn residual9_rotating(
     pim: &PreintegratedImu,
     xi: &NavState,

@@ -88,18 +88,24 @@ macro_rules! each {
     };
 }
 
-/// Whether `scheme` has a fast path (a constant for the loop of each scheme).
-pub(crate) const fn attached(scheme: Scheme) -> bool {
-    matches!(scheme, Scheme::Euler | Scheme::Midpoint | Scheme::Hermite4)
+/// Which fast path attaches to `scheme`: 0 for none, else its [`Attached`] variant's number
+/// (a constant of each scheme's loop, so that the one-by-one path dispatches at compile time).
+pub(crate) const fn kind(scheme: Scheme) -> u8 {
+    match scheme {
+        Scheme::Euler => 1,
+        Scheme::Midpoint => 2,
+        Scheme::Hermite4 => 3,
+        _ => 0,
+    }
 }
 
 impl Attached {
     /// The fast path of `scheme` (none for a scheme this module does not list).
     pub(crate) fn of(scheme: Scheme) -> Self {
-        match scheme {
-            Scheme::Euler => Attached::Euler(EulerDeltas::default()),
-            Scheme::Midpoint => Attached::Midpoint(MidpointDeltas::default()),
-            Scheme::Hermite4 => Attached::Hermite4(HermiteDeltas::default()),
+        match kind(scheme) {
+            1 => Attached::Euler(EulerDeltas::default()),
+            2 => Attached::Midpoint(MidpointDeltas::default()),
+            3 => Attached::Hermite4(HermiteDeltas::default()),
             _ => Attached::None,
         }
     }
@@ -124,10 +130,17 @@ impl Attached {
         each!(self, f => f.start(first), ())
     }
 
-    /// [`FastDeltas::step`]; false without a fast path.
+    /// [`FastDeltas::step`] of the path of kind `k` ([`kind`]; a constant where it is called,
+    /// so that only that path's code is there); false without it.
     #[inline(always)]
-    pub(crate) fn step(&mut self, st: &Stencil) -> bool {
-        each!(self, f => { f.step(st); true }, false)
+    pub(crate) fn step(&mut self, k: u8, st: &Stencil) -> bool {
+        match (k, self) {
+            (1, Attached::Euler(f)) => f.step(st),
+            (2, Attached::Midpoint(f)) => f.step(st),
+            (3, Attached::Hermite4(f)) => f.step(st),
+            _ => return false,
+        }
+        true
     }
 
     /// [`FastDeltas::run_slice`]; 0 without a fast path.

@@ -110,8 +110,10 @@ pub(crate) struct Core<S: IntervalScheme> {
 }
 
 impl<S: IntervalScheme> Core<S> {
-    /// Whether the scheme has a fast path ([`crate::fast::attached`]).
-    const FAST: bool = crate::fast::attached(S::SCHEME);
+    /// The scheme's fast path ([`crate::fast::kind`], 0 for none).
+    const FAST_KIND: u8 = crate::fast::kind(S::SCHEME);
+    /// Whether the scheme has a fast path.
+    const FAST: bool = Self::FAST_KIND != 0;
 
     /// An empty loop; the context samples of `fixed.spec` are used if `S`'s stencil reaches
     /// beyond the window.
@@ -153,7 +155,7 @@ impl<S: IntervalScheme> Core<S> {
     }
 
     /// The same loop accumulating the Jacobians with respect to `model` (the samples reach it
-    /// corrected, by the preintegrator's `Corrected` wrapper); nothing at `Level::Deltas`.
+    /// corrected, by the preintegrator's front, `front.rs`); nothing at `Level::Deltas`.
     pub(crate) fn with_intrinsics(
         mut self,
         model: Option<crate::intrinsics::ImuIntrinsics>,
@@ -337,7 +339,7 @@ impl<S: IntervalScheme> Core<S> {
             ..
         } = self;
         let (first_id, st) = stencil::<S>(ring, ctx_after.as_ref(), *ctx_before, *n, k, at_end);
-        if !LINEARISE && Self::FAST && fast.step(&st) {
+        if !LINEARISE && Self::FAST && fast.step(Self::FAST_KIND, &st) {
             return;
         }
         let intr = I::sink(intr);

@@ -52,14 +52,20 @@ impl Maps {
 
     /// Every sample of `src` transformed into `dst` (same length).
     fn map_all(&self, src: &[ImuSample], dst: &mut [ImuSample]) {
-        match &self.intr {
-            Some((c, _)) => c.apply_all(src, dst),
-            None => dst.copy_from_slice(src),
-        }
-        if let Some((arm, b_g)) = &self.arm {
-            for d in dst.iter_mut() {
-                *d = arm.map(d, b_g);
+        match (&self.intr, &self.arm) {
+            (Some((c, _)), None) => c.apply_all(src, dst),
+            (None, Some((arm, b_g))) => {
+                for (d, s) in dst.iter_mut().zip(src) {
+                    *d = arm.map(s, b_g);
+                }
             }
+            (Some((c, _)), Some((arm, b_g))) => {
+                c.apply_all(src, dst);
+                for d in dst.iter_mut() {
+                    *d = arm.map(d, b_g);
+                }
+            }
+            (None, None) => dst.copy_from_slice(src),
         }
     }
 }
@@ -89,6 +95,7 @@ impl<E> Front<E> {
 }
 
 impl<E: Engine + Clone + 'static> Engine for Front<E> {
+    #[inline]
     fn push(&mut self, s: &ImuSample) {
         self.inner.push(&self.maps.map(s));
     }

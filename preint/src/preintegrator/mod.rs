@@ -62,6 +62,7 @@ impl<S: IntervalScheme + Send + Sync> Engine for Core<S>
 where
     S::Carry: Send + Sync,
 {
+    #[inline(always)]
     fn push(&mut self, s: &ImuSample) {
         Core::push(self, s);
     }
