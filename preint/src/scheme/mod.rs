@@ -66,12 +66,14 @@ pub struct SchemeInfo {
     /// One line for `--help`.
     pub help: &'static str,
     /// Global order of its deltas' error on smooth input (error ∝ hᵒʳᵈᵉʳ, h the sample
-    /// period); checked by the evidence suite's measured slopes.
+    /// period); every scheme's measured slope is checked against it
+    /// (`preint/tests/scheme_contract.rs`).
     pub order: u32,
     /// The input on which each of its deltas is exact.
     pub exact_on: &'static str,
     /// Whether its deltas are exact (to round-off) on held input: `(ω_k, a_k)` constant over
-    /// each interval (a sample-and-hold stream, an integrating IMU).
+    /// each interval (a sample-and-hold stream, an integrating IMU); `preint advise --input
+    /// held` takes the scheme that is as its reference (checked in `cli/tests/advise_exact.rs`).
     pub exact_when_held: bool,
     /// Simplicity rank: among candidates of near-equal cost `preint advise` recommends the
     /// lowest (model no more than the scene needs).
