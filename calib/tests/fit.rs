@@ -55,7 +55,9 @@ fn correct_fits_are_credible() {
     for dof in [1usize, 2, 3, 9, 15, 29, 30, 43, 100, 223, 1000, 10_000] {
         let d = ChiSquared::new(dof as f64).unwrap();
         let n = 4000;
-        let credible = (0..n).filter(|_| Fit::new(d.sample(&mut rng), dof).credible).count();
+        let credible = (0..n)
+            .filter(|_| Fit::new(d.sample(&mut rng), dof).credible)
+            .count();
         assert!(
             credible as f64 >= 0.999 * n as f64,
             "{dof} dof: {credible} of {n} credible"
@@ -84,8 +86,18 @@ fn wrong_fits_are_not_credible() {
     // Underflow is said, not printed as 0.
     assert!(Fit::new(3.06e7, 223).why.contains("p < 1e-300"));
     // A cause is appended only to a fit that is not credible.
-    assert!(Fit::new(400.0, 100).because("the poses").why.ends_with(": the poses"));
-    assert!(!Fit::new(100.0, 100).because("the poses").why.contains("poses"));
+    assert!(
+        Fit::new(400.0, 100)
+            .because("the poses")
+            .why
+            .ends_with(": the poses")
+    );
+    assert!(
+        !Fit::new(100.0, 100)
+            .because("the poses")
+            .why
+            .contains("poses")
+    );
 }
 
 /// What cannot be tested says so: no redundancy, or a χ² that is not a number.

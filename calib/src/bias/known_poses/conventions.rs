@@ -160,9 +160,11 @@ pub fn hand_eye_rotation(
         pairs.push((m.delta_r.log(), body));
     }
     let n = pairs.len() as f64;
-    let (ma, mb) = pairs.iter().fold((Vector3::zeros(), Vector3::zeros()), |s, p| {
-        (s.0 + p.0 / n, s.1 + p.1 / n)
-    });
+    let (ma, mb) = pairs
+        .iter()
+        .fold((Vector3::zeros(), Vector3::zeros()), |s, p| {
+            (s.0 + p.0 / n, s.1 + p.1 / n)
+        });
     // Log ΔR_imu = Xᵀ Log ΔR_body: M = Xᵀ minimises Σ‖a − M b‖², H = Σ b aᵀ = U S Vᵀ,
     // M = V diag(1, 1, det(V Uᵀ)) Uᵀ.
     let h: Matrix3<f64> = pairs
@@ -252,7 +254,11 @@ pub fn diagnose_known_poses(
             r: p.r.compose(&x),
             ..*p
         });
-        candidates.push((Convention::OtherFrame { frame_from_imu: x }, rotated, o.clone()));
+        candidates.push((
+            Convention::OtherFrame { frame_from_imu: x },
+            rotated,
+            o.clone(),
+        ));
     }
     let fits = candidates
         .iter()
@@ -274,10 +280,14 @@ pub fn gravity_flipped(tilt_rad: f64) -> Option<Convention> {
 
 /// The hand-eye rotation when it is far enough from the identity to try.
 fn other_frame(samples: &[ImuSample], atts: &[(i64, SO3)], o: &KnownPoseOptions) -> Option<SO3> {
-    let x = hand_eye_rotation(samples, atts, &KnownPoseOptions {
-        initial_bias: ImuBias::zero(),
-        ..o.clone()
-    })?;
+    let x = hand_eye_rotation(
+        samples,
+        atts,
+        &KnownPoseOptions {
+            initial_bias: ImuBias::zero(),
+            ..o.clone()
+        },
+    )?;
     (x.log().norm().to_degrees() > MIN_FRAME_ANGLE_DEG).then_some(x)
 }
 
@@ -357,9 +367,17 @@ mod tests {
         let xh = hand_eye_rotation(&s.samples, &atts, &opts).unwrap();
         let err = xh.inverse().compose(&x).log().norm().to_degrees();
         assert!(err < 0.5, "hand-eye error {err}°");
-        let d = diagnose_known_poses(&s.samples, &body, &opts).unwrap().unwrap();
-        assert!(matches!(d.convention, Convention::OtherFrame { .. }), "{d:?}");
-        assert!(d.with_convention.chi2_dof * 10.0 < d.as_given.chi2_dof, "{d:?}");
+        let d = diagnose_known_poses(&s.samples, &body, &opts)
+            .unwrap()
+            .unwrap();
+        assert!(
+            matches!(d.convention, Convention::OtherFrame { .. }),
+            "{d:?}"
+        );
+        assert!(
+            d.with_convention.chi2_dof * 10.0 < d.as_given.chi2_dof,
+            "{d:?}"
+        );
         assert!(d.message().contains("another frame"), "{}", d.message());
         let none = diagnose_known_poses(&s.samples, &s.poses, &opts).unwrap();
         assert!(none.is_none(), "{none:?}");

@@ -170,6 +170,11 @@ impl KnownPoseCalibration {
     pub fn chi2_per_dof(&self) -> f64 {
         per_dof(self.chi2, self.dof)
     }
+
+    /// The goodness of fit: `chi2` against `χ²_dof` ([`crate::fit`]).
+    pub fn fit(&self) -> crate::Fit {
+        crate::Fit::new(self.chi2, self.dof)
+    }
 }
 
 /// `χ² / dof`, NaN for dof = 0.
