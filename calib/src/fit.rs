@@ -176,11 +176,11 @@ impl Fit {
         std * self.scale()
     }
 
-    /// The same fit with `cause` appended to `why` when it is not credible (the caller's
-    /// likely cause: "the poses' quaternions look like x,y,z,w order", …).
+    /// The same fit with `; likely cause: {cause}` appended to `why` when it is not credible
+    /// (the caller's likely cause: "the poses' quaternions look like x,y,z,w order", …).
     pub fn because(mut self, cause: &str) -> Self {
         if !self.credible && !cause.is_empty() {
-            self.why = format!("{}: {cause}", self.why);
+            self.why = format!("{}; likely cause: {cause}", self.why);
         }
         self
     }

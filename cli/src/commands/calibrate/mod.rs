@@ -21,14 +21,47 @@
 //!
 //! The samples must be continuous: a gap longer than [`MAX_GAP_S`] (and ten sample intervals)
 //! is refused, naming where it is.
+//!
+//! # Goodness of fit
+//! Every estimate is printed with its fit ([`preint_calib::fit`]; JSON `fit`): the problem's
+//! χ² against `χ²_dof`, credible or not and why. What the χ² is, per problem:
+//! - known poses / attitudes: the whitened preintegration residuals of every window, the time
+//!   offset and intrinsics included (`9(P − 1)` resp. `3(P − 1)` rows less the unknowns);
+//! - multi-position: the whitened interval means and link rotations of the chosen model;
+//! - static: the per-sample problem, the means' χ² plus the samples' scatter about them
+//!   ([`preint_calib::bias::StaticCalibration::fit`]), which tests the noise densities.
+//!
+//! Not credible: a `warning:` line naming the likely cause (JSON `fit.why`). For known poses
+//! the usual convention errors of a pose file are tried and the one that explains the misfit
+//! is named ([`preint_calib::bias::known_poses::conventions`]). Every σ is printed as
+//! modelled (from the noise densities and pose noise) and scaled by `√(χ²/dof)` (JSON `*_std`
+//! and `*_std_scaled`): use the modelled σ when the fit is credible and the noise model
+//! trusted, the scaled σ when the noise level itself is uncertain (a credible fit with χ²/dof
+//! away from 1); with a fit that is not credible neither describes the error. `--strict` makes
+//! a fit that is not credible a refusal (exit 2, after the output).
+//!
+//! # Scheme
+//! `--scheme` (default midpoint) is the scheme the known-pose windows are preintegrated with:
+//! the estimated time offset absorbs the scheme's own lag (euler and galilean hold each
+//! interval's first sample, half a sample interval behind midpoint and hermite4), so estimate
+//! with the scheme that will use the result. `--out` records it (`preint_scheme`).
 
-use crate::format::{list, opt_list};
+mod print;
+
+pub use print::{to_json, to_text};
+
+use crate::analysis::consistency::strict;
 use crate::imu_args::ImuArgs;
+use crate::scheme::SchemeParser;
 use crate::{CliError, Output, calibration_file, checks, noise, stream};
 use nalgebra::Vector3;
 use preint::intrinsics::{ImuIntrinsics, IntrinsicsModel};
-use preint::{ImuNoise, ImuSample, PreintParams, Scheme};
-use preint_calib::bias::known_poses::extras::{Estimate, ParameterEstimate};
+use preint::{ImuNoise, ImuSample, PreintParams};
+use preint_calib::Fit;
+use preint_calib::bias::known_poses::conventions::{
+    self, Convention, Diagnosis, diagnose_known_attitudes, diagnose_known_poses,
+};
+use preint_calib::bias::known_poses::extras::Estimate;
 use preint_calib::bias::known_poses::{
     KnownAttitude, KnownAttitudeCalibration, calibrate_known_attitudes,
 };
@@ -38,7 +71,7 @@ use preint_calib::bias::{
     calibrate_multi_pose, calibrate_static, detect_still_intervals, roll_pitch_of_up,
 };
 use preint_lie::SO3;
-use serde_json::{Value, json};
+use serde_json::json;
 use std::path::{Path, PathBuf};
 
 /// Flags of `preint calibrate`.
@@ -111,6 +144,17 @@ pub struct Args {
     /// densities. `integrate --calibration FILE` applies it.
     #[arg(long, value_name = "FILE")]
     pub out: Option<std::path::PathBuf>,
+    /// Known-pose problem: the scheme the windows are preintegrated with, which should be the
+    /// one that will use the result (euler, midpoint, hermite4 or galilean): the time offset
+    /// absorbs its lag (euler and galilean are half a sample behind midpoint and hermite4).
+    /// Recorded in --out's file (preint_scheme).
+    #[arg(long, value_parser = SchemeParser, default_value = "midpoint", requires = "poses")]
+    pub scheme: crate::scheme::Scheme,
+    /// Exit with status 2 (after printing the result) when the fit is not credible: χ² far
+    /// above its distribution (χ²/dof > 3 for dof ≥ 30, else p < 1e-6; see the module docs
+    /// for what the χ² of each problem is).
+    #[arg(long)]
+    pub strict: bool,
 }
 
 /// The problem solved and its estimates.
@@ -158,6 +202,32 @@ pub enum Calibration {
         /// The Earth rate taken out of the gyro bias (`--latitude`).
         earth: Option<preint_calib::bias::EarthRateInBody>,
     },
+}
+
+/// A calibration, its goodness of fit and what the user must know about it.
+#[derive(Clone, Debug)]
+pub struct Calibrated {
+    /// The problem solved and its estimates.
+    pub calibration: Calibration,
+    /// Its goodness of fit (with the likely cause in `why` when not credible).
+    pub fit: Fit,
+    /// Lines to print after the estimates, each starting with `warning:` or `note:` (the
+    /// calibration file's scheme, a gravity estimate upside down).
+    pub notes: Vec<String>,
+    /// The scheme of the known-pose windows (`--scheme`).
+    pub scheme: preint::Scheme,
+}
+
+impl Calibration {
+    /// The problem's name in a sentence (`known-pose calibration`, …).
+    pub fn problem(&self) -> &'static str {
+        match self {
+            Calibration::KnownPoses { .. } => "known-pose calibration",
+            Calibration::KnownAttitudes { .. } => "known-attitude calibration",
+            Calibration::MultiPose(_) => "multi-position calibration",
+            Calibration::Static { .. } => "static calibration",
+        }
+    }
 }
 
 /// A solver error, prefixed with the IMU file it came from.
@@ -237,14 +307,66 @@ fn select_poses(
     Ok(kp)
 }
 
+/// The likely cause of a known-pose (or attitude) misfit: the convention error the diagnosis
+/// names (with the flag that fixes a frame error), or the usual suspects.
+fn misfit_cause(
+    diagnosis: Result<Option<Diagnosis>, preint_calib::bias::BiasError>,
+    positions: bool,
+) -> String {
+    match diagnosis {
+        Ok(Some(d)) => {
+            let hint = match d.convention {
+                Convention::OtherFrame { frame_from_imu } => {
+                    let q = nalgebra::UnitQuaternion::from_rotation_matrix(
+                        &nalgebra::Rotation3::from_matrix_unchecked(*frame_from_imu.matrix()),
+                    );
+                    let s = if q.w < 0.0 { -1.0 } else { 1.0 };
+                    format!(
+                        " (--body-p-sensor 0,0,0,{:.6},{:.6},{:.6},{:.6} with a zero lever arm)",
+                        s * q.w,
+                        s * q.i,
+                        s * q.j,
+                        s * q.k
+                    )
+                }
+                _ => String::new(),
+            };
+            format!("{}{hint}", d.message())
+        }
+        _ => format!(
+            "no convention error of the pose file explains it (quaternion order, inverse \
+             rotation{}, poses of another frame were tried); the noise densities (--noise){} are \
+             too small, the biases drift over the span (shorten --from/--to), or the clocks \
+             are offset (--estimate time-offset)",
+            if positions {
+                " or pose, world z down"
+            } else {
+                ""
+            },
+            if positions {
+                " or the pose noise (--pose-rot-std, --pose-pos-std)"
+            } else {
+                " or the attitude noise (--pose-rot-std)"
+            }
+        ),
+    }
+}
+
+/// Mean sample interval \[s\].
+fn mean_interval_s(samples: &[ImuSample]) -> f64 {
+    let n = samples.len();
+    (samples[n - 1].t_ns - samples[0].t_ns) as f64 * 1e-9 / (n - 1).max(1) as f64
+}
+
 /// The known-pose problem on the poses of `pfile` inside the samples' time span (attitudes
-/// only when the file has no positions).
+/// only when the file has no positions), with its fit and, when that is not credible, the
+/// likely cause.
 fn known_poses(
     args: &Args,
     pfile: &Path,
     samples: &[ImuSample],
     noise: &ImuNoise,
-) -> Result<Calibration, CliError> {
+) -> Result<Calibrated, CliError> {
     checks::positive("--pose-spacing", args.pose_spacing)?;
     let estimate = args.estimate.unwrap_or_default();
     if estimate.any() && args.body_p_sensor.is_some() {
@@ -267,10 +389,20 @@ fn known_poses(
         0
     };
     let rows = select_poses(args, pfile, samples, margin)?;
+    let scheme: preint::Scheme = args.scheme.into();
+    let mut notes = Vec::new();
+    if let (Some(f), Some(path)) = (&file, &args.calibration) {
+        notes.extend(calibration_file::scheme_note(
+            f,
+            path,
+            scheme,
+            mean_interval_s(samples),
+        ));
+    }
     let params = PreintParams {
         body_p_sensor: args.body_p_sensor,
         ..PreintParams::from_noise(noise)
-            .with_scheme(Scheme::Midpoint)
+            .with_scheme(scheme)
             .with_gravity(Vector3::new(0.0, 0.0, -args.gravity))
     };
     let mut opts = KnownPoseOptions {
@@ -294,12 +426,23 @@ fn known_poses(
             })
             .collect();
         let c = calibrate_known_attitudes(samples, &atts, &opts).map_err(fail)?;
-        return Ok(Calibration::KnownAttitudes {
+        let mut fit = c.fit();
+        if !fit.credible {
+            let d = diagnose_known_attitudes(samples, &atts, &opts);
+            fit = fit.because(&misfit_cause(d, false));
+        }
+        let calibration = Calibration::KnownAttitudes {
             source,
             poses: atts.len(),
             pose_rot_std: args.pose_rot_std,
             c: Box::new(c),
             time_offset,
+        };
+        return Ok(Calibrated {
+            calibration,
+            fit,
+            notes,
+            scheme,
         });
     }
     let kp: Vec<KnownPose> = rows
@@ -311,17 +454,35 @@ fn known_poses(
         })
         .collect();
     let c = calibrate_known_poses(samples, &kp, &opts).map_err(fail)?;
-    Ok(Calibration::KnownPoses {
+    let mut fit = c.fit();
+    if !fit.credible {
+        fit = fit.because(&misfit_cause(diagnose_known_poses(samples, &kp, &opts), true));
+    }
+    if let Some(z) = conventions::gravity_flipped(c.gravity_tilt) {
+        notes.push(format!(
+            "warning: the estimated gravity is {:.1}° from (0, 0, −{}): {}",
+            c.gravity_tilt.to_degrees(),
+            args.gravity,
+            z.describe()
+        ));
+    }
+    let calibration = Calibration::KnownPoses {
         source,
         poses: kp.len(),
         pose_std: (args.pose_rot_std, args.pose_pos_std),
         c: Box::new(c),
         time_offset,
+    };
+    Ok(Calibrated {
+        calibration,
+        fit,
+        notes,
+        scheme,
     })
 }
 
-/// Chooses the problem (module docs) and solves it.
-pub fn compute(args: &Args) -> Result<Calibration, CliError> {
+/// Chooses the problem (module docs), solves it and tests its fit.
+pub fn compute(args: &Args) -> Result<Calibrated, CliError> {
     checks::non_negative("--pose-rot-std", args.pose_rot_std)?;
     checks::non_negative("--pose-pos-std", args.pose_pos_std)?;
     checks::positive("--gravity", args.gravity)?;
@@ -362,7 +523,17 @@ pub fn compute(args: &Args) -> Result<Calibration, CliError> {
             ..Default::default()
         };
         let c = calibrate_multi_pose(&samples, &noise, &opts).map_err(&fail)?;
-        return Ok(Calibration::MultiPose(Box::new(c)));
+        let fit = c.fit().because(
+            "the noise densities (--noise) are too small for this sensor, the biases drift more \
+             than their random walk (temperature), or the sensor has terms the chosen model \
+             lacks",
+        );
+        return Ok(Calibrated {
+            calibration: Calibration::MultiPose(Box::new(c)),
+            fit,
+            notes: Vec::new(),
+            scheme: args.scheme.into(),
+        });
     }
     let Some(used) = still.iter().max_by_key(|iv| iv.len()).copied() else {
         return Err(CliError::Failed(format!(
@@ -390,251 +561,35 @@ pub fn compute(args: &Args) -> Result<Calibration, CliError> {
         let (roll, pitch, _) = roll_pitch_of_up(&pose.rotation.act(&c.up_body));
         (roll, pitch)
     });
-    Ok(Calibration::Static {
-        c: Box::new(c),
-        used,
-        still_s: (still_s, total_s),
-        body_roll_pitch,
-        earth,
-    })
-}
-
-/// The JSON form: `model` names the problem; estimates with standard deviations, χ², units.
-pub fn to_json(cal: &Calibration) -> Value {
-    match cal {
-        Calibration::KnownPoses {
-            poses,
-            pose_std,
-            c,
-            time_offset,
-            ..
-        } => json!({
-            "model": "known-poses", "poses": poses,
-            "parameters": parameters_json(&c.parameters, c.intrinsics.model),
-            "time_offset_s": time_offset.then_some(c.time_offset_s),
-            "intrinsics": intrinsics_json(&c.intrinsics),
-            "gyro_bias": list(&c.bias.gyro), "gyro_bias_std": list(&c.gyro_bias_std),
-            "acc_bias": list(&c.bias.acc), "acc_bias_std": list(&c.acc_bias_std),
-            "gravity": list(&c.gravity), "gravity_std": list(&c.gravity_std), "gravity_tilt_deg": c.gravity_tilt.to_degrees(),
-            "pose_rot_std": pose_std.0, "pose_pos_std": pose_std.1,
-            "iterations": c.iterations, "cost": 0.5 * c.chi2, "chi2": c.chi2, "dof": c.dof,
-            "units": {"gyro_bias": "rad/s", "acc_bias": "m/s^2", "gravity": "m/s^2"},
-        }),
-        Calibration::KnownAttitudes {
-            poses,
-            pose_rot_std,
-            c,
-            time_offset,
-            ..
-        } => json!({
-            "model": "known-attitudes", "poses": poses,
-            "gyro_bias": list(&c.gyro_bias), "gyro_bias_std": list(&c.gyro_bias_std),
-            "parameters": parameters_json(&c.parameters, c.intrinsics.model),
-            "time_offset_s": time_offset.then_some(c.time_offset_s),
-            "intrinsics": intrinsics_json(&c.intrinsics),
-            "pose_rot_std": pose_rot_std,
-            "iterations": c.iterations, "chi2": c.chi2, "dof": c.dof,
-            "units": {"gyro_bias": "rad/s"},
-        }),
-        Calibration::MultiPose(c) => multi_pose_json(c),
-        Calibration::Static {
-            c,
+    let fit = c.fit(&noise).because(&format!(
+        "the samples scatter more than the noise densities say (measured white-noise densities \
+         gyro {:.2e} rad/s/√Hz against {:.2e}, accelerometer {:.2e} m/s²/√Hz against {:.2e}): \
+         give this sensor's densities with --noise (preint allan), or the interval is not still",
+        c.measured_gyro_density.max(),
+        noise.gyro_noise_density,
+        c.measured_acc_density.max(),
+        noise.acc_noise_density
+    ));
+    Ok(Calibrated {
+        calibration: Calibration::Static {
+            c: Box::new(c),
             used,
-            still_s,
+            still_s: (still_s, total_s),
             body_roll_pitch,
             earth,
-        } => json!({
-            "model": "static-single-attitude",
-            "interval_ns": [used.t_start_ns, used.t_end_ns], "still_s": still_s.0, "recording_s": still_s.1,
-            "gyro_bias": list(&c.gyro_bias), "gyro_bias_std": list(&c.gyro_bias_std),
-            "acc_bias": opt_list(c.acc_bias), "acc_bias_std": opt_list(c.acc_bias_std), "acc_bias_note": c.acc_bias_note,
-            "roll": c.roll, "pitch": c.pitch, "roll_std": c.roll_std, "pitch_std": c.pitch_std,
-            "body_roll": body_roll_pitch.map(|b| b.0), "body_pitch": body_roll_pitch.map(|b| b.1),
-            "unobservable": c.unobservable, "measured_gyro_density": list(&c.measured_gyro_density),
-            "measured_acc_density": list(&c.measured_acc_density),
-            "iterations": c.iterations, "cost": 0.5 * c.chi2, "chi2": c.chi2, "dof": c.dof,
-            "units": {"gyro_bias": "rad/s", "roll": "rad", "pitch": "rad", "densities": "rad/s/sqrt(Hz), m/s^2/sqrt(Hz)"},
-            "earth_rate": earth.as_ref().map(earth_json),
-        }),
-    }
-}
-
-/// The `--estimate` parameters: name, unit, whether excited, the estimate (`value`, null when
-/// withheld), the value kept (`kept`: the estimate, or the initial value when withheld) and σ
-/// (null when the motion does not move the parameter at all).
-fn parameters_json(ps: &[ParameterEstimate], model: IntrinsicsModel) -> Value {
-    ps.iter()
-        .map(|e| {
-            json!({"name": e.param.name(model), "unit": e.param.unit(), "excited": e.excited,
-                "value": e.excited.then_some(e.value), "kept": e.value,
-                "std": e.std.is_finite().then_some(e.std)})
-        })
-        .collect()
-}
-
-/// The intrinsics' matrices, row by row.
-fn intrinsics_json(x: &ImuIntrinsics) -> Value {
-    let rows = |m: &nalgebra::Matrix3<f64>| -> Vec<Vec<f64>> {
-        (0..3)
-            .map(|r| (0..3).map(|c| m[(r, c)]).collect())
-            .collect()
-    };
-    json!({"model": x.model.name(), "Tw": rows(&x.t_w), "R_IMUtoGYRO": rows(&x.r_imu_to_gyro),
-        "Ta": rows(&x.t_a), "R_IMUtoACC": rows(&x.r_imu_to_acc), "Tg": rows(&x.t_g)})
-}
-
-/// The `--estimate` parameters, one line each: value ± σ, or why withheld.
-fn parameter_lines(ps: &[ParameterEstimate], model: IntrinsicsModel) -> String {
-    ps.iter()
-        .map(|e| {
-            let name = e.param.name(model);
-            let unit = e.param.unit();
-            if e.excited {
-                format!("  {name} = {:+.6e} ± {:.1e} {unit}\n", e.value, e.std)
-            } else {
-                format!(
-                    "  {name}: not excited by the motion (σ {:.1e} {unit}): kept at {:+.6e}\n",
-                    e.std, e.value
-                )
-            }
-        })
-        .collect()
-}
-
-/// What `--latitude` did to the gyro bias.
-fn earth_json(e: &preint_calib::bias::EarthRateInBody) -> Value {
-    json!({"latitude_deg": e.latitude_deg, "heading_deg": e.heading_deg,
-        "removed_body": list(&e.removed), "unresolved_horizontal": e.unresolved,
-        "note": earth_note(e), "units": "rad/s, body frame"})
-}
-
-/// One sentence on the Earth rate's share of the bias.
-fn earth_note(e: &preint_calib::bias::EarthRateInBody) -> String {
-    if e.heading_deg.is_some() {
-        "the Earth rate R_wb^T w_ie (from latitude, roll, pitch and heading) is removed from b_g"
-            .into()
-    } else {
-        format!(
-            "the vertical Earth rate is removed from b_g; its horizontal part ({:.3e} rad/s, \
-             direction unknown without --heading) is not separable from b_g and is included in \
-             the b_g sigma",
-            e.unresolved
-        )
-    }
-}
-
-fn multi_pose_json(c: &MultiPoseCalibration) -> Value {
-    let fits: Vec<Value> = c
-        .fits
-        .iter()
-        .map(|f| {
-            json!({"model": format!("{:?}", f.model), "chi2": f.chi2,
-        "params": f.params, "bic": f.bic, "identifiable": f.identifiable, "converged": f.converged})
-        })
-        .collect();
-    let chosen = c.fits.iter().find(|f| f.model == c.model);
-    json!({
-        "model": format!("multi-pose/{:?}", c.model), "still_intervals": c.intervals.len(),
-        "gyro_bias": list(&c.gyro_bias), "gyro_bias_std": list(&c.gyro_bias_std),
-        "acc_bias": list(&c.acc_bias), "acc_bias_std": list(&c.acc_bias_std),
-        "acc_scale": opt_list(c.acc_scale), "acc_scale_std": opt_list(c.acc_scale_std),
-        "gyro_scale": opt_list(c.gyro_scale), "gyro_scale_std": opt_list(c.gyro_scale_std),
-        "model_selection": fits, "reason": c.reason,
-        "bias_reference_time_ns": c.reference_time_ns, "random_walk_marginalised": c.random_walk_marginalised,
-        "iterations": c.iterations, "cost": chosen.map(|f| 0.5 * f.chi2),
-        "units": {"gyro_bias": "rad/s", "acc_bias": "m/s^2", "scale": "dimensionless (1 = ideal)"},
+        },
+        fit,
+        notes: Vec::new(),
+        scheme: args.scheme.into(),
     })
-}
-
-/// `  b_g = [x, y, z] ± [σx, σy, σz] rad/s`.
-fn gyro_line(b: &Vector3<f64>, s: &Vector3<f64>) -> String {
-    format!(
-        "  b_g = [{:.6}, {:.6}, {:.6}] ± [{:.1e}, {:.1e}, {:.1e}] rad/s\n",
-        b.x, b.y, b.z, s.x, s.y, s.z
-    )
-}
-
-/// `  b_a = [x, y, z] ± [σx, σy, σz] m/s²`.
-fn acc_line(b: &Vector3<f64>, s: &Vector3<f64>) -> String {
-    format!(
-        "  b_a = [{:.4}, {:.4}, {:.4}] ± [{:.1e}, {:.1e}, {:.1e}] m/s²\n",
-        b.x, b.y, b.z, s.x, s.y, s.z
-    )
-}
-
-/// The human summary: the problem solved and its estimates with standard deviations.
-pub fn to_text(cal: &Calibration) -> String {
-    match cal {
-        Calibration::KnownPoses {
-            source, poses, c, ..
-        } => format!(
-            "known-pose calibration ({poses} poses from {source}):\n{}{}{}  gravity tilt {:.3}°, \
-             χ²/dof = {:.2}, {} iterations\n",
-            gyro_line(&c.bias.gyro, &c.gyro_bias_std),
-            acc_line(&c.bias.acc, &c.acc_bias_std),
-            parameter_lines(&c.parameters, c.intrinsics.model),
-            c.gravity_tilt.to_degrees(),
-            c.chi2 / c.dof.max(1) as f64,
-            c.iterations
-        ),
-        Calibration::KnownAttitudes {
-            source, poses, c, ..
-        } => format!(
-            "known-attitude (gyroscope) calibration ({poses} attitudes from {source}):\n{}{}  \
-             χ²/dof = {:.2}, {} iterations\n",
-            gyro_line(&c.gyro_bias, &c.gyro_bias_std),
-            parameter_lines(&c.parameters, c.intrinsics.model),
-            c.chi2_per_dof(),
-            c.iterations
-        ),
-        Calibration::MultiPose(c) => format!(
-            "multi-position calibration: {} still intervals; model {:?} ({})\n{}{}",
-            c.intervals.len(),
-            c.model,
-            c.reason,
-            gyro_line(&c.gyro_bias, &c.gyro_bias_std),
-            acc_line(&c.acc_bias, &c.acc_bias_std)
-        ),
-        Calibration::Static {
-            c,
-            used,
-            still_s,
-            body_roll_pitch,
-            earth,
-        } => format!(
-            "static calibration (one attitude) on the longest still interval, {:.1} s from {} to \
-             {} ns ({:.1} s still of {:.1} s recorded):\n{}  roll {:.4}° ± {:.1e}°, pitch \
-             {:.4}° ± {:.1e}° (IMU axes){}\n  b_a: not estimated ({})\n{}",
-            c.duration_s,
-            used.t_start_ns,
-            used.t_end_ns,
-            still_s.0,
-            still_s.1,
-            gyro_line(&c.gyro_bias, &c.gyro_bias_std),
-            c.roll.to_degrees(),
-            c.roll_std.to_degrees(),
-            c.pitch.to_degrees(),
-            c.pitch_std.to_degrees(),
-            body_roll_pitch.map_or(String::new(), |(r, p)| format!(
-                "; body roll {:.4}°, pitch {:.4}°",
-                r.to_degrees(),
-                p.to_degrees()
-            )),
-            c.acc_bias_note,
-            earth
-                .as_ref()
-                .map(|e| format!("  Earth rate at {}°: {}\n", e.latitude_deg, earth_note(e)))
-                .unwrap_or_default()
-        ),
-    }
 }
 
 /// Runs `preint calibrate`.
 pub fn run(args: &Args) -> Result<Output, CliError> {
-    let c = compute(args)?;
-    let (mut human, mut json) = (to_text(&c), to_json(&c));
+    let r = compute(args)?;
+    let (mut human, mut json) = (to_text(&r), to_json(&r));
     if let Some(path) = &args.out {
-        let (intrinsics, td, from) = match &c {
+        let (intrinsics, td, from) = match &r.calibration {
             Calibration::MultiPose(m) => (
                 calibration_file::intrinsics_of_multi_pose(m)?,
                 None,
@@ -657,14 +612,29 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
             ),
         };
         let noise = noise::or_default(args.noise.as_deref())?;
-        calibration_file::write(path, intrinsics, &noise, td)?;
+        // The scheme matters for what the windows estimated: the known-pose problem's.
+        let scheme = matches!(
+            r.calibration,
+            Calibration::KnownPoses { .. } | Calibration::KnownAttitudes { .. }
+        )
+        .then_some(r.scheme);
+        calibration_file::write(path, intrinsics, &noise, td, scheme)?;
         human.push_str(&format!(
-            "calibration written to {} (OpenVINS kalibr_imu_chain.yaml: intrinsics{from}{}, \
+            "calibration written to {} (OpenVINS kalibr_imu_chain.yaml: intrinsics{from}{}{}, \
              noise densities)\n",
             path.display(),
-            if td.is_some() { ", time offset" } else { "" }
+            if td.is_some() { ", time offset" } else { "" },
+            scheme.map_or(String::new(), |s| format!(
+                " for the {} scheme",
+                crate::scheme::label(s)
+            ))
         ));
         json["out"] = json!(path.display().to_string());
     }
-    Ok(Output { human, json })
+    strict(
+        args.strict,
+        Output { human, json },
+        &r.fit,
+        r.calibration.problem(),
+    )
 }
