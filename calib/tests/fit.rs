@@ -90,7 +90,7 @@ fn wrong_fits_are_not_credible() {
         Fit::new(400.0, 100)
             .because("the poses")
             .why
-            .ends_with(": the poses")
+            .ends_with("; likely cause: the poses")
     );
     assert!(
         !Fit::new(100.0, 100)
