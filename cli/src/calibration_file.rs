@@ -33,8 +33,8 @@
 
 use crate::CliError;
 use nalgebra::{Matrix3, SVector, Vector3};
-use preint::{CellRule, ImuNoise, Scheme};
 use preint::intrinsics::{ImuIntrinsics, IntrinsicsModel};
+use preint::{CellRule, ImuNoise, Scheme};
 use preint_calib::bias::MultiPoseCalibration;
 use preint_calib::bias::multipose::{acc_scale_matrix, gyro_scale_matrix};
 use preint_io::ImuCalibration;

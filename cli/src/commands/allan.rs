@@ -257,10 +257,5 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
         human: to_text(&r),
         json: to_json(&r),
     };
-    crate::analysis::consistency::strict(
-        args.strict,
-        output,
-        &r.allan.fit(),
-        "Allan noise model",
-    )
+    crate::analysis::consistency::strict(args.strict, output, &r.allan.fit(), "Allan noise model")
 }

@@ -132,14 +132,13 @@ pub struct FactorRun {
 
 /// The factor's fit: its χ² against `χ²_dof`, with the block that disagrees most as the cause.
 pub fn fit(f: &FactorRun) -> preint_calib::Fit {
-    let (b, m) = f
-        .ev
-        .marginal_chi2
-        .iter()
-        .enumerate()
-        .filter(|(_, m)| m.is_finite())
-        .max_by(|a, b| a.1.total_cmp(b.1))
-        .map_or(("rotation", f64::NAN), |(b, m)| (BLOCKS[b], *m));
+    let (b, m) =
+        f.ev.marginal_chi2
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| m.is_finite())
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .map_or(("rotation", f64::NAN), |(b, m)| (BLOCKS[b], *m));
     preint_calib::Fit::new(f.ev.chi2, f.ev.residual.len()).because(&format!(
         "the IMU and the ground truth disagree beyond the factor's covariance, most in the {b} \
          block (marginal χ²₃ = {m:.3}): the noise densities (--noise), the ground truth's own \

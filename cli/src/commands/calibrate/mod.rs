@@ -456,7 +456,10 @@ fn known_poses(
     let c = calibrate_known_poses(samples, &kp, &opts).map_err(fail)?;
     let mut fit = c.fit();
     if !fit.credible {
-        fit = fit.because(&misfit_cause(diagnose_known_poses(samples, &kp, &opts), true));
+        fit = fit.because(&misfit_cause(
+            diagnose_known_poses(samples, &kp, &opts),
+            true,
+        ));
     }
     if let Some(z) = conventions::gravity_flipped(c.gravity_tilt) {
         notes.push(format!(
