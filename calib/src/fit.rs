@@ -96,7 +96,12 @@ impl Fit {
             );
         }
         let (a, x) = (dof as f64 / 2.0, chi2 / 2.0);
-        let (upper, lower) = (gamma_ur(a, x), gamma_lr(a, x));
+        // statrs takes x in (0, ∞): at χ² = 0 the tails are 1 and 0.
+        let (upper, lower) = if x > 0.0 {
+            (gamma_ur(a, x), gamma_lr(a, x))
+        } else {
+            (1.0, 0.0)
+        };
         let r = chi2 / dof as f64;
         let (credible, pessimistic) = if dof >= LARGE_DOF {
             (r <= MAX_CHI2_DOF, r < 1.0 / MAX_CHI2_DOF)

@@ -51,7 +51,11 @@ fn white_noise_and_random_walk_fit_credibly() {
 fn a_disturbance_makes_the_fit_not_credible() {
     let f = allan(&channels(60_000, 0.0, 1e-2, 1), 0.01).fit();
     assert!(!f.credible, "{}", f.why);
-    assert!(f.why.contains("misses the measured Allan deviation"), "{}", f.why);
+    assert!(
+        f.why.contains("misses the measured Allan deviation"),
+        "{}",
+        f.why
+    );
     assert!(f.why.contains("likely cause"), "{}", f.why);
 }
 

@@ -45,6 +45,10 @@ fn p_values_match_the_tables() {
     assert!(f.why.contains("pessimistic"));
     let f = Fit::new(400.0, 100);
     assert!((f.p_value / 1.692_797_995_885_708_8e-37 - 1.0).abs() < 1e-8);
+    // χ² = 0 exactly (residuals all zero): the tails are 1 and 0.
+    let f = Fit::new(0.0, 9);
+    assert_eq!((f.p_value, f.p_value_lower), (1.0, 0.0));
+    assert!(f.credible && f.pessimistic);
 }
 
 /// χ² drawn from χ²_dof (the fit is correct): credible in ≥ 99.9 % of the draws, for few and

@@ -314,7 +314,8 @@ fn audit_checks_a_calibration_file_against_the_recording() {
         kinds(&wrong, "warning").contains(&"calibration".to_string()),
         "{wrong:#}"
     );
-    let wild = audit(&file("wild.yaml", 1.01, 1.5));
+    // A 15 % gyro scale: beyond a MEMS sensor's range, within what a calibration file may hold.
+    let wild = audit(&file("wild.yaml", 1.01, 1.15));
     let msgs: Vec<&str> = (wild["findings"].as_array().unwrap().iter())
         .filter(|f| f["severity"] == "warning")
         .map(|f| f["message"].as_str().unwrap())

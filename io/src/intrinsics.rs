@@ -28,8 +28,9 @@
 //! its diagonal) or sensor-axis rotation (`R_IMUtoGYRO`, `R_IMUtoACC`) above
 //! [`MAX_AXIS_ANGLE_DEG`], or a g-sensitivity entry above [`MAX_G_SENSITIVITY`]. MEMS
 //! datasheets give scale errors of a few % and cross-axis sensitivities of 1–2 % (≈ 1°)
-//! before calibration, and gyro g-sensitivities of 0.01–0.1 °/s/g; a file ten (thirty for
-//! `Tg`) times beyond is a unit, layout or sign error, not a sensor. `preint_unusual_intrinsics: true` under
+//! before calibration, and gyro g-sensitivities of 0.01–0.1 °/s/g; a file ten (a hundred for
+//! `Tg`) times beyond is a unit, layout or sign error, not a sensor (`preint audit
+//! --calibration` warns from closer limits: 10 % scale, 0.1 rad, 0.01 (rad/s)/(m/s²)). `preint_unusual_intrinsics: true` under
 //! `imu0` accepts such a file for a sensor that really is that far from nominal.
 //!
 //! # Kalibr (`IccSensors.py`, `IccScaledMisalignedImu`)
@@ -67,10 +68,9 @@ pub struct ImuCalibration {
 pub const SCALE_RANGE: (f64, f64) = (0.8, 1.25);
 /// Largest accepted misalignment or sensor-axis rotation \[deg\].
 pub const MAX_AXIS_ANGLE_DEG: f64 = 10.0;
-/// Largest accepted `|Tg|` entry \[(rad/s)/(m/s²)\]: 2.8 °/s/g, about thirty times the
-/// 0.1 °/s/g of consumer MEMS gyroscopes' datasheets (and below a realistic `Tg` written in
-/// (°/s)/(m/s²), 57 times its value in rad).
-pub const MAX_G_SENSITIVITY: f64 = 5e-3;
+/// Largest accepted `|Tg|` entry \[(rad/s)/(m/s²)\]: 11 °/s/g, a hundred times the 0.1 °/s/g
+/// of consumer MEMS gyroscopes' datasheets (`preint audit --calibration` warns from half of it).
+pub const MAX_G_SENSITIVITY: f64 = 0.02;
 /// The key that accepts intrinsics beyond the plausible ranges (module docs).
 pub const UNUSUAL_KEY: &str = "preint_unusual_intrinsics";
 
@@ -214,7 +214,7 @@ impl Ctx<'_> {
                 "Tg",
                 format!(
                     "has an entry of {g} (rad/s)/(m/s²) ({:.2} °/s/g), above \
-                     {MAX_G_SENSITIVITY} (2.8 °/s/g, thirty times a MEMS datasheet's)",
+                     {MAX_G_SENSITIVITY} (11 °/s/g, a hundred times a MEMS datasheet's)",
                     g.to_degrees() * 9.80665
                 ),
             );

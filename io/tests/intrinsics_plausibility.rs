@@ -51,7 +51,7 @@ fn implausible_intrinsics_are_refused_by_key_and_line() {
                 - [ 0.0, 0.0, 0.0 ]\n    - [ 0.0, 0.0, 0.0 ]\n";
     assert!(parse_openvins_imu_chain(base, "c.yaml").is_ok());
     let cases = [
-        // A scale of 1.3 (30 %), a misalignment of 14°, 0.01 (rad/s)/(m/s²) of g-sensitivity.
+        // A scale of 1.3 (30 %), a misalignment of 14°, 0.03 (rad/s)/(m/s²) of g-sensitivity.
         (
             "- [ 0.0, 0.0, 1.0 ]",
             "- [ 0.0, 0.0, 1.3 ]",
@@ -68,7 +68,7 @@ fn implausible_intrinsics_are_refused_by_key_and_line() {
         ),
         (
             "- [ 0.0, 0.0, 0.0 ]\n    - [ 0.0, 0.0, 0.0 ]\n",
-            "- [ 0.0, 0.01, 0.0 ]\n    - [ 0.0, 0.0, 0.0 ]\n",
+            "- [ 0.0, 0.03, 0.0 ]\n    - [ 0.0, 0.0, 0.0 ]\n",
             "`imu0.Tg`",
             "c.yaml:9:",
             "°/s/g",

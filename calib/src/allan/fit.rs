@@ -370,7 +370,8 @@ pub fn model_deviation(pts: &[AllanPoint], fit: &NoiseFit) -> ModelDeviation {
     };
     for p in pts.iter().filter(|p| p.clusters >= MIN_CLUSTERS) {
         let white = !fit.white_density_is_bound && within(fit.white_tau_range, p.tau);
-        let fitted = white || (!fit.random_walk_is_bound && within(fit.random_walk_tau_range, p.tau));
+        let fitted =
+            white || (!fit.random_walk_is_bound && within(fit.random_walk_tau_range, p.tau));
         if !fitted || !(p.adev_err > 0.0) {
             continue;
         }

@@ -193,7 +193,9 @@ impl ImuAllan {
         let d: Vec<ModelDeviation> = (0..6)
             .map(|c| model_deviation(&self.curves[c], &self.fits[c]))
             .collect();
-        let (chi2, dof) = d.iter().fold((0.0, 0), |a, d| (a.0 + d.sum_z2, a.1 + d.points));
+        let (chi2, dof) = d
+            .iter()
+            .fold((0.0, 0), |a, d| (a.0 + d.sum_z2, a.1 + d.points));
         let (worst, w) = d
             .iter()
             .enumerate()
