@@ -372,7 +372,7 @@ pub fn model_deviation(pts: &[AllanPoint], fit: &NoiseFit) -> ModelDeviation {
         let white = !fit.white_density_is_bound && within(fit.white_tau_range, p.tau);
         let fitted =
             white || (!fit.random_walk_is_bound && within(fit.random_walk_tau_range, p.tau));
-        if !fitted || !(p.adev_err > 0.0) {
+        if !fitted || p.adev_err.is_nan() || p.adev_err <= 0.0 {
             continue;
         }
         let m = model_adev(fit, p.tau);
