@@ -147,6 +147,32 @@ fn pose_convention_errors_are_named() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("(--strict)"));
 }
 
+/// Attitudes only (a 5-column file, the gyroscope problem) in x,y,z,w order: named too; in
+/// w,x,y,z order credible.
+#[test]
+fn attitude_convention_errors_are_named() {
+    let file = |name: &str, xyzw: bool| {
+        let mut out = String::from("#t,q0,q1,q2,q3\n");
+        for (t, _, q) in ground_truth() {
+            let c = if xyzw {
+                [q.i, q.j, q.k, q.w]
+            } else {
+                [q.w, q.i, q.j, q.k]
+            };
+            out.push_str(&format!("{t},{},{},{},{}\n", c[0], c[1], c[2], c[3]));
+        }
+        write(&tmp("calibrate-fit"), name, &out)
+            .display()
+            .to_string()
+    };
+    let bad = calibrate(&file("att_xyzw.csv", true), &[]);
+    assert_eq!(bad["model"], "known-attitudes", "{bad}");
+    assert_eq!(bad["fit"]["credible"], false, "{bad}");
+    assert!(why(&bad).contains("x,y,z,w order"), "{}", why(&bad));
+    let good = calibrate(&file("att.csv", false), &["--strict"]);
+    assert_eq!(good["fit"]["credible"], true, "{good}");
+}
+
 /// The ground truth as it is, with EuRoC's motion-capture noise, and simulated data: credible,
 /// no warning, `--strict` passes; every σ has its scaled twin, `σ·√(χ²/dof)`.
 #[test]
