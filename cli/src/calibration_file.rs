@@ -8,6 +8,23 @@
 //! Read: that format, or Kalibr's `imu.yaml` with a `scale-misalignment` model (told apart by
 //! Kalibr's `gyroscopes:` section).
 //!
+//! # What is refused
+//! A file with nothing to apply (empty, or identity intrinsics and no `time_offset`) is
+//! refused naming it, as are intrinsics far from the identity (`preint_io::intrinsics`,
+//! "Plausibility": the file, line and key are named) and a time offset of a second or more.
+//!
+//! # Scheme
+//! `preint_scheme` records the scheme the time offset was estimated for (`calibrate
+//! --scheme`). Euler and galilean hold each interval's first sample: their windows lag those
+//! of midpoint and hermite4 by half a sample interval, which an estimated time offset absorbs
+//! (`calib/tests/broad_calibration.rs`: 5.82 ms with euler and galilean, 4.04 and 4.05 ms with
+//! midpoint and hermite4, at 3.5 ms per sample). A command that applies the offset with a
+//! scheme of the other kind warns with the size of that lag ([`scheme_note`]) and does not
+//! convert it: `Δt/2` is the first-order lag of a held sample on smooth input, not an exact
+//! relation (the estimates differ by 1.78 ms there, not 1.75), and it depends on the sample
+//! interval of the recording it is applied to. A file with a time offset and no
+//! `preint_scheme` gets a note that its scheme is unknown.
+//!
 //! The multi-position calibration's model (Tedaldi et al. 2014, `preint_calib::bias::multipose`)
 //! maps exactly: `a_m = S_a a + b_a` with `S_a` lower triangular is OpenVINS' `kalibr` model
 //! with `Ta = S_a`, `R_IMUtoACC = I`; `ω_m = S_g ω + b_g` with a full `S_g` becomes
@@ -16,8 +33,8 @@
 
 use crate::CliError;
 use nalgebra::{Matrix3, SVector, Vector3};
-use preint::ImuNoise;
 use preint::intrinsics::{ImuIntrinsics, IntrinsicsModel};
+use preint::{CellRule, ImuNoise, Scheme};
 use preint_calib::bias::MultiPoseCalibration;
 use preint_calib::bias::multipose::{acc_scale_matrix, gyro_scale_matrix};
 use preint_io::ImuCalibration;
@@ -36,6 +53,13 @@ pub fn read(path: &Path) -> Result<ImuCalibration, CliError> {
     cal.intrinsics
         .validate()
         .map_err(|e| CliError::Usage(format!("--calibration {}: {e}", path.display())))?;
+    if cal.intrinsics.is_identity() && cal.time_offset_s.is_none() {
+        return Err(CliError::Usage(format!(
+            "--calibration {}: the file holds no intrinsics (or identity ones) and no \
+             time_offset: nothing to apply (is it the right file? `calibrate --out` writes one)",
+            path.display()
+        )));
+    }
     if let Some(t) = cal.time_offset_s
         && t.abs() >= 1.0
     {
@@ -58,22 +82,77 @@ pub fn time_offset_ns_of(t: Option<f64>) -> i64 {
     t.map_or(0, |t| (t * 1e9).round() as i64)
 }
 
-/// Writes `intrinsics`, `noise` and `time_offset_s` to `path` as OpenVINS'
-/// `kalibr_imu_chain.yaml`.
+/// Writes `intrinsics`, `noise`, `time_offset_s` and the scheme they were estimated for to
+/// `path` as OpenVINS' `kalibr_imu_chain.yaml`.
 pub fn write(
     path: &Path,
     intrinsics: ImuIntrinsics,
     noise: &ImuNoise,
     time_offset_s: Option<f64>,
+    scheme: Option<Scheme>,
 ) -> Result<(), CliError> {
     let cal = ImuCalibration {
         intrinsics,
         noise: Some(*noise),
         time_offset_s,
         rostopic: None,
+        scheme,
     };
     preint_io::write_openvins_imu_chain(path, &cal)?;
     Ok(())
+}
+
+/// Whether `a` and `b` place a window alike in time: both hold each interval's first sample
+/// (euler, galilean) or both centre it (midpoint, hermite4).
+pub fn same_lag(a: Scheme, b: Scheme) -> bool {
+    a.cell_rule() == b.cell_rule()
+}
+
+/// The lag of `used` behind the scheme `recorded` \[s\] for samples `dt_s` apart: `+Δt/2` when
+/// `used` holds samples and `recorded` centres them, `−Δt/2` the other way round, 0 alike.
+pub fn scheme_lag_s(recorded: Scheme, used: Scheme, dt_s: f64) -> f64 {
+    match (recorded.cell_rule(), used.cell_rule()) {
+        (CellRule::Centered, CellRule::Held) => 0.5 * dt_s,
+        (CellRule::Held, CellRule::Centered) => -0.5 * dt_s,
+        _ => 0.0,
+    }
+}
+
+/// The line to print when the file's time offset is applied with `used` (module docs,
+/// "Scheme"): a `warning:` when the file's scheme lags differently (with the size of the lag
+/// at `dt_s` \[s\] per sample), a `note:` when the file does not say, `None` when it agrees or
+/// the file has no time offset.
+pub fn scheme_note(cal: &ImuCalibration, path: &Path, used: Scheme, dt_s: f64) -> Option<String> {
+    let td = cal.time_offset_s?;
+    let name = crate::scheme::label;
+    match cal.scheme {
+        None => Some(format!(
+            "note: {} does not record the scheme its time_offset ({:.3} ms) was estimated for \
+             (preint_scheme): an offset estimated with euler or galilean is half a sample \
+             interval ({:.3} ms here) larger than with midpoint or hermite4",
+            path.display(),
+            td * 1e3,
+            0.5 * dt_s * 1e3
+        )),
+        Some(rec) if !same_lag(rec, used) => {
+            let lag = scheme_lag_s(rec, used, dt_s);
+            Some(format!(
+                "warning: {}'s time_offset ({:.3} ms) was estimated for {}; {} places its windows \
+                 {:.3} ms {} (half a sample interval), which the offset does not include: the \
+                 offset for {} is ≈ {:.3} ms; re-estimate it with `calibrate --scheme {}`",
+                path.display(),
+                td * 1e3,
+                name(rec),
+                name(used),
+                lag.abs() * 1e3,
+                if lag > 0.0 { "earlier" } else { "later" },
+                name(used),
+                (td + lag) * 1e3,
+                name(used)
+            ))
+        }
+        Some(_) => None,
+    }
 }
 
 /// The intrinsics of a multi-position calibration (module docs); the identity for the terms its

@@ -56,6 +56,7 @@ const EXAMPLES: &[(&str, &str, &[&str])] = &[
     ("convert", "out", &["out/contract/imu.csv"]),
     ("calibrate", "out", &["out/contract/calib.yaml"]),
     ("calibrate", "calibration", &["calib.yaml", "--poses", EUROC_GT]),
+    ("calibrate", "scheme", &["euler", "--poses", EUROC_GT]),
     // integrate.
     ("integrate", "bias_gyro", &["0.001,-0.002,0"]),
     ("integrate", "bias_acc", &["0.01,0,-0.02"]),
@@ -123,7 +124,9 @@ fn takes_value(arg: &Arg) -> bool {
 }
 
 /// The values to try for `arg` on `sub`, each an argv after the flag: every possible value
-/// clap knows, else the table's example; nothing for a flag. `Err` names the missing line.
+/// clap knows (followed by the arguments the table's example adds after its value, for a flag
+/// that requires another), else the table's example; nothing for a flag. `Err` names the
+/// missing line.
 fn values(sub: &str, arg: &Arg) -> Result<Vec<Vec<String>>, String> {
     if !takes_value(arg) {
         return Ok(vec![Vec::new()]);
@@ -131,9 +134,14 @@ fn values(sub: &str, arg: &Arg) -> Result<Vec<Vec<String>>, String> {
     let id = arg.get_id().as_str();
     let possible = arg.get_possible_values();
     if !possible.is_empty() {
+        let requires = example(sub, id).map_or(Vec::new(), |e| e[1..].to_vec());
         return Ok(possible
             .iter()
-            .map(|p| vec![p.get_name().to_string()])
+            .map(|p| {
+                let mut v = vec![p.get_name().to_string()];
+                v.extend(requires.iter().cloned());
+                v
+            })
             .collect());
     }
     example(sub, id).map(|v| vec![v]).ok_or_else(|| {

@@ -65,6 +65,7 @@ pub(crate) fn advise_py<'py>(
         to: None,
         input_class: class,
         calibration: None,
+        strict: false,
     };
     let json = py
         .detach(|| {
@@ -126,6 +127,7 @@ pub(crate) fn advise_file<'py>(
         fraction,
         from: from_ns,
         to: to_ns,
+        strict: false,
     };
     let json = py
         .detach(|| advise::run(&args).map(|o| o.json))

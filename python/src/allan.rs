@@ -160,6 +160,7 @@ pub(crate) fn allan_variance_file<'py>(
         input,
         out: None,
         no_still_check: !check_still,
+        strict: false,
     };
     let r = py
         .detach(|| allan::compute(&args))

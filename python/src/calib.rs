@@ -383,6 +383,8 @@ pub(crate) fn calibrate_file<'py>(
         estimate,
         pose_spacing,
         calibration,
+        scheme: preint_cli::scheme::Scheme::Midpoint,
+        strict: false,
     };
     let json = py
         .detach(|| calibrate::run(&args).map(|o| o.json))

@@ -33,6 +33,14 @@
 //!    where costs within 15 % of the cheapest count as equal and the simplest scheme among them
 //!    wins.
 
+//!
+//! # Goodness of fit
+//! [`fit`]: the embedded estimate's χ² `êᵀΣ⁻¹ê` (max over windows) of the recommended
+//! candidate (of the reference when none is acceptable) against `χ²₉`: the discretisation
+//! error alone would then make an `ImuFactor` at the true states fail a χ² test. Credible
+//! when its upper-tail p-value is ≥ 1e-6 ([`preint_calib::fit`]); a χ² far below 9 is the
+//! aim here, not a pessimistic noise model, and is not flagged.
+
 use super::input_class::InputClass;
 use super::speed::{best_ns_per_sample, synthetic_stream};
 use crate::{CliError, scheme};
@@ -315,6 +323,39 @@ pub fn gap_beyond_limit(samples: &[ImuSample], d: usize) -> Option<(i64, i64, us
     }
     let (gap, at) = longest(1)?;
     Some((wide, gap, at))
+}
+
+/// The advice's fit (module docs): the embedded χ² of the recommended candidate, or of the
+/// reference when none is acceptable, against `χ²₉`. `None` without a candidate.
+pub fn fit(candidates: &[Candidate], recommended: Option<&Candidate>) -> Option<preint_calib::Fit> {
+    let c = recommended.or_else(|| candidates.iter().find(|c| c.is_reference()))?;
+    let mut f = preint_calib::Fit::new(c.embedded_chi2, 9);
+    f.pessimistic = false;
+    let what = format!(
+        "{} at {:.1} Hz{}",
+        scheme::label(c.scheme),
+        c.rate_hz,
+        if recommended.is_some() {
+            " (recommended)"
+        } else {
+            " (the reference; none is acceptable)"
+        }
+    );
+    f.why = if f.credible {
+        format!(
+            "{what}: its truncation error adds χ² = {:.3e} (max over windows, 9 dof, p = {:.3}) to \
+             a factor at the true states",
+            c.embedded_chi2, f.p_value
+        )
+    } else {
+        format!(
+            "{what}: its truncation error alone adds χ² = {:.3e} (max over windows, 9 dof) to a \
+             factor at the true states, which would then be inconsistent; likely cause: the \
+             rate is too low for the motion: use hermite4 or record faster",
+            c.embedded_chi2
+        )
+    };
+    Some(f)
 }
 
 /// Costs within this factor of the cheapest count as equal: run-to-run timing on a shared

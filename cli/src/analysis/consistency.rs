@@ -6,10 +6,16 @@
 //! `S = diag(σ_R² I, σ_p² I, σ_v² I)` in the `NavState` tangent [δφ, δp, δv]. The whitened
 //! residual is `U r` with `UᵀU = Σ⁻¹` (`U` upper triangular), `χ² = ‖U r‖²`; block b's marginal
 //! χ² is `r_bᵀ Σ_bb⁻¹ r_b` (3 dof).
+//!
+//! The goodness of fit as every command prints it ([`preint_calib::fit`]): [`fit_json`] (the
+//! top-level `fit` object), [`fit_text`] (a `fit:` line, and a `warning:` line when not
+//! credible) and [`strict`] (`--strict`: a fit that is not credible is a refusal, exit 2).
 
-use crate::CliError;
+use crate::{CliError, Output};
 use nalgebra::{SMatrix, SVector};
 use preint::factor::sqrt_information;
+use preint_calib::Fit;
+use serde_json::{Value, json};
 
 /// The standard deviations of the ground truth's own errors (0: exact).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -73,6 +79,36 @@ pub fn evaluate<const R: usize>(
         chi2: w.norm_squared(),
         marginal_chi2,
     })
+}
+
+/// The `fit` object: `{chi2, dof, chi2_dof, p_value, p_value_lower, credible, pessimistic,
+/// scale, why}` (`scale` = √(χ²/dof), the factor of every `*_std_scaled`; NaN → null).
+pub fn fit_json(f: &Fit) -> Value {
+    json!({"chi2": f.chi2, "dof": f.dof, "chi2_dof": f.chi2_dof, "p_value": f.p_value,
+        "p_value_lower": f.p_value_lower, "credible": f.credible, "pessimistic": f.pessimistic,
+        "scale": f.scale(), "why": f.why})
+}
+
+/// `fit of the {what}: credible ({why})`, or, when not credible, `warning: the {what} fit is
+/// not credible: {why}` (with its likely cause); one line, ending with a newline.
+pub fn fit_text(f: &Fit, what: &str) -> String {
+    if f.credible {
+        format!("fit of the {what}: credible ({})\n", f.why)
+    } else {
+        format!("warning: the {what} fit is not credible: {}\n", f.why)
+    }
+}
+
+/// `--strict`: `output` as it is, or, when `strict` and the fit is not credible, a refusal
+/// that prints it and then why (exit 2).
+pub fn strict(strict: bool, output: Output, f: &Fit, what: &str) -> Result<Output, CliError> {
+    if strict && !f.credible {
+        return Err(CliError::Refused {
+            output: Box::new(output),
+            msg: format!("the {what} fit is not credible (--strict): {}", f.why),
+        });
+    }
+    Ok(output)
 }
 
 /// χ² quantiles (scipy.stats.chi2.ppf) for 3, 9 and 15 degrees of freedom: (0.95, 0.99).

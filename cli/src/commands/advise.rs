@@ -1,10 +1,17 @@
 //! `preint advise`: the cheapest scheme and lowest rate whose discretisation error stays below
 //! a fraction of the noise-induced standard deviation, estimated from the recording itself
 //! (method: [`crate::analysis::advise`], after [`crate::analysis::denoise`]).
+//!
+//! Its fit (JSON `fit`, [`crate::analysis::advise::fit`]): the embedded truncation estimate's
+//! χ² of the recommended (scheme, rate) against `χ²₉`, credible when p ≥ 1e-6; `--strict`
+//! makes a fit that is not credible a refusal (exit 2, after the output). `--calibration`
+//! applies only the file's intrinsics (every scheme is evaluated, so its scheme and time
+//! offset do not enter).
 
 use crate::analysis::advise::{
     Candidate, decimation_in_range, evaluate_input, gap_beyond_limit, recommend,
 };
+use crate::analysis::consistency::{fit_json, fit_text};
 use crate::analysis::denoise::denoise;
 use crate::analysis::input_class::{InputClass, exactness};
 use crate::imu_args::ImuArgs;
@@ -46,6 +53,11 @@ pub struct Args {
     /// imu.yaml): its intrinsics are applied to the raw samples before the analysis.
     #[arg(long, value_name = "FILE")]
     pub calibration: Option<std::path::PathBuf>,
+    /// Exit with status 2 (after printing the result) when the fit is not credible: the
+    /// recommended (scheme, rate)'s own truncation error would make a factor at the true
+    /// states inconsistent (χ² of the embedded estimate with p < 1e-6 against 9 dof).
+    #[arg(long)]
+    pub strict: bool,
 }
 
 /// The evaluation and the recommendation.
@@ -188,6 +200,7 @@ pub fn to_json(a: &Advice) -> Value {
         "method": method(input),
         "calibration": a.args.calibration.as_ref().map(|p| p.display().to_string()),
         "rates_not_evaluated": a.rates_not_evaluated,
+        "fit": crate::analysis::advise::fit(&a.candidates, rec).as_ref().map(fit_json),
     });
     if let (Value::Object(o), Value::Object(i)) = (&mut out, input_json(input)) {
         o.extend(i);
@@ -266,6 +279,9 @@ pub fn to_text(a: &Advice) -> String {
                 }
             );
         }
+    }
+    if let Some(f) = crate::analysis::advise::fit(&a.candidates, a.recommendation()) {
+        h.push_str(&fit_text(&f, "advice"));
     }
     if input == InputClass::Smooth && a.cutoffs.iter().any(Option::is_none) {
         let _ = writeln!(
@@ -355,8 +371,12 @@ fn table(candidates: &[Candidate]) -> String {
 /// Runs `preint advise`.
 pub fn run(args: &Args) -> Result<Output, CliError> {
     let a = compute(args)?;
-    Ok(Output {
+    let output = Output {
         human: to_text(&a),
         json: to_json(&a),
-    })
+    };
+    match crate::analysis::advise::fit(&a.candidates, a.recommendation()) {
+        Some(f) => crate::analysis::consistency::strict(args.strict, output, &f, "advice"),
+        None => Ok(output),
+    }
 }

@@ -12,7 +12,16 @@
 //!   recording is refused (exit 2) with the fraction of still windows, unless
 //!   `--no-still-check` (for a sensor whose noise the detector takes for motion, e.g. strong
 //!   popcorn noise).
+//!
+//! # Goodness of fit
+//! The fit (JSON `fit`, [`preint_calib::allan::ImuAllan::fit`]) compares the model curve
+//! `√(N²/τ + K²τ/3)` with the measured Allan deviation over the τ ranges its lines were fitted
+//! on, in units of each point's statistical error: credible while no point is more than 5 of
+//! them away (`chi2` = Σz², `dof` = the points; no p-value, the points are correlated). Not
+//! credible: a `warning:` line names the channel, τ and line; `--strict` makes it a refusal
+//! (exit 2, after the output).
 
+use crate::analysis::consistency::{fit_json, fit_text};
 use crate::charts::figures;
 use crate::format::IMU_AXES;
 use crate::imu_args::ImuArgs;
@@ -42,6 +51,11 @@ pub struct Args {
     /// describes the motion, not the sensor's noise).
     #[arg(long)]
     pub no_still_check: bool,
+    /// Exit with status 2 (after printing the result) when the fit is not credible: the model
+    /// curve √(N²/τ + K²τ/3) more than 5 statistical errors from the measured Allan deviation
+    /// somewhere in the τ ranges its lines were fitted on.
+    #[arg(long)]
+    pub strict: bool,
 }
 
 /// The Allan deviations, their fits, and the files written.
@@ -170,6 +184,7 @@ pub fn to_json(r: &AllanRun) -> Value {
         "yaml_aggregate": "maximum over the three axes (conservative)",
         "per_axis": per_axis,
         "files": r.files,
+        "fit": fit_json(&a.fit()),
     })
 }
 
@@ -238,6 +253,7 @@ pub fn to_text(r: &AllanRun) -> String {
         h,
         "units: gyro rad/s/√Hz, rad/s²/√Hz, rad/s; acc m/s²/√Hz, m/s³/√Hz, m/s². ≤: upper bound (no region of slope −½ resp. +½ in the data)"
     );
+    h.push_str(&fit_text(&a.fit(), "Allan noise model"));
     let _ = writeln!(
         h,
         "imu.yaml uses the maximum over the axes.{}",
@@ -253,8 +269,9 @@ pub fn to_text(r: &AllanRun) -> String {
 /// Runs `preint allan`.
 pub fn run(args: &Args) -> Result<Output, CliError> {
     let r = compute(args)?;
-    Ok(Output {
+    let output = Output {
         human: to_text(&r),
         json: to_json(&r),
-    })
+    };
+    crate::analysis::consistency::strict(args.strict, output, &r.allan.fit(), "Allan noise model")
 }

@@ -21,8 +21,16 @@
 //! each block's marginal χ² (`r_bᵀ Σ_bb⁻¹ r_b`, 3 dof) to say which part disagrees.
 
 //! The weighting and χ² are [`crate::analysis::consistency`].
+//!
+//! # Goodness of fit
+//! The factor's fit (JSON `fit`, [`preint_calib::fit`]) is its χ² at the ground truth against
+//! `χ²_dof` (9, or 15 with `--combined`): credible when the upper-tail p-value is ≥ 1e-6.
+//! Not credible: a `warning:` line names the block whose marginal χ² is largest (the part that
+//! disagrees); `--strict` makes it a refusal (exit 2, after the output).
 
-use crate::analysis::consistency::{Evaluation, TruthNoise, chi2_quantiles, evaluate};
+use crate::analysis::consistency::{
+    Evaluation, TruthNoise, chi2_quantiles, evaluate, fit_json, fit_text,
+};
 use crate::format::list;
 use crate::imu_args::ImuArgs;
 use crate::preint_args::PreintArgs;
@@ -77,6 +85,10 @@ pub struct Args {
     /// term the first-order covariance misses over long windows with noisy gyroscopes).
     #[arg(long)]
     pub second_order: bool,
+    /// Exit with status 2 (after printing the result) when the fit is not credible: χ² at the
+    /// ground truth with p < 1e-6 against χ² with 9 (15 with --combined) dof.
+    #[arg(long)]
+    pub strict: bool,
 }
 
 fn parse_residual(s: &str) -> Result<ResidualMode, String> {
@@ -116,6 +128,22 @@ pub struct FactorRun {
     pub truth_noise: TruthNoise,
     /// The weighted residual.
     pub ev: Evaluation,
+}
+
+/// The factor's fit: its χ² against `χ²_dof`, with the block that disagrees most as the cause.
+pub fn fit(f: &FactorRun) -> preint_calib::Fit {
+    let (b, m) =
+        f.ev.marginal_chi2
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| m.is_finite())
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .map_or(("rotation", f64::NAN), |(b, m)| (BLOCKS[b], *m));
+    preint_calib::Fit::new(f.ev.chi2, f.ev.residual.len()).because(&format!(
+        "the IMU and the ground truth disagree beyond the factor's covariance, most in the {b} \
+         block (marginal χ²₃ = {m:.3}): the noise densities (--noise), the ground truth's own \
+         errors (--pose-rot-std, --pose-pos-std, --vel-std), its biases, or the clocks"
+    ))
 }
 
 fn nav(s: &GroundTruthState) -> NavState {
@@ -260,6 +288,7 @@ pub fn to_json(f: &FactorRun) -> Value {
         },
         "units": {"residual": "rad, m/s, m (, rad/s, m/s^2) per block", "whitened_residual": "dimensionless",
                   "state": "p m (world), q body->world, v m/s (world), biases rad/s and m/s^2"},
+        "fit": fit_json(&fit(f)),
     })
 }
 
@@ -319,6 +348,7 @@ pub fn to_text(f: &FactorRun) -> String {
          quantiles 7.81 / 11.34",
         f.ev.chi2
     );
+    h.push_str(&fit_text(&fit(f), "factor at the ground truth"));
     if f.truth_noise.is_exact() {
         let _ = writeln!(
             h,
@@ -332,8 +362,14 @@ pub fn to_text(f: &FactorRun) -> String {
 /// Runs `preint factor`.
 pub fn run(args: &Args) -> Result<Output, CliError> {
     let f = compute(args)?;
-    Ok(Output {
+    let output = Output {
         human: to_text(&f),
         json: to_json(&f),
-    })
+    };
+    crate::analysis::consistency::strict(
+        args.strict,
+        output,
+        &fit(&f),
+        "factor at the ground truth",
+    )
 }

@@ -65,7 +65,10 @@ pub struct Args {
     /// An IMU calibration file (what `calibrate --out` writes: OpenVINS kalibr_imu_chain.yaml,
     /// or Kalibr's imu.yaml with a scale-misalignment model): its intrinsics are applied to the
     /// raw samples, and its `time_offset` (s; t_imu = t_keyframe + time_offset) moves
-    /// --from/--to onto the IMU's clock. Noise densities still come from --noise.
+    /// --from/--to onto the IMU's clock. Noise densities still come from --noise. A time
+    /// offset recorded for a scheme that lags differently from --scheme (euler and galilean
+    /// are half a sample behind midpoint and hermite4) is warned about, with the size of the
+    /// lag; it is applied as recorded.
     #[arg(long, value_name = "FILE")]
     pub calibration: Option<std::path::PathBuf>,
 }
@@ -106,6 +109,10 @@ pub struct Integration {
     /// The calibration file applied (`--calibration`): its path, intrinsics and the time
     /// offset \[ns\] added to `--from`/`--to`.
     pub calibration: Option<(String, preint::intrinsics::ImuIntrinsics, i64)>,
+    /// The scheme the file's time offset was estimated for (`preint_scheme`), and the line
+    /// [`crate::calibration_file::scheme_note`] prints when it lags differently from the
+    /// scheme used, or is unknown.
+    pub calibration_scheme: (Option<preint::Scheme>, Option<String>),
 }
 
 /// Reads the file once and preintegrates `[--from, --to]` at [`Level::Combined`]: the whole
@@ -120,17 +127,21 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
         args.bias_gyro.unwrap_or_default(),
         args.bias_acc.unwrap_or_default(),
     );
-    let calibration = match &args.calibration {
-        Some(path) => {
-            let cal = crate::calibration_file::read(path)?;
+    let file = args
+        .calibration
+        .as_deref()
+        .map(crate::calibration_file::read)
+        .transpose()?;
+    let calibration = match (&args.calibration, &file) {
+        (Some(path), Some(cal)) => {
             if !cal.intrinsics.is_identity() {
                 params.intrinsics =
                     Some(preint::intrinsics::AppliedIntrinsics::new(cal.intrinsics));
             }
-            let td = crate::calibration_file::time_offset_ns(&cal);
+            let td = crate::calibration_file::time_offset_ns(cal);
             Some((path.display().to_string(), cal.intrinsics, td))
         }
-        None => None,
+        _ => None,
     };
     // The keyframes on the IMU's clock.
     let td = calibration.as_ref().map_or(0, |c| c.2);
@@ -184,7 +195,16 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
         };
         (source, noise, result)
     };
+    let calibration_scheme = match (&args.calibration, &file) {
+        (Some(path), Some(cal)) => {
+            let dt_s = pim.delta_t / samples.max(1) as f64;
+            let note = crate::calibration_file::scheme_note(cal, path, scheme, dt_s);
+            (cal.scheme, note)
+        }
+        _ => (None, None),
+    };
     Ok(Integration {
+        calibration_scheme,
         imu: args.input.label(),
         source,
         scheme,
@@ -368,6 +388,8 @@ pub fn to_json(r: &Integration) -> Value {
             "R_IMUtoACC": rows(&x.r_imu_to_acc), "Tg": rows(&x.t_g),
             "note": "intrinsics applied to the raw samples (preint::intrinsics); t_i_ns and \
                      t_j_ns are on the IMU clock: --from/--to plus time_offset_ns",
+            "scheme": r.calibration_scheme.0.map(scheme::label),
+            "scheme_note": r.calibration_scheme.1,
         });
     }
     if let Some(c) = &r.second_order {
@@ -497,6 +519,9 @@ pub fn to_text(r: &Integration) -> String {
             x.model.name(),
             if x.is_identity() { ", identity" } else { "" }
         );
+        if let Some(n) = &r.calibration_scheme.1 {
+            let _ = writeln!(h, "{n}");
+        }
     }
     if let Some(c) = &r.second_order {
         let _ = writeln!(
