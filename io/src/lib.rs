@@ -67,7 +67,7 @@ pub use intrinsics::{
 };
 pub use kalibr::{kalibr_yaml_string, parse_kalibr_yaml, read_kalibr_yaml, write_kalibr_yaml};
 pub use layout::{Column, Delimiter, TextLayout};
-pub use plausibility::check_si_units;
+pub use plausibility::{UnitVerdict, check_si_units};
 pub use poses::{PoseRow, parse_poses, read_poses};
 pub use reader::{ImuReader, Located, Progress, ReadOptions, SourceInfo, Stamp};
 pub use units::{AccelUnit, GyroUnit, TimeUnit, Units};
