@@ -22,6 +22,7 @@
 //! The samples must be continuous: a gap longer than [`MAX_GAP_S`] (and ten sample intervals)
 //! is refused, naming where it is.
 
+use crate::checks::UnitCheck;
 use crate::format::{list, opt_list};
 use crate::imu_args::ImuArgs;
 use crate::{CliError, Output, calibration_file, checks, noise, stream};
@@ -37,6 +38,7 @@ use preint_calib::bias::{
     StaticCalibration, StaticOptions, StillInterval, StillOptions, calibrate_known_poses,
     calibrate_multi_pose, calibrate_static, detect_still_intervals, roll_pitch_of_up,
 };
+use preint_io::SourceInfo;
 use preint_lie::SO3;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
@@ -188,7 +190,7 @@ pub const MAX_GAP_S: f64 = preint::params::DEFAULT_MAX_GAP_NS as f64 * 1e-9;
 /// Reads the samples in `[--from, --to]` (only those are held, at most
 /// [`stream::MAX_HELD_SAMPLES`]; reading stops after `--to`) and checks their units and that
 /// they have no gap.
-fn read_samples(args: &Args) -> Result<Vec<ImuSample>, CliError> {
+fn read_samples(args: &Args) -> Result<stream::Span, CliError> {
     stream::read_span(&args.input, args.from, args.to, "calibrate")
 }
 
@@ -320,13 +322,20 @@ fn known_poses(
     })
 }
 
-/// Chooses the problem (module docs) and solves it.
-pub fn compute(args: &Args) -> Result<Calibration, CliError> {
+/// Chooses the problem (module docs) and solves it; also returns how the recording was read
+/// and what its unit checks said.
+pub fn compute(args: &Args) -> Result<(Calibration, (SourceInfo, UnitCheck)), CliError> {
     checks::non_negative("--pose-rot-std", args.pose_rot_std)?;
     checks::non_negative("--pose-pos-std", args.pose_pos_std)?;
     checks::positive("--gravity", args.gravity)?;
     let noise = noise::or_default(args.noise.as_deref())?;
-    let samples = read_samples(args)?;
+    let span = read_samples(args)?;
+    let c = solve(args, &span.samples, &noise)?;
+    Ok((c, (span.source, span.unit_check)))
+}
+
+/// [`compute`] on the samples read.
+fn solve(args: &Args, samples: &[ImuSample], noise: &ImuNoise) -> Result<Calibration, CliError> {
     if let Some(h) = args.heading
         && !h.is_finite()
     {
@@ -631,8 +640,10 @@ pub fn to_text(cal: &Calibration) -> String {
 
 /// Runs `preint calibrate`.
 pub fn run(args: &Args) -> Result<Output, CliError> {
-    let c = compute(args)?;
-    let (mut human, mut json) = (to_text(&c), to_json(&c));
+    let (c, (source, units)) = compute(args)?;
+    let (mut human, mut json) = (units.text() + &to_text(&c), to_json(&c));
+    json["input"] = crate::imu_args::input_json(&source, &units);
+
     if let Some(path) = &args.out {
         let (intrinsics, td, from) = match &c {
             Calibration::MultiPose(m) => (

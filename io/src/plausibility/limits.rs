@@ -26,17 +26,22 @@ pub const MAX_ACCEL_M_S2: f64 = 10_000.0;
 /// What is impossible about the (finite) readings of `s`, if anything: the norm, the axis
 /// readings and the limit it exceeds.
 pub fn impossible(s: &ImuSample) -> Option<String> {
-    let (w, a) = (s.gyro.norm(), s.acc.norm());
+    // The largest component, not the norm, is printed: the norm of 1e308 overflows.
+    let magnitude = |v: &nalgebra::Vector3<f64>| {
+        let n = v.norm();
+        if n.is_finite() { n } else { v.amax() }
+    };
+    let (w, a) = (magnitude(&s.gyro), magnitude(&s.acc));
     if !(w <= MAX_GYRO_RAD_S) {
         return Some(format!(
-            "the gyro reads |ω| = {w:.4e} rad/s ({:?}), beyond any IMU's range ({MAX_GYRO_RAD_S} \
+            "the gyro reads {:?} rad/s (|ω| ≥ {w:.4e}), beyond any IMU's range ({MAX_GYRO_RAD_S} \
              rad/s; the widest gyroscope reads ±349 rad/s)",
             [s.gyro.x, s.gyro.y, s.gyro.z]
         ));
     }
     if !(a <= MAX_ACCEL_M_S2) {
         return Some(format!(
-            "the accelerometer reads |a| = {a:.4e} m/s² ({:?}), beyond any IMU's range \
+            "the accelerometer reads {:?} m/s² (|a| ≥ {a:.4e}), beyond any IMU's range \
              ({MAX_ACCEL_M_S2} m/s²; the widest IMU accelerometer reads ±400 g = 3923 m/s²)",
             [s.acc.x, s.acc.y, s.acc.z]
         ));
@@ -80,7 +85,7 @@ mod tests {
         );
         assert!(impossible(&ok).is_none());
         let spin = ImuSample::new(5, Vector3::new(600.0, 600.0, 0.0), Vector3::zeros());
-        assert!(impossible(&spin).unwrap().contains("|ω| = 8.4853e2"));
+        assert!(impossible(&spin).unwrap().contains("|ω| ≥ 8.4853e2"));
         let bad = ImuSample::new(7, Vector3::zeros(), Vector3::new(1e308, 0.0, 9.8));
         let e = check_reading(&bad, 1000, Location::Line(1002), "rec.csv")
             .unwrap_err()

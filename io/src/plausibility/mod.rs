@@ -347,9 +347,10 @@ impl StillGyro {
         };
         Some(format!(
             "while the accelerometer is steady (no turn about a horizontal axis; {} still 0.5 s \
-             windows), the gyro reads {w:.3} rad/s across the vertical (median), {bound}: \
+             window{}), the gyro reads {w:.3} rad/s across the vertical (median), {bound}: \
              {fix} If this gyro's bias really is that large, pass --no-unit-check",
-            self.windows
+            self.windows,
+            if self.windows == 1 { "" } else { "s" }
         ))
     }
 }
