@@ -23,13 +23,17 @@ pub const MAX_GYRO_RAD_S: f64 = 1000.0;
 /// Largest specific-force norm any IMU reads \[m/s²\] (module docs).
 pub const MAX_ACCEL_M_S2: f64 = 10_000.0;
 
-/// What is impossible about the (finite) readings of `s`, if anything: the norm, the axis
-/// readings and the limit it exceeds.
+/// What is impossible about the readings of `s`, if anything: the readings, their norm and
+/// the limit it exceeds (a NaN is impossible too).
 pub fn impossible(s: &ImuSample) -> Option<String> {
     // The largest component, not the norm, is printed: the norm of 1e308 overflows.
     let magnitude = |v: &nalgebra::Vector3<f64>| {
         let n = v.norm();
-        if n.is_finite() { n } else { v.amax() }
+        if n.is_finite() || n.is_nan() {
+            n
+        } else {
+            v.amax()
+        }
     };
     let (w, a) = (magnitude(&s.gyro), magnitude(&s.acc));
     if !(w <= MAX_GYRO_RAD_S) {
@@ -84,8 +88,8 @@ mod tests {
             Vector3::new(0.0, 0.0, 3923.0),
         );
         assert!(impossible(&ok).is_none());
-        let spin = ImuSample::new(5, Vector3::new(600.0, 600.0, 0.0), Vector3::zeros());
-        assert!(impossible(&spin).unwrap().contains("|ω| ≥ 8.4853e2"));
+        let spin = ImuSample::new(5, Vector3::new(800.0, 800.0, 0.0), Vector3::zeros());
+        assert!(impossible(&spin).unwrap().contains("|ω| ≥ 1.1314e3"));
         let bad = ImuSample::new(7, Vector3::zeros(), Vector3::new(1e308, 0.0, 9.8));
         let e = check_reading(&bad, 1000, Location::Line(1002), "rec.csv")
             .unwrap_err()
