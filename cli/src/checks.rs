@@ -28,6 +28,14 @@ pub fn positive(flag: &str, v: f64) -> Result<(), CliError> {
     }
 }
 
+/// `flag`'s value `g` must be a gravity magnitude in [0, 100] m/s² ([`crate::parse::gravity`]),
+/// for values that do not come through the flag's parser (library callers).
+pub fn gravity(flag: &str, g: f64) -> Result<(), CliError> {
+    crate::parse::gravity(&g.to_string())
+        .map(|_| ())
+        .map_err(|e| CliError::Usage(format!("{flag}: {e}")))
+}
+
 /// The samples of `file` look like the units `read_as` they were read in (time unit,
 /// accelerometer m/s², gyroscope rad/s, moving and still; see [`preint_io::plausibility`]):
 /// data in g, deg/s or another time unit is refused with a message naming the file and the

@@ -19,7 +19,7 @@
 //! than the raw one by more than 0.5 %.
 //!
 //! The verdict is `clean`, `DEFECTS`, or `too short to judge` (fewer than 100 samples or
-//! less than 2 s: [`preint_io::audit::MIN_JUDGED_SAMPLES`]); readings beyond any IMU's
+//! less than 1 s: [`preint_io::audit::MIN_JUDGED_SAMPLES`]); readings beyond any IMU's
 //! range are defects, single-sample spikes and unit checks that cannot decide are warnings.
 //! Exit status 0 with a verdict; with `--strict`, exit 2 when a defect is found or the
 //! recording is too short to judge (the defects are printed on stderr, each naming counts,
@@ -507,10 +507,7 @@ pub fn to_json(r: &AuditRun, no_unit_check: bool) -> Value {
     let mut m = Map::new();
     m.insert("imu".into(), json!(r.imu));
     if let Some(s) = &r.source {
-        m.insert(
-            "input".into(),
-            input_json(s, &r.unit_check(no_unit_check)),
-        );
+        m.insert("input".into(), input_json(s, &r.unit_check(no_unit_check)));
     }
     m.insert("split".into(), json!(matches!(r.report, Report::Split(_))));
     m.insert("verdict".into(), json!(r.verdict().name()));

@@ -70,8 +70,8 @@ pub struct Args {
     /// Kalibr imu.yaml with the noise densities (default: EuRoC figures).
     #[arg(long)]
     pub noise: Option<PathBuf>,
-    /// Gravity magnitude G (m/s^2).
-    #[arg(long, default_value_t = 9.81)]
+    /// Gravity magnitude G (m/s^2, up to 100).
+    #[arg(long, default_value_t = 9.81, value_parser = crate::parse::gravity)]
     pub gravity: f64,
     /// Use only samples (and poses) with timestamps >= this, in ns.
     #[arg(long, allow_hyphen_values = true)]
@@ -328,6 +328,7 @@ pub fn compute(args: &Args) -> Result<(Calibration, (SourceInfo, UnitCheck)), Cl
     checks::non_negative("--pose-rot-std", args.pose_rot_std)?;
     checks::non_negative("--pose-pos-std", args.pose_pos_std)?;
     checks::positive("--gravity", args.gravity)?;
+    checks::gravity("--gravity", args.gravity)?;
     let noise = noise::or_default(args.noise.as_deref())?;
     let span = read_samples(args)?;
     let c = solve(args, &span.samples, &noise)?;

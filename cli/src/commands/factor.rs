@@ -142,6 +142,9 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
         Level::Covariance
     };
     let (noise, mut params) = args.preint.params(level)?;
+    if let (true, Some(path)) = (args.combined, &args.preint.noise) {
+        preint_io::read_kalibr_bias_model(path)?;
+    }
     let gt = read_euroc_groundtruth(&args.poses)?;
     let (gi, gj) = (
         *input::nearest_row(&gt, args.from),

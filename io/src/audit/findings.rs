@@ -57,13 +57,14 @@ impl Finding {
 /// Events named in a message (the rest are counted).
 const NAMED: usize = 3;
 
-/// Fewest samples an audit judges: a Δt histogram, a median interval and a still fraction of
-/// fewer say little.
+/// Fewest samples an audit judges: a Δt histogram, a median interval, a jitter and a drift of
+/// fewer than 99 intervals say little.
 pub const MIN_JUDGED_SAMPLES: u64 = 100;
 
-/// Shortest span an audit judges \[s\]: the unit checks' still part needs 4 windows of
-/// 0.5 s, their quasi-static pairs are 1 s apart.
-pub const MIN_JUDGED_SPAN_S: f64 = 2.0;
+/// Shortest span an audit judges \[s\]: two of the 0.5 s still windows, and the unit checks'
+/// pairs of quasi-static moments are 1 s apart. (The unit checks say on their own when they
+/// need more: a still part of 2 s.)
+pub const MIN_JUDGED_SPAN_S: f64 = 1.0;
 
 /// The overall verdict of an audit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -51,11 +51,11 @@ pub use findings::{
     DRIFT_WARNING_PPM, Finding, JITTER_WARNING, MIN_JUDGED_SAMPLES, MIN_JUDGED_SPAN_S, Severity,
     Verdict,
 };
-pub use spikes::{SPIKE_SIGMAS, Spike};
 pub use intervals::{
     Event, EventList, GAP_FACTOR, HISTOGRAM_EDGES, LONG_GAP_NS, Step, Timing, TimingStats,
     reference_interval,
 };
+pub use spikes::{SPIKE_SIGMAS, Spike};
 
 use crate::error::{IoError, Location};
 use crate::plausibility::limits::impossible;
