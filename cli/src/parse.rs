@@ -6,8 +6,6 @@
 //! - rate of a rotating navigation frame ([`frame_rate`]): |ω| ≤ [`MAX_FRAME_RATE_RAD_S`] =
 //!   100 rad/s;
 //! - lever arm of `--body-p-sensor` ([`sensor_pose`]): |r| ≤ [`MAX_LEVER_ARM_M`] = 1000 m;
-//! - bias estimates ([`gyro_bias`], [`accel_bias`]): within any IMU's range
-//!   ([`preint_io::plausibility::limits`]);
 //! - a state's position and velocity (`--initial-state`, [`crate::earth_args::initial_state`]):
 //!   |p| ≤ [`MAX_POSITION_M`] = 10¹² m, |v| below the speed of light.
 
@@ -115,39 +113,6 @@ pub fn frame_rate(s: &str) -> Result<Vector3<f64>, String> {
     Ok(w)
 }
 
-/// Parses a gyro bias `x,y,z` \[rad/s\]: finite, within any gyro's range
-/// ([`preint_io::plausibility::limits::MAX_GYRO_RAD_S`]).
-pub fn gyro_bias(s: &str) -> Result<Vector3<f64>, String> {
-    bounded(
-        s,
-        preint_io::plausibility::limits::MAX_GYRO_RAD_S,
-        "rad/s",
-        "gyro",
-    )
-}
-
-/// Parses an accelerometer bias `x,y,z` \[m/s²\]: finite, within any accelerometer's range
-/// ([`preint_io::plausibility::limits::MAX_ACCEL_M_S2`]).
-pub fn accel_bias(s: &str) -> Result<Vector3<f64>, String> {
-    bounded(
-        s,
-        preint_io::plausibility::limits::MAX_ACCEL_M_S2,
-        "m/s^2",
-        "accelerometer",
-    )
-}
-
-/// `x,y,z` with norm at most `max` `unit`, the range of any `sensor`.
-fn bounded(s: &str, max: f64, unit: &str, sensor: &str) -> Result<Vector3<f64>, String> {
-    let v = vec3(s)?;
-    if !(v.norm() <= max) {
-        return Err(format!(
-            "a bias of {s} {unit} is beyond the range of any {sensor} (norm at most {max} {unit})"
-        ));
-    }
-    Ok(v)
-}
-
 /// Largest lever arm of `--body-p-sensor` \[m\]: 1000. The largest rigid bodies an IMU is
 /// mounted on (ships, aircraft) put it tens to a few hundred metres from their reference
 /// point; a kilometre is a unit slip (mm given as m).
@@ -205,13 +170,6 @@ mod tests {
         );
         assert!(frame_rate("1e300,1e300,0").is_err());
         assert!(frame_rate("0,60,80.1").is_err());
-        assert!(gyro_bias("-0.01,0.002,0").is_ok());
-        assert!(gyro_bias("1001,0,0").unwrap_err().contains("any gyro"));
-        assert!(
-            accel_bias("0,0,1e5")
-                .unwrap_err()
-                .contains("any accelerometer")
-        );
         assert!(sensor_pose("100,0,0,1,0,0,0").is_ok());
         assert!(
             sensor_pose("0,0,1001,1,0,0,0")

@@ -8,7 +8,8 @@
 //! the recording around it, not on the few seconds before its end. Every sample read, in the
 //! prefix or after it, is also refused if its readings are beyond any IMU's range
 //! ([`preint_io::plausibility::limits`], naming the line and the sample), `--no-unit-check`
-//! or not.
+//! or not. A row that cannot be read after a window's end ends the checks' reading there: the
+//! window does not need it.
 
 use crate::CliError;
 use crate::checks::{self, UnitCheck};
@@ -163,16 +164,20 @@ struct Prefix {
 }
 
 impl Prefix {
-    /// Reads from `reader` until `done` says so (given the prefix and the last sample) or the
-    /// recording ends.
+    /// Reads from `reader` while `more` says so (given the prefix) and the recording goes on.
+    /// A reading error is returned, or with `past_window` (samples read for the checks only)
+    /// ends the prefix: what the window needs was read without it.
     fn read_while(
         &mut self,
         reader: &mut ImuReader,
         mut more: impl FnMut(&[ImuSample]) -> bool,
+        past_window: bool,
     ) -> Result<(), CliError> {
         while !self.ended && more(&self.samples) {
             match next_within_limits(reader, self.samples.len() as u64) {
-                Some(s) => self.samples.push(s?),
+                Some(Ok(s)) => self.samples.push(s),
+                Some(Err(_)) if past_window => self.ended = true,
+                Some(Err(e)) => return Err(e.into()),
                 None => self.ended = true,
             }
         }
@@ -208,7 +213,7 @@ pub fn open_checked_prefix(
         Some(t) => p.iter().rev().take_while(|s| s.t_ns > t).count() >= edge - 1,
         None => false,
     };
-    prefix.read_while(&mut reader, |p| !full(p) && !window_read(p))?;
+    prefix.read_while(&mut reader, |p| !full(p) && !window_read(p), false)?;
     if prefix.samples.is_empty() {
         return Err(IoError::Empty {
             source_name: info.source_name.clone(),
@@ -228,7 +233,8 @@ pub fn open_checked_prefix(
                 };
             }
             let target = (2 * n).max(n + 1024);
-            prefix.read_while(&mut reader, |p| p.len() < target && !full(p))?;
+            let past_window = until.is_some();
+            prefix.read_while(&mut reader, |p| p.len() < target && !full(p), past_window)?;
         }
     };
     let index = prefix.samples.len() as u64;
@@ -569,7 +575,8 @@ mod tests {
             if Some(k) == bad {
                 t.push_str("not a row\n");
             } else {
-                t.push_str(&format!("{},{k},0.5,0,0,0,9.8\n", 1_000 + k * 5_000_000));
+                let w = k as f64 * 1e-3;
+                t.push_str(&format!("{},{w},0.5,0,0,0,9.8\n", 1_000 + k * 5_000_000));
             }
         }
         t
@@ -586,7 +593,7 @@ mod tests {
             let s = s.unwrap();
             assert_eq!(
                 (s.t_ns, s.gyro.x),
-                ((1_000 + k * 5_000_000) as i64, k as f64)
+                ((1_000 + k * 5_000_000) as i64, k as f64 * 1e-3)
             );
             k += 1;
         }
@@ -610,6 +617,43 @@ mod tests {
         // Header on line 1, row 9000 on line 9002.
         assert!(err.contains("p.csv:9002"), "{err}");
         assert!(p.next_sample().is_none());
+    }
+
+    #[test]
+    fn the_prefetch_thread_refuses_a_reading_beyond_any_imu_naming_line_and_sample() {
+        let text = euroc_text(10_000, None).replace(
+            &format!("{},8.5,0.5", 1_000 + 8_500 * 5_000_000i64),
+            &format!("{},1e308,0.5", 1_000 + 8_500 * 5_000_000i64),
+        );
+        let reader = ImuReader::from_text(&text, "p.csv", &preint_io::ReadOptions::euroc());
+        let mut p = Prefetch::start(reader.unwrap(), 0);
+        let err = std::iter::from_fn(|| p.next_sample())
+            .find_map(Result::err)
+            .expect("refused")
+            .to_string();
+        assert!(
+            err.starts_with("p.csv:8502: sample 8500 ") && err.contains("1e308"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn a_window_before_the_first_sample_names_the_last_one() {
+        let w = cut_window(stream(100), Some(-50), Some(-40)).unwrap();
+        assert_eq!((w.first_ns, w.last_ns), (0, Some(990)));
+        let e = w.in_stream(PreintError::KeyframeOutsideSamples {
+            t_ns: -50,
+            first_ns: 0,
+            last_ns: 20,
+        });
+        assert!(e.to_string().contains("[0, 990]"), "{e}");
+        // Inside the stream, reading stops after the window and the last time is not known.
+        assert_eq!(
+            cut_window(stream(100), Some(100), Some(200))
+                .unwrap()
+                .last_ns,
+            None
+        );
     }
 
     #[test]

@@ -28,10 +28,10 @@ pub struct Args {
     #[command(flatten)]
     pub preint: PreintArgs,
     /// Gyro bias estimate b_g (rad/s) as x,y,z (negative values allowed: --bias-gyro=-0.01,0,0).
-    #[arg(long, allow_hyphen_values = true, value_parser = crate::parse::gyro_bias)]
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::parse::vec3)]
     pub bias_gyro: Option<Vector3<f64>>,
     /// Accelerometer bias estimate b_a (m/s^2) as x,y,z.
-    #[arg(long, allow_hyphen_values = true, value_parser = crate::parse::accel_bias)]
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::parse::vec3)]
     pub bias_acc: Option<Vector3<f64>>,
     /// First keyframe time in ns (default: first sample).
     #[arg(long, allow_hyphen_values = true)]

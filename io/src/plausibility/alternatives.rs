@@ -263,6 +263,14 @@ impl Fit {
                  ({} pairs 1 s apart, {MIN_PAIRS} needed)",
                 self.pairs
             ),
+            Some(r) if r.misfit >= MISFIT_REFUSED_RAD => format!(
+                "no scale of the gyro's integral explains how the gravity direction turns \
+                 between quasi-static moments (the gyro as read missing by {:.1}° over {} pairs, \
+                 gravity turning by {:.1}°: the accelerometer does not see gravity alone there)",
+                r.misfit.to_degrees(),
+                r.pairs,
+                r.turn.to_degrees()
+            ),
             Some(r) => format!(
                 "the gravity direction turns too little between quasi-static moments to tell \
                  the scales of the gyro's integral apart (median {:.1}° over {} pairs 1 s \

@@ -14,8 +14,9 @@
 //!    no gyroscope (an accelerometer-only topic, a wrong column): no real gyro is noise-free.
 //!    (Noise-free simulated data at rest, with a constant accelerometer, passes.)
 //! 4. **Gyroscope, still.** Over the windows where the accelerometer is steady
-//!    ([`still_windows`]: decided from the accelerometer only, so the gyro's unit does not
-//!    matter), the gyro's mean reading across the gravity direction must stay below
+//!    ([`still_windows`], whose two halves also agree within 0.1 m/s²: decided from the
+//!    accelerometer only, so the gyro's unit does not matter), the gyro's mean reading across
+//!    the gravity direction must stay below
 //!    [`MAX_STILL_GYRO_RAD_S`] = 0.1 rad/s (median over at least 4 windows), and below
 //!    [`MAX_STEADY_TURN_RAD_S`] = 1 rad/s over any number of them. A steady accelerometer
 //!    means the body turns at most about the vertical (any turn about a horizontal axis tilts
@@ -286,6 +287,21 @@ pub fn still_windows(samples: &[ImuSample], dt: f64) -> Vec<&[ImuSample]> {
 /// moving recording can look steady while it turns slowly.
 pub const MIN_STILL_WINDOWS: usize = 4;
 
+/// Largest difference \[m/s²\] between the accelerometer's means over the two halves of a
+/// still window for check 4: a turn about a horizontal axis at ω tilts gravity by ω·0.25 s
+/// between the halves' centres, so 0.1 m/s² bounds ω at 0.04 rad/s, below the 0.1 rad/s the
+/// check allows. (A window's standard deviation below 0.2 m/s² alone admits a slow rocking
+/// at 0.14 rad/s.)
+const MAX_HALVES_DIFFERENCE_M_S2: f64 = 0.1;
+
+/// Whether the accelerometer's means over the two halves of `w` agree (see
+/// [`MAX_HALVES_DIFFERENCE_M_S2`]).
+fn halves_agree(w: &[ImuSample]) -> bool {
+    let (a, b) = w.split_at(w.len() / 2);
+    let mean = |x: &[ImuSample]| x.iter().map(|s| s.acc).sum::<Vector3<f64>>() / x.len() as f64;
+    (mean(a) - mean(b)).norm() < MAX_HALVES_DIFFERENCE_M_S2
+}
+
 /// The gyro across the vertical over the still windows (module docs, check 4).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct StillGyro {
@@ -301,6 +317,7 @@ impl StillGyro {
         let still = still_windows(samples, dt);
         let across: Vec<f64> = still
             .iter()
+            .filter(|w| halves_agree(w))
             .map(|w| {
                 let n = w.len() as f64;
                 let gyro = w.iter().map(|s| s.gyro).sum::<Vector3<f64>>() / n;
