@@ -76,14 +76,14 @@ pub fn initial_state(s: &str) -> Result<NavState, String> {
         Vector3::new(x[0], x[1], x[2]),
         Vector3::new(x[3], x[4], x[5]),
     );
-    if !(p.norm() <= MAX_POSITION_M) {
+    if p.norm() > MAX_POSITION_M {
         return Err(format!(
             "the position is {:.4e} m from the origin, beyond {MAX_POSITION_M:e} m (where a \
              double no longer resolves 0.1 mm)",
             p.norm()
         ));
     }
-    if !(v.norm() < SPEED_OF_LIGHT_M_S) {
+    if v.norm() >= SPEED_OF_LIGHT_M_S {
         return Err(format!(
             "the speed {:.4e} m/s is not below the speed of light",
             v.norm()

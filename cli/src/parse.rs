@@ -66,7 +66,7 @@ pub fn sensor_pose(s: &str) -> Result<SensorPose, String> {
     )?;
     let rotation = unit_quaternion([v[3], v[4], v[5], v[6]])?;
     let r = Vector3::new(v[0], v[1], v[2]);
-    if !(r.norm() <= MAX_LEVER_ARM_M) {
+    if r.norm() > MAX_LEVER_ARM_M {
         return Err(format!(
             "a lever arm of {},{},{} m is longer than any rigid mount (norm at most \
              {MAX_LEVER_ARM_M} m): is it in mm?",
@@ -103,7 +103,7 @@ pub const MAX_FRAME_RATE_RAD_S: f64 = 100.0;
 /// most [`MAX_FRAME_RATE_RAD_S`].
 pub fn frame_rate(s: &str) -> Result<Vector3<f64>, String> {
     let w = vec3(s)?;
-    if !(w.norm() <= MAX_FRAME_RATE_RAD_S) {
+    if w.norm() > MAX_FRAME_RATE_RAD_S {
         return Err(format!(
             "a navigation frame turning at {s} rad/s is beyond any rotating frame (norm at most \
              {MAX_FRAME_RATE_RAD_S} rad/s; the Earth's is 7.292115e-5 rad/s): is it in deg/s or \

@@ -137,7 +137,11 @@ fn a_recording_too_short_to_judge_is_not_clean() {
     );
     let o = run(&["audit", "--imu", imu, "--strict"]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("too short to judge: 1 sample"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("too short to judge: 1 sample"),
+        "{}",
+        stderr(&o)
+    );
     // 300 samples over 1.5 s are judged.
     let ok = write_imu_csv(&d, "ok.csv", &euroc_rows(300, |_, _| {}));
     assert_eq!(

@@ -197,3 +197,66 @@ pub fn kalibr_yaml_string(noise: &ImuNoise) -> String {
 pub fn write_kalibr_yaml(path: &Path, noise: &ImuNoise) -> Result<(), IoError> {
     write_text(path, &kalibr_yaml_string(noise))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const EUROC: &str = "gyroscope_noise_density: 1.6968e-04\ngyroscope_random_walk: 1.9393e-05\n\
+        accelerometer_noise_density: 2.0e-03\naccelerometer_random_walk: 3.0e-03\n\
+        update_rate: 200.0\n";
+
+    fn with(key: &str, value: &str) -> String {
+        (EUROC.lines())
+            .map(|l| {
+                if l.starts_with(key) {
+                    format!("{key}: {value}\n")
+                } else {
+                    format!("{l}\n")
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn values_beyond_any_imu_and_zero_white_noise_are_refused_naming_line_and_key() {
+        assert!(parse_kalibr_noise_model(EUROC, "imu.yaml").is_ok());
+        let e = parse_kalibr_yaml(&with("accelerometer_noise_density", "1e308"), "imu.yaml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("imu.yaml:3: `accelerometer_noise_density` is 1e308"),
+            "{e}"
+        );
+        let e = parse_kalibr_yaml(&with("gyroscope_random_walk", "1.5"), "imu.yaml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("imu.yaml:2: `gyroscope_random_walk`"), "{e}");
+        assert!(parse_kalibr_yaml(&with("update_rate", "2e6"), "imu.yaml").is_err());
+        // Zero white noise: a noise-free simulation may read it, a factor's weight may not.
+        let zero = with("gyroscope_noise_density", "0");
+        assert_eq!(
+            parse_kalibr_yaml(&zero, "imu.yaml")
+                .unwrap()
+                .gyro_noise_density,
+            0.0
+        );
+        let e = parse_kalibr_noise_model(&zero, "imu.yaml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("imu.yaml:1: `gyroscope_noise_density` is 0"),
+            "{e}"
+        );
+        // Zero random walk: a constant bias, refused only where the bias change is weighted.
+        let walk = with("accelerometer_random_walk", "0");
+        assert!(parse_kalibr_noise_model(&walk, "imu.yaml").is_ok());
+        let e = parse_kalibr_bias_model(&walk, "imu.yaml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("imu.yaml:4: `accelerometer_random_walk` is 0"),
+            "{e}"
+        );
+    }
+}

@@ -52,8 +52,8 @@ pub struct Advice {
     pub args: Args,
     /// Number of samples in the recording.
     pub samples: usize,
-    /// How the recording was read.
-    pub source: preint_io::SourceInfo,
+    /// How the recording was read (`None` for samples given in memory).
+    pub source: Option<preint_io::SourceInfo>,
     /// What the unit checks said.
     pub unit_check: crate::checks::UnitCheck,
     /// Low-pass cutoffs \[Hz\] chosen for (gyro, accelerometer); `None`: left unfiltered.
@@ -105,7 +105,7 @@ pub fn compute(args: &Args) -> Result<Advice, CliError> {
     Ok(Advice {
         args: args.clone(),
         samples: samples.len(),
-        source,
+        source: Some(source),
         unit_check,
         cutoffs,
         candidates,
@@ -165,7 +165,7 @@ pub fn to_json(a: &Advice) -> Value {
         "tangent_order": ["dphi", "dv", "dp"],
         "method": method(input),
         "calibration": a.args.calibration.as_ref().map(|p| p.display().to_string()),
-        "input": crate::imu_args::input_json(&a.source, &a.unit_check),
+        "input": a.source.as_ref().map(|s| crate::imu_args::input_json(s, &a.unit_check)),
     });
     if let (Value::Object(o), Value::Object(i)) = (&mut out, input_json(input)) {
         o.extend(i);

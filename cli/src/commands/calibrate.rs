@@ -331,12 +331,12 @@ pub fn compute(args: &Args) -> Result<(Calibration, (SourceInfo, UnitCheck)), Cl
     checks::gravity("--gravity", args.gravity)?;
     let noise = noise::or_default(args.noise.as_deref())?;
     let span = read_samples(args)?;
-    let c = solve(args, &span.samples, &noise)?;
+    let c = solve(args, span.samples, noise)?;
     Ok((c, (span.source, span.unit_check)))
 }
 
 /// [`compute`] on the samples read.
-fn solve(args: &Args, samples: &[ImuSample], noise: &ImuNoise) -> Result<Calibration, CliError> {
+fn solve(args: &Args, samples: Vec<ImuSample>, noise: ImuNoise) -> Result<Calibration, CliError> {
     if let Some(h) = args.heading
         && !h.is_finite()
     {

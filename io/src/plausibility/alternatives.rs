@@ -79,8 +79,12 @@ fn scale_name(s: f64) -> &'static str {
     if s < 1.0 { "π/180" } else { "180/π" }
 }
 
+/// Factors from the values as read to the true ones, with the unit they stand for (`None`
+/// when the units read are unknown).
+type Factors<U> = Vec<(f64, Option<U>)>;
+
 /// The time factors and units other than as read, and the gyro factors and units.
-fn options(read_as: Option<Units>) -> (Vec<(f64, Option<TimeUnit>)>, Vec<(f64, Option<GyroUnit>)>) {
+fn options(read_as: Option<Units>) -> (Factors<TimeUnit>, Factors<GyroUnit>) {
     let deg = std::f64::consts::PI / 180.0;
     match read_as {
         Some(u) => {
@@ -112,7 +116,7 @@ fn options(read_as: Option<Units>) -> (Vec<(f64, Option<TimeUnit>)>, Vec<(f64, O
 /// median `dt_ns` as read, is an IMU's.
 pub(crate) fn candidates(read_as: Option<Units>, dt_ns: f64) -> Vec<Alternative> {
     let (times, gyros) = options(read_as);
-    let times: Vec<(f64, Option<TimeUnit>)> = std::iter::once((1.0, None))
+    let times: Factors<TimeUnit> = std::iter::once((1.0, None))
         .chain(
             times
                 .into_iter()

@@ -36,14 +36,14 @@ pub fn impossible(s: &ImuSample) -> Option<String> {
         }
     };
     let (w, a) = (magnitude(&s.gyro), magnitude(&s.acc));
-    if !(w <= MAX_GYRO_RAD_S) {
+    if w.is_nan() || w > MAX_GYRO_RAD_S {
         return Some(format!(
             "the gyro reads {:?} rad/s (|ω| ≥ {w:.4e}), beyond any IMU's range ({MAX_GYRO_RAD_S} \
              rad/s; the widest gyroscope reads ±349 rad/s)",
             [s.gyro.x, s.gyro.y, s.gyro.z]
         ));
     }
-    if !(a <= MAX_ACCEL_M_S2) {
+    if a.is_nan() || a > MAX_ACCEL_M_S2 {
         return Some(format!(
             "the accelerometer reads {:?} m/s² (|a| ≥ {a:.4e}), beyond any IMU's range \
              ({MAX_ACCEL_M_S2} m/s²; the widest IMU accelerometer reads ±400 g = 3923 m/s²)",
