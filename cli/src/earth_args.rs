@@ -16,7 +16,7 @@ use preint::{CoriolisMode, NavState};
 pub struct EarthRateArgs {
     /// Simulate in a world frame rotating at ω_ie = x,y,z (rad/s, world frame), gravity fixed
     /// in it: the gyro reads ω_b + R_wbᵀω_ie, the accelerometer R_wbᵀ(a + 2ω_ie×v +
-    /// ω_ie×(ω_ie×p) − g).
+    /// ω_ie×(ω_ie×p) − g). At most 100 rad/s.
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true,
           value_parser = crate::parse::frame_rate, conflicts_with = "latitude")]
     pub earth_rate: Option<Vector3<f64>>,

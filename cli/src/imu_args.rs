@@ -61,7 +61,8 @@ pub struct ImuArgs {
     /// record (when the recorder received the message).
     #[arg(long, default_value = "header")]
     pub stamp: Stamp,
-    /// Skip the checks that the data looks like m/s^2, rad/s and the stated time unit.
+    /// Skip the checks that the data looks like m/s^2, rad/s and the stated time unit (a
+    /// reading beyond any IMU's range, 1000 rad/s or 10000 m/s^2, is refused regardless).
     #[arg(long)]
     pub no_unit_check: bool,
 }
