@@ -2,6 +2,8 @@
 
 use crate::CliError;
 use preint::ImuSample;
+use preint_io::{UnitVerdict, Units};
+use serde_json::{Value, json};
 use std::path::Path;
 
 /// `flag`'s value `v` must be finite and ≥ 0.
@@ -26,13 +28,72 @@ pub fn positive(flag: &str, v: f64) -> Result<(), CliError> {
     }
 }
 
-/// The samples of `file` look like the units they were read as (time unit, accelerometer
-/// m/s², gyroscope rad/s, moving and still; see [`preint_io::plausibility`]): data in g,
-/// deg/s or another time unit is refused with a message naming the file and the flag that
-/// fixes it.
-pub fn si_units(samples: &[ImuSample], file: &Path) -> Result<(), CliError> {
-    preint_io::plausibility::check_units(samples, &file.display().to_string())?;
-    Ok(())
+/// `flag`'s value `g` must be a gravity magnitude in [0, 100] m/s² ([`crate::parse::gravity`]),
+/// for values that do not come through the flag's parser (library callers).
+pub fn gravity(flag: &str, g: f64) -> Result<(), CliError> {
+    crate::parse::gravity(&g.to_string())
+        .map(|_| ())
+        .map_err(|e| CliError::Usage(format!("{flag}: {e}")))
+}
+
+/// The samples of `file` look like the units `read_as` they were read in (time unit,
+/// accelerometer m/s², gyroscope rad/s, moving and still; see [`preint_io::plausibility`]):
+/// data in g, deg/s or another time unit is refused with a message naming the file and the
+/// flag that fixes it; otherwise the verdict says whether the units were confirmed.
+pub fn si_units(
+    samples: &[ImuSample],
+    file: &Path,
+    read_as: Option<Units>,
+) -> Result<UnitVerdict, CliError> {
+    let name = file.display().to_string();
+    Ok(preint_io::plausibility::check_units_read_as(
+        samples, &name, read_as,
+    )?)
+}
+
+/// What the unit checks said about the recording a command read.
+#[derive(Clone, Debug, PartialEq)]
+pub enum UnitCheck {
+    /// Checked on the first `samples` samples.
+    Checked {
+        /// Passed or inconclusive.
+        verdict: UnitVerdict,
+        /// Samples checked (a prefix of the recording, or all of it).
+        samples: usize,
+    },
+    /// `--no-unit-check`.
+    Skipped,
+}
+
+impl UnitCheck {
+    /// `{"verdict": "passed" | "inconclusive" | "skipped", "why", "samples"}`: `why` says
+    /// what the checks missed (null unless inconclusive), `samples` how many were checked
+    /// (null when skipped).
+    pub fn json(&self) -> Value {
+        match self {
+            UnitCheck::Checked { verdict, samples } => json!({
+                "verdict": verdict.name(), "why": verdict.why(), "samples": samples,
+            }),
+            UnitCheck::Skipped => json!({
+                "verdict": "skipped", "why": "--no-unit-check", "samples": null,
+            }),
+        }
+    }
+
+    /// `unit check inconclusive (N samples checked): why` and a newline when the checks could
+    /// not decide; empty otherwise.
+    pub fn text(&self) -> String {
+        match self {
+            UnitCheck::Checked {
+                verdict: UnitVerdict::Inconclusive(why),
+                samples,
+            } => format!(
+                "unit check inconclusive ({samples} samples checked): {}\n",
+                why.join("; ")
+            ),
+            _ => String::new(),
+        }
+    }
 }
 
 /// No interval between consecutive samples of `file` exceeds `max_gap_ns`; the error names

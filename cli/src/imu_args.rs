@@ -1,9 +1,11 @@
 //! The flags that say where the IMU samples are and how to read them, shared by every
 //! subcommand that reads a recording.
 
-use crate::{CliError, checks};
+use crate::CliError;
+use crate::checks::{self, UnitCheck};
 use preint::ImuSample;
 use preint_io::layout::{Column, parse_columns};
+use preint_io::plausibility::limits;
 use preint_io::split::{MergeHandle, MergeReport};
 use preint_io::{
     AccelUnit, Delimiter, Format, GyroUnit, ImuReader, ReadOptions, SourceInfo, Stamp, TimeUnit,
@@ -61,7 +63,8 @@ pub struct ImuArgs {
     /// record (when the recorder received the message).
     #[arg(long, default_value = "header")]
     pub stamp: Stamp,
-    /// Skip the checks that the data looks like m/s^2, rad/s and the stated time unit.
+    /// Skip the checks that the data looks like m/s^2, rad/s and the stated time unit (a
+    /// reading beyond any IMU's range, 1000 rad/s or 10000 m/s^2, is refused regardless).
     #[arg(long)]
     pub no_unit_check: bool,
 }
@@ -169,11 +172,34 @@ impl ImuArgs {
     pub fn read_all_split(
         &self,
     ) -> Result<(Vec<ImuSample>, SourceInfo, Option<MergeReport>), CliError> {
-        let (reader, handle) = self.open_with_report()?;
+        self.read_all_checked()
+            .map(|r| (r.samples, r.info, r.report))
+    }
+
+    /// As [`ImuArgs::read_all_split`], with the unit checks' verdict (on every sample). Every
+    /// sample is also refused when beyond the range of any IMU
+    /// ([`preint_io::plausibility::limits`]).
+    pub fn read_all_checked(&self) -> Result<Recording, CliError> {
+        let (mut reader, handle) = self.open_with_report()?;
         let mut info = reader.info().clone();
         let bar = crate::progress::ReadingBar::start(reader.progress(), "reading");
-        let samples = reader.read_all()?;
+        let mut samples = Vec::new();
+        while let Some(l) = reader.next_located() {
+            if samples.len() == preint_io::reader::DEFAULT_MAX_SAMPLES {
+                return Err(reader.too_many().into());
+            }
+            let l = l?;
+            let index = samples.len() as u64;
+            limits::check_reading(&l.sample, index, l.at, &info.source_name)?;
+            samples.push(l.sample);
+        }
         drop(bar);
+        if samples.is_empty() {
+            return Err(preint_io::IoError::Empty {
+                source_name: info.source_name.clone(),
+            }
+            .into());
+        }
         let report = handle.map(|h| h.report());
         if let Some(r) = &report {
             info.notes.push(r.describe());
@@ -183,11 +209,34 @@ impl ImuArgs {
                 r.white_ratio().sqrt()
             ));
         }
-        if !self.no_unit_check {
-            checks::si_units(&samples, self.path())?;
-        }
-        Ok((samples, info, report))
+        let unit_check = if self.no_unit_check {
+            UnitCheck::Skipped
+        } else {
+            UnitCheck::Checked {
+                verdict: checks::si_units(&samples, self.path(), Some(info.units))?,
+                samples: samples.len(),
+            }
+        };
+        Ok(Recording {
+            samples,
+            info,
+            report,
+            unit_check,
+        })
     }
+}
+
+/// A recording read whole ([`ImuArgs::read_all_checked`]).
+#[derive(Clone, Debug)]
+pub struct Recording {
+    /// Every sample, in order.
+    pub samples: Vec<ImuSample>,
+    /// How it was read.
+    pub info: SourceInfo,
+    /// The merge report of a split recording.
+    pub report: Option<MergeReport>,
+    /// The unit checks' verdict.
+    pub unit_check: UnitCheck,
 }
 
 /// How a source was read, as JSON: format, units and the notes on how they were decided.
@@ -197,4 +246,12 @@ pub fn source_json(info: &SourceInfo) -> Value {
         "read_as": info.describe(),
         "notes": info.notes,
     })
+}
+
+/// [`source_json`] with the unit checks' verdict under `unit_check` ([`UnitCheck::json`]): the
+/// `input` object of every command that reads a recording.
+pub fn input_json(info: &SourceInfo, unit_check: &UnitCheck) -> Value {
+    let mut v = source_json(info);
+    v["unit_check"] = unit_check.json();
+    v
 }

@@ -17,8 +17,8 @@ pub struct PreintArgs {
     /// Kalibr imu.yaml with the noise densities (default: EuRoC figures).
     #[arg(long)]
     pub noise: Option<PathBuf>,
-    /// Gravity magnitude G (m/s^2); gravity is (0, 0, -G).
-    #[arg(long, default_value_t = 9.81, allow_hyphen_values = true)]
+    /// Gravity magnitude G (m/s^2, from 0 to 100); gravity is (0, 0, -G).
+    #[arg(long, default_value_t = 9.81, value_parser = crate::parse::gravity, allow_hyphen_values = true)]
     pub gravity: f64,
     /// Pose of the IMU in the body frame, x,y,z,qw,qx,qy,qz: sensor origin in body coordinates
     /// (m) and the unit quaternion rotating sensor vectors into the body frame. The output is
@@ -49,9 +49,9 @@ fn parse_lever_arm(s: &str) -> Result<preint::LeverArm, String> {
 
 impl PreintArgs {
     /// The noise densities (from the file, or the EuRoC figures) and the preintegration
-    /// parameters at `level`, after checking `--gravity`.
+    /// parameters at `level`, after checking `--gravity` (set by other means than the flag).
     pub fn params(&self, level: Level) -> Result<(ImuNoise, PreintParams), CliError> {
-        checks::non_negative("--gravity", self.gravity)?;
+        checks::gravity("--gravity", self.gravity)?;
         let noise = noise::or_default(self.noise.as_deref())?;
         let params = PreintParams::from_noise(&noise)
             .with_scheme(self.scheme.into())

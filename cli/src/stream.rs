@@ -1,14 +1,26 @@
 //! Reading a recording once, in bounded memory: the unit checks on a prefix, then every
 //! sample in order; and the keyframe window cut from the stream with an early stop.
+//!
+//! The unit checks ([`preint_io::plausibility`]) look at a prefix of the recording: the
+//! samples up to a window's end and, if the checks cannot decide on those, more, doubling the
+//! prefix until they decide, the recording ends or the prefix holds [`UNIT_CHECK_PREFIX`]
+//! samples (2¹⁸, 22 min at 200 Hz, 15 MB): a short window of a long recording is checked on
+//! the recording around it, not on the few seconds before its end. Every sample read, in the
+//! prefix or after it, is also refused if its readings are beyond any IMU's range
+//! ([`preint_io::plausibility::limits`], naming the line and the sample), `--no-unit-check`
+//! or not. A row that cannot be read after a window's end ends the checks' reading there: the
+//! window does not need it.
 
+use crate::CliError;
+use crate::checks::{self, UnitCheck};
 use crate::imu_args::ImuArgs;
-use crate::{CliError, checks};
 use preint::{ImuSample, PreintError};
+use preint_io::plausibility::limits;
 use preint_io::{ImuReader, IoError, Progress, SourceInfo};
 use std::collections::VecDeque;
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 
-/// Samples held in memory for the unit checks: 2¹⁸ (15 MB; 22 min at 200 Hz). The checks of
+/// Most samples held in memory for the unit checks: 2¹⁸ (15 MB; 22 min at 200 Hz). The checks of
 /// a longer recording look at this prefix only.
 pub const UNIT_CHECK_PREFIX: usize = 1 << 18;
 
@@ -25,14 +37,16 @@ pub const MAX_HELD_SAMPLES: usize = 1 << 23;
 /// more before `t_i` for the first checked interval.
 pub const EDGE_SAMPLES: usize = 4;
 
-/// The samples of a recording, in order, after the unit checks on its first
-/// [`UNIT_CHECK_PREFIX`] samples (unless `--no-unit-check`). The rest of the recording is
-/// parsed by a second thread (in chunks through a bounded channel) while the caller works on what came before.
+/// The samples of a recording, in order, after the unit checks on a prefix (module docs;
+/// unless `--no-unit-check`), each within any IMU's range. The rest of the recording is
+/// parsed by a second thread (in chunks through a bounded channel) while the caller works on
+/// what came before.
 pub struct CheckedSamples {
     prefix: std::vec::IntoIter<ImuSample>,
     rest: Option<Prefetch>,
     info: SourceInfo,
     progress: Progress,
+    unit_check: UnitCheck,
 }
 
 /// Samples per chunk handed from the reading thread.
@@ -52,7 +66,9 @@ struct Prefetch {
 }
 
 impl Prefetch {
-    fn start(mut reader: ImuReader) -> Self {
+    /// Reads the rest of `reader`, whose next sample has index `index`, checking each against
+    /// the limits of any IMU.
+    fn start(mut reader: ImuReader, mut index: u64) -> Self {
         let (full_tx, full) = sync_channel(CHUNKS_AHEAD);
         let (empty, empty_rx) = sync_channel::<Vec<ImuSample>>(CHUNKS_AHEAD + 1);
         std::thread::spawn(move || {
@@ -63,7 +79,7 @@ impl Prefetch {
                 chunk.clear();
                 let mut failed = None;
                 while chunk.len() < CHUNK {
-                    match reader.next() {
+                    match next_within_limits(&mut reader, index) {
                         Some(Ok(s)) => chunk.push(s),
                         Some(Err(e)) => {
                             failed = Some(e);
@@ -71,6 +87,7 @@ impl Prefetch {
                         }
                         None => break,
                     }
+                    index += 1;
                 }
                 let done = chunk.len() < CHUNK;
                 if !chunk.is_empty() && full_tx.send(Ok(chunk)).is_err() {
@@ -108,18 +125,29 @@ impl Prefetch {
     }
 }
 
+/// The next sample of `reader` (number `index`, 0-based), refused when beyond the range of
+/// any IMU ([`limits::check_reading`]).
+fn next_within_limits(reader: &mut ImuReader, index: u64) -> Option<Result<ImuSample, IoError>> {
+    let located = reader.next_located()?;
+    let name = &reader.info().source_name;
+    Some(located.and_then(|l| {
+        limits::check_reading(&l.sample, index, l.at, name)?;
+        Ok(l.sample)
+    }))
+}
+
 /// Opens the recording of `args` and runs the unit checks on its prefix.
 pub fn open_checked(args: &ImuArgs) -> Result<CheckedSamples, CliError> {
     open_checked_until(args, None)
 }
 
-/// As [`open_checked`], with a prefix that also ends [`EDGE_SAMPLES`] − 1 samples after
-/// `until` \[ns\] (a window's end): nothing after the window is read for the checks.
+/// As [`open_checked`], with a stream that holds at least the samples up to
+/// [`EDGE_SAMPLES`] − 1 after `until` \[ns\] (a window's end) once its checks are done.
 pub fn open_checked_until(args: &ImuArgs, until: Option<i64>) -> Result<CheckedSamples, CliError> {
     open_checked_prefix(args, until, UNIT_CHECK_PREFIX, None, EDGE_SAMPLES)
 }
 
-/// As [`open_checked_until`], the prefix ending `edge` − 1 samples after `until` (a window
+/// As [`open_checked_until`], the prefix reaching `edge` − 1 samples after `until` (a window
 /// that reads `edge` samples on each side, [`cut_window_with_edge`]).
 pub fn open_checked_window(
     args: &ImuArgs,
@@ -129,9 +157,39 @@ pub fn open_checked_window(
     open_checked_prefix(args, until, UNIT_CHECK_PREFIX, None, edge)
 }
 
+/// The prefix being read for the checks.
+struct Prefix {
+    samples: Vec<ImuSample>,
+    ended: bool,
+}
+
+impl Prefix {
+    /// Reads from `reader` while `more` says so (given the prefix) and the recording goes on.
+    /// A reading error is returned, or with `past_window` (samples read for the checks only)
+    /// ends the prefix: what the window needs was read without it.
+    fn read_while(
+        &mut self,
+        reader: &mut ImuReader,
+        mut more: impl FnMut(&[ImuSample]) -> bool,
+        past_window: bool,
+    ) -> Result<(), CliError> {
+        while !self.ended && more(&self.samples) {
+            match next_within_limits(reader, self.samples.len() as u64) {
+                Some(Ok(s)) => self.samples.push(s),
+                Some(Err(_)) if past_window => self.ended = true,
+                Some(Err(e)) => return Err(e.into()),
+                None => self.ended = true,
+            }
+        }
+        Ok(())
+    }
+}
+
 /// As [`open_checked_until`], with the unit checks on at most `max_samples` samples spanning at
 /// most `max_span_s` seconds (the prefix ends with the first sample that reaches it), and
-/// `edge` − 1 samples read after `until`.
+/// `edge` − 1 samples read after `until`. Without `until` the checks see the whole prefix;
+/// with it, the samples up to the window's end, then more while they cannot decide (module
+/// docs).
 pub fn open_checked_prefix(
     args: &ImuArgs,
     until: Option<i64>,
@@ -139,42 +197,64 @@ pub fn open_checked_prefix(
     max_span_s: Option<f64>,
     edge: usize,
 ) -> Result<CheckedSamples, CliError> {
-    let mut rest = args.open()?;
-    let (info, progress) = (rest.info().clone(), rest.progress().clone());
+    let mut reader = args.open()?;
+    let (info, progress) = (reader.info().clone(), reader.progress().clone());
     let max_span_ns = max_span_s.map_or(i64::MAX, |s| (s * 1e9) as i64);
-    let (mut prefix, mut after, mut ended) = (Vec::new(), 0, false);
-    while prefix.len() < max_samples && after < edge - 1 {
-        let Some(s) = rest.next() else {
-            ended = true;
-            break;
-        };
-        let s = s?;
-        after += usize::from(until.is_some_and(|t| s.t_ns > t));
-        prefix.push(s);
-        if s.t_ns.saturating_sub(prefix[0].t_ns) >= max_span_ns {
-            break;
-        }
-    }
-    if prefix.is_empty() {
+    let full = |p: &[ImuSample]| {
+        p.len() >= max_samples
+            || p.len() > 1 && p[p.len() - 1].t_ns.saturating_sub(p[0].t_ns) >= max_span_ns
+    };
+    let mut prefix = Prefix {
+        samples: Vec::new(),
+        ended: false,
+    };
+    // The window: up to `edge` − 1 samples after `until`, or the whole prefix without it.
+    let window_read = |p: &[ImuSample]| match until {
+        Some(t) => p.iter().rev().take_while(|s| s.t_ns > t).count() >= edge - 1,
+        None => false,
+    };
+    prefix.read_while(&mut reader, |p| !full(p) && !window_read(p), false)?;
+    if prefix.samples.is_empty() {
         return Err(IoError::Empty {
             source_name: info.source_name.clone(),
         }
         .into());
     }
-    if !args.no_unit_check {
-        checks::si_units(&prefix, args.path())?;
-    }
+    let unit_check = if args.no_unit_check {
+        UnitCheck::Skipped
+    } else {
+        loop {
+            let verdict = checks::si_units(&prefix.samples, args.path(), Some(info.units))?;
+            let n = prefix.samples.len();
+            if verdict.passed() || prefix.ended || full(&prefix.samples) {
+                break UnitCheck::Checked {
+                    verdict,
+                    samples: n,
+                };
+            }
+            let target = (2 * n).max(n + 1024);
+            let past_window = until.is_some();
+            prefix.read_while(&mut reader, |p| p.len() < target && !full(p), past_window)?;
+        }
+    };
+    let index = prefix.samples.len() as u64;
     // Nothing more is read once the source ended or the window `until` is complete.
-    let more = !ended && after < edge - 1;
+    let more = !prefix.ended && !window_read(&prefix.samples);
     Ok(CheckedSamples {
-        prefix: prefix.into_iter(),
-        rest: more.then(|| Prefetch::start(rest)),
+        prefix: prefix.samples.into_iter(),
+        rest: more.then(|| Prefetch::start(reader, index)),
         info,
         progress,
+        unit_check,
     })
 }
 
 impl CheckedSamples {
+    /// What the unit checks said.
+    pub fn unit_check(&self) -> &UnitCheck {
+        &self.unit_check
+    }
+
     /// How the source is read.
     pub fn info(&self) -> &SourceInfo {
         &self.info
@@ -211,6 +291,9 @@ pub struct StreamWindow {
     pub offset: usize,
     /// Time of the stream's first sample \[ns\].
     pub first_ns: i64,
+    /// Time of the stream's last sample \[ns\], when the stream was read to its end (the
+    /// window reaches past it, or lies before the first sample).
+    pub last_ns: Option<i64>,
     /// `t_i` \[ns\]: `--from`, or the first sample's time.
     pub t_i_ns: i64,
     /// `t_j` \[ns\]: `--to`, or the last sample's time.
@@ -228,9 +311,11 @@ pub fn cut_window(
 }
 
 /// [`cut_window`] keeping `edge` (≥ [`EDGE_SAMPLES`]) samples before `from` and `edge` − 1
-/// after `to`.
+/// after `to`. A window that ends before the stream's first sample is refused by the
+/// preintegrator: the rest of the stream is then read (not kept) for its last time, which
+/// the error names.
 pub fn cut_window_with_edge(
-    stream: impl Iterator<Item = Result<ImuSample, CliError>>,
+    mut stream: impl Iterator<Item = Result<ImuSample, CliError>>,
     from: Option<i64>,
     to: Option<i64>,
     edge: usize,
@@ -238,7 +323,7 @@ pub fn cut_window_with_edge(
     let mut before: VecDeque<ImuSample> = VecDeque::with_capacity(edge + 1);
     let mut inside: Vec<ImuSample> = Vec::new();
     let (mut first_ns, mut dropped, mut after) = (None, 0usize, 0usize);
-    for s in stream {
+    for s in stream.by_ref() {
         let s = s?;
         let t_i = *first_ns.get_or_insert(s.t_ns);
         let t_i = from.unwrap_or(t_i);
@@ -267,10 +352,18 @@ pub fn cut_window_with_edge(
     let first_ns = first_ns.unwrap_or(0);
     let mut samples: Vec<ImuSample> = before.into_iter().collect();
     samples.append(&mut inside);
-    let last_ns = samples.last().map_or(first_ns, |s| s.t_ns);
+    let mut last_ns = samples.last().map_or(first_ns, |s| s.t_ns);
+    let ended = after < edge - 1;
+    let before_first = [from, to].into_iter().flatten().any(|t| t < first_ns);
+    if !ended && before_first {
+        for s in stream.by_ref() {
+            last_ns = s?.t_ns;
+        }
+    }
     Ok(StreamWindow {
         offset: dropped,
         first_ns,
+        last_ns: (ended || before_first).then_some(last_ns),
         t_i_ns: from.unwrap_or(first_ns),
         t_j_ns: to.unwrap_or(last_ns),
         samples,
@@ -278,8 +371,9 @@ pub fn cut_window_with_edge(
 }
 
 /// A split recording (`--gyro/--accel`, `--gyro-topic/--accel-topic`) read whole, as the
-/// window `[from, to]` (defaults: its first and last merged sample), with how it was read and
-/// the merge report the effective accelerometer density comes from.
+/// window `[from, to]` (defaults: its first and last merged sample), with how it was read,
+/// the merge report the effective accelerometer density comes from and the unit checks'
+/// verdict.
 pub fn split_window(
     args: &ImuArgs,
     from: Option<i64>,
@@ -289,19 +383,34 @@ pub fn split_window(
         StreamWindow,
         SourceInfo,
         Option<preint_io::split::MergeReport>,
+        UnitCheck,
     ),
     CliError,
 > {
-    let (samples, source, report) = args.read_all_split()?;
+    let r = args.read_all_checked()?;
+    let samples = r.samples;
     let (first_ns, last_ns) = (samples[0].t_ns, samples[samples.len() - 1].t_ns);
     let w = StreamWindow {
         offset: 0,
         first_ns,
+        last_ns: Some(last_ns),
         t_i_ns: from.unwrap_or(first_ns),
         t_j_ns: to.unwrap_or(last_ns),
         samples,
     };
-    Ok((w, source, report))
+    Ok((w, r.info, r.report, r.unit_check))
+}
+
+/// The samples a solver holds ([`read_span`]), how the recording was read and what its unit
+/// checks said.
+#[derive(Clone, Debug)]
+pub struct Span {
+    /// The samples with `from ≤ t ≤ to`.
+    pub samples: Vec<ImuSample>,
+    /// How the recording was read.
+    pub source: SourceInfo,
+    /// The unit checks' verdict.
+    pub unit_check: UnitCheck,
 }
 
 /// The samples of `args`' recording with `from ≤ t ≤ to` for the solver of `command`
@@ -312,13 +421,18 @@ pub fn read_span(
     from: Option<i64>,
     to: Option<i64>,
     command: &str,
-) -> Result<Vec<ImuSample>, CliError> {
+) -> Result<Span, CliError> {
     let stream = open_checked_until(args, to)?;
+    let (source, unit_check) = (stream.info().clone(), stream.unit_check().clone());
     let bar = crate::progress::ReadingBar::start(stream.progress(), command);
     let samples = hold_span(stream, from, to, MAX_HELD_SAMPLES, args.path())?;
     drop(bar);
     checks::no_gaps(&samples, args.path(), preint::params::DEFAULT_MAX_GAP_NS)?;
-    Ok(samples)
+    Ok(Span {
+        samples,
+        source,
+        unit_check,
+    })
 }
 
 /// The samples of `stream` with `from ≤ t ≤ to` (either bound optional), read up to `to`;
@@ -400,7 +514,7 @@ impl StreamWindow {
                 PreintError::KeyframeOutsideSamples {
                     t_ns,
                     first_ns: self.first_ns,
-                    last_ns,
+                    last_ns: self.last_ns.unwrap_or(last_ns),
                 }
             }
             other => other,
@@ -461,7 +575,8 @@ mod tests {
             if Some(k) == bad {
                 t.push_str("not a row\n");
             } else {
-                t.push_str(&format!("{},{k},0.5,0,0,0,9.8\n", 1_000 + k * 5_000_000));
+                let w = k as f64 * 1e-3;
+                t.push_str(&format!("{},{w},0.5,0,0,0,9.8\n", 1_000 + k * 5_000_000));
             }
         }
         t
@@ -472,13 +587,13 @@ mod tests {
         // 10 000 samples: two full chunks and a partial one.
         let text = euroc_text(10_000, None);
         let reader = ImuReader::from_text(&text, "p.csv", &preint_io::ReadOptions::euroc());
-        let mut p = Prefetch::start(reader.unwrap());
+        let mut p = Prefetch::start(reader.unwrap(), 0);
         let mut k = 0usize;
         while let Some(s) = p.next_sample() {
             let s = s.unwrap();
             assert_eq!(
                 (s.t_ns, s.gyro.x),
-                ((1_000 + k * 5_000_000) as i64, k as f64)
+                ((1_000 + k * 5_000_000) as i64, k as f64 * 1e-3)
             );
             k += 1;
         }
@@ -489,7 +604,7 @@ mod tests {
     fn the_prefetch_thread_passes_an_error_on_after_the_samples_before_it() {
         let text = euroc_text(10_000, Some(9_000));
         let reader = ImuReader::from_text(&text, "p.csv", &preint_io::ReadOptions::euroc());
-        let mut p = Prefetch::start(reader.unwrap());
+        let mut p = Prefetch::start(reader.unwrap(), 0);
         let mut k = 0usize;
         let err = loop {
             match p.next_sample() {
@@ -502,6 +617,43 @@ mod tests {
         // Header on line 1, row 9000 on line 9002.
         assert!(err.contains("p.csv:9002"), "{err}");
         assert!(p.next_sample().is_none());
+    }
+
+    #[test]
+    fn the_prefetch_thread_refuses_a_reading_beyond_any_imu_naming_line_and_sample() {
+        let text = euroc_text(10_000, None).replace(
+            &format!("{},8.5,0.5", 1_000 + 8_500 * 5_000_000i64),
+            &format!("{},1e308,0.5", 1_000 + 8_500 * 5_000_000i64),
+        );
+        let reader = ImuReader::from_text(&text, "p.csv", &preint_io::ReadOptions::euroc());
+        let mut p = Prefetch::start(reader.unwrap(), 0);
+        let err = std::iter::from_fn(|| p.next_sample())
+            .find_map(Result::err)
+            .expect("refused")
+            .to_string();
+        assert!(
+            err.starts_with("p.csv:8502: sample 8500 ") && err.contains("1e308"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn a_window_before_the_first_sample_names_the_last_one() {
+        let w = cut_window(stream(100), Some(-50), Some(-40)).unwrap();
+        assert_eq!((w.first_ns, w.last_ns), (0, Some(990)));
+        let e = w.in_stream(PreintError::KeyframeOutsideSamples {
+            t_ns: -50,
+            first_ns: 0,
+            last_ns: 20,
+        });
+        assert!(e.to_string().contains("[0, 990]"), "{e}");
+        // Inside the stream, reading stops after the window and the last time is not known.
+        assert_eq!(
+            cut_window(stream(100), Some(100), Some(200))
+                .unwrap()
+                .last_ns,
+            None
+        );
     }
 
     #[test]

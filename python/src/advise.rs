@@ -84,6 +84,8 @@ pub(crate) fn advise_py<'py>(
             let a = advise::Advice {
                 args,
                 samples: s.len(),
+                source: None,
+                unit_check: preint_cli::checks::UnitCheck::Skipped,
                 cutoffs,
                 candidates,
                 recommended,

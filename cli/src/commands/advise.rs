@@ -67,6 +67,10 @@ pub struct Advice {
     pub args: Args,
     /// Number of samples in the recording.
     pub samples: usize,
+    /// How the recording was read (`None` for samples given in memory).
+    pub source: Option<preint_io::SourceInfo>,
+    /// What the unit checks said.
+    pub unit_check: crate::checks::UnitCheck,
     /// Low-pass cutoffs \[Hz\] chosen for (gyro, accelerometer); `None`: left unfiltered.
     pub cutoffs: [Option<f64>; 2],
     /// Every (scheme, rate) evaluated.
@@ -89,7 +93,11 @@ impl Advice {
 pub fn compute(args: &Args) -> Result<Advice, CliError> {
     checks::positive("--fraction", args.fraction)?;
     let noise = noise::or_default(Some(&args.noise))?;
-    let mut samples = stream::read_span(&args.input, args.from, args.to, "advise")?;
+    let stream::Span {
+        mut samples,
+        source,
+        unit_check,
+    } = stream::read_span(&args.input, args.from, args.to, "advise")?;
     if let Some(path) = &args.calibration {
         let x = crate::calibration_file::read(path)?.intrinsics;
         if !x.is_identity() {
@@ -116,6 +124,8 @@ pub fn compute(args: &Args) -> Result<Advice, CliError> {
     Ok(Advice {
         args: args.clone(),
         samples: samples.len(),
+        source: Some(source),
+        unit_check,
         cutoffs,
         candidates,
         recommended,
@@ -201,6 +211,7 @@ pub fn to_json(a: &Advice) -> Value {
         "calibration": a.args.calibration.as_ref().map(|p| p.display().to_string()),
         "rates_not_evaluated": a.rates_not_evaluated,
         "fit": crate::analysis::advise::fit(&a.candidates, rec).as_ref().map(fit_json),
+        "input": a.source.as_ref().map(|s| crate::imu_args::input_json(s, &a.unit_check)),
     });
     if let (Value::Object(o), Value::Object(i)) = (&mut out, input_json(input)) {
         o.extend(i);
@@ -231,6 +242,7 @@ pub fn to_text(a: &Advice) -> String {
         a.args.input.path().display(),
         a.samples
     );
+    h.push_str(&a.unit_check.text());
     h.push_str(&input_text(input));
     match input {
         InputClass::Smooth => {

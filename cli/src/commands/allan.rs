@@ -69,6 +69,10 @@ pub struct AllanRun {
     pub block_len: usize,
     /// Whether the units were checked (`--no-unit-check` not given).
     pub units_checked: bool,
+    /// How the recording was read.
+    pub source: preint_io::SourceInfo,
+    /// What the unit checks said.
+    pub unit_check: crate::checks::UnitCheck,
     /// The stillness check's findings (refused unless static or `--no-still-check`).
     pub stillness: Stillness,
     /// Curves and fits per channel (order [`IMU_AXES`]).
@@ -77,8 +81,17 @@ pub struct AllanRun {
     pub files: Vec<String>,
 }
 
+/// What the streamed pass read: base blocks, stillness, how the source was read and its unit
+/// check.
+type Streamed = (
+    AllanStream,
+    Stillness,
+    preint_io::SourceInfo,
+    crate::checks::UnitCheck,
+);
+
 /// The streamed pass: base blocks, the stillness monitor, and the unit check on the prefix.
-fn read_stream(args: &Args) -> Result<(AllanStream, Stillness), CliError> {
+fn read_stream(args: &Args) -> Result<Streamed, CliError> {
     let file = args.input.path();
     let samples = stream::open_checked_prefix(
         &args.input,
@@ -87,6 +100,7 @@ fn read_stream(args: &Args) -> Result<(AllanStream, Stillness), CliError> {
         Some(UNIT_CHECK_SECONDS),
         stream::EDGE_SAMPLES,
     )?;
+    let (source, units) = (samples.info().clone(), samples.unit_check().clone());
     let _bar = ReadingBar::start(samples.progress(), "allan");
     let mut allan = AllanStream::new();
     let mut still = StillnessMonitor::new(StillnessOptions::default());
@@ -95,13 +109,13 @@ fn read_stream(args: &Args) -> Result<(AllanStream, Stillness), CliError> {
         allan.push(&s).map_err(|e| CliError::failed_in(file, e))?;
         still.push(&s);
     }
-    Ok((allan, still.finish()))
+    Ok((allan, still.finish(), source, units))
 }
 
 /// Computes the Allan deviations and, with `--out`, writes the two charts and `imu.yaml`.
 pub fn compute(args: &Args) -> Result<AllanRun, CliError> {
     let file = args.input.path();
-    let (stream, stillness) = read_stream(args)?;
+    let (stream, stillness, source, unit_check) = read_stream(args)?;
     if !args.no_still_check {
         stillness
             .verdict(&StillnessOptions::default())
@@ -128,6 +142,8 @@ pub fn compute(args: &Args) -> Result<AllanRun, CliError> {
         samples,
         block_len,
         units_checked: !args.input.no_unit_check,
+        source,
+        unit_check,
         stillness,
         allan: a,
         files,
@@ -159,6 +175,7 @@ pub fn to_json(r: &AllanRun) -> Value {
     };
     let st = &r.stillness;
     json!({
+        "input": crate::imu_args::input_json(&r.source, &r.unit_check),
         "samples": r.samples,
         "sample_period_s": a.dt,
         "base_tau_s": a.tau0,
@@ -224,6 +241,7 @@ pub fn to_text(r: &AllanRun) -> String {
             "not checked"
         }
     );
+    h.push_str(&r.unit_check.text());
     if r.block_len > 1 {
         let _ = writeln!(
             h,

@@ -18,17 +18,23 @@
 //! recording still at least half of the time, the correction moves that norm further from |g|
 //! than the raw one by more than 0.5 %.
 //!
-//! Exit status 0 with a verdict; with `--strict`, exit 2 when a defect is found (the defects
-//! are printed on stderr, each naming counts, indices and lines). With `--no-unit-check` a
-//! unit problem is a warning instead of a defect.
+//! The verdict is `clean`, `DEFECTS`, or `too short to judge` (fewer than 100 samples or
+//! less than 1 s: [`preint_io::audit::MIN_JUDGED_SAMPLES`]); readings beyond any IMU's
+//! range are defects, single-sample spikes and unit checks that cannot decide are warnings.
+//! Exit status 0 with a verdict; with `--strict`, exit 2 when a defect is found or the
+//! recording is too short to judge (the defects are printed on stderr, each naming counts,
+//! indices and lines). With `--no-unit-check` a unit problem is a warning instead of a
+//! defect.
 //!
 //! # JSON (`--json`)
 //! - `imu`, `input` (`format`, `read_as`, `notes`): the recording and how it was read;
 //!   `split`: false.
-//! - `clean` (no defect), `defects`, `warnings`: counts; `findings`: `[{severity` (`defect`,
-//!   `warning`, `info`), `kind`, `message}]`, defects first. Kinds: `empty`, `bad_rows`,
-//!   `stopped`, `non_finite`, `duplicates`, `out_of_order`, `long_gaps`, `gaps`, `rate`,
-//!   `jitter`, `drift`, `clipping`, `constant_axis`, `units`, `still`, `calibration`.
+//! - `verdict` (`clean`, `defects`, `too_short`), `clean` (the verdict is `clean`: no
+//!   defect, long enough to judge), `defects`, `warnings`: counts; `findings`: `[{severity`
+//!   (`defect`, `warning`, `info`), `kind`, `message}]`, defects first. Kinds: `empty`,
+//!   `too_short`, `bad_rows`, `stopped`, `non_finite`, `impossible`, `spikes`, `duplicates`,
+//!   `out_of_order`, `long_gaps`, `gaps`, `rate`, `jitter`, `drift`, `clipping`,
+//!   `constant_axis`, `units`, `still`, `calibration`.
 //! - `calibration`: `{file, model, time_offset_s}` of `--calibration`, or null.
 //! - `samples`; `t_first_ns`, `t_last_ns` (largest stamp), `span_s`.
 //! - `rate`: `nominal_hz` (1 / median Δt), `median_interval_ns`, `resolution_ns` (of the
@@ -45,7 +51,10 @@
 //!   `at` (`line N` or `message N`), `line` (null for containers), `t_ns`, `dt_ns` (from the
 //!   latest earlier stamp), `prev_at}`.
 //! - `bad_rows`: `count`, `first: [{at, line, message}]`; `stopped`: the error that ended
-//!   reading, or null; `non_finite`: `count`, `first: [{index, at, line}]`.
+//!   reading, or null; `non_finite`: `count`, `first: [{index, at, line}]`; `impossible`
+//!   (beyond any IMU's range): `count`, `first: [{index, at, line, what}]`; `spikes`:
+//!   `count`, `first: [{index, at, line, axis, value, sigmas}]` (`sigmas`: distance from the
+//!   nearer neighbour in robust σ of the axis' sample-to-sample change).
 //! - `axes`: per axis (`gyro x` … `acc z`) `unit`, `max`, `min`, `constant`,
 //!   `flat_fraction`, `at_max` and `at_min` (`clipped`, `total`: samples at the extreme,
 //!   `samples`, `runs`, `longest`, `first_index`, `first_at`: runs of ≥ 3 equal readings at
@@ -53,10 +62,14 @@
 //! - `units` (on the first 32 768 samples, or null): `samples`, `gravity_median_m_s2`
 //!   (corrected with `--calibration`), `raw_gravity_median_m_s2`,
 //!   `gyro_median_rad_s`, `gyro_scale` (`pairs`, `misfit_deg`: `{deg_per_s, as_read,
-//!   rad_per_s}`, or null), `error` (the unit check's message, or null).
+//!   rad_per_s}`, or null), `error` (the unit check's message, or null), `verdict`
+//!   (`passed`, `inconclusive`, or null with an error) and `why` (what an inconclusive check
+//!   missed, or null). `input.unit_check` holds the same verdict as every other command's
+//!   (`skipped` with `--no-unit-check`).
 //! - `still`: `window_samples` (0.5 s), `windows`, `still`, `fraction`.
 //!
-//! A split recording gives `imu`, `split`: true, `clean`, `defects`, `warnings`, `findings`
+//! A split recording gives `imu`, `split`: true, `verdict`, `clean`, `defects`, `warnings`,
+//! `findings`
 //! (kinds as above, prefixed `gyro: ` or `accel: ` in the messages, and `stamps`), `gyro` and
 //! `accel` (each: `samples`, `t_first_ns`, `t_last_ns`, `span_s`, `rate`, `jitter`,
 //! `histogram`, `gaps`, `duplicates`, `out_of_order`, `bad_rows`, `stopped`, `non_finite`),
@@ -64,12 +77,12 @@
 //! `min_ns`, `max_ns`, `coincident`; samples outside the other stream's span:
 //! `accel_before`, `accel_after`, `gyro_before`, `gyro_after`).
 
-use crate::imu_args::{ImuArgs, source_json};
+use crate::imu_args::{ImuArgs, input_json};
 use crate::progress::ReadingBar;
 use crate::{CliError, Output, calibration_file};
 use preint_io::audit::{
-    Audit, AuditOptions, AxisReport, BadRow, Event, EventList, Finding, FlatTop, HISTOGRAM_EDGES,
-    Severity, SplitAudit, Timing, audit_channels, audit_reader,
+    AXES, Audit, AuditOptions, AxisReport, BadRow, Event, EventList, Finding, FlatTop,
+    HISTOGRAM_EDGES, Severity, SplitAudit, Timing, Verdict, audit_channels, audit_reader,
 };
 use preint_io::{ChannelStream, Format, Location, Sensor, SourceInfo};
 use serde_json::{Map, Value, json};
@@ -129,6 +142,39 @@ impl AuditRun {
             .filter(|f| f.severity == severity)
             .count()
     }
+
+    /// Clean, defects, or too short to judge.
+    pub fn verdict(&self) -> Verdict {
+        Verdict::of(self.findings())
+    }
+
+    /// The unit checks' verdict as every command prints it ([`crate::checks::UnitCheck`]).
+    pub fn unit_check(&self, no_unit_check: bool) -> crate::checks::UnitCheck {
+        use crate::checks::UnitCheck;
+        match (&self.report, no_unit_check) {
+            (_, true) => UnitCheck::Skipped,
+            (Report::Single(a), false) => match a.units.as_ref().and_then(|u| {
+                let v = u.verdict.clone()?;
+                Some((v, u.samples))
+            }) {
+                Some((verdict, samples)) => UnitCheck::Checked { verdict, samples },
+                None => UnitCheck::Checked {
+                    verdict: preint_io::UnitVerdict::Inconclusive(vec![
+                        "fewer than two readable samples with distinct stamps".into(),
+                    ]),
+                    samples: 0,
+                },
+            },
+            (Report::Split(_), false) => UnitCheck::Checked {
+                verdict: preint_io::UnitVerdict::Inconclusive(vec![
+                    "the channels of a split recording are checked for their median norms \
+                     only (merge them with `preint convert` for the full checks)"
+                        .into(),
+                ]),
+                samples: 0,
+            },
+        }
+    }
 }
 
 /// Reads the recording once, sample by sample, and audits it.
@@ -159,6 +205,7 @@ pub fn compute(args: &Args) -> Result<AuditRun, CliError> {
     opts.correction = calibration.as_ref().map(|(_, c)| c.intrinsics.correction());
     let reader = args.input.open()?;
     let source = reader.info().clone();
+    opts.read_as = Some(source.units);
     let progress = reader.progress().clone();
     let _bar = ReadingBar::start(&progress, "audit");
     let mut audit = audit_reader(reader, opts);
@@ -379,10 +426,32 @@ fn reading_json(
     );
 }
 
+/// `impossible` and `spikes` of the module docs, added to `m`.
+fn readings_json(m: &mut Map<String, Value>, a: &Audit) {
+    let impossible: Vec<Value> = (a.impossible.first.iter())
+        .map(|e| json!({"index": e.index, "at": e.at.to_string(), "line": line(&e.at), "what": e.what}))
+        .collect();
+    let spikes: Vec<Value> = (a.spikes.first.iter())
+        .map(|e| {
+            json!({"index": e.index, "at": e.at.to_string(), "line": line(&e.at),
+                   "axis": AXES[e.axis].0, "value": e.value, "sigmas": e.sigmas})
+        })
+        .collect();
+    m.insert(
+        "impossible".into(),
+        json!({"count": a.impossible.count, "first": impossible}),
+    );
+    m.insert(
+        "spikes".into(),
+        json!({"count": a.spikes.count, "first": spikes}),
+    );
+}
+
 fn single_json(a: &Audit) -> Map<String, Value> {
     let mut m = timing_json(&a.timing);
     m["duplicates"]["identical"] = json!(a.identical_duplicates);
     reading_json(&mut m, &a.bad_rows, &a.stopped, &a.non_finite);
+    readings_json(&mut m, a);
     let axes: Vec<Value> = (a.axes.iter().flatten())
         .map(|x| axis(x, a.timing.samples))
         .collect();
@@ -396,7 +465,9 @@ fn single_json(a: &Audit) -> Map<String, Value> {
                    json!({"pairs": s.pairs,
                           "misfit_deg": {"deg_per_s": d, "as_read": one, "rad_per_s": rad}})
                }),
-               "error": u.error})
+               "error": u.error,
+               "verdict": u.verdict.as_ref().map(|v| v.name()),
+               "why": u.verdict.as_ref().and_then(|v| v.why())})
     });
     m.insert("units".into(), json!(units));
     let st = &a.still;
@@ -427,8 +498,8 @@ pub fn split_json(a: &SplitAudit) -> Map<String, Value> {
     m
 }
 
-/// The JSON form (keys in the module docs).
-pub fn to_json(r: &AuditRun) -> Value {
+/// The JSON form (keys in the module docs); `no_unit_check` as `--no-unit-check`.
+pub fn to_json(r: &AuditRun, no_unit_check: bool) -> Value {
     let findings: Vec<Value> = (r.findings().iter())
         .map(|f| json!({"severity": f.severity.to_string(), "kind": f.kind, "message": f.message}))
         .collect();
@@ -436,10 +507,11 @@ pub fn to_json(r: &AuditRun) -> Value {
     let mut m = Map::new();
     m.insert("imu".into(), json!(r.imu));
     if let Some(s) = &r.source {
-        m.insert("input".into(), source_json(s));
+        m.insert("input".into(), input_json(s, &r.unit_check(no_unit_check)));
     }
     m.insert("split".into(), json!(matches!(r.report, Report::Split(_))));
-    m.insert("clean".into(), json!(defects == 0));
+    m.insert("verdict".into(), json!(r.verdict().name()));
+    m.insert("clean".into(), json!(r.verdict() == Verdict::Clean));
     m.insert("defects".into(), json!(defects));
     m.insert("warnings".into(), json!(r.count(Severity::Warning)));
     m.insert("findings".into(), json!(findings));
@@ -463,7 +535,11 @@ pub fn to_text(r: &AuditRun) -> String {
         None => format!("{} (split: gyro and accelerometer streams)\n", r.imu),
     };
     let defects = r.count(Severity::Defect);
-    let verdict = if defects == 0 { "clean" } else { "DEFECTS" };
+    let verdict = match r.verdict() {
+        Verdict::Clean => "clean",
+        Verdict::Defects => "DEFECTS",
+        Verdict::TooShort => "too short to judge",
+    };
     let _ = writeln!(
         s,
         "verdict: {verdict} ({defects} defects, {} warnings)",
@@ -501,21 +577,27 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
     let r = compute(args)?;
     let output = Output {
         human: to_text(&r),
-        json: to_json(&r),
+        json: to_json(&r, args.input.no_unit_check),
     };
-    if args.strict && r.count(Severity::Defect) > 0 {
-        let defects: Vec<&str> = (r.findings().iter())
-            .filter(|f| f.severity == Severity::Defect)
-            .map(|f| f.message.as_str())
-            .collect();
+    let verdict = r.verdict();
+    if args.strict && verdict != Verdict::Clean {
+        let why = |keep: &dyn Fn(&Finding) -> bool| {
+            let m: Vec<&str> = (r.findings().iter())
+                .filter(|f| keep(f))
+                .map(|f| f.message.as_str())
+                .collect();
+            (m.len(), m.join(" | "))
+        };
+        let msg = if verdict == Verdict::Defects {
+            let (n, list) = why(&|f| f.severity == Severity::Defect);
+            format!("{}: audit found {n} defects (--strict): {list}", r.imu)
+        } else {
+            let (_, list) = why(&|f| f.kind == "too_short");
+            format!("{}: {list} (--strict)", r.imu)
+        };
         return Err(CliError::Refused {
             output: Box::new(output),
-            msg: format!(
-                "{}: audit found {} defects (--strict): {}",
-                r.imu,
-                defects.len(),
-                defects.join(" | ")
-            ),
+            msg,
         });
     }
     Ok(output)

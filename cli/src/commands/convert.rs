@@ -1,7 +1,8 @@
 //! `preint convert`: any readable recording to EuRoC CSV (`t [ns], w [rad/s], a [m/s²]`),
 //! streaming, in bounded memory.
 
-use crate::imu_args::{ImuArgs, source_json};
+use crate::checks::UnitCheck;
+use crate::imu_args::{ImuArgs, input_json};
 use crate::progress::ReadingBar;
 use crate::{CliError, Output, stream};
 use preint_io::euroc::write_euroc_stream;
@@ -27,6 +28,8 @@ pub struct Conversion {
     pub imu: String,
     /// How it was read.
     pub source: SourceInfo,
+    /// What the unit checks said.
+    pub unit_check: UnitCheck,
     /// The file written.
     pub out: String,
     /// Number of samples written.
@@ -37,7 +40,7 @@ pub struct Conversion {
 /// on its first samples (a file in deg/s or g must not come out labelled rad/s and m/s²).
 pub fn compute(args: &Args) -> Result<Conversion, CliError> {
     let stream = stream::open_checked(&args.input)?;
-    let source = stream.info().clone();
+    let (source, unit_check) = (stream.info().clone(), stream.unit_check().clone());
     let _bar = ReadingBar::start(stream.progress(), "convert");
     let out_name = args.out.display().to_string();
     let file = std::fs::File::create(&args.out).map_err(|e| CliError::failed_in(&args.out, e))?;
@@ -59,6 +62,7 @@ pub fn compute(args: &Args) -> Result<Conversion, CliError> {
     Ok(Conversion {
         imu: args.input.label(),
         source,
+        unit_check,
         out: out_name,
         samples,
     })
@@ -66,18 +70,19 @@ pub fn compute(args: &Args) -> Result<Conversion, CliError> {
 
 /// The JSON form.
 pub fn to_json(c: &Conversion) -> Value {
-    json!({"imu": c.imu, "input": source_json(&c.source), "out": c.out, "samples": c.samples,
+    json!({"imu": c.imu, "input": input_json(&c.source, &c.unit_check), "out": c.out, "samples": c.samples,
            "out_format": "euroc: timestamp [ns], w_x, w_y, w_z [rad/s], a_x, a_y, a_z [m/s^2]"})
 }
 
 /// The human summary.
 pub fn to_text(c: &Conversion) -> String {
     format!(
-        "{} (read as {}) → {}: {} samples, EuRoC CSV (ns, rad/s, m/s²)\n",
+        "{} (read as {}) → {}: {} samples, EuRoC CSV (ns, rad/s, m/s²)\n{}",
         c.imu,
         c.source.describe(),
         c.out,
-        c.samples
+        c.samples,
+        c.unit_check.text()
     )
 }
 

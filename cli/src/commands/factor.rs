@@ -106,6 +106,10 @@ const ORDER: [&str; 15] = [
 pub struct FactorRun {
     /// The IMU file, as printed.
     pub imu: String,
+    /// How it was read.
+    pub source: preint_io::SourceInfo,
+    /// What the unit checks said.
+    pub unit_check: crate::checks::UnitCheck,
     /// The scheme used.
     pub scheme: preint::Scheme,
     /// `CombinedImuFactor` (else `ImuFactor`).
@@ -166,6 +170,9 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
         Level::Covariance
     };
     let (noise, mut params) = args.preint.params(level)?;
+    if let (true, Some(path)) = (args.combined, &args.preint.noise) {
+        preint_io::read_kalibr_bias_model(path)?;
+    }
     let gt = read_euroc_groundtruth(&args.poses)?;
     let (gi, gj) = (
         *input::nearest_row(&gt, args.from),
@@ -185,14 +192,17 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
     let scheme = params.scheme;
     // Only the part of the recording the window needs is read (a split recording is merged
     // whole, for the effective accelerometer density of its merged samples).
-    let w = if args.input.is_split() {
-        let (w, _, split) = stream::split_window(&args.input, Some(gi.t_ns), Some(gj.t_ns))?;
+    let (w, source, unit_check) = if args.input.is_split() {
+        let (w, source, split, units) =
+            stream::split_window(&args.input, Some(gi.t_ns), Some(gj.t_ns))?;
         crate::noise::apply_split(&noise, split.as_ref(), &mut params);
-        w
+        (w, source, units)
     } else {
         let stream = stream::open_checked_until(&args.input, Some(gj.t_ns))?;
+        let (source, units) = (stream.info().clone(), stream.unit_check().clone());
         let _bar = crate::progress::ReadingBar::start(stream.progress(), "factor");
-        stream::cut_window(stream, Some(gi.t_ns), Some(gj.t_ns))?
+        let w = stream::cut_window(stream, Some(gi.t_ns), Some(gj.t_ns))?;
+        (w, source, units)
     };
     let samples = w.samples.as_slice();
     let in_file = |e| CliError::failed_in(args.input.path(), w.in_stream(e));
@@ -214,6 +224,8 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
     };
     Ok(FactorRun {
         imu: args.input.label(),
+        source,
+        unit_check,
         scheme,
         combined: args.combined,
         residual: args.residual,
@@ -257,6 +269,7 @@ pub fn to_json(f: &FactorRun) -> Value {
         .map(|(b, c)| ((*b).to_string(), json!(c)))
         .collect();
     json!({
+        "input": crate::imu_args::input_json(&f.source, &f.unit_check),
         "factor": factor_name(f.combined),
         "scheme": scheme::label(f.scheme),
         "residual_mode": f.residual.name(),
@@ -317,6 +330,7 @@ pub fn to_text(f: &FactorRun) -> String {
         f.pim.delta_t,
         f.samples
     );
+    h.push_str(&f.unit_check.text());
     let r = &f.ev.residual;
     let names = [
         "r_φ (rad)",

@@ -1,8 +1,9 @@
 //! `preint integrate`: preintegrate a window of an IMU recording and print the deltas, their
 //! covariances and the bias Jacobians.
 
+use crate::checks::UnitCheck;
 use crate::format::{list, rows, text_matrix};
-use crate::imu_args::{ImuArgs, source_json};
+use crate::imu_args::{ImuArgs, input_json};
 use crate::preint_args::PreintArgs;
 use crate::progress::ReadingBar;
 use crate::scheme::{self};
@@ -80,6 +81,8 @@ pub struct Integration {
     pub imu: String,
     /// How it was read.
     pub source: SourceInfo,
+    /// What the unit checks said.
+    pub unit_check: UnitCheck,
     /// The scheme used.
     pub scheme: preint::Scheme,
     /// Number of samples with timestamps in the window.
@@ -168,33 +171,35 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
         let count = input::count_in(&w.samples, w.t_i_ns, w.t_j_ns);
         Ok::<_, CliError>((pim, count, at, truncation, second_order))
     };
-    let (source, noise, (pim, samples, at, truncation, second_order)) = if args.input.is_split() {
-        // The merged accelerometer's effective density is known once the files are read.
-        let (w, source, split) = stream::split_window(&args.input, from, to)?;
-        let noise = noise::apply_split(&noise, split.as_ref(), &mut params);
-        (source, noise, window(&params, w)?)
-    } else {
-        // `--truncation` reads enough samples around the window for its companion's stencils.
-        let edge = if args.truncation {
-            stream::EDGE_SAMPLES.max(preint::truncation::CONTEXT_SAMPLES)
+    let (source, unit_check, noise, (pim, samples, at, truncation, second_order)) =
+        if args.input.is_split() {
+            // The merged accelerometer's effective density is known once the files are read.
+            let (w, source, split, units) = stream::split_window(&args.input, from, to)?;
+            let noise = noise::apply_split(&noise, split.as_ref(), &mut params);
+            (source, units, noise, window(&params, w)?)
         } else {
-            stream::EDGE_SAMPLES
+            // `--truncation` reads enough samples around the window for its companion's stencils.
+            let edge = if args.truncation {
+                stream::EDGE_SAMPLES.max(preint::truncation::CONTEXT_SAMPLES)
+            } else {
+                stream::EDGE_SAMPLES
+            };
+            let stream = stream::open_checked_window(&args.input, to, edge)?;
+            let (source, units) = (stream.info().clone(), stream.unit_check().clone());
+            let _bar = ReadingBar::start(stream.progress(), "integrate");
+            let streamed = from.is_none() && to.is_none();
+            let result = if streamed && args.at.is_empty() && !args.truncation && !args.second_order
+            {
+                let (pim, count) = whole_recording(stream, params, &bias, fail)?;
+                (pim, count, vec![], None, None)
+            } else {
+                window(
+                    &params,
+                    stream::cut_window_with_edge(stream, from, to, edge)?,
+                )?
+            };
+            (source, units, noise, result)
         };
-        let stream = stream::open_checked_window(&args.input, to, edge)?;
-        let source = stream.info().clone();
-        let _bar = ReadingBar::start(stream.progress(), "integrate");
-        let streamed = from.is_none() && to.is_none();
-        let result = if streamed && args.at.is_empty() && !args.truncation && !args.second_order {
-            let (pim, count) = whole_recording(stream, params, &bias, fail)?;
-            (pim, count, vec![], None, None)
-        } else {
-            window(
-                &params,
-                stream::cut_window_with_edge(stream, from, to, edge)?,
-            )?
-        };
-        (source, noise, result)
-    };
     let calibration_scheme = match (&args.calibration, &file) {
         (Some(path), Some(cal)) => {
             let dt_s = pim.delta_t / samples.max(1) as f64;
@@ -207,6 +212,7 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
         calibration_scheme,
         imu: args.input.label(),
         source,
+        unit_check,
         scheme,
         samples,
         noise,
@@ -333,7 +339,7 @@ pub fn to_json(r: &Integration) -> Value {
     );
     let mut out = json!({
         "imu": r.imu,
-        "input": source_json(&r.source),
+        "input": input_json(&r.source, &r.unit_check),
         "scheme": scheme::label(r.scheme),
         "samples": r.samples,
         "t_i_ns": m.t_i_ns,
@@ -426,6 +432,7 @@ pub fn to_text(r: &Integration) -> String {
         scheme::label(r.scheme),
         m.delta_t
     );
+    h.push_str(&r.unit_check.text());
     let phi = m.delta_r.log();
     let _ = writeln!(
         h,

@@ -52,12 +52,13 @@ mod print;
 pub use print::{to_json, to_text};
 
 use crate::analysis::consistency::strict;
+use crate::checks::UnitCheck;
 use crate::imu_args::ImuArgs;
 use crate::scheme::SchemeParser;
 use crate::{CliError, Output, calibration_file, checks, noise, stream};
 use nalgebra::Vector3;
-use preint::ImuSample;
 use preint::intrinsics::{ImuIntrinsics, IntrinsicsModel};
+use preint::{ImuNoise, ImuSample};
 use preint_calib::Fit;
 use preint_calib::bias::known_poses::KnownAttitudeCalibration;
 use preint_calib::bias::known_poses::extras::Estimate;
@@ -66,6 +67,7 @@ use preint_calib::bias::{
     StillInterval, StillOptions, calibrate_multi_pose, calibrate_static, detect_still_intervals,
     roll_pitch_of_up,
 };
+use preint_io::SourceInfo;
 use serde_json::json;
 use std::path::{Path, PathBuf};
 
@@ -102,8 +104,13 @@ pub struct Args {
     /// Kalibr imu.yaml with the noise densities (default: EuRoC figures).
     #[arg(long)]
     pub noise: Option<PathBuf>,
-    /// Gravity magnitude G (m/s^2).
-    #[arg(long, default_value_t = 9.81, allow_hyphen_values = true)]
+    /// Gravity magnitude G (m/s^2, up to 100).
+    #[arg(
+        long,
+        default_value_t = 9.81,
+        value_parser = crate::parse::gravity,
+        allow_hyphen_values = true
+    )]
     pub gravity: f64,
     /// Use only samples (and poses) with timestamps >= this, in ns.
     #[arg(long, allow_hyphen_values = true)]
@@ -259,7 +266,7 @@ pub const MAX_GAP_S: f64 = preint::params::DEFAULT_MAX_GAP_NS as f64 * 1e-9;
 /// Reads the samples in `[--from, --to]` (only those are held, at most
 /// [`stream::MAX_HELD_SAMPLES`]; reading stops after `--to`) and checks their units and that
 /// they have no gap.
-fn read_samples(args: &Args) -> Result<Vec<ImuSample>, CliError> {
+fn read_samples(args: &Args) -> Result<stream::Span, CliError> {
     stream::read_span(&args.input, args.from, args.to, "calibrate")
 }
 
@@ -269,12 +276,19 @@ fn parse_estimate(list: &str) -> Result<Estimate, String> {
 }
 
 /// Chooses the problem (module docs), solves it and tests its fit.
-pub fn compute(args: &Args) -> Result<Calibrated, CliError> {
+pub fn compute(args: &Args) -> Result<(Calibrated, (SourceInfo, UnitCheck)), CliError> {
     checks::non_negative("--pose-rot-std", args.pose_rot_std)?;
     checks::non_negative("--pose-pos-std", args.pose_pos_std)?;
     checks::positive("--gravity", args.gravity)?;
+    checks::gravity("--gravity", args.gravity)?;
     let noise = noise::or_default(args.noise.as_deref())?;
-    let samples = read_samples(args)?;
+    let span = read_samples(args)?;
+    let c = solve(args, span.samples, noise)?;
+    Ok((c, (span.source, span.unit_check)))
+}
+
+/// [`compute`] on the samples read.
+fn solve(args: &Args, samples: Vec<ImuSample>, noise: ImuNoise) -> Result<Calibrated, CliError> {
     if let Some(h) = args.heading
         && !h.is_finite()
     {
@@ -373,8 +387,9 @@ pub fn compute(args: &Args) -> Result<Calibrated, CliError> {
 
 /// Runs `preint calibrate`.
 pub fn run(args: &Args) -> Result<Output, CliError> {
-    let r = compute(args)?;
-    let (mut human, mut json) = (to_text(&r), to_json(&r));
+    let (r, (source, units)) = compute(args)?;
+    let (mut human, mut json) = (units.text() + &to_text(&r), to_json(&r));
+    json["input"] = crate::imu_args::input_json(&source, &units);
     if let Some(path) = &args.out {
         let (intrinsics, td, from) = match &r.calibration {
             Calibration::MultiPose(m) => (
