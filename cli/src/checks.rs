@@ -17,6 +17,17 @@ pub fn non_negative(flag: &str, v: f64) -> Result<(), CliError> {
     }
 }
 
+/// `--from` must come before `--to` when both are given (timestamps in ns).
+pub fn window_order(from: Option<i64>, to: Option<i64>) -> Result<(), CliError> {
+    match (from, to) {
+        (Some(f), Some(t)) if f >= t => Err(CliError::Usage(format!(
+            "--from {f} is not before --to {t}: a window runs from --from to a later --to (both \
+             timestamps in ns, on the recording's clock)"
+        ))),
+        _ => Ok(()),
+    }
+}
+
 /// `flag`'s value `v` must be finite and > 0.
 pub fn positive(flag: &str, v: f64) -> Result<(), CliError> {
     if v.is_finite() && v > 0.0 {

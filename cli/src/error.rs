@@ -40,6 +40,14 @@ impl CliError {
         Self::Failed(e.to_string())
     }
 
+    /// An output path of `--out` that cannot be created or written (`--out path: e`).
+    pub fn out_path(path: &std::path::Path, e: impl std::fmt::Display) -> Self {
+        Self::Usage(format!(
+            "--out {}: {e} (give a path where a new file or directory can be written)",
+            path.display()
+        ))
+    }
+
     /// A failure with the message of `e`, prefixed with the file it concerns (`file: e`).
     pub fn failed_in(file: &std::path::Path, e: impl std::fmt::Display) -> Self {
         Self::Failed(format!("{}: {e}", file.display()))

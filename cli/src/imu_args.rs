@@ -123,7 +123,7 @@ impl ImuArgs {
 
     /// As [`ImuArgs::open`], with the handle of the merge report of a split recording
     /// (`--gyro`/`--accel` or `--gyro-topic`/`--accel-topic`; `None` otherwise).
-    fn open_with_report(&self) -> Result<(ImuReader, Option<MergeHandle>), CliError> {
+    pub fn open_with_report(&self) -> Result<(ImuReader, Option<MergeHandle>), CliError> {
         let opts = self.options();
         let container = || {
             let path = self.path();
@@ -202,6 +202,7 @@ impl ImuArgs {
         }
         let report = handle.map(|h| h.report());
         if let Some(r) = &report {
+            info.warnings.extend(r.shortening());
             info.notes.push(r.describe());
             info.notes.push(format!(
                 "accelerometer white-noise density of the merged samples: sqrt(rho) = {:.5} \
@@ -245,7 +246,20 @@ pub fn source_json(info: &SourceInfo) -> Value {
         "format": info.format.name(),
         "read_as": info.describe(),
         "notes": info.notes,
+        "warnings": info.warnings,
     })
+}
+
+/// What every command that reads a recording prints about its input: a `warning:` line per
+/// [`SourceInfo::warnings`], then the unit checks' line ([`UnitCheck::text`]).
+pub fn input_text(info: &SourceInfo, unit_check: &UnitCheck) -> String {
+    let mut h: String = info
+        .warnings
+        .iter()
+        .map(|w| format!("warning: {w}\n"))
+        .collect();
+    h.push_str(&unit_check.text());
+    h
 }
 
 /// [`source_json`] with the unit checks' verdict under `unit_check` ([`UnitCheck::json`]): the

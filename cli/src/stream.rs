@@ -47,6 +47,7 @@ pub struct CheckedSamples {
     info: SourceInfo,
     progress: Progress,
     unit_check: UnitCheck,
+    merge: Option<preint_io::split::MergeHandle>,
 }
 
 /// Samples per chunk handed from the reading thread.
@@ -197,7 +198,7 @@ pub fn open_checked_prefix(
     max_span_s: Option<f64>,
     edge: usize,
 ) -> Result<CheckedSamples, CliError> {
-    let mut reader = args.open()?;
+    let (mut reader, merge) = args.open_with_report()?;
     let (info, progress) = (reader.info().clone(), reader.progress().clone());
     let max_span_ns = max_span_s.map_or(i64::MAX, |s| (s * 1e9) as i64);
     let full = |p: &[ImuSample]| {
@@ -246,10 +247,17 @@ pub fn open_checked_prefix(
         info,
         progress,
         unit_check,
+        merge,
     })
 }
 
 impl CheckedSamples {
+    /// The merge report's handle of a split recording (complete once the samples are
+    /// consumed).
+    pub fn merge(&self) -> Option<preint_io::split::MergeHandle> {
+        self.merge.clone()
+    }
+
     /// What the unit checks said.
     pub fn unit_check(&self) -> &UnitCheck {
         &self.unit_check

@@ -174,3 +174,60 @@ fn a_pose_file_of_the_wrong_width_is_named_by_its_width() {
     assert!(e.contains("p16.csv:2: the first row has 16 columns"), "{e}");
     assert!(!e.contains("found 16"), "{e}");
 }
+
+/// Split streams that overlap over part of the recording: `integrate` and `convert` say the
+/// result is that of the overlap and how many gyro samples were dropped, in text and JSON; the
+/// shipped split fixture (a 63 Hz accelerometer inside a 200 Hz gyro's span) gives no warning.
+#[test]
+fn split_streams_shortened_to_their_overlap_say_so() {
+    let dir = tmp("messages-split");
+    let rows = euroc_rows(2000);
+    let (mut g, mut a) = (String::new(), String::new());
+    for (k, r) in rows.iter().enumerate() {
+        let f: Vec<&str> = r.split(',').collect();
+        let _ = writeln!(g, "{},{},{},{}", f[0], f[1], f[2], f[3]);
+        if (600..1400).contains(&k) {
+            let _ = writeln!(a, "{},{},{},{}", f[0], f[4], f[5], f[6]);
+        }
+    }
+    let (g, a) = (write(&dir, "g.csv", &g), write(&dir, "a.csv", &a));
+    let (g, a) = (g.to_str().unwrap(), a.to_str().unwrap());
+    let out = dir.join("m.csv");
+    for args in [
+        vec!["integrate", "--gyro", g, "--accel", a],
+        vec![
+            "convert",
+            "--gyro",
+            g,
+            "--accel",
+            a,
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    ] {
+        let text = String::from_utf8_lossy(&run(&args).stdout).into_owned();
+        assert!(
+            text.contains("warning: the split streams overlap over 3.980 s only")
+                && text.contains("so 601 gyro samples before and 602 after it are dropped"),
+            "{args:?}: {text}"
+        );
+        let w = &json(&args)["input"]["warnings"];
+        assert_eq!(w.as_array().map(Vec::len), Some(1), "{args:?}: {w}");
+    }
+    let mcap = repo("tests/data/ros/split.mcap");
+    let j = json(&[
+        "integrate",
+        "--imu",
+        &mcap,
+        "--gyro-topic",
+        "/camera/gyro/sample",
+        "--accel-topic",
+        "/camera/accel/sample",
+    ]);
+    assert_eq!(
+        j["input"]["warnings"],
+        serde_json::json!([]),
+        "{}",
+        j["input"]
+    );
+}

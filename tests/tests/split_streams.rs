@@ -122,6 +122,7 @@ fn merged(
         layout: None,
         units: Units::SI_NS,
         notes: vec![],
+        warnings: Vec::new(),
     };
     let (reader, handle) = merge_with_report(
         channel(gyro.to_vec()),

@@ -68,13 +68,16 @@ pub fn measure(scene_name: &str, rates: &[f64], window_s: f64) -> Result<Vec<Row
         }
         let step = (1e9 / rate).round() as i64;
         if step <= 0 {
-            return Err(CliError::Usage(format!("rate {rate} Hz is too high")));
+            return Err(CliError::Usage(format!(
+                "--rates {rate:e}: above 1e9 Hz, the sample period would be below the 1 ns \
+                 resolution of the timestamps"
+            )));
         }
         // Grid covering the window plus four samples each side (hermite4 needs neighbours).
         let (k0, k1) = (t_i / step - 4, t_j / step + 5);
         if k1 - k0 + 1 > MAX_SAMPLES as i64 {
             return Err(CliError::Usage(format!(
-                "rate {rate} Hz over a {window_s} s window is {} samples, more than \
+                "--rates {rate:e}: {rate} Hz over a {window_s} s window is {} samples, more than \
                  {MAX_SAMPLES} (56 bytes each in memory); lower the rate or the window",
                 k1 - k0 + 1
             )));

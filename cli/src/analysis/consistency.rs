@@ -82,11 +82,18 @@ pub fn evaluate<const R: usize>(
 }
 
 /// The `fit` object: `{chi2, dof, chi2_dof, p_value, p_value_lower, credible, pessimistic,
-/// scale, why}` (`scale` = √(χ²/dof), the factor of every `*_std_scaled`; NaN → null).
+/// scale, why}` (`scale` = √(χ²/dof), the factor of every `*_std_scaled`); the p-values are
+/// left out when the χ² has no distribution (`allan`'s correlated points).
 pub fn fit_json(f: &Fit) -> Value {
-    json!({"chi2": f.chi2, "dof": f.dof, "chi2_dof": f.chi2_dof, "p_value": f.p_value,
-        "p_value_lower": f.p_value_lower, "credible": f.credible, "pessimistic": f.pessimistic,
-        "scale": f.scale(), "why": f.why})
+    let mut v = json!({"chi2": f.chi2, "dof": f.dof, "chi2_dof": f.chi2_dof,
+        "credible": f.credible, "pessimistic": f.pessimistic, "scale": f.scale(), "why": f.why});
+    // A fit whose χ² has no distribution (Allan's correlated points) has no p-values: the
+    // keys are left out rather than written as null.
+    if f.p_value.is_finite() && f.p_value_lower.is_finite() {
+        v["p_value"] = json!(f.p_value);
+        v["p_value_lower"] = json!(f.p_value_lower);
+    }
+    v
 }
 
 /// `fit of the {what}: credible ({why})`, or, when not credible, `warning: the {what} fit is

@@ -91,6 +91,7 @@ impl Advice {
 
 /// Reads the recording, separates noise from motion and evaluates every scheme and rate.
 pub fn compute(args: &Args) -> Result<Advice, CliError> {
+    checks::window_order(args.from, args.to)?;
     checks::positive("--fraction", args.fraction)?;
     let noise = noise::or_default(Some(&args.noise))?;
     let stream::Span {
@@ -242,7 +243,10 @@ pub fn to_text(a: &Advice) -> String {
         a.args.input.path().display(),
         a.samples
     );
-    h.push_str(&a.unit_check.text());
+    h.push_str(&match &a.source {
+        Some(s) => crate::imu_args::input_text(s, &a.unit_check),
+        None => a.unit_check.text(),
+    });
     h.push_str(&input_text(input));
     match input {
         InputClass::Smooth => {

@@ -127,7 +127,7 @@ pub fn compute(args: &Args) -> Result<AllanRun, CliError> {
         .map_err(|e| CliError::failed_in(file, e))?;
     let mut files = Vec::new();
     if let Some(dir) = &args.out {
-        std::fs::create_dir_all(dir).map_err(|e| CliError::failed_in(dir, e))?;
+        std::fs::create_dir_all(dir).map_err(|e| CliError::out_path(dir, e))?;
         for (sensor, name) in [(0, "allan_gyro.svg"), (1, "allan_acc.svg")] {
             let p = dir.join(name);
             figures::allan(&a, sensor, &p)?;
@@ -241,7 +241,7 @@ pub fn to_text(r: &AllanRun) -> String {
             "not checked"
         }
     );
-    h.push_str(&r.unit_check.text());
+    h.push_str(&crate::imu_args::input_text(&r.source, &r.unit_check));
     if r.block_len > 1 {
         let _ = writeln!(
             h,

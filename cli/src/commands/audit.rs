@@ -44,7 +44,7 @@
 //! - `jitter`: `sd_ns` (standard deviation of Δt, gaps left out), `robust_sd_ns`
 //!   (1.4826 × MAD).
 //! - `histogram`: `[{from, to, count}]`, Δt in multiples of the reference interval, bins
-//!   `(from, to]` (`to` null for the last, unbounded one).
+//!   `(from, to]` (the last, unbounded one has no `to`).
 //! - `gaps` (Δt > 1.5 × reference): `count`, `missing_samples`, `largest`, `first`, and
 //!   `long` (`count`, `first`: gaps above 0.25 s). `duplicates` (`count`, `identical`,
 //!   `first`), `out_of_order` (`count`, `first`). An event is `{index` (0-based sample),
@@ -63,7 +63,7 @@
 //!   (corrected with `--calibration`), `raw_gravity_median_m_s2`,
 //!   `gyro_median_rad_s`, `gyro_scale` (`pairs`, `misfit_deg`: `{deg_per_s, as_read,
 //!   rad_per_s}`, or null), `error` (the unit check's message, or null), `verdict`
-//!   (`passed`, `inconclusive`, or null with an error) and `why` (what an inconclusive check
+//!   (`passed`, `inconclusive`, or `failed` with an error) and `why` (what an inconclusive check
 //!   missed, or null). `input.unit_check` holds the same verdict as every other command's
 //!   (`skipped` with `--no-unit-check`).
 //! - `still`: `window_samples` (0.5 s), `windows`, `still`, `fraction`.
@@ -374,7 +374,11 @@ fn timing_json(t: &Timing) -> Map<String, Value> {
     let mut from = 0.0;
     let histogram: Vec<Value> = (HISTOGRAM_EDGES.iter().zip(&t.histogram))
         .map(|(&to, &count)| {
-            let bin = json!({"from": from, "to": to.is_finite().then_some(to), "count": count});
+            // The last bin is open above: it has no `to`.
+            let mut bin = json!({"from": from, "count": count});
+            if to.is_finite() {
+                bin["to"] = json!(to);
+            }
             from = to;
             bin
         })
@@ -384,15 +388,21 @@ fn timing_json(t: &Timing) -> Map<String, Value> {
     gaps["largest"] = t.largest_gap.as_ref().map_or(Value::Null, event);
     gaps["long"] = events(&t.long_gaps);
     let tenth = t.tenth_rates_hz;
+    // Fewer than two samples have no interval: no rate, no jitter (`null` as a whole).
+    let intervals = t.samples >= 2;
+    let rate = intervals.then(|| {
+        json!({"nominal_hz": t.rate_hz(), "median_interval_ns": t.median_ns,
+               "resolution_ns": t.resolution_ns, "mean_interval_ns": t.mean_ns,
+               "reference_interval_ns": t.reference_ns,
+               "first_tenth_hz": tenth.map(|x| x.0), "last_tenth_hz": tenth.map(|x| x.1),
+               "drift_ppm": t.drift_ppm()})
+    });
+    let jitter = intervals.then(|| json!({"sd_ns": t.sd_ns, "robust_sd_ns": t.robust_sd_ns}));
     let v = json!({
         "samples": t.samples, "t_first_ns": t.first_t_ns, "t_last_ns": t.last_t_ns,
         "span_s": t.span_s(),
-        "rate": {"nominal_hz": t.rate_hz(), "median_interval_ns": t.median_ns,
-                 "resolution_ns": t.resolution_ns, "mean_interval_ns": t.mean_ns,
-                 "reference_interval_ns": t.reference_ns,
-                 "first_tenth_hz": tenth.map(|x| x.0), "last_tenth_hz": tenth.map(|x| x.1),
-                 "drift_ppm": t.drift_ppm()},
-        "jitter": {"sd_ns": t.sd_ns, "robust_sd_ns": t.robust_sd_ns},
+        "rate": rate,
+        "jitter": jitter,
         "histogram": histogram,
         "gaps": gaps, "duplicates": events(&t.duplicates), "out_of_order": events(&t.out_of_order),
     });
@@ -466,7 +476,7 @@ fn single_json(a: &Audit) -> Map<String, Value> {
                           "misfit_deg": {"deg_per_s": d, "as_read": one, "rad_per_s": rad}})
                }),
                "error": u.error,
-               "verdict": u.verdict.as_ref().map(|v| v.name()),
+               "verdict": u.verdict.as_ref().map_or("failed", |v| v.name()),
                "why": u.verdict.as_ref().and_then(|v| v.why())})
     });
     m.insert("units".into(), json!(units));

@@ -42,7 +42,7 @@ pub struct Bench {
 
 /// Writes the accuracy-vs-cost and convergence charts of `rows` into `dir`; returns the paths.
 pub fn write_charts(rows: &[Row], scene: &str, dir: &Path) -> Result<Vec<String>, CliError> {
-    std::fs::create_dir_all(dir).map_err(|e| CliError::failed_in(dir, e))?;
+    std::fs::create_dir_all(dir).map_err(|e| CliError::out_path(dir, e))?;
     let p1 = figures::accuracy_vs_cost(rows, scene, dir)?;
     let p2 = figures::convergence(rows, scene, dir)?;
     Ok(vec![p1.display().to_string(), p2.display().to_string()])

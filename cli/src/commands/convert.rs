@@ -40,10 +40,11 @@ pub struct Conversion {
 /// on its first samples (a file in deg/s or g must not come out labelled rad/s and m/s²).
 pub fn compute(args: &Args) -> Result<Conversion, CliError> {
     let stream = stream::open_checked(&args.input)?;
-    let (source, unit_check) = (stream.info().clone(), stream.unit_check().clone());
+    let (mut source, unit_check) = (stream.info().clone(), stream.unit_check().clone());
+    let merge = stream.merge();
     let _bar = ReadingBar::start(stream.progress(), "convert");
     let out_name = args.out.display().to_string();
-    let file = std::fs::File::create(&args.out).map_err(|e| CliError::failed_in(&args.out, e))?;
+    let file = std::fs::File::create(&args.out).map_err(|e| CliError::out_path(&args.out, e))?;
     let mut out = std::io::BufWriter::with_capacity(1 << 20, file);
     // The checked stream's errors are the reader's.
     let samples = stream.map(|r| {
@@ -53,6 +54,9 @@ pub fn compute(args: &Args) -> Result<Conversion, CliError> {
         })
     });
     let samples = write_euroc_stream(&mut out, samples, &out_name)?;
+    source
+        .warnings
+        .extend(merge.and_then(|m| m.report().shortening()));
     if samples == 0 {
         return Err(CliError::Failed(format!(
             "{}: no samples",
@@ -82,7 +86,7 @@ pub fn to_text(c: &Conversion) -> String {
         c.source.describe(),
         c.out,
         c.samples,
-        c.unit_check.text()
+        crate::imu_args::input_text(&c.source, &c.unit_check)
     )
 }
 

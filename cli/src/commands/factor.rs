@@ -156,6 +156,7 @@ fn nav(s: &GroundTruthState) -> NavState {
 
 /// Reads the files, preintegrates the window between the keyframes and evaluates the factor.
 pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
+    checks::window_order(Some(args.from), Some(args.to))?;
     let tn = TruthNoise {
         rot_rad: args.pose_rot_std,
         pos_m: args.pose_pos_std,
@@ -330,7 +331,7 @@ pub fn to_text(f: &FactorRun) -> String {
         f.pim.delta_t,
         f.samples
     );
-    h.push_str(&f.unit_check.text());
+    h.push_str(&crate::imu_args::input_text(&f.source, &f.unit_check));
     let r = &f.ev.residual;
     let names = [
         "r_φ (rad)",

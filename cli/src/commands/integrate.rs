@@ -7,7 +7,7 @@ use crate::imu_args::{ImuArgs, input_json};
 use crate::preint_args::PreintArgs;
 use crate::progress::ReadingBar;
 use crate::scheme::{self};
-use crate::{CliError, Output, input, noise, stream};
+use crate::{CliError, Output, checks, input, noise, stream};
 use nalgebra::Vector3;
 use preint::deskew::{deltas_at, states_at};
 use preint::{
@@ -122,6 +122,7 @@ pub struct Integration {
 /// recording through a [`Preintegrator`] that stores no samples, a window from the part of the
 /// stream it needs (reading stops after `--to`). Memory is bounded by the window, not the file.
 pub fn compute(args: &Args) -> Result<Integration, CliError> {
+    checks::window_order(args.from, args.to)?;
     let (noise, mut params) = args.preint.params(Level::Combined)?;
     if let Some((w, mode)) = args.predict.earth()? {
         params = params.with_omega_coriolis(w).with_coriolis(mode);
@@ -432,7 +433,7 @@ pub fn to_text(r: &Integration) -> String {
         scheme::label(r.scheme),
         m.delta_t
     );
-    h.push_str(&r.unit_check.text());
+    h.push_str(&crate::imu_args::input_text(&r.source, &r.unit_check));
     let phi = m.delta_r.log();
     let _ = writeln!(
         h,

@@ -45,7 +45,7 @@ pub struct Report {
 /// its charts into `--out`.
 pub fn compute(args: &Args) -> Result<Report, CliError> {
     let out = &args.out;
-    std::fs::create_dir_all(out).map_err(|e| CliError::failed_in(out, e))?;
+    std::fs::create_dir_all(out).map_err(|e| CliError::out_path(out, e))?;
     let pb = progress::bar(report::STEPS, "report");
     let data = report::compute(&mut |msg| {
         if let Some(pb) = &pb {

@@ -79,7 +79,7 @@ pub fn compute(args: &Args) -> Result<Simulation, CliError> {
         pb.inc(1);
         pb.set_message("writing the files");
     }
-    std::fs::create_dir_all(&args.out).map_err(|e| CliError::failed_in(&args.out, e))?;
+    std::fs::create_dir_all(&args.out).map_err(|e| CliError::out_path(&args.out, e))?;
     let yaml_noise = noise_model.unwrap_or(ImuNoise::zero(args.rate));
     let files = preint_sim::write_dataset(&args.out, &data, &yaml_noise)
         .map_err(CliError::failed)?

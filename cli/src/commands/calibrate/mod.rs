@@ -277,6 +277,7 @@ fn parse_estimate(list: &str) -> Result<Estimate, String> {
 
 /// Chooses the problem (module docs), solves it and tests its fit.
 pub fn compute(args: &Args) -> Result<(Calibrated, (SourceInfo, UnitCheck)), CliError> {
+    checks::window_order(args.from, args.to)?;
     checks::non_negative("--pose-rot-std", args.pose_rot_std)?;
     checks::non_negative("--pose-pos-std", args.pose_pos_std)?;
     checks::positive("--gravity", args.gravity)?;
@@ -388,7 +389,10 @@ fn solve(args: &Args, samples: Vec<ImuSample>, noise: ImuNoise) -> Result<Calibr
 /// Runs `preint calibrate`.
 pub fn run(args: &Args) -> Result<Output, CliError> {
     let (r, (source, units)) = compute(args)?;
-    let (mut human, mut json) = (units.text() + &to_text(&r), to_json(&r));
+    let (mut human, mut json) = (
+        crate::imu_args::input_text(&source, &units) + &to_text(&r),
+        to_json(&r),
+    );
     json["input"] = crate::imu_args::input_json(&source, &units);
     if let Some(path) = &args.out {
         let (intrinsics, td, from) = match &r.calibration {
