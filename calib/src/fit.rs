@@ -126,11 +126,21 @@ impl Fit {
                 lower,
                 r.sqrt()
             )
-        } else {
+        } else if upper >= P_MIN {
             format!(
                 "χ²/dof = {} with {dof} dof ({}): consistent with the noise model",
                 number(r),
                 p_text(upper)
+            )
+        } else {
+            // Many dof: a χ² the distribution rules out, from residuals within √3 of the model.
+            format!(
+                "χ²/dof = {} with {dof} dof ({}): the residuals are {:.3} times the noise \
+                 model's σ, more than chance allows but within the √{MAX_CHI2_DOF} a noise \
+                 model is trusted to (the scaled σ allow for it)",
+                number(r),
+                p_text(upper),
+                r.sqrt()
             )
         };
         Self::verdict(chi2, dof, (upper, lower), credible, pessimistic, why)

@@ -87,6 +87,19 @@ fn wrong_fits_are_not_credible() {
     assert!(Fit::new(3000.0, 1000).credible);
     assert!(Fit::new(3000.0, 1000).p_value < 1e-100);
     assert!(!Fit::new(3010.0, 1000).credible);
+    // Credible at many dof although the χ² is ruled out: said as such, not "consistent".
+    let f = Fit::new(1.7 * 11941.0, 11941);
+    assert!(f.credible && f.p_value < 1e-6, "{f:?}");
+    assert!(
+        f.why.contains("more than chance allows") && !f.why.contains("consistent"),
+        "{}",
+        f.why
+    );
+    assert!(
+        Fit::new(105.0, 100)
+            .why
+            .contains("consistent with the noise model")
+    );
     // Underflow is said, not printed as 0.
     assert!(Fit::new(3.06e7, 223).why.contains("p < 1e-300"));
     // A cause is appended only to a fit that is not credible.

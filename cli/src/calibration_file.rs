@@ -9,8 +9,10 @@
 //! Kalibr's `gyroscopes:` section).
 //!
 //! # What is refused
-//! A file with nothing to apply (empty, or identity intrinsics and no `time_offset`) is
-//! refused naming it, as are intrinsics far from the identity (`preint_io::intrinsics`,
+//! A file with nothing to apply (empty, or none of [`CALIBRATION_KEYS`]: `model:` and noise
+//! densities alone) is refused naming it; one that states the identity explicitly (as
+//! `calibrate --out` writes when the data supports no intrinsics) applies it. Refused too are
+//! intrinsics far from the identity (`preint_io::intrinsics`,
 //! "Plausibility": the file, line and key are named) and a time offset of a second or more.
 //!
 //! # Scheme
@@ -40,6 +42,32 @@ use preint_calib::bias::multipose::{acc_scale_matrix, gyro_scale_matrix};
 use preint_io::ImuCalibration;
 use std::path::Path;
 
+/// The keys of which a calibration file must hold at least one: the intrinsics of both
+/// formats and the time offset (a file of `model:` and noise densities alone calibrates
+/// nothing; one that states the identity does, explicitly).
+pub const CALIBRATION_KEYS: [&str; 8] = [
+    "Tw",
+    "Ta",
+    "R_IMUtoGYRO",
+    "R_IMUtoACC",
+    "Tg",
+    "time_offset",
+    "gyroscopes",
+    "accelerometers",
+];
+
+/// Whether a line of `text` starts (after indentation) with one of [`CALIBRATION_KEYS`] and a
+/// colon.
+fn has_calibration_key(text: &str) -> bool {
+    text.lines().any(|l| {
+        let l = l.trim_start();
+        CALIBRATION_KEYS.iter().any(|k| {
+            l.strip_prefix(k)
+                .is_some_and(|r| r.trim_start().starts_with(':'))
+        })
+    })
+}
+
 /// Reads a calibration file (module docs for the formats); the intrinsics are validated.
 pub fn read(path: &Path) -> Result<ImuCalibration, CliError> {
     let text = std::fs::read_to_string(path)
@@ -53,11 +81,12 @@ pub fn read(path: &Path) -> Result<ImuCalibration, CliError> {
     cal.intrinsics
         .validate()
         .map_err(|e| CliError::Usage(format!("--calibration {}: {e}", path.display())))?;
-    if cal.intrinsics.is_identity() && cal.time_offset_s.is_none() {
+    if !has_calibration_key(&text) {
         return Err(CliError::Usage(format!(
-            "--calibration {}: the file holds no intrinsics (or identity ones) and no \
-             time_offset: nothing to apply (is it the right file? `calibrate --out` writes one)",
-            path.display()
+            "--calibration {}: the file holds none of the keys of a calibration ({}): nothing \
+             to apply (is it the right file? `calibrate --out` writes one)",
+            path.display(),
+            CALIBRATION_KEYS.join(", ")
         )));
     }
     if let Some(t) = cal.time_offset_s

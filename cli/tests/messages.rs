@@ -231,3 +231,56 @@ fn split_streams_shortened_to_their_overlap_say_so() {
         j["input"]
     );
 }
+
+/// A calibration file `calibrate --out` writes when the data supports no intrinsics (the
+/// identity, stated) is read back by `--calibration`; a file with no calibration key at all
+/// (`model:` alone) is refused naming it.
+#[test]
+fn a_calibration_file_of_our_own_is_read_back() {
+    let dir = tmp("messages-calibration");
+    let sim = dir.join("sim");
+    let s = sim.to_str().unwrap();
+    json(&[
+        "simulate",
+        "--scene",
+        "static",
+        "--rate",
+        "50",
+        "--duration",
+        "20",
+        "--out",
+        s,
+    ]);
+    let imu = sim.join("imu.csv");
+    let imu = imu.to_str().unwrap();
+    let out = dir.join("calib.yaml");
+    json(&["calibrate", "--imu", imu, "--out", out.to_str().unwrap()]);
+    let back = json(&[
+        "integrate",
+        "--imu",
+        imu,
+        "--to",
+        "2000000000",
+        "--calibration",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        back["calibration"]["Tw"][0][0], 1.0,
+        "{}",
+        back["calibration"]
+    );
+    let bare = write(&dir, "bare.yaml", "imu0:\n  model: \"kalibr\"\n");
+    let o = run(&[
+        "integrate",
+        "--imu",
+        imu,
+        "--calibration",
+        bare.to_str().unwrap(),
+    ]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(
+        e.contains("bare.yaml") && e.contains("nothing to apply"),
+        "{e}"
+    );
+}
