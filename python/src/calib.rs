@@ -331,7 +331,8 @@ pub(crate) fn calibrate_multi_pose_py<'py>(
 #[pyfunction]
 #[pyo3(signature = (path=None, *, gyro=None, accel=None, noise=None, poses=None,
     gravity=9.81, from_ns=None, to_ns=None, pose_rot_std=0.0, pose_pos_std=0.0, latitude=None,
-    heading=None, estimate=None, pose_spacing=0.5, calibration=None, out=None, **options))]
+    heading=None, estimate=None, pose_spacing=0.5, calibration=None, out=None,
+    scheme="midpoint", **options))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn calibrate_file<'py>(
     py: Python<'py>,
@@ -351,10 +352,18 @@ pub(crate) fn calibrate_file<'py>(
     pose_spacing: f64,
     calibration: Option<PathBuf>,
     out: Option<PathBuf>,
+    scheme: &str,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_args()?;
     crate::checks::gravity_magnitude("gravity", gravity)?;
+    use preint_cli::scheme::Scheme as Cli;
+    let scheme = match crate::params::scheme_from(scheme)? {
+        preint::Scheme::Euler => Cli::Euler,
+        preint::Scheme::Midpoint => Cli::Midpoint,
+        preint::Scheme::Hermite4 => Cli::Hermite4,
+        preint::Scheme::Galilean => Cli::Galilean,
+    };
     earth_args(latitude, heading)?;
     let needs_poses = estimate.is_some() || calibration.is_some();
     if needs_poses && poses.is_none() {
@@ -383,7 +392,7 @@ pub(crate) fn calibrate_file<'py>(
         estimate,
         pose_spacing,
         calibration,
-        scheme: preint_cli::scheme::Scheme::Midpoint,
+        scheme,
         strict: false,
     };
     let json = py
