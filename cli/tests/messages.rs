@@ -4,7 +4,7 @@
 //! gap at low rates, 1 Hz in `bench-steps`, quoted CSV fields) are answers.
 
 mod common;
-use common::{json, repo, run, tmp, write};
+use common::{json, repo, run, simulate, tmp, write};
 use std::fmt::Write as _;
 
 const EUROC_IMU: &str = "tests/data/euroc/V1_01_easy_imu0.csv";
@@ -31,18 +31,10 @@ fn stderr(o: &std::process::Output) -> String {
 fn allan_takes_a_long_static_simulation_for_static() {
     let dir = tmp("messages-allan-static");
     let sim = dir.join("sim");
-    let s = sim.to_str().unwrap();
-    json(&[
-        "simulate",
-        "--scene",
-        "static",
-        "--rate",
-        "20",
-        "--duration",
-        "14400",
-        "--out",
-        s,
-    ]);
+    simulate(
+        &sim,
+        &["--scene", "static", "--rate", "20", "--duration", "14400"],
+    );
     let imu = sim.join("imu.csv");
     let out = json(&["allan", "--imu", imu.to_str().unwrap()]);
     let c = &out["checks"];
@@ -239,18 +231,10 @@ fn split_streams_shortened_to_their_overlap_say_so() {
 fn a_calibration_file_of_our_own_is_read_back() {
     let dir = tmp("messages-calibration");
     let sim = dir.join("sim");
-    let s = sim.to_str().unwrap();
-    json(&[
-        "simulate",
-        "--scene",
-        "static",
-        "--rate",
-        "50",
-        "--duration",
-        "20",
-        "--out",
-        s,
-    ]);
+    simulate(
+        &sim,
+        &["--scene", "static", "--rate", "50", "--duration", "20"],
+    );
     let imu = sim.join("imu.csv");
     let imu = imu.to_str().unwrap();
     let out = dir.join("calib.yaml");
