@@ -139,7 +139,7 @@ fn count(n: u64, one: &str, many: &str) -> String {
     format!("{n} {}", if n == 1 { one } else { many })
 }
 
-fn list_events(l: &EventList<Event>, one: impl Fn(&Event) -> String) -> String {
+fn list_events<T>(l: &EventList<T>, one: impl Fn(&T) -> String) -> String {
     let names: Vec<String> = l.first.iter().take(NAMED).map(one).collect();
     format!("{}{}", names.join("; "), more(l.count, names.len()))
 }
@@ -194,39 +194,31 @@ pub(crate) fn of_audit(a: &Audit) -> Vec<Finding> {
 fn impossible_and_spikes(a: &Audit, f: &mut Vec<Finding>) {
     let l = &a.impossible;
     if l.count > 0 {
-        let names: Vec<String> = (l.first.iter().take(NAMED))
-            .map(|e| format!("index {} ({}): {}", e.index, e.at, e.what))
-            .collect();
         f.push(Finding::new(
             Severity::Defect,
             "impossible",
             format!(
-                "{} beyond any IMU's range (corrupt rows): {}{}",
+                "{} beyond any IMU's range (corrupt rows): {}",
                 count(l.count, "sample", "samples"),
-                names.join("; "),
-                more(l.count, names.len())
+                list_events(l, |e| format!("index {} ({}): {}", e.index, e.at, e.what))
             ),
         ));
     }
     let s = &a.spikes;
     if s.count > 0 {
-        let names: Vec<String> = (s.first.iter().take(NAMED))
-            .map(|e| {
-                format!(
-                    "index {} ({}) {} = {} {}, {:.0} σ from both neighbours",
-                    e.index, e.at, AXES[e.axis].0, e.value, AXES[e.axis].1, e.sigmas
-                )
-            })
-            .collect();
+        let names = list_events(s, |e| {
+            format!(
+                "index {} ({}) {} = {} {}, {:.0} σ from both neighbours",
+                e.index, e.at, AXES[e.axis].0, e.value, AXES[e.axis].1, e.sigmas
+            )
+        });
         f.push(Finding::new(
             Severity::Warning,
             "spikes",
             format!(
                 "{} (a reading ≥ {SPIKE_SIGMAS} robust σ of the axis' sample-to-sample change \
-                 from both neighbours, which agree): {}{}",
+                 from both neighbours, which agree): {names}",
                 count(s.count, "single-sample spike", "single-sample spikes"),
-                names.join("; "),
-                more(s.count, names.len())
             ),
         ));
     }
@@ -242,17 +234,13 @@ pub(crate) fn reading(
     f: &mut Vec<Finding>,
 ) {
     if bad_rows.count > 0 {
-        let names: Vec<&str> = (bad_rows.first.iter().take(NAMED))
-            .map(|r| r.message.as_str())
-            .collect();
         f.push(Finding::new(
             Severity::Defect,
             "bad_rows",
             format!(
-                "{label}{} could not be read: {}{}",
+                "{label}{} could not be read: {}",
                 count(bad_rows.count, "row", "rows"),
-                names.join("; "),
-                more(bad_rows.count, names.len())
+                list_events(bad_rows, |r| r.message.clone())
             ),
         ));
     }
@@ -264,17 +252,13 @@ pub(crate) fn reading(
         ));
     }
     if non_finite.count > 0 {
-        let names: Vec<String> = (non_finite.first.iter().take(NAMED))
-            .map(|(i, at)| format!("index {i} ({at})"))
-            .collect();
         f.push(Finding::new(
             Severity::Defect,
             "non_finite",
             format!(
-                "{label}{} with a non-finite reading: {}{}",
+                "{label}{} with a non-finite reading: {}",
                 count(non_finite.count, "sample", "samples"),
-                names.join("; "),
-                more(non_finite.count, names.len())
+                list_events(non_finite, |(i, at)| format!("index {i} ({at})"))
             ),
         ));
     }
