@@ -69,7 +69,10 @@
 //!   this is an upper bound: for `σ² = N²/τ + K²τ/3` the minimum is `√(2NK/√3)` at
 //!   `τ* = √3·N/K`.
 
+use super::deviation::{local_slopes, ls_slope};
+use super::edf::{NoiseLevels, avar_covariance, chi2_quantile_ratio, edf, normal_deviate};
 use super::{AllanError, AllanPoint};
+use nalgebra::DMatrix;
 
 /// 2 ln2 / π: the bias-instability floor factor, `σ_floor = √(2 ln2/π)·B ≈ 0.664 B`.
 pub const BIAS_INSTABILITY_FACTOR: f64 = 0.664_282_818_183_265_3;
@@ -103,6 +106,13 @@ pub struct NoiseFit {
     pub bias_instability: f64,
     /// τ \[s\] of the minimum.
     pub bias_instability_tau: f64,
+    /// N of the model curve ([`model_adev`]): `white_density` when fitted; when it is a bound,
+    /// the value the joint fit gives the white-noise term over the random walk's region (at
+    /// most the bound), 0 without any region.
+    pub model_white_density: f64,
+    /// K of the model curve, likewise: `random_walk` when fitted, else the joint fit's value
+    /// over the white-noise region (at most the bound).
+    pub model_random_walk: f64,
 }
 
 const MIN_CLUSTERS: f64 = 8.0;
@@ -115,32 +125,7 @@ const MIN_RUN: usize = 3;
 /// "Goodness of fit").
 pub const MAX_MODEL_Z: f64 = 5.0;
 /// Allowance `k` of the caps and bounds, in units of a point's relative error ε (module docs).
-pub const CAP_SIGMAS: f64 = 3.0;
-
-fn local_slopes(pts: &[AllanPoint]) -> Vec<f64> {
-    let lx: Vec<f64> = pts.iter().map(|p| p.tau.ln()).collect();
-    let ly: Vec<f64> = pts.iter().map(|p| p.adev.max(1e-300).ln()).collect();
-    (0..pts.len())
-        .map(|i| {
-            let a = i.saturating_sub(2);
-            let b = (i + 2).min(pts.len() - 1);
-            ls_slope(&lx[a..=b], &ly[a..=b])
-        })
-        .collect()
-}
-
-/// Unweighted least-squares slope of `y` on `x` (NaN for fewer than 2 distinct x).
-fn ls_slope(x: &[f64], y: &[f64]) -> f64 {
-    let k = x.len() as f64;
-    let mx = x.iter().sum::<f64>() / k;
-    let my = y.iter().sum::<f64>() / k;
-    let (mut sxy, mut sxx) = (0.0, 0.0);
-    for (a, b) in x.iter().zip(y) {
-        sxy += (a - mx) * (b - my);
-        sxx += (a - mx) * (a - mx);
-    }
-    if sxx > 0.0 { sxy / sxx } else { f64::NAN }
-}
+pub const CAP_SIGMAS: f64 = 4.0;
 
 /// Indices (into `pts`, all reliable) of the kept runs of slope `target` (module docs).
 /// Only points with `τ ≥ min_tau` are candidates.
@@ -172,15 +157,48 @@ fn slope_region(pts: &[AllanPoint], slopes: &[f64], target: f64, min_tau: f64) -
     out
 }
 
-/// `min_τ σ(τ)·g(τ)·(1 + k·ε(τ))` over the reliable points and its τ: the largest `c` of a
-/// line `σ = c/g(τ)` that stays below the curve within `k` errors (module docs: `k =`
-/// [`CAP_SIGMAS`] for the caps, 0 for the bounds).
+/// Samples (or blocks) behind a point: `n = clusters·m`.
+fn samples(p: &AllanPoint) -> usize {
+    (p.clusters * p.m as f64).round() as usize
+}
+
+/// The sample period of the series behind a point: `τ/m`.
+fn period(p: &AllanPoint) -> f64 {
+    p.tau / p.m as f64
+}
+
+/// The model `σ² = n2/τ + k2·τ/3` as [`NoiseLevels`] (white noise of unit density when both
+/// are zero, which fixes the EDF only).
+fn levels(n2: f64, k2: f64) -> NoiseLevels {
+    if n2 > 0.0 || k2 > 0.0 {
+        NoiseLevels {
+            white: n2,
+            random_walk: k2,
+        }
+    } else {
+        NoiseLevels::white(1.0)
+    }
+}
+
+/// The EDF of a point under the model `σ² = n2/τ + k2·τ/3` ([`edf`]).
+fn model_edf(p: &AllanPoint, n2: f64, k2: f64) -> f64 {
+    edf(&levels(n2, k2), period(p), samples(p), p.m)
+}
+
+/// `min_τ σ(τ)·g(τ)/√q(τ)` over the reliable points and its τ, `q` the lower `k`-σ quantile of
+/// `χ²_ν/ν` ([`chi2_quantile_ratio`]) at the point's EDF: the largest `c` of a line
+/// `σ = c/g(τ)` that stays below every point's upper `k`-σ confidence limit (module docs).
 fn line_cap(reliable: &[&AllanPoint], g: impl Fn(f64) -> f64, k: f64) -> (f64, f64) {
     reliable
         .iter()
         .map(|p| {
-            let eps = p.adev_err / p.adev.max(1e-300);
-            (p.adev * g(p.tau) * (1.0 + k * eps), p.tau)
+            let q = chi2_quantile_ratio(-k, p.edf);
+            let c = if q > 0.0 {
+                p.adev * g(p.tau) / q.sqrt()
+            } else {
+                f64::INFINITY
+            };
+            (c, p.tau)
         })
         .fold(
             (f64::INFINITY, f64::NAN),
@@ -188,17 +206,78 @@ fn line_cap(reliable: &[&AllanPoint], g: impl Fn(f64) -> f64, k: f64) -> (f64, f
         )
 }
 
-/// Weighted mean of `vals` (value, weight = 2(K−1), the inverse relative variance of σ) and
-/// the relative 1-σ error of the square root of that mean: `1/√max w`, the error of the
-/// best-determined point used. Neighbouring τ of an overlapping Allan curve share their data
-/// and are strongly correlated, so combining them gains little over their best point;
-/// `1/√Σw` (independent points) is optimistic by 2–3× against the spread over seeds (the
-/// crate's Allan tests check the ratio).
-fn weighted(vals: &[(f64, f64)]) -> (f64, f64) {
-    let sw: f64 = vals.iter().map(|v| v.1).sum();
-    let wmax = vals.iter().map(|v| v.1).fold(0.0, f64::max);
-    let mean = vals.iter().map(|v| v.0 * v.1).sum::<f64>() / sw;
-    (mean, (1.0 / wmax).sqrt())
+/// The joint fit of the two lines, `σ²(τ) = n2/τ + k2·τ/3`, and the covariance of `(n2, k2)`.
+struct LinesFit {
+    n2: f64,
+    k2: f64,
+    cov: [[f64; 2]; 2],
+}
+
+/// Weighted least squares of `σ²(τ) = n2/τ + k2·τ/3` on the points `idx` (module docs, "Joint
+/// fit"), non-negative, weights `1/Var σ̂² = ν/(2σ_m⁴)` at the model itself (iterated from
+/// the measured σ̂); the covariance of `(n2, k2)` by the sandwich `G Σ Gᵀ`,
+/// `G = (XᵀWX)⁻¹XᵀW`, with `Σ` the model covariance of the points ([`avar_covariance`]).
+fn fit_lines(pts: &[AllanPoint], idx: &[usize]) -> LinesFit {
+    let (mut n2, mut k2) = (0.0, 0.0);
+    let mut cov = [[f64::NAN; 2]; 2];
+    if idx.is_empty() {
+        return LinesFit { n2, k2, cov };
+    }
+    let row = |i: usize| [1.0 / pts[i].tau, pts[i].tau / 3.0];
+    let weight = |i: usize, n2: f64, k2: f64| {
+        let p = &pts[i];
+        let (m2, nu) = if n2 > 0.0 || k2 > 0.0 {
+            (n2 / p.tau + k2 * p.tau / 3.0, model_edf(p, n2, k2))
+        } else {
+            (p.adev * p.adev, p.edf)
+        };
+        nu / (2.0 * m2 * m2).max(1e-300)
+    };
+    for _ in 0..FIT_ITERATIONS {
+        let (mut h, mut b) = ([[0.0; 2]; 2], [0.0; 2]);
+        for &i in idx {
+            let (x, w, y) = (row(i), weight(i, n2, k2), pts[i].adev.powi(2));
+            for r in 0..2 {
+                b[r] += w * x[r] * y;
+                for c in 0..2 {
+                    h[r][c] += w * x[r] * x[c];
+                }
+            }
+        }
+        (n2, k2) = solve_nonnegative(h, b);
+    }
+    let x = DMatrix::from_fn(idx.len(), 2, |r, c| row(idx[r])[c]);
+    let xtw = DMatrix::from_fn(2, idx.len(), |c, r| x[(r, c)] * weight(idx[r], n2, k2));
+    let Some(hinv) = (&xtw * &x).try_inverse() else {
+        return LinesFit { n2, k2, cov };
+    };
+    let g = hinv * xtw;
+    let (lv, p0) = (levels(n2, k2), &pts[idx[0]]);
+    let sigma = DMatrix::from_fn(idx.len(), idx.len(), |r, c| {
+        avar_covariance(&lv, period(p0), samples(p0), pts[idx[r]].m, pts[idx[c]].m)
+    });
+    let c = &g * sigma * g.transpose();
+    cov = [[c[(0, 0)], c[(0, 1)]], [c[(1, 0)], c[(1, 1)]]];
+    LinesFit { n2, k2, cov }
+}
+
+/// Iterations of the weights of [`fit_lines`] (the estimate changes by < 1e-6 after 4).
+const FIT_ITERATIONS: usize = 6;
+
+/// The non-negative solution of the 2×2 normal equations `h·θ = b`: the unconstrained one, or,
+/// when a component is negative, the other alone.
+fn solve_nonnegative(h: [[f64; 2]; 2], b: [f64; 2]) -> (f64, f64) {
+    let one = |a: f64, b: f64| if a > 0.0 { (b / a).max(0.0) } else { 0.0 };
+    let det = h[0][0] * h[1][1] - h[0][1] * h[1][0];
+    let n = (h[1][1] * b[0] - h[0][1] * b[1]) / det;
+    let k = (h[0][0] * b[1] - h[1][0] * b[0]) / det;
+    if det > 0.0 && n >= 0.0 && k >= 0.0 {
+        (n, k)
+    } else if det > 0.0 && n < 0.0 {
+        (0.0, one(h[1][1], b[1]))
+    } else {
+        (one(h[0][0], b[0]), 0.0)
+    }
 }
 
 /// Fits N, K and B to one channel's curve (see the module docs). `channel` only labels errors.
@@ -239,20 +318,14 @@ pub fn fit_noise(pts: &[AllanPoint], channel: usize) -> Result<NoiseFit, AllanEr
     let slopes = local_slopes(pts);
     let white = slope_region(pts, &slopes, -0.5, tau_w);
     let rw = slope_region(pts, &slopes, 0.5, 0.0);
-    // Two passes: each line fitted after subtracting the other's current term (σ²(τ) of the
-    // white noise is N²/τ, of the random walk K²τ/3).
-    let (mut n2, mut k2) = (0.0, 0.0);
-    let (mut n_rel, mut k_rel) = (f64::NAN, f64::NAN);
-    for _pass in 0..2 {
-        if !white.is_empty() {
-            (n2, n_rel) = fit_line(pts, &white, |t| k2 * t / 3.0, |s2, t| s2 * t);
-        }
-        if !rw.is_empty() {
-            (k2, k_rel) = fit_line(pts, &rw, |t| n2 / t, |s2, t| 3.0 * s2 / t);
-        }
-    }
-    let n = read_line(pts, &reliable_w, &white, n2, n_rel, |t: f64| t.sqrt());
-    let k = read_line(pts, &reliable, &rw, k2, k_rel, |t: f64| (3.0 / t).sqrt());
+    let mut idx: Vec<usize> = white.iter().chain(&rw).copied().collect();
+    idx.sort_unstable();
+    idx.dedup();
+    let lines = fit_lines(pts, &idx);
+    let n = read_line(&reliable_w, &white, pts, &lines, true, |t: f64| t.sqrt());
+    let kk = read_line(&reliable, &rw, pts, &lines, false, |t: f64| {
+        (3.0 / t).sqrt()
+    });
     let minp = reliable
         .iter()
         .min_by(|a, b| a.adev.total_cmp(&b.adev))
@@ -263,34 +336,25 @@ pub fn fit_noise(pts: &[AllanPoint], channel: usize) -> Result<NoiseFit, AllanEr
         white_density_err: n.err,
         white_tau_range: n.tau_range,
         white_density_is_bound: n.is_bound,
-        random_walk: k.value,
-        random_walk_err: k.err,
-        random_walk_tau_range: k.tau_range,
-        random_walk_is_bound: k.is_bound,
+        random_walk: kk.value,
+        random_walk_err: kk.err,
+        random_walk_tau_range: kk.tau_range,
+        random_walk_is_bound: kk.is_bound,
         bias_instability: minp.adev / BIAS_INSTABILITY_FACTOR,
         bias_instability_tau: minp.tau,
+        model_white_density: model_line(&n, lines.n2),
+        model_random_walk: model_line(&kk, lines.k2),
     })
 }
 
-/// The squared coefficient of one line over its slope region and its relative error
-/// ([`weighted`]): per point, `coef2(σ²(τ) − other(τ), τ)` (the other term's variance
-/// subtracted, clamped at 0), weighted by `2(K − 1)`, the inverse relative variance of σ (so of
-/// σ², up to 4).
-fn fit_line(
-    pts: &[AllanPoint],
-    region: &[usize],
-    other: impl Fn(f64) -> f64,
-    coef2: impl Fn(f64, f64) -> f64,
-) -> (f64, f64) {
-    let v: Vec<(f64, f64)> = region
-        .iter()
-        .map(|&i| {
-            let p = &pts[i];
-            let s2 = (p.adev * p.adev - other(p.tau)).max(0.0);
-            (coef2(s2, p.tau), 2.0 * (p.clusters - 1.0))
-        })
-        .collect();
-    weighted(&v)
+/// A line's coefficient in the model curve: the fitted value, or for a bound the joint fit's
+/// value over the other line's region, at most the bound (module docs).
+fn model_line(line: &LineParameter, c2: f64) -> f64 {
+    if line.is_bound {
+        c2.sqrt().min(line.value)
+    } else {
+        line.value
+    }
 }
 
 /// One parameter read from its line `σ = c/g(τ)`.
@@ -301,19 +365,19 @@ struct LineParameter {
     is_bound: bool,
 }
 
-/// The coefficient `c` of a line `σ = c/g(τ)` (module docs): `√c2` capped by [`line_cap`] with
-/// [`CAP_SIGMAS`] when the line has a slope region, with the error `c·rel` and the region's τ
-/// range; otherwise the bound `min_τ σ(τ)·g(τ)` at the τ of the minimum, NaN error.
+/// The coefficient `c` of a line `σ = c/g(τ)` (module docs): `√c2` of the joint fit, capped by
+/// [`line_cap`] with `k` when the line has a slope region, its error `σ_{c2}/(2c)` and the
+/// region's τ range; otherwise the bound `min_τ σ(τ)·g(τ)` at the τ of the minimum, NaN error.
 fn read_line(
-    pts: &[AllanPoint],
     reliable: &[&AllanPoint],
     region: &[usize],
-    c2: f64,
-    rel: f64,
+    pts: &[AllanPoint],
+    lines: &LinesFit,
+    white: bool,
     g: impl Fn(f64) -> f64,
 ) -> LineParameter {
     if region.is_empty() {
-        let (b, t) = line_cap(reliable, g, 0.0);
+        let (b, t) = line_cap(reliable, g, CAP_SIGMAS);
         return LineParameter {
             value: b,
             err: f64::NAN,
@@ -321,19 +385,42 @@ fn read_line(
             is_bound: true,
         };
     }
-    let c = c2.sqrt().min(line_cap(reliable, g, CAP_SIGMAS).0);
+    let (c2, var) = if white {
+        (lines.n2, lines.cov[0][0])
+    } else {
+        (lines.k2, lines.cov[1][1])
+    };
+    let cap = line_cap(reliable, g, CAP_SIGMAS);
+    let c = c2.sqrt().min(cap.0);
+    // δc = δ(c²)/(2c); at c = 0 the c whose square is one σ of c².
+    let sd = var.max(0.0).sqrt();
+    let err = if c2 > 0.0 {
+        sd / (2.0 * c2.sqrt())
+    } else {
+        sd.sqrt()
+    };
     LineParameter {
         value: c,
-        err: c * rel,
+        err,
         tau_range: (pts[region[0]].tau, pts[region[region.len() - 1]].tau),
         is_bound: false,
     }
 }
 
-/// The model curve of a fit: `σ_m(τ) = √(N²/τ + K²τ/3)` (the white-noise and random-walk
-/// lines added as variances; bias instability left out, as a Kalibr `imu.yaml` does).
+/// The model curve of a fit: `σ_m(τ) = √(N²/τ + K²τ/3)` over the fitted lines (a line that
+/// is only a bound is left out: it is no fit; bias instability left out, as a Kalibr
+/// `imu.yaml` does).
 pub fn model_adev(fit: &NoiseFit, tau: f64) -> f64 {
-    (fit.white_density.powi(2) / tau + fit.random_walk.powi(2) * tau / 3.0).sqrt()
+    let (n2, k2) = model_levels(fit);
+    (n2 / tau + k2 * tau / 3.0).sqrt()
+}
+
+/// `(N², K²)` of the model curve of a fit.
+fn model_levels(fit: &NoiseFit) -> (f64, f64) {
+    (
+        fit.model_white_density.powi(2),
+        fit.model_random_walk.powi(2),
+    )
 }
 
 /// How far the model curve ([`model_adev`]) is from the measured one where it was fitted:
@@ -372,11 +459,13 @@ pub fn model_deviation(pts: &[AllanPoint], fit: &NoiseFit) -> ModelDeviation {
         let white = !fit.white_density_is_bound && within(fit.white_tau_range, p.tau);
         let fitted =
             white || (!fit.random_walk_is_bound && within(fit.random_walk_tau_range, p.tau));
-        if !fitted || p.adev_err.is_nan() || p.adev_err <= 0.0 {
+        let m = model_adev(fit, p.tau);
+        if !fitted || !(m > 0.0) {
             continue;
         }
-        let m = model_adev(fit, p.tau);
-        let z = (p.adev - m) / (m * p.adev_err / p.adev);
+        let (n2, k2) = model_levels(fit);
+        let nu = model_edf(p, n2, k2);
+        let z = normal_deviate((p.adev / m).powi(2), nu);
         d.sum_z2 += z * z;
         d.points += 1;
         if z.abs() > d.max_abs_z {

@@ -19,6 +19,7 @@
 //! Units: a channel's signal unit `u` (rad/s or m/s²); N in u/√Hz, K in u/s/√Hz (u·√Hz), B in u.
 
 pub mod deviation;
+pub mod edf;
 pub mod fit;
 pub mod stillness;
 pub mod stream;
