@@ -131,8 +131,8 @@ fn edf_and_covariance_match_monte_carlo() {
 /// large ν the deviate of `1 + 3√(2/ν)` is 3 (the normal limit).
 #[test]
 fn normal_deviate_and_quantile_meet_closed_forms() {
-    let phi3 = 0.001_349_898_031_630_094_6;
-    let (low, high) = (-(1.0f64 - phi3).ln(), -(phi3 as f64).ln());
+    let phi3: f64 = 0.001_349_898_031_630_094_6;
+    let (low, high) = (-(1.0 - phi3).ln(), -phi3.ln());
     assert!((chi2_quantile_ratio(-3.0, 2.0) / low - 1.0).abs() < 1e-9);
     assert!((chi2_quantile_ratio(3.0, 2.0) / high - 1.0).abs() < 1e-9);
     assert!((normal_deviate(low, 2.0) + 3.0).abs() < 1e-6);

@@ -11,10 +11,16 @@
 //! the fits only use points with at least 8 non-overlapping clusters (N/m ≥ 8).
 //!
 //! # Confidence
-//! Each point carries `σ/√(2(N/m − 1))`, the 1-σ error of an Allan deviation estimated from
-//! `K = N/m` independent clusters (IEEE 952 Annex C; El-Sheimy, Hou, Niu 2008, eq. 11). This is
-//! the non-overlapping figure: the overlapping estimator is somewhat better, so the band is
-//! conservative.
+//! Each point carries its equivalent degrees of freedom ν (`σ̂² ~ σ²χ²_ν/ν`, [`super::edf`]:
+//! Howe, Allan, Barnes 1981; Greenhall and Riley 2003) and the 1-σ error `σ̂/√(2ν)`. ν depends
+//! on the noise, ≈ 1.5 r for white noise and ≈ 0.93 r for a random walk (`r = K − 2`,
+//! K = N/m clusters), against the `K − 1` of K independent clusters (El-Sheimy, Hou, Niu 2008,
+//! eq. 11): the overlapping estimator is better than that for white noise and a little worse
+//! for a random walk, whose long clusters hold few independent pieces of data. The point's
+//! noise is read from the curve's local slope s (least squares over the point and two
+//! neighbours on either side): a share `(1 + 2s)/2` of σ̂² is random walk, the rest white
+//! noise (clamped to [0, 1]), which is exact for a curve of white noise and a random walk,
+//! whose slope runs from −½ to +½. The fits ([`super::fit`]) use ν under the fitted model.
 
 use super::AllanError;
 use super::edf::{NoiseLevels, edf};
@@ -57,7 +63,8 @@ pub fn log_spaced_cluster_sizes(max_m: usize, per_decade: usize) -> Vec<usize> {
 }
 
 /// Overlapping Allan deviation of `data` (sample period `dt` \[s\]) at cluster sizes `ms`
-/// (sizes with `2m > N` are skipped). See the module docs for the formula.
+/// (sizes with `2m > N` are skipped), with the EDF and error of every point (the local slopes
+/// are taken over the points computed here). See the module docs for the formulas.
 ///
 /// ```
 /// use preint_calib::allan::allan_deviation;

@@ -134,7 +134,7 @@ pub fn avar_covariance(levels: &NoiseLevels, dt: f64, n: usize, m_i: usize, m_j:
 /// ```
 pub fn edf(levels: &NoiseLevels, dt: f64, n: usize, m: usize) -> f64 {
     let s2 = levels.avar(m as f64 * dt);
-    if !(s2 > 0.0) {
+    if s2.is_nan() || s2 <= 0.0 {
         return f64::NAN;
     }
     2.0 * s2 * s2 / avar_covariance(levels, dt, n, m, m)

@@ -2,13 +2,13 @@
 //! walk K and bias instability B (IEEE Std 952-1997, Annex C; the readings of allan_variance_ros
 //! and kalibr_allan).
 //!
-//! # Model and fits
+//! # Model and regions
 //! The model is `σ²(τ) = N²/τ + (2 ln2/π)B² + K²τ/3` (white noise, bias instability, rate
 //! random walk). Allan variances of independent noises **add**, so every term alone lies
-//! below the curve: `N²/τ ≤ σ²(τ)` and `K²τ/3 ≤ σ²(τ)` at every τ. The fits enforce this.
-//! Only reliable points (≥ 8 clusters) are used; below that the estimate has too few degrees
-//! of freedom for its error `ε(τ) = adev_err/adev` to mean anything (with 2–3 clusters σ can be
-//! off by a factor of several).
+//! below the curve: `N²/τ ≤ σ²(τ)` and `K²τ/3 ≤ σ²(τ)` at every τ, within the curve's error.
+//! Only reliable points (≥ 8 clusters) are used. Each point's error comes from its equivalent
+//! degrees of freedom ν (`σ̂² ~ σ²χ²_ν/ν`; [`super::edf`], Greenhall and Riley 2003), which
+//! depend on the noise: at 8 clusters 10 for white noise, 5.9 for a random walk.
 //! - Local log-log slopes are least-squares slopes over ±2 neighbouring points.
 //! - **Regions.** A point is a candidate for the slope −½ (white noise) region when its local
 //!   slope is within ±0.15 of −½. Candidates form runs of consecutive points; a run is kept
@@ -16,29 +16,48 @@
 //!   is within ±0.15 of −½. The second test matters: a smoothed local slope passes through −½
 //!   wherever the curve goes from flat to steeper than −½ (e.g. the ADIS16405 accelerometers at
 //!   τ ≈ 0.8–1.6 s: a plateau then a drop of slope ≈ −1.2, a ≈ 1 Hz disturbance), which is not
-//!   white noise. The same for +½ (random walk).
-//! - **N** (white-noise density, unit/√Hz): the slope −½ line `σ = N/√τ` fitted (weighted mean
-//!   of `σ²τ`, weights = clusters) over the kept runs, read at τ = 1 s.
-//! - **K** (random walk, unit/s/√Hz): the slope +½ line `σ = K√(τ/3)` fitted the same way,
-//!   read at τ = 3 s.
-//! - Each line is fitted after subtracting the other fitted term (two passes), which removes most
-//!   of the bias from the crossover region where both terms matter.
-//! - **Caps.** Then `N ≤ min_τ σ(τ)√τ·(1 + kε(τ))` and `K ≤ min_τ σ(τ)√(3/τ)·(1 + kε(τ))`
-//!   over the reliable points (for N those at τ ≥ 0.1 s, see "Sensor bandwidth" below),
-//!   `k = 3` ([`CAP_SIGMAS`]): the line never exceeds the measured
-//!   curve by more than 3 of its statistical errors anywhere. A weighted mean over a region
-//!   where other noise already adds (σ√τ rising slowly) sits above the lowest points; the cap
-//!   brings it to them. Why not `k = 2`: the long-τ points of a random-walk curve are few and
-//!   strongly correlated, so the whole tail of a correct curve often sits ≈ 2ε low together; on
-//!   simulated data (`preint-sim`, 10 h, 24 channels) `k = 2` puts one K 13 % low, `k = 3` none.
-//! - **Bounds.** When no run of the right slope exists, the value is only the upper bound
-//!   `min_τ σ(τ)√τ` (resp. `min_τ σ(τ)√(3/τ)`, usually at the longest reliable τ): the line
-//!   touching the measured curve at its lowest point, flagged
-//!   ([`NoiseFit::white_density_is_bound`], [`NoiseFit::random_walk_is_bound`]), with the τ of
-//!   the minimum as its range and a NaN error.
-//! - Errors of fitted N and K: the relative error of the best-determined point of the fitted
-//!   region, `1/√(2(K_max − 1))` (neighbouring τ share data, so the region is hardly better than
-//!   that point).
+//!   white noise. The same for +½ (random walk). Only where a line has its slope is the model
+//!   held to the curve: elsewhere noises the model lacks may shape it.
+//!
+//! # Joint fit
+//! - **N and K** (unit/√Hz and unit/s/√Hz; the lines `σ = N/√τ` read at τ = 1 s and
+//!   `σ = K√(τ/3)` read at τ = 3 s): weighted least squares of `σ̂²(τ) = N²/τ + K²τ/3`, linear
+//!   in N² and K², non-negative, on the union of the two regions, weights
+//!   `1/Var σ̂² = ν/(2σ_m⁴)` at the model itself (iterated; weights at the measured points
+//!   would favour the points that fall low). Both terms are fitted over the whole union: a line
+//!   without a region of its own still takes its share at the end of the other's (the random
+//!   walk at the long end of the white-noise region), and the model curve keeps it
+//!   ([`NoiseFit::model_random_walk`]).
+//! - **Errors.** The points share their data (neighbouring τ of 10 per decade correlate by
+//!   0.9), so the covariance of `(N², K²)` is the sandwich `G Σ Gᵀ`, `G = (XᵀWX)⁻¹XᵀW`, with
+//!   `Σ` the covariance of the points under the fitted model
+//!   ([`super::edf::avar_covariance`]), and `σ_N = σ_{N²}/(2N)`. Measured on simulated white
+//!   noise (N = 1e-3 u/√Hz, 100 Hz) plus a random walk, 40 seeds × 6 channels of ten minutes
+//!   of white noise, an hour with K = 1e-4 and an hour with K = 3e-3
+//!   (`calib/tests/allan_coverage.rs`): the pulls `(estimate − truth)/σ` have an RMS of
+//!   0.93–1.04 and a mean within 0.13 of 0, and N and K lie within 3σ in ≥ 99 % of the
+//!   channel-runs.
+//! - **Why not generalised least squares** with the full `Σ` (the best linear unbiased
+//!   estimator for a known `Σ`): with `Σ` from its own estimate it is more precise (N's spread
+//!   0.65 and 0.28 % instead of 0.77 and 0.34 % on the first two cases) but biases K low by
+//!   3.3 % on the hour with K = 1e-4 (a mean pull of −0.39 over 220 fits, 5 standard errors).
+//! - **Caps.** Then `N ≤ min_τ σ̂(τ)√τ/√q(τ)` and `K ≤ min_τ σ̂(τ)√(3/τ)/√q(τ)` over the
+//!   reliable points (for N those at τ ≥ 0.1 s, see "Sensor bandwidth" below), `q` the lower
+//!   4σ quantile of `χ²_ν/ν` at the point's EDF ([`CAP_SIGMAS`]): no line lies above any
+//!   point's upper 4σ confidence limit. A fit over a region where other noise already adds
+//!   (σ√τ rising slowly: the ADIS16405 gyro x from 0.1 s, or the tail of a disturbance) sits
+//!   above its best-determined points; the cap brings it to them. Why 4σ, not 3: a correct line
+//!   lies above a given point's 3σ limit with probability 1.3e-3, and a line has 20–60 points;
+//!   on the three simulated cases above, 3σ caps 5 of the 1180 fitted lines (one N 4 % low)
+//!   and leaves 2 of the 120 runs not credible, 4σ caps none. Why χ² limits and not
+//!   `σ̂(1 + kε)`: at few EDF the χ² distribution is skewed; a linear `σ̂(1 + 3ε)` at a point of
+//!   8 clusters of a random walk would cap a correct line with probability 5 %, not 1.3e-3.
+//! - **Bounds.** When a line has no region, its value is only an upper bound: the same cap
+//!   alone, `min_τ σ̂(τ)√τ/√q(τ)` (resp. `min_τ σ̂(τ)√(3/τ)/√q(τ)`), the largest line the curve
+//!   does not exclude at 4σ anywhere, flagged ([`NoiseFit::white_density_is_bound`],
+//!   [`NoiseFit::random_walk_is_bound`]), with the τ of the minimum as its range and a NaN
+//!   error. On the simulated hour with K = 1e-4, 20 of 240 channel-runs have no +½ region (their
+//!   long-τ tail fell low), and 1 of those 20 bounds lies below the truth.
 //! - **Sensor bandwidth.** The white-noise region, the cap and the bound of N use only points
 //!   with τ ≥ [`WHITE_NOISE_MIN_TAU`] = 0.1 s (all reliable points when none reaches 0.1 s).
 //!   An IMU filters before it samples (anti-alias and decimation filters; the ADIS16405 averages
@@ -52,22 +71,25 @@
 //!   T = 2.7 ms, which reproduces the ADIS16405 curve at 0.01 s). With this floor a recording
 //!   and its block means of length ≤ 0.1 s give the same N: the Allan variance of block means at
 //!   τ a multiple of the block length is that of the raw data.
-//! - **Goodness of fit** ([`model_deviation`], [`super::ImuAllan::fit`]): the model curve
-//!   `σ_m(τ) = √(N²/τ + K²τ/3)` against the measured one at the reliable points of the fitted
-//!   (not bound) τ ranges, in units of each point's statistical error,
-//!   `z = (σ − σ_m)/(σ_m ε)`. The points of an overlapping Allan curve share their data, so
-//!   `Σz²` has no χ² distribution; the fit is credible while `max |z| ≤` [`MAX_MODEL_Z`] = 5,
-//!   the level a Gaussian deviate exceeds with probability 6e-7. Measured on simulated white
-//!   noise plus random walk (N = 1e-3 u/√Hz at 100 Hz; 40 seeds each, six channels):
-//!   max |z| stays below 3.9 for an hour with K = 1e-4 and for ADIS16405's real hour
-//!   (tests/data/adis16405: 3.8 at most); above 5 are 3 of 40 ten-minute white-noise
-//!   recordings and 14 of 40 hours with K = 3e-3, where the caps below pull a line down to a
-//!   low long-τ tail (N 13 % low, K 26 % low in the worst cases): there the fit is not
-//!   credible and says so.
-//! - **B** (bias instability): the minimum of σ(τ) over points with ≥ 8 clusters, divided by
-//!   `√(2 ln2/π) ≈ 0.664`. When the curve has no flat floor (e.g. white noise + random walk only)
-//!   this is an upper bound: for `σ² = N²/τ + K²τ/3` the minimum is `√(2NK/√3)` at
-//!   `τ* = √3·N/K`.
+//!
+//! # Goodness of fit
+//! [`model_deviation`], [`super::ImuAllan::fit`]: the model curve `σ_m(τ) = √(N²/τ + K²τ/3)`
+//! ([`model_adev`]: the fitted lines, and for a line that is only a bound the value the joint
+//! fit gives it) against the measured one at the reliable points of the fitted (not bound) τ
+//! ranges, each point as the standard normal deviate `z` of `σ̂²/σ_m²` under
+//! `σ̂² ~ σ_m²χ²_ν/ν`, ν its EDF under the model ([`super::edf::normal_deviate`]), so that
+//! `z ~ N(0, 1)` at every point of a correct model. The points share their data, so `Σz²` has
+//! no χ² distribution; the fit is credible while `max |z| ≤` [`MAX_MODEL_Z`] = 5, the level a
+//! normal deviate exceeds with probability 6e-7. Measured: max |z| = 3.38 / 2.98 / 2.73 over
+//! the 40 seeds of the three simulated cases (all 120 runs credible); 3.97 on the real
+//! ADIS16405 hour (tests/data/adis16405, 10 Hz block means); not credible on the same hour at
+//! 100 Hz (12 at τ = 0.16 s: its accelerometer curves fall at −0.4 from 0.1 to 0.3 s, a region
+//! of slope −½ within the tolerance but not white noise) and with a 1 Hz disturbance.
+//!
+//! # Bias instability
+//! **B**: the minimum of σ(τ) over points with ≥ 8 clusters, divided by `√(2 ln2/π) ≈ 0.664`.
+//! When the curve has no flat floor (e.g. white noise + random walk only) this is an upper
+//! bound: for `σ² = N²/τ + K²τ/3` the minimum is `√(2NK/√3)` at `τ* = √3·N/K`.
 
 use super::deviation::{local_slopes, ls_slope};
 use super::edf::{NoiseLevels, avar_covariance, chi2_quantile_ratio, edf, normal_deviate};
@@ -80,27 +102,30 @@ pub const BIAS_INSTABILITY_FACTOR: f64 = 0.664_282_818_183_265_3;
 /// Fitted noise parameters of one channel (units: the signal's unit `u`, e.g. rad/s or m/s²).
 #[derive(Clone, Debug, PartialEq)]
 pub struct NoiseFit {
-    /// White-noise density N [u/√Hz] (σ of the slope −½ line at τ = 1 s), capped so that the
-    /// line stays below the curve (module docs), or a bound (see `white_density_is_bound`).
+    /// White-noise density N [u/√Hz] (σ of the slope −½ line at τ = 1 s) of the joint fit,
+    /// capped so that the line stays below every point's upper 4σ limit (module docs), or a
+    /// bound (see `white_density_is_bound`).
     pub white_density: f64,
-    /// Its 1-σ uncertainty: that of the best-determined point used, `N/√(2(K_max − 1))`
-    /// (K = clusters); NaN when it is a bound.
+    /// Its 1-σ uncertainty, from the covariance of the joint fit under the points' model
+    /// covariance (module docs, "Joint fit"); NaN when it is a bound.
     pub white_density_err: f64,
-    /// τ range \[s\] of the points used for N (the τ of the minimum of `σ√τ` when a bound).
+    /// τ range \[s\] of the points used for N (the τ of the point that sets the bound when a
+    /// bound).
     pub white_tau_range: (f64, f64),
-    /// `true` when no slope −½ region exists and N is only the upper bound `min_τ σ(τ)√τ`
-    /// over the reliable points at τ ≥ [`WHITE_NOISE_MIN_TAU`] (module docs).
+    /// `true` when no slope −½ region exists and N is only the upper bound
+    /// `min_τ σ̂(τ)√τ/√q(τ)` (each point's upper 4σ limit) over the reliable points at
+    /// τ ≥ [`WHITE_NOISE_MIN_TAU`] (module docs).
     pub white_density_is_bound: bool,
     /// Random walk K [u/s/√Hz] (σ of the slope +½ line at τ = 3 s), capped as N, or a bound
     /// (see `random_walk_is_bound`).
     pub random_walk: f64,
-    /// 1-σ uncertainty of K, from the best-determined point used as for N (NaN when it is a
-    /// bound).
+    /// 1-σ uncertainty of K, from the joint fit as for N (NaN when it is a bound).
     pub random_walk_err: f64,
-    /// τ range \[s\] of the points used for K (the single longest τ when it is a bound).
+    /// τ range \[s\] of the points used for K (the τ of the point that sets the bound when a
+    /// bound).
     pub random_walk_tau_range: (f64, f64),
-    /// `true` when no slope +½ region exists and K is only the upper bound `min_τ σ(τ)√(3/τ)`
-    /// over the reliable points (module docs; usually at the longest reliable τ).
+    /// `true` when no slope +½ region exists and K is only the upper bound
+    /// `min_τ σ̂(τ)√(3/τ)/√q(τ)` over the reliable points (module docs).
     pub random_walk_is_bound: bool,
     /// Bias instability B \[u\] = min σ / 0.664 (an upper bound without a flat floor).
     pub bias_instability: f64,
@@ -124,7 +149,8 @@ const MIN_RUN: usize = 3;
 /// Largest credible `|z|` of the model curve against the measured one (module docs,
 /// "Goodness of fit").
 pub const MAX_MODEL_Z: f64 = 5.0;
-/// Allowance `k` of the caps and bounds, in units of a point's relative error ε (module docs).
+/// The caps and bounds hold every line below each point's upper `k`-σ confidence limit, this
+/// `k` (module docs).
 pub const CAP_SIGMAS: f64 = 4.0;
 
 /// Indices (into `pts`, all reliable) of the kept runs of slope `target` (module docs).
@@ -261,7 +287,7 @@ fn fit_lines(pts: &[AllanPoint], idx: &[usize]) -> LinesFit {
     LinesFit { n2, k2, cov }
 }
 
-/// Iterations of the weights of [`fit_lines`] (the estimate changes by < 1e-6 after 4).
+/// Rounds of reweighting in [`fit_lines`] (the first with weights at the measured points).
 const FIT_ITERATIONS: usize = 6;
 
 /// The non-negative solution of the 2×2 normal equations `h·θ = b`: the unconstrained one, or,
@@ -365,9 +391,10 @@ struct LineParameter {
     is_bound: bool,
 }
 
-/// The coefficient `c` of a line `σ = c/g(τ)` (module docs): `√c2` of the joint fit, capped by
-/// [`line_cap`] with `k` when the line has a slope region, its error `σ_{c2}/(2c)` and the
-/// region's τ range; otherwise the bound `min_τ σ(τ)·g(τ)` at the τ of the minimum, NaN error.
+/// The coefficient `c` of a line `σ = c/g(τ)` (module docs): when the line has a slope region,
+/// `√c2` of the joint fit capped by [`line_cap`] at [`CAP_SIGMAS`], its error `σ_{c2}/(2√c2)`
+/// and the region's τ range; otherwise the bound, [`line_cap`] alone, at the τ of the point
+/// that sets it, NaN error.
 fn read_line(
     reliable: &[&AllanPoint],
     region: &[usize],
@@ -407,8 +434,9 @@ fn read_line(
     }
 }
 
-/// The model curve of a fit: `σ_m(τ) = √(N²/τ + K²τ/3)` over the fitted lines (a line that
-/// is only a bound is left out: it is no fit; bias instability left out, as a Kalibr
+/// The model curve of a fit: `σ_m(τ) = √(N²/τ + K²τ/3)` with [`NoiseFit::model_white_density`]
+/// and [`NoiseFit::model_random_walk`] (the fitted lines; for a line that is only a bound, the
+/// value the joint fit gives it, not the bound; bias instability left out, as a Kalibr
 /// `imu.yaml` does).
 pub fn model_adev(fit: &NoiseFit, tau: f64) -> f64 {
     let (n2, k2) = model_levels(fit);
@@ -423,11 +451,11 @@ fn model_levels(fit: &NoiseFit) -> (f64, f64) {
     )
 }
 
-/// How far the model curve ([`model_adev`]) is from the measured one where it was fitted:
-/// `z(τ) = (σ(τ) − σ_m(τ)) / (σ_m(τ)·ε(τ))`, `ε = adev_err/adev = 1/√(2(K − 1))` the
-/// relative error of a point with K clusters taken at the model (so that a point that
-/// happens to fall low does not shrink its own error), at the reliable points (≥ 8 clusters) of the white-
-/// noise and random-walk τ ranges that are fits, not bounds.
+/// How far the model curve ([`model_adev`]) is from the measured one where it was fitted: at
+/// the reliable points (≥ 8 clusters) of the white-noise and random-walk τ ranges that are
+/// fits, not bounds, `z(τ)` = the standard normal deviate of `σ̂²/σ_m²` under
+/// `σ̂² ~ σ_m²χ²_ν/ν`, ν the point's EDF under the model (module docs, "Goodness of fit";
+/// `≈ (σ̂ − σ_m)/(σ_m ε)` with `ε = 1/√(2ν)` for many EDF).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ModelDeviation {
     /// `Σ z²` over those points.
@@ -460,7 +488,7 @@ pub fn model_deviation(pts: &[AllanPoint], fit: &NoiseFit) -> ModelDeviation {
         let fitted =
             white || (!fit.random_walk_is_bound && within(fit.random_walk_tau_range, p.tau));
         let m = model_adev(fit, p.tau);
-        if !fitted || !(m > 0.0) {
+        if !fitted || m.is_nan() || m <= 0.0 {
             continue;
         }
         let (n2, k2) = model_levels(fit);
