@@ -2,12 +2,16 @@
 //! readings as in allan_variance_ros and kalibr_allan).
 //!
 //! - [`deviation`]: the overlapping Allan deviation `σ(τ)` of one channel at log-spaced cluster
-//!   times, with the 1-σ error of every point.
-//! - [`fit`]: the white-noise density N (slope −½ line fitted on τ ≥ 0.1 s, above the sensor's
-//!   internal filtering, and read at τ = 1 s), the random walk K
-//!   (slope +½ line read at τ = 3 s) and the bias instability B (the curve's floor / 0.664),
-//!   each line kept below the measured curve; upper bounds, flagged, when a slope region is
-//!   missing.
+//!   times, with the equivalent degrees of freedom and 1-σ error of every point.
+//! - [`edf`]: the statistics of the estimator under a noise model: the equivalent degrees of
+//!   freedom of a point and the covariance of two (Greenhall and Riley 2003), the normal
+//!   deviate of a point against the model.
+//! - [`fit`]: the white-noise density N (slope −½ region on τ ≥ 0.1 s, above the sensor's
+//!   internal filtering, read at τ = 1 s) and the random walk K (slope +½ region, read at
+//!   τ = 3 s), one weighted least-squares fit of both with errors from the points' covariance,
+//!   each line kept below every point's upper 4σ limit; upper bounds, flagged, when a slope
+//!   region is missing; the bias instability B (the curve's floor / 0.664); the goodness of
+//!   fit of the model curve.
 //! - [`stream`]: the same from a sample stream in bounded memory ([`AllanStream`], block means
 //!   at a base cluster time τ₀ that grows with the recording's length).
 //! - [`stillness`]: is a streamed recording static ([`StillnessMonitor`])? The Allan variance
@@ -19,6 +23,7 @@
 //! Units: a channel's signal unit `u` (rad/s or m/s²); N in u/√Hz, K in u/s/√Hz (u·√Hz), B in u.
 
 pub mod deviation;
+pub mod edf;
 pub mod fit;
 pub mod stillness;
 pub mod stream;
@@ -223,9 +228,10 @@ impl ImuAllan {
             format!(
                 "the model curve of {} misses the measured Allan deviation by {:.1} statistical \
                  errors at τ = {:.3} s (at most {MAX_MODEL_Z}), in the {line} line's range, the \
-                 curve {} the model; likely cause: the {line} line pulled {} by the curve's \
-                 few-cluster points, or a noise the model lacks (bias instability, a \
-                 disturbance, motion): read the curve before using N and K",
+                 curve {} the model; likely cause: a noise the model lacks (bias instability, \
+                 the sensor's filter, a disturbance, motion) shaping the curve where the {line} \
+                 line was fitted, or the line held {} by a point of the curve: read the curve \
+                 before using N and K",
                 CHANNELS[worst],
                 w.max_abs_z,
                 w.tau_at_max,
