@@ -6,14 +6,14 @@
 //! - [`commands`]: one module per subcommand. Each holds its flags (`Args`, a
 //!   [`clap::Args`]), a `compute` that returns the numbers as a struct, `to_json` and `to_text`
 //!   that print them, and `run` = compute, then both prints, as an [`Output`].
-//! - [`analysis`]: the computations that are more than a call into the `preint` or
-//!   `preint-calib` crates: the scheme/rate advice, accuracy against cost, zero-phase
-//!   denoising, throughput measurement, the factor's χ² at ground truth, and the report's
-//!   figures.
+//! - [`analysis`]: the computations on the built-in scenes: accuracy against cost and the
+//!   report's figures. What is computed from a recording (reading with the unit checks, the
+//!   scheme/rate advice, denoising, throughput, the factor's χ² at ground truth, the
+//!   calibration file) is `preint_analysis`, shared with the Python package.
 //! - [`charts`] and [`html`]: SVG charts and the self-contained HTML page.
-//! - Shared helpers: [`scheme`] (the `--scheme` values), [`noise`] (noise densities),
-//!   [`checks`] (flag values and units), [`format`](mod@format) (matrices as JSON and text), [`parse`]
-//!   (flag value parsers), [`progress`].
+//! - Shared helpers: [`scheme`] (the `--scheme` values), [`imu_args`] (the reader flags),
+//!   [`preint_args`] and [`earth_args`] (preintegration and Earth-rotation flags), [`fit`] (the
+//!   goodness of fit in text and `--strict`), [`input`] (ground-truth rows, scenes).
 //!
 //! # Conventions
 //! World frame z up, gravity `(0, 0, −G)` with `G = 9.81 m/s²` unless a `gravity` argument says
@@ -28,23 +28,17 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod analysis;
-pub mod calibration_file;
 pub mod charts;
-pub mod checks;
 pub mod cli;
 pub mod commands;
 pub mod earth_args;
 pub mod error;
-pub mod format;
+pub mod fit;
 pub mod html;
 pub mod imu_args;
 pub mod input;
-pub mod noise;
-pub mod parse;
 pub mod preint_args;
-pub mod progress;
 pub mod scheme;
-pub mod stream;
 
 pub use cli::{Cli, Command};
 pub use commands::run;

@@ -234,6 +234,7 @@ fn exercise(cli: &Cli) {
         }
     };
     if let Some(i) = input {
+        let i = i.to_input();
         let _ = format!("{:?} {} {}", i.options(), i.label(), i.is_split());
     }
 }

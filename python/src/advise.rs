@@ -7,9 +7,9 @@ use crate::calib::{check, noise_arg};
 use crate::convert::samples;
 use crate::errors::Class;
 use crate::io::{ReadArgs, cli_err, json_py};
-use preint_cli::analysis::advise::{evaluate_input, recommend};
-use preint_cli::analysis::denoise::denoise;
-use preint_cli::analysis::input_class::InputClass;
+use preint_analysis::advise::{evaluate_input, recommend};
+use preint_analysis::denoise::denoise;
+use preint_analysis::input_class::InputClass;
 use preint_cli::commands::advise;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -45,7 +45,8 @@ pub(crate) fn advise_py<'py>(
     let class = input_class(input)?;
     // The command line's checks of --window and --fraction, named as the arguments.
     for (name, v) in [("window", window), ("fraction", fraction)] {
-        preint_cli::checks::positive(name, v).map_err(|e| cli_err(e, Class::Calibration))?;
+        preint_analysis::checks::positive(name, v)
+            .map_err(|e| cli_err(e.into(), Class::Calibration))?;
     }
     let noise = noise_arg(Some(noise), false)?;
     let s = samples(t_ns, gyro, acc)?;
@@ -63,13 +64,16 @@ pub(crate) fn advise_py<'py>(
         fraction,
         from: None,
         to: None,
-        input_class: class,
+        input_class: match class {
+            InputClass::Smooth => advise::InputClassArg::Smooth,
+            InputClass::Held => advise::InputClassArg::Held,
+        },
         calibration: None,
         strict: false,
     };
     let json = py
         .detach(|| {
-            preint_cli::checks::no_gaps(&s, label, preint::params::DEFAULT_MAX_GAP_NS)?;
+            preint_analysis::checks::no_gaps(&s, label, preint::params::DEFAULT_MAX_GAP_NS)?;
             // As the command line: held input is not low-passed.
             let (signal, cutoffs) = match class {
                 InputClass::Smooth => {
@@ -85,7 +89,7 @@ pub(crate) fn advise_py<'py>(
                 args,
                 samples: s.len(),
                 source: None,
-                unit_check: preint_cli::checks::UnitCheck::Skipped,
+                unit_check: preint_analysis::checks::UnitCheck::Skipped,
                 cutoffs,
                 candidates,
                 recommended,
@@ -118,7 +122,10 @@ pub(crate) fn advise_file<'py>(
     input: &str,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let input_class = input_class(input)?;
+    let input_class = match input_class(input)? {
+        InputClass::Smooth => advise::InputClassArg::Smooth,
+        InputClass::Held => advise::InputClassArg::Held,
+    };
     let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_args()?;
     let args = advise::Args {
         input_class,

@@ -255,11 +255,11 @@ pub(crate) fn read_imu<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let args = ReadArgs::from_options(path, gyro, accel, options)?.imu_args()?;
     let (samples, info, report) = py
-        .detach(|| args.read_all_split())
-        .map_err(|e| cli_err(e, Class::Input))?;
+        .detach(|| args.to_input().read_all_split())
+        .map_err(|e| cli_err(e.into(), Class::Input))?;
     let d = samples_dict(py, &samples)?;
     drop(samples);
-    info_into(&d, &args.label(), &info)?;
+    info_into(&d, &args.to_input().label(), &info)?;
     d.set_item("split", report.is_some())?;
     d.set_item(
         "accel_white_ratio",

@@ -1,22 +1,24 @@
 //! `preint advise`: the cheapest scheme and lowest rate whose discretisation error stays below
 //! a fraction of the noise-induced standard deviation, estimated from the recording itself
-//! (method: [`crate::analysis::advise`], after [`crate::analysis::denoise`]).
+//! (method: [`preint_analysis::advise`], after [`preint_analysis::denoise`]).
 //!
-//! Its fit (JSON `fit`, [`crate::analysis::advise::fit`]): the embedded truncation estimate's
+//! Its fit (JSON `fit`, [`preint_analysis::advise::fit`]): the embedded truncation estimate's
 //! χ² of the recommended (scheme, rate) against `χ²₉`, credible when p ≥ 1e-6; `--strict`
 //! makes a fit that is not credible a refusal (exit 2, after the output). `--calibration`
 //! applies only the file's intrinsics (every scheme is evaluated, so its scheme and time
 //! offset do not enter).
 
-use crate::analysis::advise::{
+use crate::fit::fit_text;
+use crate::imu_args::ImuArgs;
+use crate::{CliError, Output, scheme};
+use preint::ImuSample;
+use preint_analysis::advise::{
     Candidate, decimation_in_range, evaluate_input, gap_beyond_limit, recommend,
 };
-use crate::analysis::consistency::{fit_json, fit_text};
-use crate::analysis::denoise::denoise;
-use crate::analysis::input_class::{InputClass, exactness};
-use crate::imu_args::ImuArgs;
-use crate::{CliError, Output, checks, noise, scheme, stream};
-use preint::ImuSample;
+use preint_analysis::consistency::fit_json;
+use preint_analysis::denoise::denoise;
+use preint_analysis::input_class::{InputClass, exactness};
+use preint_analysis::{checks, noise, stream};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -47,8 +49,8 @@ pub struct Args {
     /// rate. held: rate and specific force constant over each sample interval, as an
     /// integrating IMU (delta-angle/delta-velocity outputs) or a sample-and-hold stream
     /// delivers; galilean is exact for it and is the reference, lower rates average the samples.
-    #[arg(long = "input", value_name = "CLASS", value_enum, default_value_t = InputClass::Smooth)]
-    pub input_class: InputClass,
+    #[arg(long = "input", value_name = "CLASS", value_enum, default_value_t = InputClassArg::Smooth)]
+    pub input_class: InputClassArg,
     /// An IMU calibration file (`calibrate --out`, OpenVINS kalibr_imu_chain.yaml or Kalibr
     /// imu.yaml): its intrinsics are applied to the raw samples before the analysis.
     #[arg(long, value_name = "FILE")]
@@ -58,6 +60,26 @@ pub struct Args {
     /// states inconsistent (χ² of the embedded estimate with p < 1e-6 against 9 dof).
     #[arg(long)]
     pub strict: bool,
+}
+
+/// `--input`: the [`InputClass`] as given on the command line.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum InputClassArg {
+    /// Point samples of a smooth signal (a MEMS IMU): reference hermite4, Richardson-checked.
+    #[default]
+    Smooth,
+    /// Rate and specific force constant over each sample interval (integrating IMUs,
+    /// sample-and-hold streams): reference galilean, exact for this input.
+    Held,
+}
+
+impl From<InputClassArg> for InputClass {
+    fn from(c: InputClassArg) -> Self {
+        match c {
+            InputClassArg::Smooth => InputClass::Smooth,
+            InputClassArg::Held => InputClass::Held,
+        }
+    }
 }
 
 /// The evaluation and the recommendation.
@@ -70,7 +92,7 @@ pub struct Advice {
     /// How the recording was read (`None` for samples given in memory).
     pub source: Option<preint_io::SourceInfo>,
     /// What the unit checks said.
-    pub unit_check: crate::checks::UnitCheck,
+    pub unit_check: preint_analysis::checks::UnitCheck,
     /// Low-pass cutoffs \[Hz\] chosen for (gyro, accelerometer); `None`: left unfiltered.
     pub cutoffs: [Option<f64>; 2],
     /// Every (scheme, rate) evaluated.
@@ -93,21 +115,22 @@ impl Advice {
 pub fn compute(args: &Args) -> Result<Advice, CliError> {
     checks::window_order(args.from, args.to)?;
     checks::positive("--fraction", args.fraction)?;
+    let input = args.input.to_input();
     let noise = noise::or_default(Some(&args.noise))?;
     let stream::Span {
         mut samples,
         source,
         unit_check,
-    } = stream::read_span(&args.input, args.from, args.to, "advise")?;
+    } = stream::read_span(&input, args.from, args.to, "advise")?;
     if let Some(path) = &args.calibration {
-        let x = crate::calibration_file::read(path)?.intrinsics;
+        let x = preint_analysis::calibration_file::read(path)?.intrinsics;
         if !x.is_identity() {
             let c = x.correction();
             samples.iter_mut().for_each(|s| *s = c.apply(s));
         }
     }
     // Held input is not low-passed: the filter would smear its steps (analysis::advise docs).
-    let (signal, cutoffs) = match args.input_class {
+    let (signal, cutoffs) = match InputClass::from(args.input_class) {
         InputClass::Smooth => denoise(&samples, noise.gyro_noise_density, noise.acc_noise_density),
         InputClass::Held => (samples.clone(), [None, None]),
     };
@@ -117,7 +140,7 @@ pub fn compute(args: &Args) -> Result<Advice, CliError> {
         9.81,
         args.window,
         args.fraction,
-        args.input_class,
+        args.input_class.into(),
     )?;
     let recommended =
         recommend(&candidates).and_then(|r| candidates.iter().position(|c| std::ptr::eq(c, r)));
@@ -149,7 +172,7 @@ pub fn gap_note(args: &Args, samples: &[ImuSample], candidates: &[Candidate]) ->
          {:.6} s before sample {at} (t = {} ns), which the embedded estimate at that rate (one \
          sample in {}) widens to {:.6} s, above preintegration's gap limit of {} s",
         1.0 / (dt_s * next as f64),
-        args.input.label(),
+        args.input.to_input().label(),
         gap as f64 * 1e-9,
         samples[at].t_ns,
         2 * next,
@@ -187,7 +210,7 @@ fn input_json(input: InputClass) -> Value {
 /// The JSON form: the recommendation, the cutoffs and every candidate.
 pub fn to_json(a: &Advice) -> Value {
     let rec = a.recommendation();
-    let input = a.args.input_class;
+    let input = InputClass::from(a.args.input_class);
     let rows: Vec<_> = a
         .candidates
         .iter()
@@ -211,8 +234,8 @@ pub fn to_json(a: &Advice) -> Value {
         "method": method(input),
         "calibration": a.args.calibration.as_ref().map(|p| p.display().to_string()),
         "rates_not_evaluated": a.rates_not_evaluated,
-        "fit": crate::analysis::advise::fit(&a.candidates, rec).as_ref().map(fit_json),
-        "input": a.source.as_ref().map(|s| crate::imu_args::input_json(s, &a.unit_check)),
+        "fit": preint_analysis::advise::fit(&a.candidates, rec).as_ref().map(fit_json),
+        "input": a.source.as_ref().map(|s| preint_analysis::recording::input_json(s, &a.unit_check)),
     });
     if let (Value::Object(o), Value::Object(i)) = (&mut out, input_json(input)) {
         o.extend(i);
@@ -235,16 +258,20 @@ fn method(input: InputClass) -> &'static str {
 /// The human summary: the input class and what is exact for it, the cutoffs, a table of every
 /// candidate and the recommendation.
 pub fn to_text(a: &Advice) -> String {
-    let (window, fraction, input) = (a.args.window, a.args.fraction, a.args.input_class);
+    let (window, fraction, input) = (
+        a.args.window,
+        a.args.fraction,
+        InputClass::from(a.args.input_class),
+    );
     let mut h = String::new();
     let _ = writeln!(
         h,
         "{}: {} samples; window {window} s; threshold {fraction}·σ",
-        a.args.input.path().display(),
+        a.args.input.to_input().path().display(),
         a.samples
     );
     h.push_str(&match &a.source {
-        Some(s) => crate::imu_args::input_text(s, &a.unit_check),
+        Some(s) => preint_analysis::recording::input_text(s, &a.unit_check),
         None => a.unit_check.text(),
     });
     h.push_str(&input_text(input));
@@ -296,7 +323,7 @@ pub fn to_text(a: &Advice) -> String {
             );
         }
     }
-    if let Some(f) = crate::analysis::advise::fit(&a.candidates, a.recommendation()) {
+    if let Some(f) = preint_analysis::advise::fit(&a.candidates, a.recommendation()) {
         h.push_str(&fit_text(&f, "advice"));
     }
     if input == InputClass::Smooth && a.cutoffs.iter().any(Option::is_none) {
@@ -391,8 +418,8 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
         human: to_text(&a),
         json: to_json(&a),
     };
-    match crate::analysis::advise::fit(&a.candidates, a.recommendation()) {
-        Some(f) => crate::analysis::consistency::strict(args.strict, output, &f, "advice"),
+    match preint_analysis::advise::fit(&a.candidates, a.recommendation()) {
+        Some(f) => crate::fit::strict(args.strict, output, &f, "advice"),
         None => Ok(output),
     }
 }

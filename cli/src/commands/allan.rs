@@ -7,7 +7,7 @@
 //! means ([`preint_calib::allan::stream`]: τ₀ = Δt up to 2²⁰ samples, then doubling), so memory
 //! does not grow with the file. Checks before an answer is given:
 //! - **Units** on the first [`UNIT_CHECK_SECONDS`] s (at most [`UNIT_CHECK_MAX_SAMPLES`]
-//!   samples; [`crate::checks::si_units`]), unless `--no-unit-check`.
+//!   samples; [`preint_analysis::checks::si_units`]), unless `--no-unit-check`.
 //! - **Stillness** over the whole recording ([`preint_calib::allan::stillness`]): a moving
 //!   recording is refused (exit 2) with the fraction of still windows, unless
 //!   `--no-still-check` (for a sensor whose noise the detector takes for motion, e.g. strong
@@ -21,12 +21,14 @@
 //! credible: a `warning:` line names the channel, τ and line; `--strict` makes it a refusal
 //! (exit 2, after the output).
 
-use crate::analysis::consistency::{fit_json, fit_text};
 use crate::charts::figures;
-use crate::format::IMU_AXES;
+use crate::fit::fit_text;
 use crate::imu_args::ImuArgs;
-use crate::progress::ReadingBar;
-use crate::{CliError, Output, stream};
+use crate::{CliError, Output};
+use preint_analysis::consistency::fit_json;
+use preint_analysis::format::IMU_AXES;
+use preint_analysis::progress::ReadingBar;
+use preint_analysis::stream;
 use preint_calib::allan::{AllanStream, ImuAllan, Stillness, StillnessMonitor, StillnessOptions};
 use preint_io::write_kalibr_yaml;
 use serde_json::{Value, json};
@@ -72,7 +74,7 @@ pub struct AllanRun {
     /// How the recording was read.
     pub source: preint_io::SourceInfo,
     /// What the unit checks said.
-    pub unit_check: crate::checks::UnitCheck,
+    pub unit_check: preint_analysis::checks::UnitCheck,
     /// The stillness check's findings (refused unless static or `--no-still-check`).
     pub stillness: Stillness,
     /// Curves and fits per channel (order [`IMU_AXES`]).
@@ -87,14 +89,15 @@ type Streamed = (
     AllanStream,
     Stillness,
     preint_io::SourceInfo,
-    crate::checks::UnitCheck,
+    preint_analysis::checks::UnitCheck,
 );
 
 /// The streamed pass: base blocks, the stillness monitor, and the unit check on the prefix.
 fn read_stream(args: &Args) -> Result<Streamed, CliError> {
-    let file = args.input.path();
+    let input = args.input.to_input();
+    let file = input.path();
     let samples = stream::open_checked_prefix(
-        &args.input,
+        &input,
         None,
         UNIT_CHECK_MAX_SAMPLES,
         Some(UNIT_CHECK_SECONDS),
@@ -114,7 +117,8 @@ fn read_stream(args: &Args) -> Result<Streamed, CliError> {
 
 /// Computes the Allan deviations and, with `--out`, writes the two charts and `imu.yaml`.
 pub fn compute(args: &Args) -> Result<AllanRun, CliError> {
-    let file = args.input.path();
+    let input = args.input.to_input();
+    let file = input.path();
     let (stream, stillness, source, unit_check) = read_stream(args)?;
     if !args.no_still_check {
         stillness
@@ -138,7 +142,7 @@ pub fn compute(args: &Args) -> Result<AllanRun, CliError> {
         files.push(y.display().to_string());
     }
     Ok(AllanRun {
-        imu: args.input.label(),
+        imu: input.label(),
         samples,
         block_len,
         units_checked: !args.input.no_unit_check,
@@ -175,7 +179,7 @@ pub fn to_json(r: &AllanRun) -> Value {
     };
     let st = &r.stillness;
     json!({
-        "input": crate::imu_args::input_json(&r.source, &r.unit_check),
+        "input": preint_analysis::recording::input_json(&r.source, &r.unit_check),
         "samples": r.samples,
         "sample_period_s": a.dt,
         "base_tau_s": a.tau0,
@@ -241,7 +245,10 @@ pub fn to_text(r: &AllanRun) -> String {
             "not checked"
         }
     );
-    h.push_str(&crate::imu_args::input_text(&r.source, &r.unit_check));
+    h.push_str(&preint_analysis::recording::input_text(
+        &r.source,
+        &r.unit_check,
+    ));
     if r.block_len > 1 {
         let _ = writeln!(
             h,
@@ -291,5 +298,5 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
         human: to_text(&r),
         json: to_json(&r),
     };
-    crate::analysis::consistency::strict(args.strict, output, &r.allan.fit(), "Allan noise model")
+    crate::fit::strict(args.strict, output, &r.allan.fit(), "Allan noise model")
 }

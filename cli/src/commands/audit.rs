@@ -77,9 +77,12 @@
 //! `min_ns`, `max_ns`, `coincident`; samples outside the other stream's span:
 //! `accel_before`, `accel_after`, `gyro_before`, `gyro_after`).
 
-use crate::imu_args::{ImuArgs, input_json};
-use crate::progress::ReadingBar;
-use crate::{CliError, Output, calibration_file};
+use crate::imu_args::ImuArgs;
+use crate::{CliError, Output};
+use preint_analysis::ImuInput;
+use preint_analysis::calibration_file;
+use preint_analysis::progress::ReadingBar;
+use preint_analysis::recording::input_json;
 use preint_io::audit::{
     AXES, Audit, AuditOptions, AxisReport, BadRow, Event, EventList, Finding, FlatTop,
     HISTOGRAM_EDGES, Severity, SplitAudit, Timing, Verdict, audit_channels, audit_reader,
@@ -148,9 +151,9 @@ impl AuditRun {
         Verdict::of(self.findings())
     }
 
-    /// The unit checks' verdict as every command prints it ([`crate::checks::UnitCheck`]).
-    pub fn unit_check(&self, no_unit_check: bool) -> crate::checks::UnitCheck {
-        use crate::checks::UnitCheck;
+    /// The unit checks' verdict as every command prints it ([`preint_analysis::checks::UnitCheck`]).
+    pub fn unit_check(&self, no_unit_check: bool) -> preint_analysis::checks::UnitCheck {
+        use preint_analysis::checks::UnitCheck;
         match (&self.report, no_unit_check) {
             (_, true) => UnitCheck::Skipped,
             (Report::Single(a), false) => match a.units.as_ref().and_then(|u| {
@@ -180,12 +183,13 @@ impl AuditRun {
 /// Reads the recording once, sample by sample, and audits it.
 pub fn compute(args: &Args) -> Result<AuditRun, CliError> {
     let mut opts = AuditOptions::default();
-    let imu = args.input.label();
+    let input = args.input.to_input();
+    let imu = input.label();
     let calibration = match &args.calibration {
         Some(p) => Some((p.display().to_string(), calibration_file::read(p)?)),
         None => None,
     };
-    if let Some((gyro, accel)) = split_channels(&args.input)? {
+    if let Some((gyro, accel)) = split_channels(&input)? {
         if calibration.is_some() {
             return Err(CliError::Usage(
                 "--calibration: the intrinsics mix the gyro and accelerometer readings of a \
@@ -203,7 +207,7 @@ pub fn compute(args: &Args) -> Result<AuditRun, CliError> {
         });
     }
     opts.correction = calibration.as_ref().map(|(_, c)| c.intrinsics.correction());
-    let reader = args.input.open()?;
+    let reader = input.open()?;
     let source = reader.info().clone();
     opts.read_as = Some(source.units);
     let progress = reader.progress().clone();
@@ -316,7 +320,7 @@ fn calibration_findings(name: &str, cal: &preint_io::ImuCalibration, a: &Audit) 
 
 /// The gyro and accelerometer channels of a split recording (`--gyro`/`--accel` files, or
 /// `--gyro-topic`/`--accel-topic` of a container), or `None` for one stream.
-fn split_channels(input: &ImuArgs) -> Result<Option<(ChannelStream, ChannelStream)>, CliError> {
+fn split_channels(input: &ImuInput) -> Result<Option<(ChannelStream, ChannelStream)>, CliError> {
     use preint_io::{containers::open_channel, split::open_text_channel};
     let opts = input.options();
     if let (Some(g), Some(a)) = (&input.gyro, &input.accel) {

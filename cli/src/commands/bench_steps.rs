@@ -16,7 +16,7 @@ pub struct Args {
           value_parser = clap::builder::PossibleValuesParser::new(preint_sim::SCENE_NAMES))]
     pub scene: String,
     /// Rates (Hz), comma-separated.
-    #[arg(long, value_delimiter = ',', value_parser = crate::parse::positive, allow_hyphen_values = true,
+    #[arg(long, value_delimiter = ',', value_parser = preint_analysis::parse::positive, allow_hyphen_values = true,
           default_value = "25,50,100,200,400,800,1600,3200")]
     pub rates: Vec<f64>,
     /// Window length (s).

@@ -20,7 +20,7 @@
 //! residual `U r` (`UᵀU = Σ⁻¹`, `U` upper triangular), `χ² = ‖U r‖²` with its χ² quantiles, and
 //! each block's marginal χ² (`r_bᵀ Σ_bb⁻¹ r_b`, 3 dof) to say which part disagrees.
 
-//! The weighting and χ² are [`crate::analysis::consistency`].
+//! The weighting and χ² are [`preint_analysis::consistency`].
 //!
 //! # Goodness of fit
 //! The factor's fit (JSON `fit`, [`preint_calib::fit`]) is its χ² at the ground truth against
@@ -28,18 +28,18 @@
 //! Not credible: a `warning:` line names the block whose marginal χ² is largest (the part that
 //! disagrees); `--strict` makes it a refusal (exit 2, after the output).
 
-use crate::analysis::consistency::{
-    Evaluation, TruthNoise, chi2_quantiles, evaluate, fit_json, fit_text,
-};
-use crate::format::list;
+use crate::fit::fit_text;
 use crate::imu_args::ImuArgs;
 use crate::preint_args::PreintArgs;
 use crate::scheme::{self};
-use crate::{CliError, Output, checks, input, stream};
+use crate::{CliError, Output, input};
 use preint::{
     CombinedImuFactor, ImuBias, ImuFactor, Level, NavState, PreintegratedImu, ResidualMode,
     preintegrate,
 };
+use preint_analysis::consistency::{Evaluation, TruthNoise, chi2_quantiles, evaluate, fit_json};
+use preint_analysis::format::list;
+use preint_analysis::{checks, stream};
 use preint_io::{GroundTruthState, read_euroc_groundtruth};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
@@ -109,7 +109,7 @@ pub struct FactorRun {
     /// How it was read.
     pub source: preint_io::SourceInfo,
     /// What the unit checks said.
-    pub unit_check: crate::checks::UnitCheck,
+    pub unit_check: preint_analysis::checks::UnitCheck,
     /// The scheme used.
     pub scheme: preint::Scheme,
     /// `CombinedImuFactor` (else `ImuFactor`).
@@ -191,28 +191,28 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
         )));
     }
     let scheme = params.scheme;
+    let input = args.input.to_input();
     // Only the part of the recording the window needs is read (a split recording is merged
     // whole, for the effective accelerometer density of its merged samples).
-    let (w, source, unit_check) = if args.input.is_split() {
-        let (w, source, split, units) =
-            stream::split_window(&args.input, Some(gi.t_ns), Some(gj.t_ns))?;
-        crate::noise::apply_split(&noise, split.as_ref(), &mut params);
+    let (w, source, unit_check) = if input.is_split() {
+        let (w, source, split, units) = stream::split_window(&input, Some(gi.t_ns), Some(gj.t_ns))?;
+        preint_analysis::noise::apply_split(&noise, split.as_ref(), &mut params);
         (w, source, units)
     } else {
-        let stream = stream::open_checked_until(&args.input, Some(gj.t_ns))?;
+        let stream = stream::open_checked_until(&input, Some(gj.t_ns))?;
         let (source, units) = (stream.info().clone(), stream.unit_check().clone());
-        let _bar = crate::progress::ReadingBar::start(stream.progress(), "factor");
+        let _bar = preint_analysis::progress::ReadingBar::start(stream.progress(), "factor");
         let w = stream::cut_window(stream, Some(gi.t_ns), Some(gj.t_ns))?;
         (w, source, units)
     };
     let samples = w.samples.as_slice();
-    let in_file = |e| CliError::failed_in(args.input.path(), w.in_stream(e));
+    let in_file = |e| CliError::failed_in(input.path(), w.in_stream(e));
     let mut pim = preintegrate(&params, &gi.bias, samples, gi.t_ns, gj.t_ns).map_err(in_file)?;
     if args.second_order {
         let term = preint::second_order::covariance(&params, samples, &pim).map_err(in_file)?;
         pim = preint::second_order::inflate(&pim, &term);
     }
-    let failed = |e: preint::FactorError| CliError::failed_in(args.input.path(), e);
+    let failed = |e: preint::FactorError| CliError::failed_in(input.path(), e);
     let (xi, xj) = (nav(&gi), nav(&gj));
     let ev = if args.combined {
         let f = CombinedImuFactor::with_mode(pim.clone(), args.residual).map_err(failed)?;
@@ -224,7 +224,7 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
         evaluate(r, j.state_i(), j.state_j(), *f.residual_covariance(), tn)?
     };
     Ok(FactorRun {
-        imu: args.input.label(),
+        imu: input.label(),
         source,
         unit_check,
         scheme,
@@ -270,7 +270,7 @@ pub fn to_json(f: &FactorRun) -> Value {
         .map(|(b, c)| ((*b).to_string(), json!(c)))
         .collect();
     json!({
-        "input": crate::imu_args::input_json(&f.source, &f.unit_check),
+        "input": preint_analysis::recording::input_json(&f.source, &f.unit_check),
         "factor": factor_name(f.combined),
         "scheme": scheme::label(f.scheme),
         "residual_mode": f.residual.name(),
@@ -331,7 +331,10 @@ pub fn to_text(f: &FactorRun) -> String {
         f.pim.delta_t,
         f.samples
     );
-    h.push_str(&crate::imu_args::input_text(&f.source, &f.unit_check));
+    h.push_str(&preint_analysis::recording::input_text(
+        &f.source,
+        &f.unit_check,
+    ));
     let r = &f.ev.residual;
     let names = [
         "r_φ (rad)",
@@ -381,10 +384,5 @@ pub fn run(args: &Args) -> Result<Output, CliError> {
         human: to_text(&f),
         json: to_json(&f),
     };
-    crate::analysis::consistency::strict(
-        args.strict,
-        output,
-        &fit(&f),
-        "factor at the ground truth",
-    )
+    crate::fit::strict(args.strict, output, &fit(&f), "factor at the ground truth")
 }

@@ -1,19 +1,21 @@
 //! `preint integrate`: preintegrate a window of an IMU recording and print the deltas, their
 //! covariances and the bias Jacobians.
 
-use crate::checks::UnitCheck;
-use crate::format::{list, rows, text_matrix};
-use crate::imu_args::{ImuArgs, input_json};
+use crate::imu_args::ImuArgs;
 use crate::preint_args::PreintArgs;
-use crate::progress::ReadingBar;
 use crate::scheme::{self};
-use crate::{CliError, Output, checks, input, noise, stream};
+use crate::{CliError, Output, input};
 use nalgebra::Vector3;
 use preint::deskew::{deltas_at, states_at};
 use preint::{
     DeltasAt, ImuBias, ImuNoise, Level, NavState, PreintError, PreintParams, PreintegratedImu,
     Preintegrator, predict, preintegrate,
 };
+use preint_analysis::checks::UnitCheck;
+use preint_analysis::format::{list, rows, text_matrix};
+use preint_analysis::progress::ReadingBar;
+use preint_analysis::recording::input_json;
+use preint_analysis::{checks, noise, stream};
 use preint_io::SourceInfo;
 use serde_json::{Value, json};
 use std::fmt::Write as _;
@@ -28,10 +30,10 @@ pub struct Args {
     #[command(flatten)]
     pub preint: PreintArgs,
     /// Gyro bias estimate b_g (rad/s) as x,y,z (negative values allowed: --bias-gyro=-0.01,0,0).
-    #[arg(long, allow_hyphen_values = true, value_parser = crate::parse::vec3)]
+    #[arg(long, allow_hyphen_values = true, value_parser = preint_analysis::parse::vec3)]
     pub bias_gyro: Option<Vector3<f64>>,
     /// Accelerometer bias estimate b_a (m/s^2) as x,y,z.
-    #[arg(long, allow_hyphen_values = true, value_parser = crate::parse::vec3)]
+    #[arg(long, allow_hyphen_values = true, value_parser = preint_analysis::parse::vec3)]
     pub bias_acc: Option<Vector3<f64>>,
     /// First keyframe time in ns (default: first sample).
     #[arg(long, allow_hyphen_values = true)]
@@ -113,7 +115,7 @@ pub struct Integration {
     /// offset \[ns\] added to `--from`/`--to`.
     pub calibration: Option<(String, preint::intrinsics::ImuIntrinsics, i64)>,
     /// The scheme the file's time offset was estimated for (`preint_scheme`), and the line
-    /// [`crate::calibration_file::scheme_note`] prints when it lags differently from the
+    /// [`preint_analysis::calibration_file::scheme_note`] prints when it lags differently from the
     /// scheme used, or is unknown.
     pub calibration_scheme: (Option<preint::Scheme>, Option<String>),
 }
@@ -134,7 +136,7 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
     let file = args
         .calibration
         .as_deref()
-        .map(crate::calibration_file::read)
+        .map(preint_analysis::calibration_file::read)
         .transpose()?;
     let calibration = match (&args.calibration, &file) {
         (Some(path), Some(cal)) => {
@@ -142,7 +144,7 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
                 params.intrinsics =
                     Some(preint::intrinsics::AppliedIntrinsics::new(cal.intrinsics));
             }
-            let td = crate::calibration_file::time_offset_ns(cal);
+            let td = preint_analysis::calibration_file::time_offset_ns(cal);
             Some((path.display().to_string(), cal.intrinsics, td))
         }
         _ => None,
@@ -152,7 +154,8 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
     let (from, to) = (args.from.map(|t| t + td), args.to.map(|t| t + td));
     let scheme = params.scheme;
     let (body_p_sensor, lever_arm) = (params.body_p_sensor, params.lever_arm);
-    let fail = |e| CliError::failed_in(args.input.path(), e);
+    let input = args.input.to_input();
+    let fail = |e| CliError::failed_in(input.path(), e);
     let initial = args.predict.initial_state;
     let window = |params: &PreintParams, w: stream::StreamWindow| {
         let pim = preintegrate(params, &bias, &w.samples, w.t_i_ns, w.t_j_ns)
@@ -172,46 +175,46 @@ pub fn compute(args: &Args) -> Result<Integration, CliError> {
         let count = input::count_in(&w.samples, w.t_i_ns, w.t_j_ns);
         Ok::<_, CliError>((pim, count, at, truncation, second_order))
     };
-    let (source, unit_check, noise, (pim, samples, at, truncation, second_order)) =
-        if args.input.is_split() {
-            // The merged accelerometer's effective density is known once the files are read.
-            let (w, source, split, units) = stream::split_window(&args.input, from, to)?;
-            let noise = noise::apply_split(&noise, split.as_ref(), &mut params);
-            (source, units, noise, window(&params, w)?)
+    let (source, unit_check, noise, (pim, samples, at, truncation, second_order)) = if input
+        .is_split()
+    {
+        // The merged accelerometer's effective density is known once the files are read.
+        let (w, source, split, units) = stream::split_window(&input, from, to)?;
+        let noise = noise::apply_split(&noise, split.as_ref(), &mut params);
+        (source, units, noise, window(&params, w)?)
+    } else {
+        // `--truncation` reads enough samples around the window for its companion's stencils.
+        let edge = if args.truncation {
+            stream::EDGE_SAMPLES.max(preint::truncation::CONTEXT_SAMPLES)
         } else {
-            // `--truncation` reads enough samples around the window for its companion's stencils.
-            let edge = if args.truncation {
-                stream::EDGE_SAMPLES.max(preint::truncation::CONTEXT_SAMPLES)
-            } else {
-                stream::EDGE_SAMPLES
-            };
-            let stream = stream::open_checked_window(&args.input, to, edge)?;
-            let (source, units) = (stream.info().clone(), stream.unit_check().clone());
-            let _bar = ReadingBar::start(stream.progress(), "integrate");
-            let streamed = from.is_none() && to.is_none();
-            let result = if streamed && args.at.is_empty() && !args.truncation && !args.second_order
-            {
-                let (pim, count) = whole_recording(stream, params, &bias, fail)?;
-                (pim, count, vec![], None, None)
-            } else {
-                window(
-                    &params,
-                    stream::cut_window_with_edge(stream, from, to, edge)?,
-                )?
-            };
-            (source, units, noise, result)
+            stream::EDGE_SAMPLES
         };
+        let stream = stream::open_checked_window(&input, to, edge)?;
+        let (source, units) = (stream.info().clone(), stream.unit_check().clone());
+        let _bar = ReadingBar::start(stream.progress(), "integrate");
+        let streamed = from.is_none() && to.is_none();
+        let result = if streamed && args.at.is_empty() && !args.truncation && !args.second_order {
+            let (pim, count) = whole_recording(stream, params, &bias, fail)?;
+            (pim, count, vec![], None, None)
+        } else {
+            window(
+                &params,
+                stream::cut_window_with_edge(stream, from, to, edge)?,
+            )?
+        };
+        (source, units, noise, result)
+    };
     let calibration_scheme = match (&args.calibration, &file) {
         (Some(path), Some(cal)) => {
             let dt_s = pim.delta_t / samples.max(1) as f64;
-            let note = crate::calibration_file::scheme_note(cal, path, scheme, dt_s);
+            let note = preint_analysis::calibration_file::scheme_note(cal, path, scheme, dt_s);
             (cal.scheme, note)
         }
         _ => (None, None),
     };
     Ok(Integration {
         calibration_scheme,
-        imu: args.input.label(),
+        imu: input.label(),
         source,
         unit_check,
         scheme,
@@ -433,7 +436,10 @@ pub fn to_text(r: &Integration) -> String {
         scheme::label(r.scheme),
         m.delta_t
     );
-    h.push_str(&crate::imu_args::input_text(&r.source, &r.unit_check));
+    h.push_str(&preint_analysis::recording::input_text(
+        &r.source,
+        &r.unit_check,
+    ));
     let phi = m.delta_r.log();
     let _ = writeln!(
         h,

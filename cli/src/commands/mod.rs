@@ -77,8 +77,13 @@ mod tests {
             human: human.to_string(),
             json: json!({}),
         };
-        let e = finite(out("ok\np = [1, -inf] m\n")).unwrap_err().to_string();
-        assert!(e.contains("line 2 of the summary") && e.contains("-inf"), "{e}");
+        let e = finite(out("ok\np = [1, -inf] m\n"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("line 2 of the summary") && e.contains("-inf"),
+            "{e}"
+        );
         assert!(finite(out("σ NaN\n")).is_err());
         assert!(finite(out("info: inferred, 1e308\n")).is_ok());
     }

@@ -10,15 +10,16 @@
 //! charts are written beside `index.html` and also embedded in it.
 
 use crate::analysis::accuracy::{Row, order};
-use crate::analysis::advise::Candidate;
 use crate::analysis::report::{
     self, ADVISE_RECORDING, ADVISE_WINDOW_FRACTION, AdviceCheck, AllanCheck, NEES_RUNS, ReportData,
     SPEED_SAMPLES_RUNS, StaticCheck, front_runs, hz, nees_band_half,
 };
 use crate::charts::figures;
-use crate::format::IMU_AXES;
 use crate::html::Page;
-use crate::{CliError, Output, progress, scheme};
+use crate::{CliError, Output, scheme};
+use preint_analysis::advise::Candidate;
+use preint_analysis::format::IMU_AXES;
+use preint_analysis::progress;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 

@@ -1,8 +1,9 @@
 //! `preint simulate`: an IMU on a built-in scene, written as a EuRoC-style dataset
 //! (`imu.csv`, `groundtruth.csv`, `imu.yaml`).
 
-use crate::{CliError, Output, input, noise};
+use crate::{CliError, Output, input};
 use preint::ImuNoise;
+use preint_analysis::noise;
 use preint_io::read_kalibr_yaml;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
@@ -16,11 +17,11 @@ pub struct Args {
     pub scene: String,
     /// Sample rate (Hz), positive.
     #[arg(long, default_value_t = 200.0, allow_hyphen_values = true,
-          value_parser = crate::parse::positive)]
+          value_parser = preint_analysis::parse::positive)]
     pub rate: f64,
     /// Duration (s), positive.
     #[arg(long, default_value_t = 10.0, allow_hyphen_values = true,
-          value_parser = crate::parse::positive)]
+          value_parser = preint_analysis::parse::positive)]
     pub duration: f64,
     /// Noise: a Kalibr imu.yaml, or `none` for noise-free data. Default: EuRoC figures.
     #[arg(long)]
@@ -35,7 +36,7 @@ pub struct Args {
     /// coordinates (m) and the unit quaternion rotating sensor vectors into the body frame.
     /// The samples are the IMU's (rate in its axes, specific force of its point); the ground
     /// truth stays the body's.
-    #[arg(long, value_parser = crate::parse::sensor_pose, allow_hyphen_values = true)]
+    #[arg(long, value_parser = preint_analysis::parse::sensor_pose, allow_hyphen_values = true)]
     pub body_p_sensor: Option<preint::SensorPose>,
     /// A rotating world frame (Earth rotation).
     #[command(flatten)]
@@ -69,7 +70,7 @@ pub fn compute(args: &Args) -> Result<Simulation, CliError> {
     };
     cfg.body_p_sensor = args.body_p_sensor;
     cfg.earth_rate = args.earth.rate();
-    let pb = crate::progress::bar(2, "simulate");
+    let pb = preint_analysis::progress::bar(2, "simulate");
     if let Some(pb) = &pb {
         pb.set_message("synthesising the samples and the ground truth");
     }
@@ -103,7 +104,7 @@ pub fn to_json(s: &Simulation) -> Value {
     let a = &s.args;
     json!({"scene": a.scene, "samples": s.samples, "rate_hz": a.rate, "duration_s": a.duration,
         "seed": a.seed, "noise": s.noise.as_ref().map(noise::densities_json), "files": s.files,
-        "earth_rate": a.earth.rate().map(|w| crate::format::list(&w))})
+        "earth_rate": a.earth.rate().map(|w| preint_analysis::format::list(&w))})
 }
 
 /// The human summary: one line.

@@ -1,9 +1,9 @@
 //! `preint speed`: throughput of each scheme on this machine, with and without covariance
-//! (method: [`crate::analysis::speed`]; the median of 11 runs, comparable with the criterion
+//! (method: [`preint_analysis::speed`]; the median of 11 runs, comparable with the criterion
 //! benchmark `cargo bench -p preint`, which reports a mean over its samples).
 
-use crate::analysis::speed::{Throughput, throughput};
 use crate::{CliError, Output, scheme};
+use preint_analysis::speed::{Throughput, throughput};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
 

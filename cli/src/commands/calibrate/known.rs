@@ -3,9 +3,10 @@
 //! convention error, [`preint_calib::bias::known_poses::conventions`]).
 
 use super::{Args, Calibrated, Calibration, fail_in};
-use crate::{CliError, calibration_file, checks};
+use crate::CliError;
 use nalgebra::Vector3;
 use preint::{ImuNoise, ImuSample, PreintParams};
+use preint_analysis::{calibration_file, checks};
 use preint_calib::bias::known_poses::conventions::{
     self, Convention, Diagnosis, diagnose_known_attitudes, diagnose_known_poses,
 };
@@ -163,7 +164,8 @@ pub(super) fn known_poses(
         opts.initial_intrinsics = f.intrinsics;
     }
     let source = pfile.display().to_string();
-    let fail = fail_in(args.input.path());
+    let input = args.input.to_input();
+    let fail = fail_in(input.path());
     if rows.iter().any(|r| r.p.is_none()) {
         let atts: Vec<KnownAttitude> = rows
             .iter()

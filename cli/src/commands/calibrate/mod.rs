@@ -51,14 +51,15 @@ mod print;
 
 pub use print::{to_json, to_text};
 
-use crate::analysis::consistency::strict;
-use crate::checks::UnitCheck;
+use crate::fit::strict;
 use crate::imu_args::ImuArgs;
 use crate::scheme::SchemeParser;
-use crate::{CliError, Output, calibration_file, checks, noise, stream};
+use crate::{CliError, Output};
 use nalgebra::Vector3;
 use preint::intrinsics::{ImuIntrinsics, IntrinsicsModel};
 use preint::{ImuNoise, ImuSample};
+use preint_analysis::checks::UnitCheck;
+use preint_analysis::{calibration_file, checks, noise, stream};
 use preint_calib::Fit;
 use preint_calib::bias::known_poses::KnownAttitudeCalibration;
 use preint_calib::bias::known_poses::extras::Estimate;
@@ -108,7 +109,7 @@ pub struct Args {
     #[arg(
         long,
         default_value_t = 9.81,
-        value_parser = crate::parse::gravity,
+        value_parser = preint_analysis::parse::gravity,
         allow_hyphen_values = true
     )]
     pub gravity: f64,
@@ -129,7 +130,7 @@ pub struct Args {
     /// vectors into the body frame). Known-pose problem: the poses are the body's and the
     /// preintegration removes the lever arm. Static problem: roll and pitch are also given for
     /// the body. Biases are always the IMU's, in its own axes.
-    #[arg(long, value_parser = crate::parse::sensor_pose, allow_hyphen_values = true)]
+    #[arg(long, value_parser = preint_analysis::parse::sensor_pose, allow_hyphen_values = true)]
     pub body_p_sensor: Option<preint::SensorPose>,
     /// Latitude (deg) of a static recording: the Earth rate's vertical part (Ω_E sin φ along
     /// up) is removed from the gyro bias; its horizontal part (Ω_E cos φ, direction unknown
@@ -267,7 +268,12 @@ pub const MAX_GAP_S: f64 = preint::params::DEFAULT_MAX_GAP_NS as f64 * 1e-9;
 /// [`stream::MAX_HELD_SAMPLES`]; reading stops after `--to`) and checks their units and that
 /// they have no gap.
 fn read_samples(args: &Args) -> Result<stream::Span, CliError> {
-    stream::read_span(&args.input, args.from, args.to, "calibrate")
+    Ok(stream::read_span(
+        &args.input.to_input(),
+        args.from,
+        args.to,
+        "calibrate",
+    )?)
 }
 
 /// `--estimate`'s list.
@@ -310,7 +316,8 @@ fn solve(args: &Args, samples: Vec<ImuSample>, noise: ImuNoise) -> Result<Calibr
         }
         return known::known_poses(args, pfile, &samples, &noise);
     }
-    let fail = fail_in(args.input.path());
+    let input = args.input.to_input();
+    let fail = fail_in(input.path());
     let g = Vector3::new(0.0, 0.0, -args.gravity);
     let n = samples.len();
     let rate = (n - 1) as f64 / ((samples[n - 1].t_ns - samples[0].t_ns) as f64 * 1e-9);
@@ -342,7 +349,7 @@ fn solve(args: &Args, samples: Vec<ImuSample>, noise: ImuNoise) -> Result<Calibr
             "{}: no still interval (≥ {} s with gyro and accelerometer variances within 4× the \
              noise densities' white noise): a static calibration needs the sensor at rest. Give \
              --poses for a moving recording, or check --noise",
-            args.input.label(),
+            input.label(),
             StillOptions::from_noise(&noise, rate).min_duration_s
         )));
     };
@@ -390,10 +397,10 @@ fn solve(args: &Args, samples: Vec<ImuSample>, noise: ImuNoise) -> Result<Calibr
 pub fn run(args: &Args) -> Result<Output, CliError> {
     let (r, (source, units)) = compute(args)?;
     let (mut human, mut json) = (
-        crate::imu_args::input_text(&source, &units) + &to_text(&r),
+        preint_analysis::recording::input_text(&source, &units) + &to_text(&r),
         to_json(&r),
     );
-    json["input"] = crate::imu_args::input_json(&source, &units);
+    json["input"] = preint_analysis::recording::input_json(&source, &units);
     if let Some(path) = &args.out {
         let (intrinsics, td, from) = match &r.calibration {
             Calibration::MultiPose(m) => (

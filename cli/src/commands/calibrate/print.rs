@@ -2,11 +2,12 @@
 //! by `√(χ²/dof)` (`*_std` and `*_std_scaled` in JSON), and the fit beside them.
 
 use super::{Calibrated, Calibration};
-use crate::analysis::consistency::{fit_json, fit_text};
-use crate::format::{list, opt_list};
+use crate::fit::fit_text;
 use crate::scheme;
 use nalgebra::Vector3;
 use preint::intrinsics::{ImuIntrinsics, IntrinsicsModel};
+use preint_analysis::consistency::fit_json;
+use preint_analysis::format::{list, opt_list};
 use preint_calib::Fit;
 use preint_calib::bias::MultiPoseCalibration;
 use preint_calib::bias::known_poses::extras::ParameterEstimate;

@@ -11,9 +11,9 @@
 //! or not. A row that cannot be read after a window's end ends the checks' reading there: the
 //! window does not need it.
 
-use crate::CliError;
+use crate::Error;
 use crate::checks::{self, UnitCheck};
-use crate::imu_args::ImuArgs;
+use crate::recording::ImuInput;
 use preint::{ImuSample, PreintError};
 use preint_io::plausibility::limits;
 use preint_io::{ImuReader, IoError, Progress, SourceInfo};
@@ -138,23 +138,23 @@ fn next_within_limits(reader: &mut ImuReader, index: u64) -> Option<Result<ImuSa
 }
 
 /// Opens the recording of `args` and runs the unit checks on its prefix.
-pub fn open_checked(args: &ImuArgs) -> Result<CheckedSamples, CliError> {
+pub fn open_checked(args: &ImuInput) -> Result<CheckedSamples, Error> {
     open_checked_until(args, None)
 }
 
 /// As [`open_checked`], with a stream that holds at least the samples up to
 /// [`EDGE_SAMPLES`] − 1 after `until` \[ns\] (a window's end) once its checks are done.
-pub fn open_checked_until(args: &ImuArgs, until: Option<i64>) -> Result<CheckedSamples, CliError> {
+pub fn open_checked_until(args: &ImuInput, until: Option<i64>) -> Result<CheckedSamples, Error> {
     open_checked_prefix(args, until, UNIT_CHECK_PREFIX, None, EDGE_SAMPLES)
 }
 
 /// As [`open_checked_until`], the prefix reaching `edge` − 1 samples after `until` (a window
 /// that reads `edge` samples on each side, [`cut_window_with_edge`]).
 pub fn open_checked_window(
-    args: &ImuArgs,
+    args: &ImuInput,
     until: Option<i64>,
     edge: usize,
-) -> Result<CheckedSamples, CliError> {
+) -> Result<CheckedSamples, Error> {
     open_checked_prefix(args, until, UNIT_CHECK_PREFIX, None, edge)
 }
 
@@ -173,7 +173,7 @@ impl Prefix {
         reader: &mut ImuReader,
         mut more: impl FnMut(&[ImuSample]) -> bool,
         past_window: bool,
-    ) -> Result<(), CliError> {
+    ) -> Result<(), Error> {
         while !self.ended && more(&self.samples) {
             match next_within_limits(reader, self.samples.len() as u64) {
                 Some(Ok(s)) => self.samples.push(s),
@@ -192,12 +192,12 @@ impl Prefix {
 /// with it, the samples up to the window's end, then more while they cannot decide (module
 /// docs).
 pub fn open_checked_prefix(
-    args: &ImuArgs,
+    args: &ImuInput,
     until: Option<i64>,
     max_samples: usize,
     max_span_s: Option<f64>,
     edge: usize,
-) -> Result<CheckedSamples, CliError> {
+) -> Result<CheckedSamples, Error> {
     let (mut reader, merge) = args.open_with_report()?;
     let (info, progress) = (reader.info().clone(), reader.progress().clone());
     let max_span_ns = max_span_s.map_or(i64::MAX, |s| (s * 1e9) as i64);
@@ -275,7 +275,7 @@ impl CheckedSamples {
 }
 
 impl Iterator for CheckedSamples {
-    type Item = Result<ImuSample, CliError>;
+    type Item = Result<ImuSample, Error>;
 
     fn next(&mut self) -> Option<Self::Item> {
         match self.prefix.next() {
@@ -284,7 +284,7 @@ impl Iterator for CheckedSamples {
                 .rest
                 .as_mut()?
                 .next_sample()
-                .map(|r| r.map_err(CliError::from)),
+                .map(|r| r.map_err(Error::from)),
         }
     }
 }
@@ -311,10 +311,10 @@ pub struct StreamWindow {
 /// Cuts the window `[from, to]` (defaults: the first and the last sample) from `stream`.
 /// Memory holds the window only; without `to`, reading goes to the end.
 pub fn cut_window(
-    stream: impl Iterator<Item = Result<ImuSample, CliError>>,
+    stream: impl Iterator<Item = Result<ImuSample, Error>>,
     from: Option<i64>,
     to: Option<i64>,
-) -> Result<StreamWindow, CliError> {
+) -> Result<StreamWindow, Error> {
     cut_window_with_edge(stream, from, to, EDGE_SAMPLES)
 }
 
@@ -323,11 +323,11 @@ pub fn cut_window(
 /// preintegrator: the rest of the stream is then read (not kept) for its last time, which
 /// the error names.
 pub fn cut_window_with_edge(
-    mut stream: impl Iterator<Item = Result<ImuSample, CliError>>,
+    mut stream: impl Iterator<Item = Result<ImuSample, Error>>,
     from: Option<i64>,
     to: Option<i64>,
     edge: usize,
-) -> Result<StreamWindow, CliError> {
+) -> Result<StreamWindow, Error> {
     let mut before: VecDeque<ImuSample> = VecDeque::with_capacity(edge + 1);
     let mut inside: Vec<ImuSample> = Vec::new();
     let (mut first_ns, mut dropped, mut after) = (None, 0usize, 0usize);
@@ -347,7 +347,7 @@ pub fn cut_window_with_edge(
             after += 1;
         }
         if inside.len() == MAX_WINDOW_SAMPLES {
-            return Err(CliError::Failed(format!(
+            return Err(Error::Failed(format!(
                 "the window holds more than {MAX_WINDOW_SAMPLES} samples; choose a shorter \
                  --from/--to"
             )));
@@ -383,7 +383,7 @@ pub fn cut_window_with_edge(
 /// the merge report the effective accelerometer density comes from and the unit checks'
 /// verdict.
 pub fn split_window(
-    args: &ImuArgs,
+    args: &ImuInput,
     from: Option<i64>,
     to: Option<i64>,
 ) -> Result<
@@ -393,7 +393,7 @@ pub fn split_window(
         Option<preint_io::split::MergeReport>,
         UnitCheck,
     ),
-    CliError,
+    Error,
 > {
     let r = args.read_all_checked()?;
     let samples = r.samples;
@@ -425,11 +425,11 @@ pub struct Span {
 /// ([`hold_span`] with [`MAX_HELD_SAMPLES`], after the unit checks, with a progress bar),
 /// refused if two consecutive ones are more than the preintegrator's largest gap apart.
 pub fn read_span(
-    args: &ImuArgs,
+    args: &ImuInput,
     from: Option<i64>,
     to: Option<i64>,
     command: &str,
-) -> Result<Span, CliError> {
+) -> Result<Span, Error> {
     let stream = open_checked_until(args, to)?;
     let (source, unit_check) = (stream.info().clone(), stream.unit_check().clone());
     let bar = crate::progress::ReadingBar::start(stream.progress(), command);
@@ -447,12 +447,12 @@ pub fn read_span(
 /// more than `limit` of them is an error naming `file` and the flags that shorten the span,
 /// raised before the sample past the limit is stored.
 pub fn hold_span(
-    stream: impl Iterator<Item = Result<ImuSample, CliError>>,
+    stream: impl Iterator<Item = Result<ImuSample, Error>>,
     from: Option<i64>,
     to: Option<i64>,
     limit: usize,
     file: &std::path::Path,
-) -> Result<Vec<ImuSample>, CliError> {
+) -> Result<Vec<ImuSample>, Error> {
     let (lo, hi) = (from.unwrap_or(i64::MIN), to.unwrap_or(i64::MAX));
     let mut samples: Vec<ImuSample> = Vec::new();
     for s in stream {
@@ -464,7 +464,7 @@ pub fn hold_span(
             continue;
         }
         if samples.len() == limit {
-            return Err(CliError::Failed(format!(
+            return Err(Error::Failed(format!(
                 "{}: more than {limit} samples ({:.0} MB) from t = {} ns on; analyse a part \
                  with --from/--to",
                 file.display(),
@@ -475,7 +475,7 @@ pub fn hold_span(
         samples.push(s);
     }
     if samples.len() < 2 {
-        return Err(CliError::Failed(format!(
+        return Err(Error::Failed(format!(
             "{}: fewer than two samples with timestamps in [{lo}, {hi}] ns",
             file.display()
         )));
@@ -535,7 +535,7 @@ mod tests {
     use super::*;
     use nalgebra::Vector3;
 
-    fn stream(n: i64) -> impl Iterator<Item = Result<ImuSample, CliError>> {
+    fn stream(n: i64) -> impl Iterator<Item = Result<ImuSample, Error>> {
         (0..n).map(|k| {
             Ok(ImuSample::new(
                 k * 10,
