@@ -9,9 +9,13 @@
 //!   the keyframe window, the span a solver holds), [`checks`] (option values and units),
 //!   [`noise`] (noise densities), [`calibration_file`] (what `calibrate --out` writes and
 //!   `--calibration` reads), [`parse`] (option values and their physical ranges).
-//! - Analyses: [`advise`] (the cheapest scheme and lowest rate, after [`denoise`], for the
-//!   [`input_class`] declared), [`consistency`] (a factor's χ² at ground truth; the `fit`
-//!   object), [`speed`] (throughput of each scheme on this machine).
+//! - The commands both faces run, each as `Options` → `compute` → a result struct →
+//!   `to_json`: [`advise`] (the cheapest scheme and lowest rate, after [`denoise`], for the
+//!   [`input_class`] declared), [`allan`] (Allan deviation and noise fits), [`calibrate`]
+//!   (biases, time offset, intrinsics, with the problem the data makes observable), [`audit`]
+//!   (what is wrong with a recording).
+//! - Other analyses: [`consistency`] (a factor's χ² at ground truth; the `fit` object),
+//!   [`speed`] (throughput of each scheme on this machine).
 //! - Printing helpers: [`format`](mod@format) (matrices as JSON and text), [`progress`] (bars
 //!   on stderr, at a terminal only).
 //!
@@ -31,6 +35,9 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod advise;
+pub mod allan;
+pub mod audit;
+pub mod calibrate;
 pub mod calibration_file;
 pub mod checks;
 pub mod consistency;

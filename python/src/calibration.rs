@@ -4,7 +4,7 @@
 
 use crate::convert::{SampleArrays, mat_py};
 use crate::errors::{Class, new_err};
-use crate::io::cli_err;
+use crate::io::analysis_err;
 use numpy::IntoPyArray;
 use numpy::ndarray::Array2;
 use preint::ImuSample;
@@ -17,7 +17,7 @@ use std::path::PathBuf;
 fn read(path: &std::path::Path) -> PyResult<preint_io::ImuCalibration> {
     calibration_file::read(path).map_err(|e| match e {
         preint_analysis::Error::Usage(m) => new_err(Class::Input, "Failed", m),
-        e => cli_err(e.into(), Class::Input),
+        e => analysis_err(e, Class::Input),
     })
 }
 

@@ -100,10 +100,8 @@ pub struct StaticCheck {
 pub struct AllanCheck {
     /// The simulated densities.
     pub simulated: ImuNoise,
-    /// Curves and fits.
+    /// Curves and fits (the fitted densities: [`ImuAllan::to_imu_noise`]).
     pub allan: ImuAllan,
-    /// The fitted densities (maximum over the axes).
-    pub fitted: ImuNoise,
 }
 
 /// Number of `progress` calls of [`compute`].
@@ -254,12 +252,7 @@ pub fn allan_hour() -> Result<AllanCheck, CliError> {
     let hour =
         preint_sim::simulate(st.as_ref(), 100.0, 3600.0, &cfg, 7).map_err(CliError::failed)?;
     let allan = ImuAllan::from_samples(&hour.samples, 10).map_err(CliError::failed)?;
-    let fitted = allan.to_imu_noise();
-    Ok(AllanCheck {
-        simulated,
-        allan,
-        fitted,
-    })
+    Ok(AllanCheck { simulated, allan })
 }
 
 /// `advise` ([`preint_analysis::advise`], after [`preint_analysis::denoise`]) on a noisy recording of `scene`

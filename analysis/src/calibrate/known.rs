@@ -2,11 +2,10 @@
 //! problem solved with `--scheme`, its fit, and the likely cause of a misfit (a pose-file
 //! convention error, [`preint_calib::bias::known_poses::conventions`]).
 
-use super::{Args, Calibrated, Calibration, fail_in};
-use crate::CliError;
+use super::{Calibrated, Calibration, Options, fail_in};
+use crate::{Error, calibration_file, checks};
 use nalgebra::Vector3;
 use preint::{ImuNoise, ImuSample, PreintParams};
-use preint_analysis::{calibration_file, checks};
 use preint_calib::bias::known_poses::conventions::{
     self, Convention, Diagnosis, diagnose_known_attitudes, diagnose_known_poses,
 };
@@ -22,11 +21,11 @@ const MAX_TIME_OFFSET_NS: i64 = 100_000_000;
 /// The poses of `pfile` inside the samples' time span (less a margin for the time offset),
 /// `--pose-spacing` apart.
 fn select_poses(
-    args: &Args,
+    args: &Options,
     pfile: &Path,
     samples: &[ImuSample],
     margin_ns: i64,
-) -> Result<Vec<preint_io::PoseRow>, CliError> {
+) -> Result<Vec<preint_io::PoseRow>, Error> {
     let rows = preint_io::read_poses(pfile)?;
     let (t0, t1) = (
         samples[0].t_ns + margin_ns,
@@ -40,7 +39,7 @@ fn select_poses(
         }
     }
     if kp.len() < 3 {
-        return Err(CliError::Failed(format!(
+        return Err(Error::Failed(format!(
             "{}: fewer than three poses inside the IMU time span (poses ≥ {} s apart{} are \
              used)",
             pfile.display(),
@@ -110,15 +109,15 @@ fn mean_interval_s(samples: &[ImuSample]) -> f64 {
 /// only when the file has no positions), with its fit and, when that is not credible, the
 /// likely cause.
 pub(super) fn known_poses(
-    args: &Args,
+    args: &Options,
     pfile: &Path,
     samples: &[ImuSample],
     noise: &ImuNoise,
-) -> Result<Calibrated, CliError> {
+) -> Result<Calibrated, Error> {
     checks::positive("--pose-spacing", args.pose_spacing)?;
     let estimate = args.estimate.unwrap_or_default();
     if estimate.any() && args.body_p_sensor.is_some() {
-        return Err(CliError::Usage(
+        return Err(Error::Usage(
             "--estimate with --body-p-sensor: the calibration parameters are estimated in the \
              IMU's frame; give poses of the IMU instead"
                 .into(),
@@ -137,7 +136,7 @@ pub(super) fn known_poses(
         0
     };
     let rows = select_poses(args, pfile, samples, margin)?;
-    let scheme: preint::Scheme = args.scheme.into();
+    let scheme = args.scheme;
     let mut notes = Vec::new();
     if let (Some(f), Some(path)) = (&file, &args.calibration) {
         notes.extend(calibration_file::scheme_note(
@@ -164,8 +163,7 @@ pub(super) fn known_poses(
         opts.initial_intrinsics = f.intrinsics;
     }
     let source = pfile.display().to_string();
-    let input = args.input.to_input();
-    let fail = fail_in(input.path());
+    let fail = fail_in(args.input.path());
     if rows.iter().any(|r| r.p.is_none()) {
         let atts: Vec<KnownAttitude> = rows
             .iter()
