@@ -351,20 +351,35 @@ fn solve(args: &Options, samples: Vec<ImuSample>, noise: ImuNoise) -> Result<Cal
             scheme: args.scheme,
         });
     }
+    static_problem(args, &samples, &noise, &still, rate)
+}
+
+/// The single-attitude static problem on the longest of the still intervals `still` of
+/// `samples` (recorded at `rate` Hz), with its fit; the Earth rate of `--latitude` removed.
+fn static_problem(
+    args: &Options,
+    samples: &[ImuSample],
+    noise: &ImuNoise,
+    still: &[StillInterval],
+    rate: f64,
+) -> Result<Calibrated, Error> {
+    let fail = fail_in(args.input.path());
+    let g = Vector3::new(0.0, 0.0, -args.gravity);
+    let n = samples.len();
     let Some(used) = still.iter().max_by_key(|iv| iv.len()).copied() else {
         return Err(Error::Failed(format!(
             "{}: no still interval (≥ {} s with gyro and accelerometer variances within 4× the \
              noise densities' white noise): a static calibration needs the sensor at rest. Give \
              --poses for a moving recording, or check --noise",
             args.input.label(),
-            StillOptions::from_noise(&noise, rate).min_duration_s
+            StillOptions::from_noise(noise, rate).min_duration_s
         )));
     };
     let opts = StaticOptions {
         gravity: g,
         ..Default::default()
     };
-    let mut c = calibrate_static(&samples[used.start..used.end], &noise, &opts).map_err(&fail)?;
+    let mut c = calibrate_static(&samples[used.start..used.end], noise, &opts).map_err(&fail)?;
     let earth = args.latitude.map(|lat| {
         preint_calib::bias::earth_rate_in_body(&c.up_body, (c.roll, c.pitch), lat, args.heading)
     });
@@ -377,7 +392,7 @@ fn solve(args: &Options, samples: Vec<ImuSample>, noise: ImuNoise) -> Result<Cal
         let (roll, pitch, _) = roll_pitch_of_up(&pose.rotation.act(&c.up_body));
         (roll, pitch)
     });
-    let fit = c.fit(&noise).because(&format!(
+    let fit = c.fit(noise).because(&format!(
         "the samples scatter more than the noise densities say (measured white-noise densities \
          gyro {:.2e} rad/s/√Hz against {:.2e}, accelerometer {:.2e} m/s²/√Hz against {:.2e}): \
          give this sensor's densities with --noise (preint allan), or the interval is not still",

@@ -60,16 +60,9 @@ pub fn compute(args: &Args) -> Result<AllanRun, CliError> {
     Ok(r)
 }
 
-/// The human summary: a table of the fits per axis.
-pub fn to_text(r: &AllanRun) -> String {
-    let a = &r.allan;
-    let mut h = format!(
-        "{}: {} samples at {:.1} Hz ({:.0} s)\n",
-        r.imu,
-        r.samples,
-        1.0 / a.dt,
-        a.dt * r.samples as f64
-    );
+/// `still: …`: the stillness check's findings (with the accelerometer bias walk when it, not
+/// motion, turns gravity) and whether the units were checked.
+fn still_line(r: &AllanRun) -> String {
     let st = &r.stillness;
     let walk = if st.max_tilt_deg > StillnessOptions::default().max_tilt_deg {
         if st.tilt_is_bias_walk() {
@@ -84,9 +77,8 @@ pub fn to_text(r: &AllanRun) -> String {
     } else {
         String::new()
     };
-    let _ = writeln!(
-        h,
-        "still: {:.1} % of {} one-second windows, gravity turns by up to {:.2}°{walk}; units {}",
+    format!(
+        "still: {:.1} % of {} one-second windows, gravity turns by up to {:.2}°{walk}; units {}\n",
         100.0 * st.still_fraction(),
         st.windows,
         st.max_tilt_deg,
@@ -95,7 +87,20 @@ pub fn to_text(r: &AllanRun) -> String {
         } else {
             "not checked"
         }
+    )
+}
+
+/// The human summary: a table of the fits per axis.
+pub fn to_text(r: &AllanRun) -> String {
+    let a = &r.allan;
+    let mut h = format!(
+        "{}: {} samples at {:.1} Hz ({:.0} s)\n",
+        r.imu,
+        r.samples,
+        1.0 / a.dt,
+        a.dt * r.samples as f64
     );
+    h.push_str(&still_line(r));
     h.push_str(&preint_analysis::recording::input_text(
         &r.source,
         &r.unit_check,

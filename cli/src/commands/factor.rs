@@ -34,13 +34,15 @@ use crate::preint_args::PreintArgs;
 use crate::scheme::{self};
 use crate::{CliError, Output, input};
 use preint::{
-    CombinedImuFactor, ImuBias, ImuFactor, Level, NavState, PreintegratedImu, ResidualMode,
-    preintegrate,
+    CombinedImuFactor, ImuBias, ImuFactor, ImuNoise, Level, NavState, PreintParams,
+    PreintegratedImu, ResidualMode, preintegrate,
 };
+use preint_analysis::checks::UnitCheck;
 use preint_analysis::consistency::{Evaluation, TruthNoise, chi2_quantiles, evaluate, fit_json};
 use preint_analysis::format::list;
-use preint_analysis::{checks, stream};
-use preint_io::{GroundTruthState, read_euroc_groundtruth};
+use preint_analysis::stream::{self, StreamWindow};
+use preint_analysis::{ImuInput, checks};
+use preint_io::{GroundTruthState, SourceInfo, read_euroc_groundtruth};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -154,6 +156,49 @@ fn nav(s: &GroundTruthState) -> NavState {
     NavState::new(s.rotation(), s.p, s.v)
 }
 
+/// The ground-truth rows nearest to `--from` and `--to`: two different rows, the first
+/// earlier.
+fn keyframes(args: &Args) -> Result<(GroundTruthState, GroundTruthState), CliError> {
+    let gt = read_euroc_groundtruth(&args.poses)?;
+    let (gi, gj) = (
+        *input::nearest_row(&gt, args.from),
+        *input::nearest_row(&gt, args.to),
+    );
+    if gj.t_ns <= gi.t_ns {
+        return Err(CliError::Usage(format!(
+            "{}: the ground-truth rows nearest to --from {} and --to {} are at {} and {} ns; \
+             they must be two different rows, the first earlier",
+            args.poses.display(),
+            args.from,
+            args.to,
+            gi.t_ns,
+            gj.t_ns
+        )));
+    }
+    Ok((gi, gj))
+}
+
+/// The window `[t_i, t_j]` of the recording, how it was read and its unit checks. Only the
+/// part the window needs is read; a split recording is merged whole, and the effective
+/// accelerometer density of its merged samples is set in `params`.
+fn window(
+    input: &ImuInput,
+    noise: &ImuNoise,
+    params: &mut PreintParams,
+    (t_i, t_j): (i64, i64),
+) -> Result<(StreamWindow, SourceInfo, UnitCheck), CliError> {
+    if input.is_split() {
+        let (w, source, split, units) = stream::split_window(input, Some(t_i), Some(t_j))?;
+        preint_analysis::noise::apply_split(noise, split.as_ref(), params);
+        return Ok((w, source, units));
+    }
+    let stream = stream::open_checked_until(input, Some(t_j))?;
+    let (source, units) = (stream.info().clone(), stream.unit_check().clone());
+    let _bar = preint_analysis::progress::ReadingBar::start(stream.progress(), "factor");
+    let w = stream::cut_window(stream, Some(t_i), Some(t_j))?;
+    Ok((w, source, units))
+}
+
 /// Reads the files, preintegrates the window between the keyframes and evaluates the factor.
 pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
     checks::window_order(Some(args.from), Some(args.to))?;
@@ -174,37 +219,10 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
     if let (true, Some(path)) = (args.combined, &args.preint.noise) {
         preint_io::read_kalibr_bias_model(path)?;
     }
-    let gt = read_euroc_groundtruth(&args.poses)?;
-    let (gi, gj) = (
-        *input::nearest_row(&gt, args.from),
-        *input::nearest_row(&gt, args.to),
-    );
-    if gj.t_ns <= gi.t_ns {
-        return Err(CliError::Usage(format!(
-            "{}: the ground-truth rows nearest to --from {} and --to {} are at {} and {} ns; \
-             they must be two different rows, the first earlier",
-            args.poses.display(),
-            args.from,
-            args.to,
-            gi.t_ns,
-            gj.t_ns
-        )));
-    }
+    let (gi, gj) = keyframes(args)?;
     let scheme = params.scheme;
     let input = args.input.to_input();
-    // Only the part of the recording the window needs is read (a split recording is merged
-    // whole, for the effective accelerometer density of its merged samples).
-    let (w, source, unit_check) = if input.is_split() {
-        let (w, source, split, units) = stream::split_window(&input, Some(gi.t_ns), Some(gj.t_ns))?;
-        preint_analysis::noise::apply_split(&noise, split.as_ref(), &mut params);
-        (w, source, units)
-    } else {
-        let stream = stream::open_checked_until(&input, Some(gj.t_ns))?;
-        let (source, units) = (stream.info().clone(), stream.unit_check().clone());
-        let _bar = preint_analysis::progress::ReadingBar::start(stream.progress(), "factor");
-        let w = stream::cut_window(stream, Some(gi.t_ns), Some(gj.t_ns))?;
-        (w, source, units)
-    };
+    let (w, source, unit_check) = window(&input, &noise, &mut params, (gi.t_ns, gj.t_ns))?;
     let samples = w.samples.as_slice();
     let in_file = |e| CliError::failed_in(input.path(), w.in_stream(e));
     let mut pim = preintegrate(&params, &gi.bias, samples, gi.t_ns, gj.t_ns).map_err(in_file)?;

@@ -8,6 +8,7 @@ use preint::intrinsics::IntrinsicsModel;
 use preint_analysis::calibrate::{CalibrateRun, Calibrated, Calibration, earth_note};
 use preint_calib::Fit;
 use preint_calib::bias::known_poses::extras::ParameterEstimate;
+use preint_calib::bias::{EarthRateInBody, StaticCalibration, StillInterval};
 
 /// `v·√(χ²/dof)` per component.
 fn scaled(v: &Vector3<f64>, f: &Fit) -> Vector3<f64> {
@@ -78,6 +79,50 @@ fn acc_line(b: &Vector3<f64>, s: &Vector3<f64>, f: &Fit) -> String {
     vector_line("b_a", b, s, "m/s²", 4, f)
 }
 
+/// The static problem's estimates: the interval used, b_g, roll and pitch (of the IMU, and of
+/// the body with `--body-p-sensor`), why b_a is not estimated, and the Earth rate removed.
+fn static_text(
+    c: &StaticCalibration,
+    used: &StillInterval,
+    still_s: (f64, f64),
+    body_roll_pitch: Option<(f64, f64)>,
+    earth: Option<&EarthRateInBody>,
+    f: &Fit,
+) -> String {
+    format!(
+        "static calibration (one attitude) on the longest still interval, {:.1} s from {} to \
+         {} ns ({:.1} s still of {:.1} s recorded):\n{}  roll {:.4}° ± {:.1e}°, pitch \
+         {:.4}° ± {:.1e}° (IMU axes){}{}\n  b_a: not estimated ({})\n{}",
+        c.duration_s,
+        used.t_start_ns,
+        used.t_end_ns,
+        still_s.0,
+        still_s.1,
+        gyro_line(&c.gyro_bias, &c.gyro_bias_std, f),
+        c.roll.to_degrees(),
+        c.roll_std.to_degrees(),
+        c.pitch.to_degrees(),
+        c.pitch_std.to_degrees(),
+        scaled_note(
+            format!(
+                "{:.1e}°, {:.1e}°",
+                f.scaled(c.roll_std).to_degrees(),
+                f.scaled(c.pitch_std).to_degrees()
+            ),
+            f
+        ),
+        body_roll_pitch.map_or(String::new(), |(r, p)| format!(
+            "; body roll {:.4}°, pitch {:.4}°",
+            r.to_degrees(),
+            p.to_degrees()
+        )),
+        c.acc_bias_note,
+        earth
+            .map(|e| format!("  Earth rate at {}°: {}\n", e.latitude_deg, earth_note(e)))
+            .unwrap_or_default()
+    )
+}
+
 /// The human summary: the problem solved, its estimates with their standard deviations
 /// (modelled, then scaled by √(χ²/dof)), the fit, and its warnings and notes.
 pub fn calibrated_text(r: &Calibrated) -> String {
@@ -121,39 +166,7 @@ pub fn calibrated_text(r: &Calibrated) -> String {
             still_s,
             body_roll_pitch,
             earth,
-        } => format!(
-            "static calibration (one attitude) on the longest still interval, {:.1} s from {} to \
-             {} ns ({:.1} s still of {:.1} s recorded):\n{}  roll {:.4}° ± {:.1e}°, pitch \
-             {:.4}° ± {:.1e}° (IMU axes){}{}\n  b_a: not estimated ({})\n{}",
-            c.duration_s,
-            used.t_start_ns,
-            used.t_end_ns,
-            still_s.0,
-            still_s.1,
-            gyro_line(&c.gyro_bias, &c.gyro_bias_std, f),
-            c.roll.to_degrees(),
-            c.roll_std.to_degrees(),
-            c.pitch.to_degrees(),
-            c.pitch_std.to_degrees(),
-            scaled_note(
-                format!(
-                    "{:.1e}°, {:.1e}°",
-                    f.scaled(c.roll_std).to_degrees(),
-                    f.scaled(c.pitch_std).to_degrees()
-                ),
-                f
-            ),
-            body_roll_pitch.map_or(String::new(), |(r, p)| format!(
-                "; body roll {:.4}°, pitch {:.4}°",
-                r.to_degrees(),
-                p.to_degrees()
-            )),
-            c.acc_bias_note,
-            earth
-                .as_ref()
-                .map(|e| format!("  Earth rate at {}°: {}\n", e.latitude_deg, earth_note(e)))
-                .unwrap_or_default()
-        ),
+        } => static_text(c, used, *still_s, *body_roll_pitch, earth.as_ref(), f),
     };
     let mut h = body;
     h.push_str(&fit_text(f, r.calibration.problem()));
