@@ -18,35 +18,45 @@ pub struct Args {
     #[command(flatten)]
     pub input: ImuArgs,
     /// Kalibr imu.yaml with the noise densities.
-    #[arg(long)]
+    #[arg(help_heading = "Analysis", long)]
     pub noise: PathBuf,
     /// Preintegration window (s).
-    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Analysis",
+        long,
+        default_value_t = 1.0,
+        allow_hyphen_values = true
+    )]
     pub window: f64,
     /// Allowed discretisation error as a fraction of the noise σ.
-    #[arg(long, default_value_t = 0.1, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Analysis",
+        long,
+        default_value_t = 0.1,
+        allow_hyphen_values = true
+    )]
     pub fraction: f64,
     /// Analyse only samples with timestamps >= this, in ns.
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(help_heading = "Window", long, allow_hyphen_values = true)]
     pub from: Option<i64>,
     /// Analyse only samples with timestamps <= this, in ns.
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(help_heading = "Window", long, allow_hyphen_values = true)]
     pub to: Option<i64>,
     /// What the input is between samples. smooth: point samples of a smooth signal,
     /// as a MEMS IMU delivers; no scheme is exact, the reference is hermite4 at the recording's
     /// rate. held: rate and specific force constant over each sample interval, as an
     /// integrating IMU (delta-angle/delta-velocity outputs) or a sample-and-hold stream
     /// delivers; galilean is exact for it and is the reference, lower rates average the samples.
-    #[arg(long = "input", value_name = "CLASS", value_enum, default_value_t = InputClassArg::Smooth)]
+    #[arg(help_heading = "Analysis", long = "input", value_name = "CLASS", value_enum, default_value_t = InputClassArg::Smooth)]
     pub input_class: InputClassArg,
     /// An IMU calibration file (`calibrate --out`, OpenVINS kalibr_imu_chain.yaml or Kalibr
     /// imu.yaml): its intrinsics are applied to the raw samples before the analysis.
-    #[arg(long, value_name = "FILE")]
+    #[arg(help_heading = "Input", long, value_name = "FILE")]
     pub calibration: Option<std::path::PathBuf>,
     /// Exit with status 2 (after printing the result) when the fit is not credible: the
     /// recommended (scheme, rate)'s own truncation error would make a factor at the true
     /// states inconsistent (χ² of the embedded estimate with p < 1e-6 against 9 dof).
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     pub strict: bool,
 }
 

@@ -20,16 +20,16 @@ pub struct Args {
     #[command(flatten)]
     pub input: ImuArgs,
     /// Output directory for the charts allan_gyro.svg and allan_acc.svg and the Kalibr imu.yaml.
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     pub out: Option<PathBuf>,
     /// Skip the check that the recording is static (the Allan deviation of a moving recording
     /// describes the motion, not the sensor's noise).
-    #[arg(long)]
+    #[arg(help_heading = "Input", long)]
     pub no_still_check: bool,
     /// Exit with status 2 (after printing the result) when the fit is not credible: the model
     /// curve √(N²/τ + K²τ/3) more than 5 statistical errors from the measured Allan deviation
     /// somewhere in the τ ranges its lines were fitted on.
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     pub strict: bool,
 }
 

@@ -16,12 +16,12 @@ pub struct Args {
     #[command(flatten)]
     pub input: ImuArgs,
     /// Exit with status 2 when a defect is found (for scripts and CI).
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     pub strict: bool,
     /// An IMU calibration file (`calibrate --out`, OpenVINS kalibr_imu_chain.yaml or Kalibr
     /// imu.yaml): its intrinsics correct the samples of the unit checks, and it is checked
     /// against the recording (accelerometer norm at rest, plausible ranges). One stream only.
-    #[arg(long, value_name = "FILE")]
+    #[arg(help_heading = "Input", long, value_name = "FILE")]
     pub calibration: Option<std::path::PathBuf>,
 }
 

@@ -19,7 +19,7 @@ pub struct Args {
     #[command(flatten)]
     pub input: ImuArgs,
     /// The EuRoC CSV file to write.
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     pub out: PathBuf,
 }
 

@@ -55,41 +55,56 @@ pub struct Args {
     pub input: ImuArgs,
     /// Ground truth (EuRoC state_groundtruth_estimate0 format: p (m), q wxyz body->world,
     /// v (m/s), b_g (rad/s), b_a (m/s^2)), world frame z up.
-    #[arg(long)]
+    #[arg(help_heading = "Ground truth", long)]
     pub poses: PathBuf,
     /// Keyframe i: the ground-truth row nearest to this time (ns).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(help_heading = "Window", long, allow_hyphen_values = true)]
     pub from: i64,
     /// Keyframe j: the ground-truth row nearest to this time (ns).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(help_heading = "Window", long, allow_hyphen_values = true)]
     pub to: i64,
     /// Scheme, noise densities and gravity.
     #[command(flatten)]
     pub preint: PreintArgs,
     /// Evaluate CombinedImuFactor (15-dim residual with the bias change b_j - b_i, weighted
     /// by the covariance with the bias random walk) instead of ImuFactor (9-dim).
-    #[arg(long)]
+    #[arg(help_heading = "Factor", long)]
     pub combined: bool,
     /// Residual: `component` (Forster's [r_phi, r_v, r_p]) or `logmap` (the SE_2(3) logarithm
     /// of predicted^-1 * actual, GTSAM 4.3's default).
-    #[arg(long, value_parser = parse_residual, default_value = ResidualMode::default().name())]
+    #[arg(help_heading = "Factor", long, value_parser = parse_residual, default_value = ResidualMode::default().name())]
     pub residual: ResidualMode,
     /// Standard deviation of the ground truth's attitudes (rad), added to the weight.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Ground truth",
+        long,
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
     pub pose_rot_std: f64,
     /// Standard deviation of the ground truth's positions (m), added to the weight.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Ground truth",
+        long,
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
     pub pose_pos_std: f64,
     /// Standard deviation of the ground truth's velocities (m/s), added to the weight.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Ground truth",
+        long,
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
     pub vel_std: f64,
     /// Weight the factor with the second-order covariance (`preint::second_order`: the
     /// term the first-order covariance misses over long windows with noisy gyroscopes).
-    #[arg(long)]
+    #[arg(help_heading = "Factor", long)]
     pub second_order: bool,
     /// Exit with status 2 (after printing the result) when the fit is not credible: χ² at the
     /// ground truth with p < 1e-6 against χ² with 9 (15 with --combined) dof.
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     pub strict: bool,
 }
 

@@ -12,31 +12,36 @@ use std::path::{Path, PathBuf};
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
     /// Built-in scene (each one's motion is described in the preint-sim crate's `scenes` docs).
-    #[arg(long, default_value = "seed-ellipse",
+    #[arg(help_heading = "Scene", long, default_value = "seed-ellipse",
           value_parser = clap::builder::PossibleValuesParser::new(preint_sim::SCENE_NAMES))]
     pub scene: String,
     /// Sample rate (Hz), positive.
-    #[arg(long, default_value_t = 200.0, allow_hyphen_values = true,
+    #[arg(help_heading = "Sensor", long, default_value_t = 200.0, allow_hyphen_values = true,
           value_parser = preint_analysis::parse::positive)]
     pub rate: f64,
     /// Duration (s), positive.
-    #[arg(long, default_value_t = 10.0, allow_hyphen_values = true,
+    #[arg(help_heading = "Scene", long, default_value_t = 10.0, allow_hyphen_values = true,
           value_parser = preint_analysis::parse::positive)]
     pub duration: f64,
     /// Noise: a Kalibr imu.yaml, or `none` for noise-free data. Default: EuRoC figures.
-    #[arg(long)]
+    #[arg(help_heading = "Sensor", long)]
     pub noise: Option<String>,
     /// Random seed (same seed, same data on every machine).
-    #[arg(long, default_value_t = 1, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Sensor",
+        long,
+        default_value_t = 1,
+        allow_hyphen_values = true
+    )]
     pub seed: u64,
     /// Output directory (created if missing).
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     pub out: PathBuf,
     /// Mount the IMU at this pose in the body, x,y,z,qw,qx,qy,qz: sensor origin in body
     /// coordinates (m) and the unit quaternion rotating sensor vectors into the body frame.
     /// The samples are the IMU's (rate in its axes, specific force of its point); the ground
     /// truth stays the body's.
-    #[arg(long, value_parser = preint_analysis::parse::sensor_pose, allow_hyphen_values = true)]
+    #[arg(help_heading = "Sensor", long, value_parser = preint_analysis::parse::sensor_pose, allow_hyphen_values = true)]
     pub body_p_sensor: Option<preint::SensorPose>,
     /// A rotating world frame (Earth rotation).
     #[command(flatten)]

@@ -19,7 +19,12 @@ const RUNS: usize = 11;
 pub struct Args {
     /// Number of samples to integrate per measurement, 10 to 10⁷ (10⁵ is the criterion
     /// bench's stream).
-    #[arg(long, default_value_t = 100_000, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Benchmark",
+        long,
+        default_value_t = 100_000,
+        allow_hyphen_values = true
+    )]
     pub samples: usize,
 }
 

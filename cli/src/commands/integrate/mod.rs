@@ -38,16 +38,16 @@ pub struct Args {
     #[command(flatten)]
     pub preint: PreintArgs,
     /// Gyro bias estimate b_g (rad/s) as x,y,z (negative values allowed: --bias-gyro=-0.01,0,0).
-    #[arg(long, allow_hyphen_values = true, value_parser = preint_analysis::parse::vec3)]
+    #[arg(help_heading = "Preintegration", long, allow_hyphen_values = true, value_parser = preint_analysis::parse::vec3)]
     pub bias_gyro: Option<Vector3<f64>>,
     /// Accelerometer bias estimate b_a (m/s^2) as x,y,z.
-    #[arg(long, allow_hyphen_values = true, value_parser = preint_analysis::parse::vec3)]
+    #[arg(help_heading = "Preintegration", long, allow_hyphen_values = true, value_parser = preint_analysis::parse::vec3)]
     pub bias_acc: Option<Vector3<f64>>,
     /// First keyframe time in ns (default: first sample).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(help_heading = "Window", long, allow_hyphen_values = true)]
     pub from: Option<i64>,
     /// Last keyframe time in ns (default: last sample).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(help_heading = "Window", long, allow_hyphen_values = true)]
     pub to: Option<i64>,
     /// Earth rotation and the predicted state at the window's end.
     #[command(flatten)]
@@ -56,6 +56,7 @@ pub struct Args {
     /// from t_i at each, and with --initial-state the predicted state (keeps the window's
     /// samples in memory).
     #[arg(
+        help_heading = "Extras",
         long,
         value_delimiter = ',',
         allow_hyphen_values = true,
@@ -65,13 +66,13 @@ pub struct Args {
     /// Also estimate the window's own discretisation (truncation) error from its samples
     /// (`preint::truncation`: a hermite4 companion, or Richardson for hermite4). Reads the
     /// window rather than streaming the whole recording.
-    #[arg(long)]
+    #[arg(help_heading = "Extras", long)]
     pub truncation: bool,
     /// Also compute the second-order covariance term of the window's SE₂(3) error
     /// (`preint::second_order`: what the first-order covariance misses over long windows with
     /// noisy gyroscopes) and the increase of the mean χ² it accounts for. Reads the window
     /// rather than streaming the whole recording.
-    #[arg(long)]
+    #[arg(help_heading = "Extras", long)]
     pub second_order: bool,
     /// An IMU calibration file (what `calibrate --out` writes: OpenVINS kalibr_imu_chain.yaml,
     /// or Kalibr's imu.yaml with a scale-misalignment model): its intrinsics are applied to the
@@ -80,7 +81,7 @@ pub struct Args {
     /// offset recorded for a scheme that lags differently from --scheme (euler and galilean
     /// are half a sample behind midpoint and hermite4) is warned about, with the size of the
     /// lag; it is applied as recorded.
-    #[arg(long, value_name = "FILE")]
+    #[arg(help_heading = "Input", long, value_name = "FILE")]
     pub calibration: Option<std::path::PathBuf>,
 }
 

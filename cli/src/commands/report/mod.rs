@@ -27,7 +27,7 @@ use sections::{
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
     /// Output directory (index.html and the SVG charts).
-    #[arg(long, default_value = "out/report")]
+    #[arg(help_heading = "Output", long, default_value = "out/report")]
     pub out: PathBuf,
 }
 
