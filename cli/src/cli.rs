@@ -43,7 +43,7 @@ Examples:
 #[command(name = "preint", version, about, after_help = CONVENTIONS)]
 pub struct Cli {
     /// Print one JSON object on stdout instead of the human summary.
-    #[arg(long, global = true)]
+    #[arg(help_heading = "Output", long, global = true)]
     pub json: bool,
     /// The subcommand and its flags.
     #[command(subcommand)]

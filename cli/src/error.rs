@@ -34,6 +34,16 @@ pub enum CliError {
     },
 }
 
+impl From<preint_analysis::Error> for CliError {
+    fn from(e: preint_analysis::Error) -> Self {
+        match e {
+            preint_analysis::Error::Io(e) => CliError::Io(e),
+            preint_analysis::Error::Usage(m) => CliError::Usage(m),
+            preint_analysis::Error::Failed(m) => CliError::Failed(m),
+        }
+    }
+}
+
 impl CliError {
     /// A failure with the message of `e`.
     pub fn failed(e: impl std::fmt::Display) -> Self {

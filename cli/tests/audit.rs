@@ -172,7 +172,7 @@ fn adis_is_clean_in_its_units_and_a_units_defect_in_the_wrong_ones() {
 /// gyro at 200 Hz, accelerometer at 100 Hz stamped 1 ms after every other gyro stamp).
 #[test]
 fn split_streams_print_each_channel_and_the_offsets() {
-    use preint_cli::commands::audit::split_json;
+    use preint_analysis::audit::split_json;
     use preint_io::audit::{AuditOptions, audit_channels};
     use preint_io::{ChannelSample, ChannelStream, Location};
     let stream = |n: i64, dt: i64, t0: i64| -> ChannelStream {

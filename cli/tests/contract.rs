@@ -8,7 +8,10 @@
 //! - a numeric argument takes a negative number after a space (`--flag -1`): clap hands it to
 //!   the value parser instead of calling it an unexpected argument;
 //! - every argument and subcommand has help text, and an argument whose default clap prints
-//!   (`[default: …]`) does not state it in its own text as well (`default:`, `(default`).
+//!   (`[default: …]`) does not state it in its own text as well (`default:`, `(default`);
+//! - every argument sits under a help heading of [`HEADINGS`] (`--help` lists the flags in
+//!   these groups): the reader flags under `Input` wherever they appear, `integrate`'s under
+//!   input, preintegration, window, prediction and extras (and `--json` under output).
 //!
 //! A new argument without a value clap knows fails the test until it has a line in
 //! [`EXAMPLES`].
@@ -234,6 +237,7 @@ fn exercise(cli: &Cli) {
         }
     };
     if let Some(i) = input {
+        let i = i.to_input();
         let _ = format!("{:?} {} {}", i.options(), i.label(), i.is_split());
     }
 }
@@ -378,6 +382,92 @@ fn every_argument_has_help_and_states_its_default_once() {
                      [default: {:?}] after it: {help}",
                     flag(arg),
                     arg.get_default_values()
+                ));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The help headings, in the order `--help` of a subcommand tends to show them.
+const HEADINGS: &[&str] = &[
+    "Input",
+    "Window",
+    "Preintegration",
+    "Prediction",
+    "Extras",
+    "Ground truth",
+    "Factor",
+    "Known poses",
+    "Sensor model",
+    "Earth rotation",
+    "Analysis",
+    "Scene",
+    "Sensor",
+    "Benchmark",
+    "Output",
+];
+
+/// The reader flags (`ImuArgs`), under `Input` in every subcommand that reads a recording.
+const READER: &[&str] = &[
+    "imu",
+    "gyro",
+    "accel",
+    "format",
+    "columns",
+    "delimiter",
+    "time_unit",
+    "gyro_unit",
+    "accel_unit",
+    "topic",
+    "gyro_topic",
+    "accel_topic",
+    "stamp",
+    "no_unit_check",
+];
+
+#[test]
+fn every_argument_has_a_help_heading() {
+    let mut failures = Vec::new();
+    for sub in subcommands() {
+        let name = sub.get_name();
+        let mut used = std::collections::BTreeSet::new();
+        for arg in own_arguments(&sub) {
+            let id = arg.get_id().as_str();
+            match arg.get_help_heading() {
+                None => failures.push(format!("`preint {name} {}` has no help heading", flag(arg))),
+                Some(h) if !HEADINGS.contains(&h) => failures.push(format!(
+                    "`preint {name} {}` is under {h:?}, not one of {HEADINGS:?}",
+                    flag(arg)
+                )),
+                Some(h) => {
+                    used.insert(h);
+                    if READER.contains(&id) && h != "Input" {
+                        failures.push(format!("`preint {name} {}` is under {h:?}", flag(arg)));
+                    }
+                }
+            }
+        }
+        if name == "integrate" {
+            let want = [
+                "Extras",
+                "Input",
+                "Output",
+                "Prediction",
+                "Preintegration",
+                "Window",
+            ];
+            if !used.iter().eq(want.iter()) {
+                failures.push(format!(
+                    "`preint integrate`'s headings are {used:?}, not {want:?}"
+                ));
+            }
+        }
+        let help = sub.clone().render_long_help().to_string();
+        for h in &used {
+            if !help.contains(&format!("{h}:")) {
+                failures.push(format!(
+                    "`preint {name} --help` does not show the heading {h}"
                 ));
             }
         }

@@ -11,19 +11,19 @@
 
 use crate::convert::{mat_py, samples, vec_py};
 use crate::errors::{Class, new_err, raise};
-use crate::io::{ReadArgs, cli_err, json_py};
+use crate::io::{ReadArgs, analysis_err, json_py};
 use crate::params::PyNoise;
 use nalgebra::Vector3;
 use numpy::IntoPyArray;
 use numpy::ndarray::Array3;
 use preint::{ImuNoise, ImuSample};
+use preint_analysis::calibrate;
 use preint_calib::bias::known_poses::extras::Estimate;
 use preint_calib::bias::{
     AccBiasPrior, BiasError, MultiPoseCalibration, MultiPoseOptions, StaticCalibration,
     StaticOptions, StillInterval, StillOptions, calibrate_multi_pose, calibrate_static,
     detect_still_intervals, earth_rate_in_body, remove_earth_rate,
 };
-use preint_cli::commands::calibrate;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
@@ -61,7 +61,7 @@ pub(crate) fn noise_arg(obj: Option<&Bound<'_, PyAny>>, default_euroc: bool) -> 
 fn earth_args(latitude: Option<f64>, heading: Option<f64>) -> PyResult<()> {
     let usage = |m: String| new_err(Class::Shape, "Usage", m);
     if let Some(lat) = latitude {
-        preint_cli::earth_args::latitude(&lat.to_string())
+        preint_analysis::parse::latitude(&lat.to_string())
             .map_err(|m| usage(format!("latitude: {m}")))?;
     }
     match heading {
@@ -355,15 +355,9 @@ pub(crate) fn calibrate_file<'py>(
     scheme: &str,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_args()?;
+    let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_input()?;
     crate::checks::gravity_magnitude("gravity", gravity)?;
-    use preint_cli::scheme::Scheme as Cli;
-    let scheme = match crate::params::scheme_from(scheme)? {
-        preint::Scheme::Euler => Cli::Euler,
-        preint::Scheme::Midpoint => Cli::Midpoint,
-        preint::Scheme::Hermite4 => Cli::Hermite4,
-        preint::Scheme::Galilean => Cli::Galilean,
-    };
+    let scheme = crate::params::scheme_from(scheme)?;
     earth_args(latitude, heading)?;
     let needs_poses = estimate.is_some() || calibration.is_some();
     if needs_poses && poses.is_none() {
@@ -376,7 +370,7 @@ pub(crate) fn calibrate_file<'py>(
         .map(|e| Estimate::parse(&e))
         .transpose()
         .map_err(|e| raise(Class::Input, e))?;
-    let args = calibrate::Args {
+    let opts = calibrate::Options {
         input,
         poses,
         noise,
@@ -393,10 +387,9 @@ pub(crate) fn calibrate_file<'py>(
         pose_spacing,
         calibration,
         scheme,
-        strict: false,
     };
     let json = py
-        .detach(|| calibrate::run(&args).map(|o| o.json))
-        .map_err(|e| cli_err(e, Class::Calibration))?;
+        .detach(|| calibrate::compute(&opts).map(|r| calibrate::to_json(&r)))
+        .map_err(|e| analysis_err(e, Class::Calibration))?;
     json_py(py, &json)
 }

@@ -1,10 +1,12 @@
 //! `preint convert`: any readable recording to EuRoC CSV (`t [ns], w [rad/s], a [m/s²]`),
 //! streaming, in bounded memory.
 
-use crate::checks::UnitCheck;
-use crate::imu_args::{ImuArgs, input_json};
-use crate::progress::ReadingBar;
-use crate::{CliError, Output, stream};
+use crate::imu_args::ImuArgs;
+use crate::{CliError, Output};
+use preint_analysis::checks::UnitCheck;
+use preint_analysis::progress::ReadingBar;
+use preint_analysis::recording::input_json;
+use preint_analysis::stream;
 use preint_io::euroc::write_euroc_stream;
 use preint_io::{IoError, SourceInfo};
 use serde_json::{Value, json};
@@ -17,7 +19,7 @@ pub struct Args {
     #[command(flatten)]
     pub input: ImuArgs,
     /// The EuRoC CSV file to write.
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     pub out: PathBuf,
 }
 
@@ -39,7 +41,8 @@ pub struct Conversion {
 /// Reads the recording sample by sample and writes each as a EuRoC row, after the unit checks
 /// on its first samples (a file in deg/s or g must not come out labelled rad/s and m/s²).
 pub fn compute(args: &Args) -> Result<Conversion, CliError> {
-    let stream = stream::open_checked(&args.input)?;
+    let input = args.input.to_input();
+    let stream = stream::open_checked(&input)?;
     let (mut source, unit_check) = (stream.info().clone(), stream.unit_check().clone());
     let merge = stream.merge();
     let _bar = ReadingBar::start(stream.progress(), "convert");
@@ -49,7 +52,7 @@ pub fn compute(args: &Args) -> Result<Conversion, CliError> {
     // The checked stream's errors are the reader's.
     let samples = stream.map(|r| {
         r.map_err(|e| match e {
-            CliError::Io(io) => io,
+            preint_analysis::Error::Io(io) => io,
             other => IoError::format(&source.source_name, other.to_string()),
         })
     });
@@ -58,13 +61,10 @@ pub fn compute(args: &Args) -> Result<Conversion, CliError> {
         .warnings
         .extend(merge.and_then(|m| m.report().shortening()));
     if samples == 0 {
-        return Err(CliError::Failed(format!(
-            "{}: no samples",
-            args.input.label()
-        )));
+        return Err(CliError::Failed(format!("{}: no samples", input.label())));
     }
     Ok(Conversion {
-        imu: args.input.label(),
+        imu: input.label(),
         source,
         unit_check,
         out: out_name,
@@ -86,7 +86,7 @@ pub fn to_text(c: &Conversion) -> String {
         c.source.describe(),
         c.out,
         c.samples,
-        crate::imu_args::input_text(&c.source, &c.unit_check)
+        preint_analysis::recording::input_text(&c.source, &c.unit_check)
     )
 }
 

@@ -18,7 +18,7 @@ pub mod simulate;
 pub mod speed;
 
 /// Runs the selected subcommand. Nothing non-finite leaves it: an output whose summary holds
-/// `inf` or `NaN` is refused ([`finite`]), the inputs' own checks naming the cause first.
+/// `inf` or `NaN` is refused (`finite`), the inputs' own checks naming the cause first.
 pub fn run(command: &Command) -> Result<Output, CliError> {
     match dispatch(command) {
         Ok(out) => finite(out),

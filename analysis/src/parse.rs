@@ -1,13 +1,14 @@
-//! Value parsers for flags: comma-separated vectors (negative numbers allowed in both
-//! `--flag -1,2,3` and `--flag=-1,2,3` forms) and positive numbers (lists of rates use clap's
-//! `value_delimiter`), and the physical ranges of the quantities they carry (a value outside
-//! its range is refused by clap, naming the flag):
+//! Value parsers for flags (the command line's value parsers, and the checks of the same values
+//! given by other callers): comma-separated vectors (negative numbers allowed in both
+//! `--flag -1,2,3` and `--flag=-1,2,3` forms) and positive numbers, and the physical ranges of
+//! the quantities they carry (a value outside its range is refused, naming the flag):
 //! - gravity magnitude ([`gravity`]): [0, [`MAX_GRAVITY_M_S2`] = 100] m/s²;
 //! - rate of a rotating navigation frame ([`frame_rate`]): |ω| ≤ [`MAX_FRAME_RATE_RAD_S`] =
 //!   100 rad/s;
 //! - lever arm of `--body-p-sensor` ([`sensor_pose`]): |r| ≤ [`MAX_LEVER_ARM_M`] = 1000 m;
-//! - a state's position and velocity (`--initial-state`, [`crate::earth_args::initial_state`]):
-//!   |p| ≤ [`MAX_POSITION_M`] = 10¹² m, |v| below the speed of light.
+//! - a state's position and velocity (`--initial-state`): |p| ≤ [`MAX_POSITION_M`] = 10¹² m,
+//!   |v| below the speed of light;
+//! - a latitude ([`latitude`]): [−90, 90] degrees.
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use preint::{SO3, SensorPose};
@@ -125,6 +126,16 @@ pub const MAX_POSITION_M: f64 = 1e12;
 
 /// The speed of light \[m/s\]: no velocity of `--initial-state` reaches it.
 pub const SPEED_OF_LIGHT_M_S: f64 = 299_792_458.0;
+
+/// Parses a latitude in degrees: finite and within [−90, 90].
+pub fn latitude(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && (-90.0..=90.0).contains(&x) => Ok(x),
+        _ => Err(format!(
+            "`{s}` is not a latitude in degrees within [-90, 90]"
+        )),
+    }
+}
 
 /// Parses one positive finite number (e.g. a rate in Hz).
 pub fn positive(s: &str) -> Result<f64, String> {

@@ -1,26 +1,26 @@
 //! Checks of flag values and of the units of the data, with messages that name the flag or file.
 
-use crate::CliError;
+use crate::Error;
 use preint::ImuSample;
 use preint_io::{UnitVerdict, Units};
 use serde_json::{Value, json};
 use std::path::Path;
 
 /// `flag`'s value `v` must be finite and ≥ 0.
-pub fn non_negative(flag: &str, v: f64) -> Result<(), CliError> {
+pub fn non_negative(flag: &str, v: f64) -> Result<(), Error> {
     if v.is_finite() && v >= 0.0 {
         Ok(())
     } else {
-        Err(CliError::Usage(format!(
+        Err(Error::Usage(format!(
             "{flag} must be a non-negative number, got {v}"
         )))
     }
 }
 
 /// `--from` must come before `--to` when both are given (timestamps in ns).
-pub fn window_order(from: Option<i64>, to: Option<i64>) -> Result<(), CliError> {
+pub fn window_order(from: Option<i64>, to: Option<i64>) -> Result<(), Error> {
     match (from, to) {
-        (Some(f), Some(t)) if f >= t => Err(CliError::Usage(format!(
+        (Some(f), Some(t)) if f >= t => Err(Error::Usage(format!(
             "--from {f} is not before --to {t}: a window runs from --from to a later --to (both \
              timestamps in ns, on the recording's clock)"
         ))),
@@ -29,11 +29,11 @@ pub fn window_order(from: Option<i64>, to: Option<i64>) -> Result<(), CliError> 
 }
 
 /// `flag`'s value `v` must be finite and > 0.
-pub fn positive(flag: &str, v: f64) -> Result<(), CliError> {
+pub fn positive(flag: &str, v: f64) -> Result<(), Error> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
-        Err(CliError::Usage(format!(
+        Err(Error::Usage(format!(
             "{flag} must be a positive number, got {v}"
         )))
     }
@@ -41,10 +41,10 @@ pub fn positive(flag: &str, v: f64) -> Result<(), CliError> {
 
 /// `flag`'s value `g` must be a gravity magnitude in [0, 100] m/s² ([`crate::parse::gravity`]),
 /// for values that do not come through the flag's parser (library callers).
-pub fn gravity(flag: &str, g: f64) -> Result<(), CliError> {
+pub fn gravity(flag: &str, g: f64) -> Result<(), Error> {
     crate::parse::gravity(&g.to_string())
         .map(|_| ())
-        .map_err(|e| CliError::Usage(format!("{flag}: {e}")))
+        .map_err(|e| Error::Usage(format!("{flag}: {e}")))
 }
 
 /// The samples of `file` look like the units `read_as` they were read in (time unit,
@@ -55,7 +55,7 @@ pub fn si_units(
     samples: &[ImuSample],
     file: &Path,
     read_as: Option<Units>,
-) -> Result<UnitVerdict, CliError> {
+) -> Result<UnitVerdict, Error> {
     let name = file.display().to_string();
     Ok(preint_io::plausibility::check_units_read_as(
         samples, &name, read_as,
@@ -109,13 +109,13 @@ impl UnitCheck {
 
 /// No interval between consecutive samples of `file` exceeds `max_gap_ns`; the error names
 /// the two samples (indices and times) around the first gap.
-pub fn no_gaps(samples: &[ImuSample], file: &Path, max_gap_ns: i64) -> Result<(), CliError> {
+pub fn no_gaps(samples: &[ImuSample], file: &Path, max_gap_ns: i64) -> Result<(), Error> {
     match samples
         .windows(2)
         .position(|w| w[1].t_ns - w[0].t_ns > max_gap_ns)
     {
         None => Ok(()),
-        Some(k) => Err(CliError::Failed(format!(
+        Some(k) => Err(Error::Failed(format!(
             "{}: gap of {:.6} s between samples {k} (t = {} ns) and {} (t = {} ns), above {} s; \
              choose a continuous part with --from/--to",
             file.display(),

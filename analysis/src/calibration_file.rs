@@ -33,7 +33,7 @@
 //! `Tw R_IMUtoGYRO = S_g` by the RQ decomposition (`Tw` lower triangular with a positive
 //! diagonal, `R_IMUtoGYRO` a rotation), `Tg = 0`.
 
-use crate::CliError;
+use crate::Error;
 use nalgebra::{Matrix3, SVector, Vector3};
 use preint::intrinsics::{ImuIntrinsics, IntrinsicsModel};
 use preint::{CellRule, ImuNoise, Scheme};
@@ -69,9 +69,9 @@ fn has_calibration_key(text: &str) -> bool {
 }
 
 /// Reads a calibration file (module docs for the formats); the intrinsics are validated.
-pub fn read(path: &Path) -> Result<ImuCalibration, CliError> {
+pub fn read(path: &Path) -> Result<ImuCalibration, Error> {
     let text = std::fs::read_to_string(path)
-        .map_err(|e| CliError::Usage(format!("--calibration {}: {e}", path.display())))?;
+        .map_err(|e| Error::Usage(format!("--calibration {}: {e}", path.display())))?;
     let name = path.display().to_string();
     let cal = if text.contains("gyroscopes:") {
         preint_io::parse_kalibr_imu(&text, &name)?
@@ -80,9 +80,9 @@ pub fn read(path: &Path) -> Result<ImuCalibration, CliError> {
     };
     cal.intrinsics
         .validate()
-        .map_err(|e| CliError::Usage(format!("--calibration {}: {e}", path.display())))?;
+        .map_err(|e| Error::Usage(format!("--calibration {}: {e}", path.display())))?;
     if !has_calibration_key(&text) {
-        return Err(CliError::Usage(format!(
+        return Err(Error::Usage(format!(
             "--calibration {}: the file holds none of the keys of a calibration ({}): nothing \
              to apply (is it the right file? `calibrate --out` writes one)",
             path.display(),
@@ -92,7 +92,7 @@ pub fn read(path: &Path) -> Result<ImuCalibration, CliError> {
     if let Some(t) = cal.time_offset_s
         && t.abs() >= 1.0
     {
-        return Err(CliError::Usage(format!(
+        return Err(Error::Usage(format!(
             "--calibration {}: time_offset {t} s is not a clock offset between an IMU and its \
              keyframes (|t| < 1 s)",
             path.display()
@@ -119,7 +119,7 @@ pub fn write(
     noise: &ImuNoise,
     time_offset_s: Option<f64>,
     scheme: Option<Scheme>,
-) -> Result<(), CliError> {
+) -> Result<(), Error> {
     let cal = ImuCalibration {
         intrinsics,
         noise: Some(*noise),
@@ -153,7 +153,7 @@ pub fn scheme_lag_s(recorded: Scheme, used: Scheme, dt_s: f64) -> f64 {
 /// the file has no time offset.
 pub fn scheme_note(cal: &ImuCalibration, path: &Path, used: Scheme, dt_s: f64) -> Option<String> {
     let td = cal.time_offset_s?;
-    let name = crate::scheme::label;
+    let name = Scheme::name;
     match cal.scheme {
         None => Some(format!(
             "note: {} does not record the scheme its time_offset ({:.3} ms) was estimated for \
@@ -186,7 +186,7 @@ pub fn scheme_note(cal: &ImuCalibration, path: &Path, used: Scheme, dt_s: f64) -
 
 /// The intrinsics of a multi-position calibration (module docs); the identity for the terms its
 /// chosen model does not have.
-pub fn intrinsics_of_multi_pose(c: &MultiPoseCalibration) -> Result<ImuIntrinsics, CliError> {
+pub fn intrinsics_of_multi_pose(c: &MultiPoseCalibration) -> Result<ImuIntrinsics, Error> {
     let z3 = Vector3::zeros();
     let s_a = acc_scale_matrix(
         &c.acc_scale.unwrap_or(z3),
@@ -197,7 +197,7 @@ pub fn intrinsics_of_multi_pose(c: &MultiPoseCalibration) -> Result<ImuIntrinsic
         &c.gyro_misalignment.unwrap_or(SVector::zeros()),
     );
     let (t_w, r) = rq(&s_g).ok_or_else(|| {
-        CliError::Failed(format!(
+        Error::Failed(format!(
             "the gyro scale/misalignment matrix {s_g} is not a rotation times a lower-triangular \
              matrix with a positive diagonal (det ≤ 0)"
         ))

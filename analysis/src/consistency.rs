@@ -7,11 +7,10 @@
 //! residual is `U r` with `UᵀU = Σ⁻¹` (`U` upper triangular), `χ² = ‖U r‖²`; block b's marginal
 //! χ² is `r_bᵀ Σ_bb⁻¹ r_b` (3 dof).
 //!
-//! The goodness of fit as every command prints it ([`preint_calib::fit`]): [`fit_json`] (the
-//! top-level `fit` object), [`fit_text`] (a `fit:` line, and a `warning:` line when not
-//! credible) and [`strict`] (`--strict`: a fit that is not credible is a refusal, exit 2).
+//! The goodness of fit as every command prints it in JSON ([`preint_calib::fit`]):
+//! [`fit_json`], the top-level `fit` object.
 
-use crate::{CliError, Output};
+use crate::Error;
 use nalgebra::{SMatrix, SVector};
 use preint::factor::sqrt_information;
 use preint_calib::Fit;
@@ -56,7 +55,7 @@ pub fn evaluate<const R: usize>(
     jac_j: SMatrix<f64, R, 9>,
     cov: SMatrix<f64, R, R>,
     tn: TruthNoise,
-) -> Result<Evaluation, CliError> {
+) -> Result<Evaluation, Error> {
     let mut s = SMatrix::<f64, 9, 9>::zeros();
     for k in 0..3 {
         s[(k, k)] = tn.rot_rad.powi(2);
@@ -64,7 +63,7 @@ pub fn evaluate<const R: usize>(
         s[(6 + k, 6 + k)] = tn.vel_m_s.powi(2);
     }
     let sigma = cov + jac_i * s * jac_i.transpose() + jac_j * s * jac_j.transpose();
-    let u = sqrt_information(&sigma).map_err(|e| CliError::Failed(format!("weight: {e}")))?;
+    let u = sqrt_information(&sigma).map_err(|e| Error::Failed(format!("weight: {e}")))?;
     let w = u * r;
     let marginal_chi2 = (0..R / 3)
         .map(|b| {
@@ -94,28 +93,6 @@ pub fn fit_json(f: &Fit) -> Value {
         v["p_value_lower"] = json!(f.p_value_lower);
     }
     v
-}
-
-/// `fit of the {what}: credible ({why})`, or, when not credible, `warning: the {what} fit is
-/// not credible: {why}` (with its likely cause); one line, ending with a newline.
-pub fn fit_text(f: &Fit, what: &str) -> String {
-    if f.credible {
-        format!("fit of the {what}: credible ({})\n", f.why)
-    } else {
-        format!("warning: the {what} fit is not credible: {}\n", f.why)
-    }
-}
-
-/// `--strict`: `output` as it is, or, when `strict` and the fit is not credible, a refusal
-/// that prints it and then why (exit 2).
-pub fn strict(strict: bool, output: Output, f: &Fit, what: &str) -> Result<Output, CliError> {
-    if strict && !f.credible {
-        return Err(CliError::Refused {
-            output: Box::new(output),
-            msg: format!("the {what} fit is not credible (--strict): {}", f.why),
-        });
-    }
-    Ok(output)
 }
 
 /// χ² quantiles (scipy.stats.chi2.ppf) for 3, 9 and 15 degrees of freedom: (0.95, 0.99).

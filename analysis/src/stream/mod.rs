@@ -1,5 +1,6 @@
 //! Reading a recording once, in bounded memory: the unit checks on a prefix, then every
-//! sample in order; and the keyframe window cut from the stream with an early stop.
+//! sample in order; the keyframe window cut from the stream with an early stop
+//! ([`cut_window`]); the span a solver holds ([`read_span`]).
 //!
 //! The unit checks ([`preint_io::plausibility`]) look at a prefix of the recording: the
 //! samples up to a window's end and, if the checks cannot decide on those, more, doubling the
@@ -11,13 +12,18 @@
 //! or not. A row that cannot be read after a window's end ends the checks' reading there: the
 //! window does not need it.
 
-use crate::CliError;
+mod span;
+mod window;
+
+pub use span::{Span, hold_span, read_span};
+pub use window::{StreamWindow, cut_window, cut_window_with_edge, split_window};
+
+use crate::Error;
 use crate::checks::{self, UnitCheck};
-use crate::imu_args::ImuArgs;
-use preint::{ImuSample, PreintError};
+use crate::recording::ImuInput;
+use preint::ImuSample;
 use preint_io::plausibility::limits;
 use preint_io::{ImuReader, IoError, Progress, SourceInfo};
-use std::collections::VecDeque;
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 
 /// Most samples held in memory for the unit checks: 2¹⁸ (15 MB; 22 min at 200 Hz). The checks of
@@ -138,23 +144,23 @@ fn next_within_limits(reader: &mut ImuReader, index: u64) -> Option<Result<ImuSa
 }
 
 /// Opens the recording of `args` and runs the unit checks on its prefix.
-pub fn open_checked(args: &ImuArgs) -> Result<CheckedSamples, CliError> {
+pub fn open_checked(args: &ImuInput) -> Result<CheckedSamples, Error> {
     open_checked_until(args, None)
 }
 
 /// As [`open_checked`], with a stream that holds at least the samples up to
 /// [`EDGE_SAMPLES`] − 1 after `until` \[ns\] (a window's end) once its checks are done.
-pub fn open_checked_until(args: &ImuArgs, until: Option<i64>) -> Result<CheckedSamples, CliError> {
+pub fn open_checked_until(args: &ImuInput, until: Option<i64>) -> Result<CheckedSamples, Error> {
     open_checked_prefix(args, until, UNIT_CHECK_PREFIX, None, EDGE_SAMPLES)
 }
 
 /// As [`open_checked_until`], the prefix reaching `edge` − 1 samples after `until` (a window
 /// that reads `edge` samples on each side, [`cut_window_with_edge`]).
 pub fn open_checked_window(
-    args: &ImuArgs,
+    args: &ImuInput,
     until: Option<i64>,
     edge: usize,
-) -> Result<CheckedSamples, CliError> {
+) -> Result<CheckedSamples, Error> {
     open_checked_prefix(args, until, UNIT_CHECK_PREFIX, None, edge)
 }
 
@@ -173,7 +179,7 @@ impl Prefix {
         reader: &mut ImuReader,
         mut more: impl FnMut(&[ImuSample]) -> bool,
         past_window: bool,
-    ) -> Result<(), CliError> {
+    ) -> Result<(), Error> {
         while !self.ended && more(&self.samples) {
             match next_within_limits(reader, self.samples.len() as u64) {
                 Some(Ok(s)) => self.samples.push(s),
@@ -192,12 +198,12 @@ impl Prefix {
 /// with it, the samples up to the window's end, then more while they cannot decide (module
 /// docs).
 pub fn open_checked_prefix(
-    args: &ImuArgs,
+    args: &ImuInput,
     until: Option<i64>,
     max_samples: usize,
     max_span_s: Option<f64>,
     edge: usize,
-) -> Result<CheckedSamples, CliError> {
+) -> Result<CheckedSamples, Error> {
     let (mut reader, merge) = args.open_with_report()?;
     let (info, progress) = (reader.info().clone(), reader.progress().clone());
     let max_span_ns = max_span_s.map_or(i64::MAX, |s| (s * 1e9) as i64);
@@ -275,7 +281,7 @@ impl CheckedSamples {
 }
 
 impl Iterator for CheckedSamples {
-    type Item = Result<ImuSample, CliError>;
+    type Item = Result<ImuSample, Error>;
 
     fn next(&mut self) -> Option<Self::Item> {
         match self.prefix.next() {
@@ -284,297 +290,26 @@ impl Iterator for CheckedSamples {
                 .rest
                 .as_mut()?
                 .next_sample()
-                .map(|r| r.map_err(CliError::from)),
+                .map(|r| r.map_err(Error::from)),
         }
     }
 }
 
-/// The part of a stream that the keyframe window `[t_i, t_j]` needs: the samples from
-/// [`EDGE_SAMPLES`] before `t_i` to [`EDGE_SAMPLES`] − 1 after `t_j` (reading stops there).
-#[derive(Debug)]
-pub struct StreamWindow {
-    /// The samples, in order.
-    pub samples: Vec<ImuSample>,
-    /// Index in the stream of `samples[0]`.
-    pub offset: usize,
-    /// Time of the stream's first sample \[ns\].
-    pub first_ns: i64,
-    /// Time of the stream's last sample \[ns\], when the stream was read to its end (the
-    /// window reaches past it, or lies before the first sample).
-    pub last_ns: Option<i64>,
-    /// `t_i` \[ns\]: `--from`, or the first sample's time.
-    pub t_i_ns: i64,
-    /// `t_j` \[ns\]: `--to`, or the last sample's time.
-    pub t_j_ns: i64,
-}
-
-/// Cuts the window `[from, to]` (defaults: the first and the last sample) from `stream`.
-/// Memory holds the window only; without `to`, reading goes to the end.
-pub fn cut_window(
-    stream: impl Iterator<Item = Result<ImuSample, CliError>>,
-    from: Option<i64>,
-    to: Option<i64>,
-) -> Result<StreamWindow, CliError> {
-    cut_window_with_edge(stream, from, to, EDGE_SAMPLES)
-}
-
-/// [`cut_window`] keeping `edge` (≥ [`EDGE_SAMPLES`]) samples before `from` and `edge` − 1
-/// after `to`. A window that ends before the stream's first sample is refused by the
-/// preintegrator: the rest of the stream is then read (not kept) for its last time, which
-/// the error names.
-pub fn cut_window_with_edge(
-    mut stream: impl Iterator<Item = Result<ImuSample, CliError>>,
-    from: Option<i64>,
-    to: Option<i64>,
-    edge: usize,
-) -> Result<StreamWindow, CliError> {
-    let mut before: VecDeque<ImuSample> = VecDeque::with_capacity(edge + 1);
-    let mut inside: Vec<ImuSample> = Vec::new();
-    let (mut first_ns, mut dropped, mut after) = (None, 0usize, 0usize);
-    for s in stream.by_ref() {
-        let s = s?;
-        let t_i = *first_ns.get_or_insert(s.t_ns);
-        let t_i = from.unwrap_or(t_i);
-        if s.t_ns < t_i {
-            before.push_back(s);
-            if before.len() > edge {
-                before.pop_front();
-                dropped += 1;
-            }
-            continue;
-        }
-        if to.is_some_and(|t_j| s.t_ns > t_j) {
-            after += 1;
-        }
-        if inside.len() == MAX_WINDOW_SAMPLES {
-            return Err(CliError::Failed(format!(
-                "the window holds more than {MAX_WINDOW_SAMPLES} samples; choose a shorter \
-                 --from/--to"
-            )));
-        }
-        inside.push(s);
-        if after == edge - 1 {
-            break;
-        }
-    }
-    let first_ns = first_ns.unwrap_or(0);
-    let mut samples: Vec<ImuSample> = before.into_iter().collect();
-    samples.append(&mut inside);
-    let mut last_ns = samples.last().map_or(first_ns, |s| s.t_ns);
-    let ended = after < edge - 1;
-    let before_first = [from, to].into_iter().flatten().any(|t| t < first_ns);
-    if !ended && before_first {
-        for s in stream.by_ref() {
-            last_ns = s?.t_ns;
-        }
-    }
-    Ok(StreamWindow {
-        offset: dropped,
-        first_ns,
-        last_ns: (ended || before_first).then_some(last_ns),
-        t_i_ns: from.unwrap_or(first_ns),
-        t_j_ns: to.unwrap_or(last_ns),
-        samples,
+/// A stream of the samples `0, 10, …, 10(n − 1)` ns, gyro x = the index (for tests).
+#[cfg(test)]
+pub(crate) fn test_stream(n: i64) -> impl Iterator<Item = Result<ImuSample, Error>> {
+    (0..n).map(|k| {
+        Ok(ImuSample::new(
+            k * 10,
+            nalgebra::Vector3::new(k as f64, 0.0, 0.0),
+            nalgebra::Vector3::zeros(),
+        ))
     })
-}
-
-/// A split recording (`--gyro/--accel`, `--gyro-topic/--accel-topic`) read whole, as the
-/// window `[from, to]` (defaults: its first and last merged sample), with how it was read,
-/// the merge report the effective accelerometer density comes from and the unit checks'
-/// verdict.
-pub fn split_window(
-    args: &ImuArgs,
-    from: Option<i64>,
-    to: Option<i64>,
-) -> Result<
-    (
-        StreamWindow,
-        SourceInfo,
-        Option<preint_io::split::MergeReport>,
-        UnitCheck,
-    ),
-    CliError,
-> {
-    let r = args.read_all_checked()?;
-    let samples = r.samples;
-    let (first_ns, last_ns) = (samples[0].t_ns, samples[samples.len() - 1].t_ns);
-    let w = StreamWindow {
-        offset: 0,
-        first_ns,
-        last_ns: Some(last_ns),
-        t_i_ns: from.unwrap_or(first_ns),
-        t_j_ns: to.unwrap_or(last_ns),
-        samples,
-    };
-    Ok((w, r.info, r.report, r.unit_check))
-}
-
-/// The samples a solver holds ([`read_span`]), how the recording was read and what its unit
-/// checks said.
-#[derive(Clone, Debug)]
-pub struct Span {
-    /// The samples with `from ≤ t ≤ to`.
-    pub samples: Vec<ImuSample>,
-    /// How the recording was read.
-    pub source: SourceInfo,
-    /// The unit checks' verdict.
-    pub unit_check: UnitCheck,
-}
-
-/// The samples of `args`' recording with `from ≤ t ≤ to` for the solver of `command`
-/// ([`hold_span`] with [`MAX_HELD_SAMPLES`], after the unit checks, with a progress bar),
-/// refused if two consecutive ones are more than the preintegrator's largest gap apart.
-pub fn read_span(
-    args: &ImuArgs,
-    from: Option<i64>,
-    to: Option<i64>,
-    command: &str,
-) -> Result<Span, CliError> {
-    let stream = open_checked_until(args, to)?;
-    let (source, unit_check) = (stream.info().clone(), stream.unit_check().clone());
-    let bar = crate::progress::ReadingBar::start(stream.progress(), command);
-    let samples = hold_span(stream, from, to, MAX_HELD_SAMPLES, args.path())?;
-    drop(bar);
-    checks::no_gaps(&samples, args.path(), preint::params::DEFAULT_MAX_GAP_NS)?;
-    Ok(Span {
-        samples,
-        source,
-        unit_check,
-    })
-}
-
-/// The samples of `stream` with `from ≤ t ≤ to` (either bound optional), read up to `to`;
-/// more than `limit` of them is an error naming `file` and the flags that shorten the span,
-/// raised before the sample past the limit is stored.
-pub fn hold_span(
-    stream: impl Iterator<Item = Result<ImuSample, CliError>>,
-    from: Option<i64>,
-    to: Option<i64>,
-    limit: usize,
-    file: &std::path::Path,
-) -> Result<Vec<ImuSample>, CliError> {
-    let (lo, hi) = (from.unwrap_or(i64::MIN), to.unwrap_or(i64::MAX));
-    let mut samples: Vec<ImuSample> = Vec::new();
-    for s in stream {
-        let s = s?;
-        if s.t_ns > hi {
-            break;
-        }
-        if s.t_ns < lo {
-            continue;
-        }
-        if samples.len() == limit {
-            return Err(CliError::Failed(format!(
-                "{}: more than {limit} samples ({:.0} MB) from t = {} ns on; analyse a part \
-                 with --from/--to",
-                file.display(),
-                (limit * std::mem::size_of::<ImuSample>()) as f64 * 1e-6,
-                samples.first().map_or(s.t_ns, |f| f.t_ns)
-            )));
-        }
-        samples.push(s);
-    }
-    if samples.len() < 2 {
-        return Err(CliError::Failed(format!(
-            "{}: fewer than two samples with timestamps in [{lo}, {hi}] ns",
-            file.display()
-        )));
-    }
-    Ok(samples)
-}
-
-impl StreamWindow {
-    /// `e` from [`preint::preintegrate`] on [`StreamWindow::samples`], with sample indices
-    /// counted in the whole stream and the stream's first sample time.
-    pub fn in_stream(&self, e: PreintError) -> PreintError {
-        let o = self.offset;
-        match e {
-            PreintError::NonFinite { index, t_ns, field } => PreintError::NonFinite {
-                index: index + o,
-                t_ns,
-                field,
-            },
-            PreintError::DuplicateTimestamp { index, t_ns } => PreintError::DuplicateTimestamp {
-                index: index + o,
-                t_ns,
-            },
-            PreintError::DecreasingTimestamp {
-                index,
-                t_ns,
-                prev_t_ns,
-            } => PreintError::DecreasingTimestamp {
-                index: index + o,
-                t_ns,
-                prev_t_ns,
-            },
-            PreintError::GapTooLarge {
-                index,
-                t_ns,
-                gap_ns,
-                max_gap_ns,
-            } => PreintError::GapTooLarge {
-                index: index + o,
-                t_ns,
-                gap_ns,
-                max_gap_ns,
-            },
-            PreintError::KeyframeOutsideSamples { t_ns, last_ns, .. } => {
-                PreintError::KeyframeOutsideSamples {
-                    t_ns,
-                    first_ns: self.first_ns,
-                    last_ns: self.last_ns.unwrap_or(last_ns),
-                }
-            }
-            other => other,
-        }
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nalgebra::Vector3;
-
-    fn stream(n: i64) -> impl Iterator<Item = Result<ImuSample, CliError>> {
-        (0..n).map(|k| {
-            Ok(ImuSample::new(
-                k * 10,
-                Vector3::new(k as f64, 0.0, 0.0),
-                Vector3::zeros(),
-            ))
-        })
-    }
-
-    #[test]
-    fn the_window_keeps_four_samples_before_and_three_after() {
-        let w = cut_window(stream(100), Some(305), Some(505)).unwrap();
-        // Samples 27..=30 before t_i = 305, 31..=50 inside, 51..=53 after t_j = 505.
-        let t: Vec<i64> = w.samples.iter().map(|s| s.t_ns).collect();
-        assert_eq!(t.first(), Some(&270));
-        assert_eq!(t.last(), Some(&530));
-        assert_eq!(t.len(), 27);
-        assert_eq!(
-            (w.offset, w.first_ns, w.t_i_ns, w.t_j_ns),
-            (27, 0, 305, 505)
-        );
-    }
-
-    #[test]
-    fn without_keyframes_the_window_is_the_whole_stream() {
-        let w = cut_window(stream(10), None, None).unwrap();
-        assert_eq!(
-            (w.samples.len(), w.offset, w.t_i_ns, w.t_j_ns),
-            (10, 0, 0, 90)
-        );
-    }
-
-    #[test]
-    fn reading_stops_after_the_window() {
-        let mut read = 0;
-        let counted = stream(1000).inspect(|_| read += 1);
-        cut_window(counted, Some(100), Some(200)).unwrap();
-        assert_eq!(read, 24, "samples 0..=23 read, the rest left unread");
-    }
 
     /// EuRoC text of `n` rows, row `bad` (if any) malformed.
     fn euroc_text(n: usize, bad: Option<usize>) -> String {
@@ -642,58 +377,6 @@ mod tests {
         assert!(
             err.starts_with("p.csv:8502: sample 8500 ") && err.contains("1e308"),
             "{err}"
-        );
-    }
-
-    #[test]
-    fn a_window_before_the_first_sample_names_the_last_one() {
-        let w = cut_window(stream(100), Some(-50), Some(-40)).unwrap();
-        assert_eq!((w.first_ns, w.last_ns), (0, Some(990)));
-        let e = w.in_stream(PreintError::KeyframeOutsideSamples {
-            t_ns: -50,
-            first_ns: 0,
-            last_ns: 20,
-        });
-        assert!(e.to_string().contains("[0, 990]"), "{e}");
-        // Inside the stream, reading stops after the window and the last time is not known.
-        assert_eq!(
-            cut_window(stream(100), Some(100), Some(200))
-                .unwrap()
-                .last_ns,
-            None
-        );
-    }
-
-    #[test]
-    fn a_held_span_is_bounded_before_it_grows_past_the_limit() {
-        let file = std::path::Path::new("rec.csv");
-        let held = hold_span(stream(100), Some(200), Some(300), 11, file).unwrap();
-        assert_eq!(held.len(), 11);
-        assert_eq!((held[0].t_ns, held[10].t_ns), (200, 300));
-        let e = hold_span(stream(100), Some(200), Some(300), 10, file).unwrap_err();
-        let e = e.to_string();
-        assert!(
-            e.contains("rec.csv")
-                && e.contains("more than 10 samples")
-                && e.contains("--from/--to"),
-            "{e}"
-        );
-        let e = hold_span(stream(100), Some(2000), None, 10, file).unwrap_err();
-        assert!(e.to_string().contains("fewer than two samples"), "{e}");
-    }
-
-    #[test]
-    fn errors_count_samples_in_the_whole_stream() {
-        let w = cut_window(stream(100), Some(505), Some(705)).unwrap();
-        let e = w.in_stream(PreintError::GapTooLarge {
-            index: 2,
-            t_ns: 0,
-            gap_ns: 1,
-            max_gap_ns: 0,
-        });
-        assert!(
-            matches!(e, PreintError::GapTooLarge { index: 49, .. }),
-            "{e:?}"
         );
     }
 }

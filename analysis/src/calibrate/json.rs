@@ -1,10 +1,10 @@
-//! The printed forms of `preint calibrate`: every estimate with its modelled σ and its σ scaled
-//! by `√(χ²/dof)` (`*_std` and `*_std_scaled` in JSON), and the fit beside them.
+//! The JSON form of `preint calibrate`: every estimate with its modelled σ and its σ scaled by
+//! `√(χ²/dof)` (`*_std` and `*_std_scaled`), the fit beside them, how the recording was read
+//! and the file written.
 
-use super::{Calibrated, Calibration};
-use crate::analysis::consistency::{fit_json, fit_text};
+use super::{CalibrateRun, Calibrated, Calibration};
+use crate::consistency::fit_json;
 use crate::format::{list, opt_list};
-use crate::scheme;
 use nalgebra::Vector3;
 use preint::intrinsics::{ImuIntrinsics, IntrinsicsModel};
 use preint_calib::Fit;
@@ -17,9 +17,20 @@ fn scaled(v: &Vector3<f64>, f: &Fit) -> Vector3<f64> {
     v * f.scale()
 }
 
+/// The JSON form of a run: [`calibrated_json`] with `input` (how the recording was read) and,
+/// when a file was written, `out` (its path).
+pub fn to_json(r: &CalibrateRun) -> Value {
+    let mut json = calibrated_json(&r.calibrated);
+    json["input"] = crate::recording::input_json(&r.source, &r.unit_check);
+    if let Some(w) = &r.written {
+        json["out"] = json!(w.path.display().to_string());
+    }
+    json
+}
+
 /// The JSON form: `model` names the problem; estimates with their standard deviations
 /// (modelled `*_std`, scaled `*_std_scaled`), χ², units, the `fit` and the `notes`.
-pub fn to_json(r: &Calibrated) -> Value {
+pub fn calibrated_json(r: &Calibrated) -> Value {
     let f = &r.fit;
     let s = |v: &Vector3<f64>| list(&scaled(v, f));
     let mut out = match &r.calibration {
@@ -30,7 +41,7 @@ pub fn to_json(r: &Calibrated) -> Value {
             time_offset,
             ..
         } => json!({
-            "model": "known-poses", "poses": poses, "scheme": scheme::label(r.scheme),
+            "model": "known-poses", "poses": poses, "scheme": r.scheme.name(),
             "parameters": parameters_json(&c.parameters, c.intrinsics.model, f),
             "time_offset_s": time_offset.then_some(c.time_offset_s),
             "intrinsics": intrinsics_json(&c.intrinsics),
@@ -51,7 +62,7 @@ pub fn to_json(r: &Calibrated) -> Value {
             time_offset,
             ..
         } => json!({
-            "model": "known-attitudes", "poses": poses, "scheme": scheme::label(r.scheme),
+            "model": "known-attitudes", "poses": poses, "scheme": r.scheme.name(),
             "gyro_bias": list(&c.gyro_bias), "gyro_bias_std": list(&c.gyro_bias_std),
             "gyro_bias_std_scaled": s(&c.gyro_bias_std),
             "parameters": parameters_json(&c.parameters, c.intrinsics.model, f),
@@ -116,39 +127,6 @@ fn intrinsics_json(x: &ImuIntrinsics) -> Value {
         "Ta": rows(&x.t_a), "R_IMUtoACC": rows(&x.r_imu_to_acc), "Tg": rows(&x.t_g)})
 }
 
-/// ` (± σ' scaled by √(χ²/dof) = s)`.
-fn scaled_note(value: String, f: &Fit) -> String {
-    format!(" (± {value} scaled by √(χ²/dof) = {:.3})", f.scale())
-}
-
-/// The `--estimate` parameters, one line each: value ± σ (and scaled), or why withheld.
-fn parameter_lines(ps: &[ParameterEstimate], model: IntrinsicsModel, f: &Fit) -> String {
-    ps.iter()
-        .map(|e| {
-            let name = e.param.name(model);
-            let unit = e.param.unit();
-            if e.excited {
-                format!(
-                    "  {name} = {:+.6e} ± {:.1e} {unit}{}\n",
-                    e.value,
-                    e.std,
-                    scaled_note(format!("{:.1e}", f.scaled(e.std)), f)
-                )
-            } else {
-                let sigma = if e.std.is_finite() {
-                    format!("σ {:.1e} {unit}", e.std)
-                } else {
-                    "σ unbounded: the motion holds no information on it".to_string()
-                };
-                format!(
-                    "  {name}: not excited by the motion ({sigma}): kept at {:+.6e}\n",
-                    e.value
-                )
-            }
-        })
-        .collect()
-}
-
 /// What `--latitude` did to the gyro bias.
 fn earth_json(e: &preint_calib::bias::EarthRateInBody) -> Value {
     json!({"latitude_deg": e.latitude_deg, "heading_deg": e.heading_deg,
@@ -157,7 +135,7 @@ fn earth_json(e: &preint_calib::bias::EarthRateInBody) -> Value {
 }
 
 /// One sentence on the Earth rate's share of the bias.
-fn earth_note(e: &preint_calib::bias::EarthRateInBody) -> String {
+pub fn earth_note(e: &preint_calib::bias::EarthRateInBody) -> String {
     if e.heading_deg.is_some() {
         "the Earth rate R_wb^T w_ie (from latitude, roll, pitch and heading) is removed from b_g"
             .into()
@@ -171,6 +149,7 @@ fn earth_note(e: &preint_calib::bias::EarthRateInBody) -> String {
     }
 }
 
+/// The multi-position calibration: estimates, σ (modelled and scaled), the models compared.
 fn multi_pose_json(c: &MultiPoseCalibration, f: &Fit) -> Value {
     let fits: Vec<Value> = c
         .fits
@@ -197,121 +176,4 @@ fn multi_pose_json(c: &MultiPoseCalibration, f: &Fit) -> Value {
         "iterations": c.iterations, "cost": chosen.map(|f| 0.5 * f.chi2), "chi2": c.chi2, "dof": c.dof,
         "units": {"gyro_bias": "rad/s", "acc_bias": "m/s^2", "scale": "dimensionless (1 = ideal)"},
     })
-}
-
-/// `  name = [x, y, z] ± [σx, σy, σz] unit (± [σ'…] scaled by √(χ²/dof) = s)`, the values with
-/// `digits` decimals.
-fn vector_line(
-    name: &str,
-    b: &Vector3<f64>,
-    s: &Vector3<f64>,
-    unit: &str,
-    digits: usize,
-    f: &Fit,
-) -> String {
-    let ss = scaled(s, f);
-    format!(
-        "  {name} = [{:.digits$}, {:.digits$}, {:.digits$}] ± [{:.1e}, {:.1e}, {:.1e}] {unit}{}\n",
-        b.x,
-        b.y,
-        b.z,
-        s.x,
-        s.y,
-        s.z,
-        scaled_note(format!("[{:.1e}, {:.1e}, {:.1e}]", ss.x, ss.y, ss.z), f)
-    )
-}
-
-fn gyro_line(b: &Vector3<f64>, s: &Vector3<f64>, f: &Fit) -> String {
-    vector_line("b_g", b, s, "rad/s", 6, f)
-}
-
-fn acc_line(b: &Vector3<f64>, s: &Vector3<f64>, f: &Fit) -> String {
-    vector_line("b_a", b, s, "m/s²", 4, f)
-}
-
-/// The human summary: the problem solved, its estimates with their standard deviations
-/// (modelled, then scaled by √(χ²/dof)), the fit, and its warnings and notes.
-pub fn to_text(r: &Calibrated) -> String {
-    let f = &r.fit;
-    let body = match &r.calibration {
-        Calibration::KnownPoses {
-            source, poses, c, ..
-        } => format!(
-            "known-pose calibration ({poses} poses from {source}, scheme {}):\n{}{}{}  gravity \
-             tilt {:.3}°, χ²/dof = {:.2}, {} iterations\n",
-            scheme::label(r.scheme),
-            gyro_line(&c.bias.gyro, &c.gyro_bias_std, f),
-            acc_line(&c.bias.acc, &c.acc_bias_std, f),
-            parameter_lines(&c.parameters, c.intrinsics.model, f),
-            c.gravity_tilt.to_degrees(),
-            c.chi2 / c.dof.max(1) as f64,
-            c.iterations
-        ),
-        Calibration::KnownAttitudes {
-            source, poses, c, ..
-        } => format!(
-            "known-attitude (gyroscope) calibration ({poses} attitudes from {source}, scheme \
-             {}):\n{}{}  χ²/dof = {:.2}, {} iterations\n",
-            scheme::label(r.scheme),
-            gyro_line(&c.gyro_bias, &c.gyro_bias_std, f),
-            parameter_lines(&c.parameters, c.intrinsics.model, f),
-            c.chi2_per_dof(),
-            c.iterations
-        ),
-        Calibration::MultiPose(c) => format!(
-            "multi-position calibration: {} still intervals; model {:?} ({})\n{}{}",
-            c.intervals.len(),
-            c.model,
-            c.reason,
-            gyro_line(&c.gyro_bias, &c.gyro_bias_std, f),
-            acc_line(&c.acc_bias, &c.acc_bias_std, f)
-        ),
-        Calibration::Static {
-            c,
-            used,
-            still_s,
-            body_roll_pitch,
-            earth,
-        } => format!(
-            "static calibration (one attitude) on the longest still interval, {:.1} s from {} to \
-             {} ns ({:.1} s still of {:.1} s recorded):\n{}  roll {:.4}° ± {:.1e}°, pitch \
-             {:.4}° ± {:.1e}° (IMU axes){}{}\n  b_a: not estimated ({})\n{}",
-            c.duration_s,
-            used.t_start_ns,
-            used.t_end_ns,
-            still_s.0,
-            still_s.1,
-            gyro_line(&c.gyro_bias, &c.gyro_bias_std, f),
-            c.roll.to_degrees(),
-            c.roll_std.to_degrees(),
-            c.pitch.to_degrees(),
-            c.pitch_std.to_degrees(),
-            scaled_note(
-                format!(
-                    "{:.1e}°, {:.1e}°",
-                    f.scaled(c.roll_std).to_degrees(),
-                    f.scaled(c.pitch_std).to_degrees()
-                ),
-                f
-            ),
-            body_roll_pitch.map_or(String::new(), |(r, p)| format!(
-                "; body roll {:.4}°, pitch {:.4}°",
-                r.to_degrees(),
-                p.to_degrees()
-            )),
-            c.acc_bias_note,
-            earth
-                .as_ref()
-                .map(|e| format!("  Earth rate at {}°: {}\n", e.latitude_deg, earth_note(e)))
-                .unwrap_or_default()
-        ),
-    };
-    let mut h = body;
-    h.push_str(&fit_text(f, r.calibration.problem()));
-    for n in &r.notes {
-        h.push_str(n);
-        h.push('\n');
-    }
-    h
 }

@@ -2,10 +2,11 @@
 //! problem solved with `--scheme`, its fit, and the likely cause of a misfit (a pose-file
 //! convention error, [`preint_calib::bias::known_poses::conventions`]).
 
-use super::{Args, Calibrated, Calibration, fail_in};
-use crate::{CliError, calibration_file, checks};
+use super::{Calibrated, Calibration, Options, fail_in};
+use crate::{Error, calibration_file, checks};
 use nalgebra::Vector3;
 use preint::{ImuNoise, ImuSample, PreintParams};
+use preint_calib::Fit;
 use preint_calib::bias::known_poses::conventions::{
     self, Convention, Diagnosis, diagnose_known_attitudes, diagnose_known_poses,
 };
@@ -21,11 +22,11 @@ const MAX_TIME_OFFSET_NS: i64 = 100_000_000;
 /// The poses of `pfile` inside the samples' time span (less a margin for the time offset),
 /// `--pose-spacing` apart.
 fn select_poses(
-    args: &Args,
+    args: &Options,
     pfile: &Path,
     samples: &[ImuSample],
     margin_ns: i64,
-) -> Result<Vec<preint_io::PoseRow>, CliError> {
+) -> Result<Vec<preint_io::PoseRow>, Error> {
     let rows = preint_io::read_poses(pfile)?;
     let (t0, t1) = (
         samples[0].t_ns + margin_ns,
@@ -39,7 +40,7 @@ fn select_poses(
         }
     }
     if kp.len() < 3 {
-        return Err(CliError::Failed(format!(
+        return Err(Error::Failed(format!(
             "{}: fewer than three poses inside the IMU time span (poses ≥ {} s apart{} are \
              used)",
             pfile.display(),
@@ -109,15 +110,15 @@ fn mean_interval_s(samples: &[ImuSample]) -> f64 {
 /// only when the file has no positions), with its fit and, when that is not credible, the
 /// likely cause.
 pub(super) fn known_poses(
-    args: &Args,
+    args: &Options,
     pfile: &Path,
     samples: &[ImuSample],
     noise: &ImuNoise,
-) -> Result<Calibrated, CliError> {
+) -> Result<Calibrated, Error> {
     checks::positive("--pose-spacing", args.pose_spacing)?;
     let estimate = args.estimate.unwrap_or_default();
     if estimate.any() && args.body_p_sensor.is_some() {
-        return Err(CliError::Usage(
+        return Err(Error::Usage(
             "--estimate with --body-p-sensor: the calibration parameters are estimated in the \
              IMU's frame; give poses of the IMU instead"
                 .into(),
@@ -136,7 +137,7 @@ pub(super) fn known_poses(
         0
     };
     let rows = select_poses(args, pfile, samples, margin)?;
-    let scheme: preint::Scheme = args.scheme.into();
+    let scheme = args.scheme;
     let mut notes = Vec::new();
     if let (Some(f), Some(path)) = (&file, &args.calibration) {
         notes.extend(calibration_file::scheme_note(
@@ -162,66 +163,17 @@ pub(super) fn known_poses(
     if let Some(f) = &file {
         opts.initial_intrinsics = f.intrinsics;
     }
-    let source = pfile.display().to_string();
-    let fail = fail_in(args.input.path());
-    if rows.iter().any(|r| r.p.is_none()) {
-        let atts: Vec<KnownAttitude> = rows
-            .iter()
-            .map(|r| KnownAttitude {
-                t_ns: r.t_ns,
-                r: SO3::from_quaternion(&r.q),
-            })
-            .collect();
-        let c = calibrate_known_attitudes(samples, &atts, &opts).map_err(fail)?;
-        let mut fit = c.fit();
-        if !fit.credible {
-            let d = diagnose_known_attitudes(samples, &atts, &opts);
-            fit = fit.because(&misfit_cause(d, false));
-        }
-        let calibration = Calibration::KnownAttitudes {
-            source,
-            poses: atts.len(),
-            pose_rot_std: args.pose_rot_std,
-            c: Box::new(c),
-            time_offset,
-        };
-        return Ok(Calibrated {
-            calibration,
-            fit,
-            notes,
-            scheme,
-        });
-    }
-    let kp: Vec<KnownPose> = rows
-        .iter()
-        .map(|r| KnownPose {
-            t_ns: r.t_ns,
-            r: SO3::from_quaternion(&r.q),
-            p: r.p.unwrap_or_default(),
-        })
-        .collect();
-    let c = calibrate_known_poses(samples, &kp, &opts).map_err(fail)?;
-    let mut fit = c.fit();
-    if !fit.credible {
-        fit = fit.because(&misfit_cause(
-            diagnose_known_poses(samples, &kp, &opts),
-            true,
-        ));
-    }
-    if let Some(z) = conventions::gravity_flipped(c.gravity_tilt) {
-        notes.push(format!(
-            "warning: the estimated gravity is {:.1}° from (0, 0, −{}): {}",
-            c.gravity_tilt.to_degrees(),
-            args.gravity,
-            z.describe()
-        ));
-    }
-    let calibration = Calibration::KnownPoses {
-        source,
-        poses: kp.len(),
-        pose_std: (args.pose_rot_std, args.pose_pos_std),
-        c: Box::new(c),
+    let problem = Problem {
+        args,
+        samples,
+        opts: &opts,
+        source: pfile.display().to_string(),
         time_offset,
+    };
+    let (calibration, fit) = if rows.iter().any(|r| r.p.is_none()) {
+        problem.attitudes(&rows)?
+    } else {
+        problem.poses(&rows, &mut notes)?
     };
     Ok(Calibrated {
         calibration,
@@ -229,4 +181,86 @@ pub(super) fn known_poses(
         notes,
         scheme,
     })
+}
+
+/// A known-pose problem set up: the samples, the solver's options and what is printed with it.
+struct Problem<'a> {
+    args: &'a Options,
+    samples: &'a [ImuSample],
+    opts: &'a KnownPoseOptions,
+    /// The pose file, as printed.
+    source: String,
+    /// Whether the time offset was asked for or given.
+    time_offset: bool,
+}
+
+impl Problem<'_> {
+    /// The gyroscope problem on attitudes only, with its fit (and the likely cause of a
+    /// misfit).
+    fn attitudes(self, rows: &[preint_io::PoseRow]) -> Result<(Calibration, Fit), Error> {
+        let atts: Vec<KnownAttitude> = rows
+            .iter()
+            .map(|r| KnownAttitude {
+                t_ns: r.t_ns,
+                r: SO3::from_quaternion(&r.q),
+            })
+            .collect();
+        let fail = fail_in(self.args.input.path());
+        let c = calibrate_known_attitudes(self.samples, &atts, self.opts).map_err(fail)?;
+        let mut fit = c.fit();
+        if !fit.credible {
+            let d = diagnose_known_attitudes(self.samples, &atts, self.opts);
+            fit = fit.because(&misfit_cause(d, false));
+        }
+        let calibration = Calibration::KnownAttitudes {
+            source: self.source,
+            poses: atts.len(),
+            pose_rot_std: self.args.pose_rot_std,
+            c: Box::new(c),
+            time_offset: self.time_offset,
+        };
+        Ok((calibration, fit))
+    }
+
+    /// The known-pose problem, with its fit (and the likely cause of a misfit); a gravity
+    /// estimate upside down adds a warning to `notes`.
+    fn poses(
+        self,
+        rows: &[preint_io::PoseRow],
+        notes: &mut Vec<String>,
+    ) -> Result<(Calibration, Fit), Error> {
+        let kp: Vec<KnownPose> = rows
+            .iter()
+            .map(|r| KnownPose {
+                t_ns: r.t_ns,
+                r: SO3::from_quaternion(&r.q),
+                p: r.p.unwrap_or_default(),
+            })
+            .collect();
+        let fail = fail_in(self.args.input.path());
+        let c = calibrate_known_poses(self.samples, &kp, self.opts).map_err(fail)?;
+        let mut fit = c.fit();
+        if !fit.credible {
+            fit = fit.because(&misfit_cause(
+                diagnose_known_poses(self.samples, &kp, self.opts),
+                true,
+            ));
+        }
+        if let Some(z) = conventions::gravity_flipped(c.gravity_tilt) {
+            notes.push(format!(
+                "warning: the estimated gravity is {:.1}° from (0, 0, −{}): {}",
+                c.gravity_tilt.to_degrees(),
+                self.args.gravity,
+                z.describe()
+            ));
+        }
+        let calibration = Calibration::KnownPoses {
+            source: self.source,
+            poses: kp.len(),
+            pose_std: (self.args.pose_rot_std, self.args.pose_pos_std),
+            c: Box::new(c),
+            time_offset: self.time_offset,
+        };
+        Ok((calibration, fit))
+    }
 }
