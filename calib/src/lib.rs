@@ -19,6 +19,8 @@
 //!   - [`bias::still`]: still-interval detection ([`detect_still_intervals`]).
 //! - [`allan`]: overlapping Allan deviation (IEEE Std 952-1997) and the white-noise, random-walk
 //!   and bias-instability fits ([`allan::ImuAllan`], Kalibr `imu.yaml`).
+//! - [`fit`]: the goodness of fit of an estimate, its χ² against `χ²_dof` ([`Fit`]: credible
+//!   or not, and why), and the standard deviations scaled by `√(χ²/dof)`.
 //! - [`gauss_newton`]: the solver every estimator uses ([`solve`], [`LeastSquares`],
 //!   [`GaussNewton`]), run by argmin's executor; covariance and unobservable directions of the
 //!   estimate ([`Solution`]).
@@ -40,6 +42,7 @@
 pub mod allan;
 pub mod bias;
 pub mod checker;
+pub mod fit;
 pub mod gauss_newton;
 pub mod numdiff;
 
@@ -50,6 +53,7 @@ pub use bias::{
     detect_still_intervals,
 };
 pub use checker::{CheckError, CheckOptions, CheckReport, check_jacobian, to_dmatrix};
+pub use fit::Fit;
 pub use gauss_newton::{
     Damping, GaussNewton, GnError, GnState, LeastSquares, NumericLeastSquares, Solution,
     StopReason, finish, solve,

@@ -97,7 +97,7 @@ fn merged_blocks_are_the_means_of_their_samples() {
 
 /// The block-mean estimator at τ = mτ₀ (starts stepping by τ₀ = 64Δt) against the full
 /// overlapping one (stepping by Δt) on 2 h at 50 Hz of white noise and random walk: within
-/// twice the point's 1-σ error `σ/√(2(K − 1))` at every τ with at least 8 clusters.
+/// twice the point's 1-σ error `σ/√(2ν)` at every τ with at least 8 clusters.
 #[test]
 fn block_means_agree_with_the_full_estimator_within_its_confidence() {
     let samples = sim_static(50.0, 7200.0, 3);

@@ -49,7 +49,7 @@ fn conventions() -> String {
 #[command(name = "preint", version, about, after_help = conventions())]
 pub struct Cli {
     /// Print one JSON object on stdout instead of the human summary.
-    #[arg(long, global = true)]
+    #[arg(help_heading = "Output", long, global = true)]
     pub json: bool,
     /// The subcommand and its flags.
     #[command(subcommand)]

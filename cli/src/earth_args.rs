@@ -16,12 +16,12 @@ use preint::{CoriolisMode, NavState};
 pub struct EarthRateArgs {
     /// Simulate in a world frame rotating at ω_ie = x,y,z (rad/s, world frame), gravity fixed
     /// in it: the gyro reads ω_b + R_wbᵀω_ie, the accelerometer R_wbᵀ(a + 2ω_ie×v +
-    /// ω_ie×(ω_ie×p) − g).
-    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true,
-          value_parser = crate::parse::vec3, conflicts_with = "latitude")]
+    /// ω_ie×(ω_ie×p) − g). At most 100 rad/s.
+    #[arg(help_heading = "Scene", long, value_name = "X,Y,Z", allow_hyphen_values = true,
+          value_parser = preint_analysis::parse::frame_rate, conflicts_with = "latitude")]
     pub earth_rate: Option<Vector3<f64>>,
     /// The Earth rate at this latitude (deg, −90..90) in an east-north-up world frame.
-    #[arg(long, value_name = "DEG", allow_hyphen_values = true, value_parser = latitude)]
+    #[arg(help_heading = "Scene", long, value_name = "DEG", allow_hyphen_values = true, value_parser = latitude)]
     pub latitude: Option<f64>,
 }
 
@@ -32,15 +32,7 @@ impl EarthRateArgs {
     }
 }
 
-/// Parses a latitude in degrees: finite and within [−90, 90].
-pub fn latitude(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(x) if x.is_finite() && (-90.0..=90.0).contains(&x) => Ok(x),
-        _ => Err(format!(
-            "`{s}` is not a latitude in degrees within [-90, 90]"
-        )),
-    }
-}
+pub use preint_analysis::parse::latitude;
 
 /// Parses `first`, `second` or `exact`.
 pub fn coriolis_mode(s: &str) -> Result<CoriolisMode, String> {
@@ -63,34 +55,49 @@ pub fn mode_label(m: CoriolisMode) -> &'static str {
     }
 }
 
-/// Parses `px,py,pz,vx,vy,vz,qw,qx,qy,qz` (m, m/s, quaternion body→world) into a state.
+/// Parses `px,py,pz,vx,vy,vz,qw,qx,qy,qz` (m, m/s, quaternion body→world) into a state:
+/// |p| at most [`preint_analysis::parse::MAX_POSITION_M`], |v| below the speed of light.
 pub fn initial_state(s: &str) -> Result<NavState, String> {
-    let x = crate::parse::numbers::<10>(
+    use preint_analysis::parse::{MAX_POSITION_M, SPEED_OF_LIGHT_M_S};
+    let x = preint_analysis::parse::numbers::<10>(
         s,
         "ten comma-separated numbers px,py,pz,vx,vy,vz,qw,qx,qy,qz",
     )?;
-    let r = crate::parse::unit_quaternion([x[6], x[7], x[8], x[9]])?;
-    Ok(NavState::new(
-        r,
+    let r = preint_analysis::parse::unit_quaternion([x[6], x[7], x[8], x[9]])?;
+    let (p, v) = (
         Vector3::new(x[0], x[1], x[2]),
         Vector3::new(x[3], x[4], x[5]),
-    ))
+    );
+    if p.norm() > MAX_POSITION_M {
+        return Err(format!(
+            "the position is {:.4e} m from the origin, beyond {MAX_POSITION_M:e} m (where a \
+             double no longer resolves 0.1 mm)",
+            p.norm()
+        ));
+    }
+    if v.norm() >= SPEED_OF_LIGHT_M_S {
+        return Err(format!(
+            "the speed {:.4e} m/s is not below the speed of light",
+            v.norm()
+        ));
+    }
+    Ok(NavState::new(r, p, v))
 }
 
 /// Prediction flags of `integrate`.
 #[derive(clap::Args, Clone, Debug, Default)]
 pub struct PredictArgs {
     /// Rotation rate of the world (navigation) frame ω_ie = x,y,z (rad/s, world frame), for the
-    /// prediction (Earth rotation; gravity fixed in the frame).
-    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, value_parser = crate::parse::vec3)]
+    /// prediction (Earth rotation; gravity fixed in the frame). At most 100 rad/s.
+    #[arg(help_heading = "Prediction", long, value_name = "X,Y,Z", allow_hyphen_values = true, value_parser = preint_analysis::parse::frame_rate)]
     pub omega_coriolis: Option<Vector3<f64>>,
     /// How ω_ie enters the prediction: first (first-order Coriolis), second (plus centrifugal
     /// terms) or exact (constant-rate rotating frame). Default exact; needs --omega-coriolis.
-    #[arg(long, value_name = "MODE", value_parser = coriolis_mode)]
+    #[arg(help_heading = "Prediction", long, value_name = "MODE", value_parser = coriolis_mode)]
     pub coriolis: Option<CoriolisMode>,
     /// State at the window's start, px,py,pz,vx,vy,vz,qw,qx,qy,qz (m, m/s, quaternion
     /// body→world): adds the predicted state at the window's end to the output.
-    #[arg(long, value_name = "P,V,Q", allow_hyphen_values = true, value_parser = initial_state)]
+    #[arg(help_heading = "Prediction", long, value_name = "P,V,Q", allow_hyphen_values = true, value_parser = initial_state)]
     pub initial_state: Option<NavState>,
 }
 
@@ -140,5 +147,16 @@ mod tests {
         assert_eq!(coriolis_mode("second").unwrap(), CoriolisMode::SecondOrder);
         assert!(coriolis_mode("third").is_err());
         assert!(latitude("91").is_err() && latitude("-45").is_ok());
+        assert!(
+            initial_state("1e13,0,0,0,0,0,1,0,0,0")
+                .unwrap_err()
+                .contains("1e12")
+        );
+        assert!(
+            initial_state("0,0,0,3e8,0,0,1,0,0,0")
+                .unwrap_err()
+                .contains("speed of light")
+        );
+        assert!(initial_state("4e11,0,0,2e8,0,0,1,0,0,0").is_ok());
     }
 }

@@ -34,10 +34,28 @@ pub enum CliError {
     },
 }
 
+impl From<preint_analysis::Error> for CliError {
+    fn from(e: preint_analysis::Error) -> Self {
+        match e {
+            preint_analysis::Error::Io(e) => CliError::Io(e),
+            preint_analysis::Error::Usage(m) => CliError::Usage(m),
+            preint_analysis::Error::Failed(m) => CliError::Failed(m),
+        }
+    }
+}
+
 impl CliError {
     /// A failure with the message of `e`.
     pub fn failed(e: impl std::fmt::Display) -> Self {
         Self::Failed(e.to_string())
+    }
+
+    /// An output path of `--out` that cannot be created or written (`--out path: e`).
+    pub fn out_path(path: &std::path::Path, e: impl std::fmt::Display) -> Self {
+        Self::Usage(format!(
+            "--out {}: {e} (give a path where a new file or directory can be written)",
+            path.display()
+        ))
     }
 
     /// A failure with the message of `e`, prefixed with the file it concerns (`file: e`).

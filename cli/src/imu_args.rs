@@ -1,15 +1,11 @@
 //! The flags that say where the IMU samples are and how to read them, shared by every
-//! subcommand that reads a recording.
+//! subcommand that reads a recording; [`ImuArgs::to_input`] hands them to the library as an
+//! [`ImuInput`].
 
-use crate::{CliError, checks};
-use preint::ImuSample;
+use preint_analysis::ImuInput;
 use preint_io::layout::{Column, parse_columns};
-use preint_io::split::{MergeHandle, MergeReport};
-use preint_io::{
-    AccelUnit, Delimiter, Format, GyroUnit, ImuReader, ReadOptions, SourceInfo, Stamp, TimeUnit,
-};
-use serde_json::{Value, json};
-use std::path::{Path, PathBuf};
+use preint_io::{AccelUnit, Delimiter, Format, GyroUnit, Stamp, TimeUnit};
+use std::path::PathBuf;
 
 /// The recording and how to read it. Whatever is not given is detected from the extension
 /// and the first lines; what was decided is printed with the result.
@@ -17,52 +13,53 @@ use std::path::{Path, PathBuf};
 pub struct ImuArgs {
     /// IMU recording: EuRoC/TUM-VI CSV, UZH-FPV imu.txt, KITTI text, any delimited text (see
     /// --columns and the unit flags), ROS 1 bag, MCAP or ROS 2 db3 (see --topic).
-    #[arg(long, required_unless_present_all = ["gyro", "accel"], conflicts_with_all = ["gyro", "accel"])]
+    #[arg(help_heading = "Input", long, required_unless_present_all = ["gyro", "accel"], conflicts_with_all = ["gyro", "accel"])]
     pub imu: Option<PathBuf>,
     /// A split recording's gyroscope file (rows t, wx, wy, wz), with --accel.
-    #[arg(long, requires = "accel")]
+    #[arg(help_heading = "Input", long, requires = "accel")]
     pub gyro: Option<PathBuf>,
     /// A split recording's accelerometer file (rows t, ax, ay, az), with --gyro.
-    #[arg(long, requires = "gyro")]
+    #[arg(help_heading = "Input", long, requires = "gyro")]
     pub accel: Option<PathBuf>,
     /// Format of --imu: euroc, tum-vi, uzh-fpv, kitti, delimited, bag, mcap, db3 (default:
     /// detected from the extension and the header).
-    #[arg(long)]
+    #[arg(help_heading = "Input", long)]
     pub format: Option<Format>,
     /// Columns of a delimited file, e.g. t,ax,ay,az,wx,wy,wz (skip for unused columns;
     /// default: from the header's names).
     // One value, the whole list: `std::vec::Vec` (not `Vec`) keeps clap's derive from reading
     // the field as a list of values, each a `Column`, which is not what `columns` returns.
-    #[arg(long, value_parser = columns)]
+    #[arg(help_heading = "Input", long, value_parser = columns)]
     pub columns: Option<std::vec::Vec<Column>>,
     /// Field delimiter of a text file: comma, semicolon, tab or whitespace (default: sniffed).
-    #[arg(long)]
+    #[arg(help_heading = "Input", long)]
     pub delimiter: Option<Delimiter>,
     /// Unit of the timestamps: s, ms, us or ns (decimals allowed; converted to integer ns
     /// exactly).
-    #[arg(long)]
+    #[arg(help_heading = "Input", long)]
     pub time_unit: Option<TimeUnit>,
     /// Unit of the gyroscope: rad/s or deg/s.
-    #[arg(long)]
+    #[arg(help_heading = "Input", long)]
     pub gyro_unit: Option<GyroUnit>,
     /// Unit of the accelerometer: m/s2 or g (1 g = 9.80665 m/s^2).
-    #[arg(long)]
+    #[arg(help_heading = "Input", long)]
     pub accel_unit: Option<AccelUnit>,
     /// The sensor_msgs/Imu topic of a bag, MCAP or db3 file (default: its only one).
-    #[arg(long, conflicts_with_all = ["gyro_topic", "accel_topic"])]
+    #[arg(help_heading = "Input", long, conflicts_with_all = ["gyro_topic", "accel_topic"])]
     pub topic: Option<String>,
     /// A split recording in a bag, MCAP or db3 file: the topic whose angular velocity is used.
-    #[arg(long, requires = "accel_topic")]
+    #[arg(help_heading = "Input", long, requires = "accel_topic")]
     pub gyro_topic: Option<String>,
     /// The topic whose linear acceleration is used, with --gyro-topic.
-    #[arg(long, requires = "gyro_topic")]
+    #[arg(help_heading = "Input", long, requires = "gyro_topic")]
     pub accel_topic: Option<String>,
     /// Time stamps of bag, MCAP or db3 messages: header (header.stamp, when the sensor sampled) or
     /// record (when the recorder received the message).
-    #[arg(long, default_value = "header")]
+    #[arg(help_heading = "Input", long, default_value = "header")]
     pub stamp: Stamp,
-    /// Skip the checks that the data looks like m/s^2, rad/s and the stated time unit.
-    #[arg(long)]
+    /// Skip the checks that the data looks like m/s^2, rad/s and the stated time unit (a
+    /// reading beyond any IMU's range, 1000 rad/s or 10000 m/s^2, is refused regardless).
+    #[arg(help_heading = "Input", long)]
     pub no_unit_check: bool,
 }
 
@@ -72,9 +69,12 @@ fn columns(s: &str) -> Result<Vec<Column>, String> {
 }
 
 impl ImuArgs {
-    /// The reader options these flags give.
-    pub fn options(&self) -> ReadOptions {
-        ReadOptions {
+    /// The recording and how to read it, as the library takes it.
+    pub fn to_input(&self) -> ImuInput {
+        ImuInput {
+            imu: self.imu.clone(),
+            gyro: self.gyro.clone(),
+            accel: self.accel.clone(),
             format: self.format,
             columns: self.columns.clone(),
             delimiter: self.delimiter,
@@ -85,116 +85,7 @@ impl ImuArgs {
             gyro_topic: self.gyro_topic.clone(),
             accel_topic: self.accel_topic.clone(),
             stamp: self.stamp,
-            ..ReadOptions::default()
+            no_unit_check: self.no_unit_check,
         }
     }
-
-    /// The recording's file (the gyroscope file of a split recording), for messages.
-    pub fn path(&self) -> &Path {
-        match (&self.imu, &self.gyro) {
-            (Some(p), _) | (None, Some(p)) => p,
-            (None, None) => Path::new("(no --imu)"),
-        }
-    }
-
-    /// The recording's path(s), as printed.
-    pub fn label(&self) -> String {
-        match (&self.imu, &self.gyro, &self.accel) {
-            (None, Some(g), Some(a)) => format!("{} + {}", g.display(), a.display()),
-            _ => self.path().display().to_string(),
-        }
-    }
-
-    /// Whether the recording is split: a gyroscope file and an accelerometer file
-    /// (`--gyro/--accel`) or two topics of a container (`--gyro-topic/--accel-topic`), merged
-    /// with an effective accelerometer density ([`ImuArgs::read_all_split`]).
-    pub fn is_split(&self) -> bool {
-        (self.imu.is_none() && self.gyro.is_some() && self.accel.is_some())
-            || (self.gyro_topic.is_some() && self.accel_topic.is_some())
-    }
-
-    /// A streaming reader of the recording.
-    pub fn open(&self) -> Result<ImuReader, CliError> {
-        self.open_with_report().map(|(r, _)| r)
-    }
-
-    /// As [`ImuArgs::open`], with the handle of the merge report of a split recording
-    /// (`--gyro`/`--accel` or `--gyro-topic`/`--accel-topic`; `None` otherwise).
-    fn open_with_report(&self) -> Result<(ImuReader, Option<MergeHandle>), CliError> {
-        let opts = self.options();
-        let container = || {
-            let path = self.path();
-            opts.format
-                .or_else(|| Format::of_file(path))
-                .filter(|f| f.is_container())
-                .ok_or_else(|| {
-                    CliError::Usage(format!(
-                        "--gyro-topic/--accel-topic need a bag, MCAP or db3 file; {} is not one",
-                        path.display()
-                    ))
-                })
-        };
-        Ok(
-            match (
-                &self.imu,
-                &self.gyro,
-                &self.accel,
-                &self.gyro_topic,
-                &self.accel_topic,
-            ) {
-                (None, Some(g), Some(a), _, _) => {
-                    let (r, h) = preint_io::split::open_split_with_report(g, a, &opts)?;
-                    (r, Some(h))
-                }
-                (Some(p), _, _, Some(g), Some(a)) => {
-                    let (r, h) = preint_io::containers::open_split(p, container()?, g, a, &opts)?;
-                    (r, Some(h))
-                }
-                _ => (ImuReader::open(self.path(), &opts)?, None),
-            },
-        )
-    }
-
-    /// Every sample of the recording, with the unit checks unless `--no-unit-check`; and how
-    /// it was read.
-    pub fn read_all(&self) -> Result<(Vec<ImuSample>, SourceInfo), CliError> {
-        self.read_all_split().map(|(s, info, _)| (s, info))
-    }
-
-    /// As [`ImuArgs::read_all`], also returning the merge report of a split recording
-    /// (`--gyro`/`--accel` or `--gyro-topic`/`--accel-topic`), from which
-    /// [`crate::noise::effective`] gives the noise densities to preintegrate the merged samples
-    /// with. The report's summary and the accelerometer density factor are added to the
-    /// source's notes.
-    pub fn read_all_split(
-        &self,
-    ) -> Result<(Vec<ImuSample>, SourceInfo, Option<MergeReport>), CliError> {
-        let (reader, handle) = self.open_with_report()?;
-        let mut info = reader.info().clone();
-        let bar = crate::progress::ReadingBar::start(reader.progress(), "reading");
-        let samples = reader.read_all()?;
-        drop(bar);
-        let report = handle.map(|h| h.report());
-        if let Some(r) = &report {
-            info.notes.push(r.describe());
-            info.notes.push(format!(
-                "accelerometer white-noise density of the merged samples: sqrt(rho) = {:.5} \
-                 times the given density, plus the interpolation term (docs/SPLIT_STREAMS.md)",
-                r.white_ratio().sqrt()
-            ));
-        }
-        if !self.no_unit_check {
-            checks::si_units(&samples, self.path())?;
-        }
-        Ok((samples, info, report))
-    }
-}
-
-/// How a source was read, as JSON: format, units and the notes on how they were decided.
-pub fn source_json(info: &SourceInfo) -> Value {
-    json!({
-        "format": info.format.name(),
-        "read_as": info.describe(),
-        "notes": info.notes,
-    })
 }

@@ -1,19 +1,22 @@
-//! The library behind the `preint` command line: each subcommand's flags, computation and
-//! printed forms, and the analyses they run, callable without the binary.
+//! The `preint` command line. The library exposes what the binary (`src/main.rs`) and the
+//! command-line tests need: the parsed command line ([`Cli`], [`Command`]), [`run`] and what it
+//! returns ([`Output`], [`CliError`]). The computations on recordings, their result structs
+//! and their JSON are `preint_analysis`, which the Python package uses too; this crate adds the
+//! flags, the human summaries, the charts and the report.
 //!
-//! # Layout
-//! - [`cli`]: the parsed command line ([`Cli`], [`Command`]).
-//! - [`commands`]: one module per subcommand. Each holds its flags (`Args`, a
-//!   [`clap::Args`]), a `compute` that returns the numbers as a struct, `to_json` and `to_text`
-//!   that print them, and `run` = compute, then both prints, as an [`Output`].
-//! - [`analysis`]: the computations that are more than a call into the `preint` or
-//!   `preint-calib` crates: the scheme/rate advice, accuracy against cost, zero-phase
-//!   denoising, throughput measurement, the factor's χ² at ground truth, and the report's
-//!   figures.
-//! - [`charts`] and [`html`]: SVG charts and the self-contained HTML page.
-//! - Shared helpers: [`scheme`] (the `--scheme` values), [`noise`] (noise densities),
-//!   [`checks`] (flag values and units), [`format`](mod@format) (matrices as JSON and text), [`parse`]
-//!   (flag value parsers), [`progress`].
+//! # Layout (private modules)
+//! - `cli`: the parsed command line ([`Cli`], [`Command`]).
+//! - `commands`: one module per subcommand. Each holds its flags (`Args`, a [`clap::Args`],
+//!   which converts into the library's `Options` where the library computes), a `compute` that
+//!   returns the numbers as a struct, `to_json` and `to_text` that print them, and `run` =
+//!   compute, then both prints, as an [`Output`].
+//! - `analysis`: the computations on the built-in scenes: accuracy against cost and the
+//!   report's figures.
+//! - `charts` and `html`: SVG charts and the self-contained HTML page.
+//! - Shared helpers: `scheme` (the `--scheme` values), `imu_args` (the reader flags, into
+//!   `preint_analysis::ImuInput`), `preint_args` and `earth_args` (preintegration and
+//!   Earth-rotation flags), `fit` (the goodness of fit in text and `--strict`), `input`
+//!   (ground-truth rows, scenes).
 //!
 //! # Conventions
 //! World frame z up, gravity `(0, 0, −G)` with `G = 9.81 m/s²` unless a `gravity` argument says
@@ -27,24 +30,18 @@
 // Channel loops index several parallel arrays (axes, curves, fits) by the same index.
 #![allow(clippy::needless_range_loop)]
 
-pub mod analysis;
-pub mod calibration_file;
-pub mod charts;
-pub mod checks;
-pub mod cli;
-pub mod commands;
-pub mod earth_args;
-pub mod error;
-pub mod format;
-pub mod html;
-pub mod imu_args;
-pub mod input;
-pub mod noise;
-pub mod parse;
-pub mod preint_args;
-pub mod progress;
-pub mod scheme;
-pub mod stream;
+mod analysis;
+mod charts;
+mod cli;
+mod commands;
+mod earth_args;
+mod error;
+mod fit;
+mod html;
+mod imu_args;
+mod input;
+mod preint_args;
+mod scheme;
 
 pub use cli::{Cli, Command};
 pub use commands::run;

@@ -9,7 +9,7 @@
 
 use nalgebra::{Matrix3, Matrix5, Vector3};
 use preint::{ImuBias, ImuSample, Level, PreintParams, PreintegratedImu, Scheme, preintegrate};
-use preint_cli::analysis::input_class::exactness;
+use preint_analysis::input_class::exactness;
 use preint_sim::{exact_deltas, scene_by_name, t_s};
 
 type V3 = Vector3<f64>;

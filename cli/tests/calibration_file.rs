@@ -205,6 +205,7 @@ fn advise_applies_the_calibrations_intrinsics() {
             noise: None,
             time_offset_s: None,
             rostopic: None,
+            scheme: None,
         },
     )
     .unwrap();

@@ -8,7 +8,10 @@
 //! - a numeric argument takes a negative number after a space (`--flag -1`): clap hands it to
 //!   the value parser instead of calling it an unexpected argument;
 //! - every argument and subcommand has help text, and an argument whose default clap prints
-//!   (`[default: …]`) does not state it in its own text as well (`default:`, `(default`).
+//!   (`[default: …]`) does not state it in its own text as well (`default:`, `(default`);
+//! - every argument sits under a help heading of [`HEADINGS`] (`--help` lists the flags in
+//!   these groups): the reader flags under `Input` wherever they appear, `integrate`'s under
+//!   input, preintegration, window, prediction and extras (and `--json` under output).
 //!
 //! A new argument without a value clap knows fails the test until it has a line in
 //! [`EXAMPLES`].
@@ -56,6 +59,7 @@ const EXAMPLES: &[(&str, &str, &[&str])] = &[
     ("convert", "out", &["out/contract/imu.csv"]),
     ("calibrate", "out", &["out/contract/calib.yaml"]),
     ("calibrate", "calibration", &["calib.yaml", "--poses", EUROC_GT]),
+    ("calibrate", "scheme", &["euler", "--poses", EUROC_GT]),
     // integrate.
     ("integrate", "bias_gyro", &["0.001,-0.002,0"]),
     ("integrate", "bias_acc", &["0.01,0,-0.02"]),
@@ -123,7 +127,9 @@ fn takes_value(arg: &Arg) -> bool {
 }
 
 /// The values to try for `arg` on `sub`, each an argv after the flag: every possible value
-/// clap knows, else the table's example; nothing for a flag. `Err` names the missing line.
+/// clap knows (followed by the arguments the table's example adds after its value, for a flag
+/// that requires another), else the table's example; nothing for a flag. `Err` names the
+/// missing line.
 fn values(sub: &str, arg: &Arg) -> Result<Vec<Vec<String>>, String> {
     if !takes_value(arg) {
         return Ok(vec![Vec::new()]);
@@ -131,9 +137,14 @@ fn values(sub: &str, arg: &Arg) -> Result<Vec<Vec<String>>, String> {
     let id = arg.get_id().as_str();
     let possible = arg.get_possible_values();
     if !possible.is_empty() {
+        let requires = example(sub, id).map_or(Vec::new(), |e| e[1..].to_vec());
         return Ok(possible
             .iter()
-            .map(|p| vec![p.get_name().to_string()])
+            .map(|p| {
+                let mut v = vec![p.get_name().to_string()];
+                v.extend(requires.iter().cloned());
+                v
+            })
             .collect());
     }
     example(sub, id).map(|v| vec![v]).ok_or_else(|| {
@@ -226,6 +237,7 @@ fn exercise(cli: &Cli) {
         }
     };
     if let Some(i) = input {
+        let i = i.to_input();
         let _ = format!("{:?} {} {}", i.options(), i.label(), i.is_split());
     }
 }
@@ -370,6 +382,92 @@ fn every_argument_has_help_and_states_its_default_once() {
                      [default: {:?}] after it: {help}",
                     flag(arg),
                     arg.get_default_values()
+                ));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The help headings, in the order `--help` of a subcommand tends to show them.
+const HEADINGS: &[&str] = &[
+    "Input",
+    "Window",
+    "Preintegration",
+    "Prediction",
+    "Extras",
+    "Ground truth",
+    "Factor",
+    "Known poses",
+    "Sensor model",
+    "Earth rotation",
+    "Analysis",
+    "Scene",
+    "Sensor",
+    "Benchmark",
+    "Output",
+];
+
+/// The reader flags (`ImuArgs`), under `Input` in every subcommand that reads a recording.
+const READER: &[&str] = &[
+    "imu",
+    "gyro",
+    "accel",
+    "format",
+    "columns",
+    "delimiter",
+    "time_unit",
+    "gyro_unit",
+    "accel_unit",
+    "topic",
+    "gyro_topic",
+    "accel_topic",
+    "stamp",
+    "no_unit_check",
+];
+
+#[test]
+fn every_argument_has_a_help_heading() {
+    let mut failures = Vec::new();
+    for sub in subcommands() {
+        let name = sub.get_name();
+        let mut used = std::collections::BTreeSet::new();
+        for arg in own_arguments(&sub) {
+            let id = arg.get_id().as_str();
+            match arg.get_help_heading() {
+                None => failures.push(format!("`preint {name} {}` has no help heading", flag(arg))),
+                Some(h) if !HEADINGS.contains(&h) => failures.push(format!(
+                    "`preint {name} {}` is under {h:?}, not one of {HEADINGS:?}",
+                    flag(arg)
+                )),
+                Some(h) => {
+                    used.insert(h);
+                    if READER.contains(&id) && h != "Input" {
+                        failures.push(format!("`preint {name} {}` is under {h:?}", flag(arg)));
+                    }
+                }
+            }
+        }
+        if name == "integrate" {
+            let want = [
+                "Extras",
+                "Input",
+                "Output",
+                "Prediction",
+                "Preintegration",
+                "Window",
+            ];
+            if !used.iter().eq(want.iter()) {
+                failures.push(format!(
+                    "`preint integrate`'s headings are {used:?}, not {want:?}"
+                ));
+            }
+        }
+        let help = sub.clone().render_long_help().to_string();
+        for h in &used {
+            if !help.contains(&format!("{h}:")) {
+                failures.push(format!(
+                    "`preint {name} --help` does not show the heading {h}"
                 ));
             }
         }

@@ -4,7 +4,7 @@
 //! gap at low rates, 1 Hz in `bench-steps`, quoted CSV fields) are answers.
 
 mod common;
-use common::{json, repo, run, tmp, write};
+use common::{json, repo, run, simulate, tmp, write};
 use std::fmt::Write as _;
 
 const EUROC_IMU: &str = "tests/data/euroc/V1_01_easy_imu0.csv";
@@ -31,18 +31,10 @@ fn stderr(o: &std::process::Output) -> String {
 fn allan_takes_a_long_static_simulation_for_static() {
     let dir = tmp("messages-allan-static");
     let sim = dir.join("sim");
-    let s = sim.to_str().unwrap();
-    json(&[
-        "simulate",
-        "--scene",
-        "static",
-        "--rate",
-        "20",
-        "--duration",
-        "14400",
-        "--out",
-        s,
-    ]);
+    simulate(
+        &sim,
+        &["--scene", "static", "--rate", "20", "--duration", "14400"],
+    );
     let imu = sim.join("imu.csv");
     let out = json(&["allan", "--imu", imu.to_str().unwrap()]);
     let c = &out["checks"];
@@ -173,4 +165,106 @@ fn a_pose_file_of_the_wrong_width_is_named_by_its_width() {
     assert_eq!(o.status.code(), Some(2), "{e}");
     assert!(e.contains("p16.csv:2: the first row has 16 columns"), "{e}");
     assert!(!e.contains("found 16"), "{e}");
+}
+
+/// Split streams that overlap over part of the recording: `integrate` and `convert` say the
+/// result is that of the overlap and how many gyro samples were dropped, in text and JSON; the
+/// shipped split fixture (a 63 Hz accelerometer inside a 200 Hz gyro's span) gives no warning.
+#[test]
+fn split_streams_shortened_to_their_overlap_say_so() {
+    let dir = tmp("messages-split");
+    let rows = euroc_rows(2000);
+    let (mut g, mut a) = (String::new(), String::new());
+    for (k, r) in rows.iter().enumerate() {
+        let f: Vec<&str> = r.split(',').collect();
+        let _ = writeln!(g, "{},{},{},{}", f[0], f[1], f[2], f[3]);
+        if (600..1400).contains(&k) {
+            let _ = writeln!(a, "{},{},{},{}", f[0], f[4], f[5], f[6]);
+        }
+    }
+    let (g, a) = (write(&dir, "g.csv", &g), write(&dir, "a.csv", &a));
+    let (g, a) = (g.to_str().unwrap(), a.to_str().unwrap());
+    let out = dir.join("m.csv");
+    for args in [
+        vec!["integrate", "--gyro", g, "--accel", a],
+        vec![
+            "convert",
+            "--gyro",
+            g,
+            "--accel",
+            a,
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    ] {
+        let text = String::from_utf8_lossy(&run(&args).stdout).into_owned();
+        assert!(
+            text.contains("warning: the split streams overlap over 3.980 s only")
+                && text.contains("so 601 gyro samples before and 602 after it are dropped"),
+            "{args:?}: {text}"
+        );
+        let w = &json(&args)["input"]["warnings"];
+        assert_eq!(w.as_array().map(Vec::len), Some(1), "{args:?}: {w}");
+    }
+    let mcap = repo("tests/data/ros/split.mcap");
+    let j = json(&[
+        "integrate",
+        "--imu",
+        &mcap,
+        "--gyro-topic",
+        "/camera/gyro/sample",
+        "--accel-topic",
+        "/camera/accel/sample",
+    ]);
+    assert_eq!(
+        j["input"]["warnings"],
+        serde_json::json!([]),
+        "{}",
+        j["input"]
+    );
+}
+
+/// A calibration file `calibrate --out` writes when the data supports no intrinsics (the
+/// identity, stated) is read back by `--calibration`; a file with no calibration key at all
+/// (`model:` alone) is refused naming it.
+#[test]
+fn a_calibration_file_of_our_own_is_read_back() {
+    let dir = tmp("messages-calibration");
+    let sim = dir.join("sim");
+    simulate(
+        &sim,
+        &["--scene", "static", "--rate", "50", "--duration", "20"],
+    );
+    let imu = sim.join("imu.csv");
+    let imu = imu.to_str().unwrap();
+    let out = dir.join("calib.yaml");
+    json(&["calibrate", "--imu", imu, "--out", out.to_str().unwrap()]);
+    let back = json(&[
+        "integrate",
+        "--imu",
+        imu,
+        "--to",
+        "2000000000",
+        "--calibration",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        back["calibration"]["Tw"][0][0], 1.0,
+        "{}",
+        back["calibration"]
+    );
+    let bare = write(&dir, "bare.yaml", "imu0:\n  model: \"kalibr\"\n");
+    let o = run(&[
+        "integrate",
+        "--imu",
+        imu,
+        "--calibration",
+        bare.to_str().unwrap(),
+    ]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(
+        e.contains("bare.yaml") && e.contains("nothing to apply"),
+        "{e}"
+    );
 }

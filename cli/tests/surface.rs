@@ -107,7 +107,7 @@ fn negative_numbers_after_a_space_reach_the_validation() {
         (vec!["simulate", "--out", out, "--seed", "-1"], "--seed"),
         (
             vec!["integrate", "--imu", &imu, "--gravity", "-9.81"],
-            "--gravity must be",
+            "for '--gravity <GRAVITY>'",
         ),
         (vec!["bench-steps", "--window", "-1e-3"], "--window must be"),
         (vec!["bench-steps", "--rates", "-100,200"], "--rates"),

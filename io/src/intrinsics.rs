@@ -15,6 +15,24 @@
 //! (`gyroscope_noise_density` …) and `update_rate` are read as in Kalibr's `imu.yaml`;
 //! `time_offset` \[s\] and `rostopic` are kept as the file holds them.
 //!
+//! `preint_scheme` (this crate's key: `euler`, `midpoint`, `hermite4` or `galilean`) names the
+//! preintegration scheme the time offset was estimated for: a scheme that holds each
+//! interval's first sample (euler, galilean) lags the centred ones (midpoint, hermite4) by
+//! half a sample interval, which an estimated offset absorbs. OpenVINS and Kalibr read their
+//! keys by name (OpenVINS' `YamlParser::parse_external(…, "imu0", key, …)`, Kalibr's
+//! `ImuParameters` dictionary look-ups), so they never see it.
+//!
+//! # Plausibility
+//! Intrinsics far from the identity are refused, naming the file, line and key: a scale
+//! (diagonal of `Tw`, `Ta`) outside [`SCALE_RANGE`], a misalignment (off-diagonal entry over
+//! its diagonal) or sensor-axis rotation (`R_IMUtoGYRO`, `R_IMUtoACC`) above
+//! [`MAX_AXIS_ANGLE_DEG`], or a g-sensitivity entry above [`MAX_G_SENSITIVITY`]. MEMS
+//! datasheets give scale errors of a few % and cross-axis sensitivities of 1–2 % (≈ 1°)
+//! before calibration, and gyro g-sensitivities of 0.01–0.1 °/s/g; a file ten (a hundred for
+//! `Tg`) times beyond is a unit, layout or sign error, not a sensor (`preint audit
+//! --calibration` warns from closer limits: 10 % scale, 0.1 rad, 0.01 (rad/s)/(m/s²)). `preint_unusual_intrinsics: true` under
+//! `imu0` accepts such a file for a sensor that really is that far from nominal.
+//!
 //! # Kalibr (`IccSensors.py`, `IccScaledMisalignedImu`)
 //!
 //! Under `imu0` (or at the top level): `model: scale-misalignment`, `gyroscopes: {M, A,
@@ -25,9 +43,9 @@
 use crate::error::{IoError, Location, read_text, write_text};
 use crate::number::parse_finite;
 use crate::yaml::{Node, parse};
-use preint::ImuNoise;
 use preint::intrinsics::{ImuIntrinsics, IntrinsicsModel};
 use preint::nalgebra::Matrix3;
+use preint::{ImuNoise, Scheme};
 use std::path::Path;
 
 /// An IMU calibration file's content.
@@ -41,7 +59,20 @@ pub struct ImuCalibration {
     pub time_offset_s: Option<f64>,
     /// `rostopic`.
     pub rostopic: Option<String>,
+    /// `preint_scheme`: the scheme the time offset was estimated for (module docs); `None`
+    /// when the file does not say.
+    pub scheme: Option<Scheme>,
 }
+
+/// Accepted range of a scale factor (a diagonal entry of `Tw`, `Ta`): ±20–25 %.
+pub const SCALE_RANGE: (f64, f64) = (0.8, 1.25);
+/// Largest accepted misalignment or sensor-axis rotation \[deg\].
+pub const MAX_AXIS_ANGLE_DEG: f64 = 10.0;
+/// Largest accepted `|Tg|` entry \[(rad/s)/(m/s²)\]: 11 °/s/g, a hundred times the 0.1 °/s/g
+/// of consumer MEMS gyroscopes' datasheets (`preint audit --calibration` warns from half of it).
+pub const MAX_G_SENSITIVITY: f64 = 0.02;
+/// The key that accepts intrinsics beyond the plausible ranges (module docs).
+pub const UNUSUAL_KEY: &str = "preint_unusual_intrinsics";
 
 const NOISE_KEYS: [&str; 5] = [
     "gyroscope_noise_density",
@@ -58,20 +89,137 @@ struct Ctx<'a> {
 
 impl Ctx<'_> {
     /// The file's content: `x` checked, and the keys both formats share.
+    /// `keys`: where each matrix was read, `(name, key path, line)` (the map's line for a
+    /// matrix the file does not give), for the plausibility messages.
     fn calibration(
         &self,
         x: ImuIntrinsics,
         map: &Node,
         path: &str,
+        keys: &[(&str, String, u64)],
     ) -> Result<ImuCalibration, IoError> {
         let intrinsics = self.checked(x, map.line(), path)?;
+        if !self.flag(map, path, UNUSUAL_KEY)? {
+            self.plausible(&intrinsics, keys, path)?;
+        }
         let (time_offset_s, rostopic) = self.common(map, path)?;
         Ok(ImuCalibration {
             intrinsics,
             noise: self.noise(map, path)?,
             time_offset_s,
             rostopic,
+            scheme: self.scheme(map, path)?,
         })
+    }
+
+    /// `preint_scheme`, if given.
+    fn scheme(&self, map: &Node, path: &str) -> Result<Option<Scheme>, IoError> {
+        match map.get("preint_scheme") {
+            None => Ok(None),
+            Some(Node::Scalar(s, l)) => Scheme::from_name(s).map(Some).ok_or_else(|| {
+                self.err(
+                    *l,
+                    format!(
+                        "`{path}preint_scheme`: `{s}` is not euler, midpoint, hermite4 or \
+                         galilean"
+                    ),
+                )
+            }),
+            Some(n) => Err(self.err(n.line(), format!("`{path}preint_scheme`: expected a name"))),
+        }
+    }
+
+    /// A `true`/`false` key (absent: false).
+    fn flag(&self, map: &Node, path: &str, key: &str) -> Result<bool, IoError> {
+        match map.get(key) {
+            None => Ok(false),
+            Some(Node::Scalar(s, _)) if s == "true" => Ok(true),
+            Some(Node::Scalar(s, _)) if s == "false" => Ok(false),
+            Some(n) => Err(self.err(n.line(), format!("`{path}{key}`: expected true or false"))),
+        }
+    }
+
+    /// The plausibility limits of the module docs, the first violation named by its key and
+    /// line.
+    fn plausible(
+        &self,
+        x: &ImuIntrinsics,
+        keys: &[(&str, String, u64)],
+        path: &str,
+    ) -> Result<(), IoError> {
+        let at = |name: &str| {
+            keys.iter()
+                .find(|k| k.0 == name)
+                .map_or((format!("{path}{name}"), 0), |k| (k.1.clone(), k.2))
+        };
+        let fix = format!(
+            "if this sensor really is that far from nominal, add `{UNUSUAL_KEY}: true` under \
+             imu0"
+        );
+        let refuse = |name: &str, what: String| {
+            let (key, line) = at(name);
+            Err(self.err(line, format!("`{key}` {what}; {fix}")))
+        };
+        let tan = MAX_AXIS_ANGLE_DEG.to_radians().tan();
+        for (name, m) in [("Tw", &x.t_w), ("Ta", &x.t_a)] {
+            for i in 0..3 {
+                let d = m[(i, i)];
+                if !(SCALE_RANGE.0..=SCALE_RANGE.1).contains(&d) {
+                    return refuse(
+                        name,
+                        format!(
+                            "entry ({i}, {i}) is {d}: a scale factor outside [{}, {}] is not an \
+                             IMU's (a unit, layout or sign error?)",
+                            SCALE_RANGE.0, SCALE_RANGE.1
+                        ),
+                    );
+                }
+            }
+            for (i, j) in [(0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1)] {
+                let a = m[(i, j)] / m[(j, j)];
+                if a.abs() > tan {
+                    return refuse(
+                        name,
+                        format!(
+                            "entry ({i}, {j}) is {}: a misalignment of {:.1}° (above \
+                             {MAX_AXIS_ANGLE_DEG}°) is not an IMU's",
+                            m[(i, j)],
+                            a.atan().to_degrees().abs()
+                        ),
+                    );
+                }
+            }
+        }
+        for (name, r) in [
+            ("R_IMUtoGYRO", &x.r_imu_to_gyro),
+            ("R_IMUtoACC", &x.r_imu_to_acc),
+        ] {
+            let angle = ((r.trace() - 1.0) / 2.0)
+                .clamp(-1.0, 1.0)
+                .acos()
+                .to_degrees();
+            if angle > MAX_AXIS_ANGLE_DEG {
+                return refuse(
+                    name,
+                    format!(
+                        "rotates the sensor axes by {angle:.1}° (above {MAX_AXIS_ANGLE_DEG}°): \
+                         the sensors' axes of an IMU agree to about a degree"
+                    ),
+                );
+            }
+        }
+        let g = x.t_g.amax();
+        if g > MAX_G_SENSITIVITY {
+            return refuse(
+                "Tg",
+                format!(
+                    "has an entry of {g} (rad/s)/(m/s²) ({:.2} °/s/g), above \
+                     {MAX_G_SENSITIVITY} (11 °/s/g, a hundred times a MEMS datasheet's)",
+                    g.to_degrees() * 9.80665
+                ),
+            );
+        }
+        Ok(())
     }
 
     fn err(&self, line: u64, msg: impl Into<String>) -> IoError {
@@ -230,6 +378,13 @@ pub fn parse_openvins_imu_chain(text: &str, source_name: &str) -> Result<ImuCali
         None => IntrinsicsModel::Kalibr,
     };
     let i = Matrix3::identity();
+    let keys: Vec<(&str, String, u64)> = ["Tw", "Ta", "R_IMUtoGYRO", "R_IMUtoACC", "Tg"]
+        .into_iter()
+        .map(|k| {
+            let line = map.get(k).map_or(map.line(), Node::line);
+            (k, format!("{path}{k}"), line)
+        })
+        .collect();
     let x = ImuIntrinsics {
         model,
         t_w: cx.optional_matrix(map, path, "Tw", i)?,
@@ -238,7 +393,7 @@ pub fn parse_openvins_imu_chain(text: &str, source_name: &str) -> Result<ImuCali
         r_imu_to_acc: cx.optional_matrix(map, path, "R_IMUtoACC", i)?,
         t_g: cx.optional_matrix(map, path, "Tg", Matrix3::zeros())?,
     };
-    cx.calibration(x, map, path)
+    cx.calibration(x, map, path, &keys)
 }
 
 /// Parses Kalibr's `imu.yaml` with the `scale-misalignment` (or `calibrated`) model (module
@@ -250,6 +405,7 @@ pub fn parse_kalibr_imu(text: &str, source_name: &str) -> Result<ImuCalibration,
     };
     let (map, path) = imu_map(&root);
     let mut x = ImuIntrinsics::identity(IntrinsicsModel::Kalibr);
+    let mut keys: Vec<(&str, String, u64)> = Vec::new();
     match map.get("model") {
         None => {}
         Some(Node::Scalar(s, _)) if s == "calibrated" => {}
@@ -272,6 +428,17 @@ pub fn parse_kalibr_imu(text: &str, source_name: &str) -> Result<ImuCalibration,
             x.r_imu_to_gyro = get(g, "gyroscopes", "C_gyro_i")?;
             x.t_g = get(g, "gyroscopes", "A")? * x.r_imu_to_gyro;
             x.t_a = get(a, "accelerometers", "M")?;
+            let line = |sec: &Node, key: &str| sec.get(key).map_or(sec.line(), Node::line);
+            keys = vec![
+                ("Tw", format!("{path}gyroscopes.M"), line(g, "M")),
+                (
+                    "R_IMUtoGYRO",
+                    format!("{path}gyroscopes.C_gyro_i"),
+                    line(g, "C_gyro_i"),
+                ),
+                ("Tg", format!("{path}gyroscopes.A"), line(g, "A")),
+                ("Ta", format!("{path}accelerometers.M"), line(a, "M")),
+            ];
         }
         Some(n) => {
             return Err(cx.err(
@@ -280,7 +447,7 @@ pub fn parse_kalibr_imu(text: &str, source_name: &str) -> Result<ImuCalibration,
             ));
         }
     }
-    cx.calibration(x, map, path)
+    cx.calibration(x, map, path, &keys)
 }
 
 /// Reads an OpenVINS `kalibr_imu_chain.yaml`.
@@ -325,6 +492,12 @@ fn header_lines(out: &mut String, cal: &ImuCalibration) {
     }
     if let Some(t) = cal.time_offset_s {
         out.push_str(&format!("  time_offset: {t:?}  # [ s ]\n"));
+    }
+    if let Some(s) = cal.scheme {
+        out.push_str(&format!(
+            "  preint_scheme: \"{}\"  # the preint scheme time_offset was estimated for\n",
+            s.name()
+        ));
     }
 }
 

@@ -65,9 +65,12 @@ pub use intrinsics::{
     parse_openvins_imu_chain, read_kalibr_imu, read_openvins_imu_chain, write_kalibr_imu,
     write_openvins_imu_chain,
 };
-pub use kalibr::{kalibr_yaml_string, parse_kalibr_yaml, read_kalibr_yaml, write_kalibr_yaml};
+pub use kalibr::{
+    kalibr_yaml_string, parse_kalibr_bias_model, parse_kalibr_noise_model, parse_kalibr_yaml,
+    read_kalibr_bias_model, read_kalibr_noise_model, read_kalibr_yaml, write_kalibr_yaml,
+};
 pub use layout::{Column, Delimiter, TextLayout};
-pub use plausibility::check_si_units;
+pub use plausibility::{UnitVerdict, check_si_units};
 pub use poses::{PoseRow, parse_poses, read_poses};
 pub use reader::{ImuReader, Located, Progress, ReadOptions, SourceInfo, Stamp};
 pub use units::{AccelUnit, GyroUnit, TimeUnit, Units};

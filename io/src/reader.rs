@@ -128,6 +128,9 @@ pub struct SourceInfo {
     pub units: Units,
     /// How the format, columns and units were decided.
     pub notes: Vec<String>,
+    /// What a user must know about what was read (a split recording shortened to the streams'
+    /// overlap), printed with every result as `warning:` lines and in the JSON's `input`.
+    pub warnings: Vec<String>,
 }
 
 impl SourceInfo {
@@ -225,6 +228,7 @@ impl ImuReader {
             units: detection.layout.units,
             layout: Some(detection.layout.clone()),
             notes: detection.notes,
+            warnings: Vec::new(),
         };
         let samples = TextSamples::new(lines, &detection.layout);
         Self::from_source(Box::new(samples), info, progress, opts.max_samples)

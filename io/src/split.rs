@@ -193,6 +193,7 @@ pub fn open_split_with_report(
             accel: a.layout.accel,
         },
         notes,
+        warnings: Vec::new(),
     };
     merged(g.stream, a.stream, info, g.progress, opts)
 }

@@ -591,3 +591,47 @@ fn split_channels_are_checked_for_units() {
     let m = units(&zero);
     assert!(m.len() == 1 && m[0].contains("exactly 0"), "{m:?}");
 }
+
+#[test]
+fn an_impossible_reading_is_a_defect_and_a_spike_a_warning_at_their_index_and_line() {
+    let mut s = still(4000);
+    s[1200].acc.y = 1e308;
+    s[3000].gyro.x += 0.5; // 0.5 rad/s for one sample, the neighbours at the bias
+    let a = audit_text(&s);
+    assert_eq!(kinds(&a, Severity::Defect), ["impossible"]);
+    assert_eq!(kinds(&a, Severity::Warning), ["spikes"]);
+    let i = &a.impossible.first[0];
+    assert_eq!(
+        (a.impossible.count, i.index, i.at),
+        (1, 1200, Location::Line(1202))
+    );
+    let p = &a.spikes.first[0];
+    assert_eq!(
+        (a.spikes.count, p.index, p.at, p.axis),
+        (1, 3000, Location::Line(3002), 0)
+    );
+    // The hash noise is uniform in ±2e-3 rad/s: the robust σ of its changes is ≈ 2.3e-3.
+    assert!(p.sigmas > 100.0 && p.sigmas < 400.0, "{p:?}");
+    assert!(message(&a, "spikes").contains("index 3000 (line 3002) gyro x"));
+    // The impossible sample is left out of the spikes and the unit checks.
+    assert!(a.units.as_ref().unwrap().error.is_none());
+}
+
+#[test]
+fn a_recording_too_short_to_judge_is_not_clean_and_units_that_cannot_be_told_warn() {
+    use preint_io::audit::Verdict;
+    for n in [1, 99, 150] {
+        // 150 samples span 0.745 s.
+        let a = audit_text(&still(n));
+        assert_eq!(a.verdict(), Verdict::TooShort, "{n}: {:#?}", a.findings);
+        assert!(a.is_clean(), "no defect");
+        assert!(!message(&a, "too_short").is_empty());
+    }
+    let one = audit_text(&still(1));
+    assert!(one.still.windows == 0, "one sample is no 0.5 s window");
+    // 300 samples (1.5 s): judged; its units cannot be told (fewer than 4 still windows).
+    let a = audit_text(&still(300));
+    assert_eq!(a.verdict(), Verdict::Clean);
+    assert_eq!(kinds(&a, Severity::Warning), ["units"]);
+    assert!(message(&a, "units").starts_with("unit check inconclusive: gyro unit"));
+}

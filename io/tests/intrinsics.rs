@@ -54,6 +54,7 @@ fn calibration(x: ImuIntrinsics) -> ImuCalibration {
         noise: Some(preint::ImuNoise::euroc()),
         time_offset_s: Some(-0.0045123456789),
         rostopic: Some("/imu0".into()),
+        scheme: None,
     }
 }
 
@@ -77,6 +78,7 @@ fn openvins_files_round_trip_exactly() {
         noise: None,
         time_offset_s: None,
         rostopic: None,
+        scheme: None,
     };
     let text = openvins_imu_chain_string(&bare);
     assert_eq!(parse_openvins_imu_chain(&text, "mem").unwrap(), bare);

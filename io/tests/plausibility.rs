@@ -1,9 +1,11 @@
 //! The unit checks on real recordings: each passes as recorded, and each is refused (with the
 //! flag that fixes it) when its gyro is in deg/s, its accelerometer in g or its time unit
-//! wrong.
+//! wrong; where the checks cannot tell, the verdict says what was missing.
 
 use preint::ImuSample;
-use preint_io::plausibility::{check_units, gyro_scale_fit, median_interval_ns};
+use preint_io::plausibility::{
+    UnitVerdict, check_units, check_units_read_as, gyro_scale_fit, median_interval_ns,
+};
 use preint_io::{GyroUnit, ImuReader, ReadOptions};
 use std::path::PathBuf;
 
@@ -115,4 +117,65 @@ fn a_gyro_of_exact_zeros_beside_a_live_accelerometer_is_refused() {
         })
         .collect();
     assert!(check_units(&rest, "rest").is_ok());
+}
+
+fn verdict(rel: &str, opts: &ReadOptions) -> Result<UnitVerdict, String> {
+    let r = ImuReader::open(&repo(rel), opts).unwrap();
+    let units = r.info().units;
+    let s = r.read_all().unwrap();
+    check_units_read_as(&s, rel, Some(units)).map_err(|e| e.to_string())
+}
+
+#[test]
+fn recordings_with_a_still_part_or_turning_gravity_pass_and_the_others_say_why_not() {
+    // EuRoC (200 Hz in ns: no other time unit gives an IMU's rate; still at the start) and
+    // KITTI (100 Hz in s; still while the car stops).
+    for rel in [EUROC, KITTI] {
+        assert_eq!(
+            verdict(rel, &ReadOptions::default()),
+            Ok(UnitVerdict::Passed),
+            "{rel}"
+        );
+    }
+    // The static ADIS hour at 10 Hz: in ms it would be 10 kHz, and nothing turns gravity.
+    let Ok(UnitVerdict::Inconclusive(why)) = verdict(ADIS, &ReadOptions::default()) else {
+        panic!("ADIS passed")
+    };
+    assert_eq!(why.len(), 1, "{why:?}");
+    assert!(
+        why[0].starts_with("time unit:") && why[0].contains("in ms 0.0001 s"),
+        "{why:?}"
+    );
+    // Its gyro is decided: declared deg/s, its 0.6 deg/s bias would be 0.6 rad/s in rad/s.
+    // EuRoC declared deg/s: 0.0013 rad/s of bias would be plausible in rad/s too.
+    let opts = ReadOptions {
+        gyro_unit: Some(GyroUnit::DegPerS),
+        ..Default::default()
+    };
+    let Ok(UnitVerdict::Inconclusive(why)) = verdict(EUROC, &opts) else {
+        panic!("EuRoC declared deg/s passed")
+    };
+    assert!(
+        why[0].starts_with("gyro unit: deg/s not told from rad/s"),
+        "{why:?}"
+    );
+    // Two seconds of EuRoC: no still part, no pairs.
+    let euroc = read(EUROC, &ReadOptions::default());
+    let v = check_units_read_as(&euroc[..400], "rec", Some(preint_io::Units::SI_NS)).unwrap();
+    assert!(v.why().unwrap().contains("no still part"), "{v:?}");
+    // One sample decides nothing, but is no error.
+    let v = check_units_read_as(&euroc[..1], "rec", None).unwrap();
+    assert_eq!(v.name(), "inconclusive");
+}
+
+#[test]
+fn one_still_window_with_the_gyro_of_a_fast_turn_is_refused() {
+    // EuRoC's first 7.7 s hold one still window; in deg/s its bias reads 4.3 "rad/s" across
+    // the vertical, which would tilt gravity by 120° within it.
+    let deg = scaled(&read(EUROC, &ReadOptions::default())[..1500], DEG, 1.0);
+    let e = err(&deg);
+    assert!(
+        e.contains("1 still 0.5 s window)") && e.contains("above 1 rad/s"),
+        "{e}"
+    );
 }

@@ -10,7 +10,7 @@
 //! - Lever arm on GTSAM's exact case (constant rate, body origin at rest): GTSAM subtracts the
 //!   centripetal term per sample, which is exact here and makes its Euler deltas exact (the
 //!   Euler error of the sensor's circular motion cancels). This crate removes the lever arm by
-//!   the exact end-point identity (`preint::extrinsics`), so its deltas carry the scheme's
+//!   the exact end-point identity (`preint::SensorPose`), so its deltas carry the scheme's
 //!   error on the sensor's own motion: reported per scheme and asserted at each scheme's
 //!   order (Euler ≤ 5e-4 m/s at 200 Hz, midpoint ≤ 1e-6, hermite4 ≤ 1e-9). Both covariances
 //!   are consistent by Monte Carlo on this stream (GTSAM's mean NEES from the generator, this

@@ -10,12 +10,12 @@
 //! Mapping, with `Q` the row permutation our [φ, v, p, b_g, b_a] → GTSAM's [rot, pos, vel, b_a,
 //! b_g] and `M = R_jᵀR_i`:
 //!
-//! - Logmap: `e = −Q r_L` and `∂e/∂x = −Q ∂r_L/∂x` exactly (`preint::factor::logmap` docs);
+//! - Logmap: `e = −Q r_L` and `∂e/∂x = −Q ∂r_L/∂x` exactly (`preint::ResidualMode` docs);
 //!   GTSAM weights with `residualCovariance() = T Q residual_cov15 Qᵀ Tᵀ`, `T = diag(I, ΔRᵀ,
 //!   ΔRᵀ, I, I)`, which is our Logmap weight reordered, so the χ² are equal.
 //! - ComponentWise: rows `[−r_φ, −M r_p, −M r_v, −r_ba, −r_bg]`, the Jacobians likewise plus
 //!   `M[r_{p,v}]×` in the `δφ_i` columns and `−[M r_{p,v}]×` in the `δφ_j` columns
-//!   (`preint::factor` docs).
+//!   (`preint::ImuFactor` docs).
 //!
 //! Columns: GTSAM's pose `[dw, dt]` = our [δφ, δp] to first order, world velocity = δv, bias
 //! columns [acc, gyro].

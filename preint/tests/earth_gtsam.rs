@@ -5,7 +5,7 @@
 //! [`PreintegratedImu`] is built from each fixture's ΔR, Δv, Δp and Forster-chart covariance
 //! (reordered [φ, p, v] → [φ, v, p]) with `CoriolisMode::Exact`, so only prediction and the
 //! factor are under test. GTSAM's ComponentWise error `e = [Log(R_jᵀR̂_j), R_jᵀ(p̂_j − p_j),
-//! R_jᵀ(v̂_j − v_j)]` follows from our residual exactly (`preint::factor` rotating-frame docs),
+//! R_jᵀ(v̂_j − v_j)]` follows from our residual exactly (`preint::ImuFactor` docs, rotating frame),
 //! with `A = Exp(−ωT)`, `M = R_jᵀ A R_i`, `N = R_jᵀ[ω]× A R_i`:
 //!
 //! ```text

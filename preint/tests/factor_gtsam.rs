@@ -3,7 +3,7 @@
 //!
 //! The `PreintegratedImu` is built from each fixture's own ΔR, Δv, Δp, bias Jacobians and
 //! covariance (GTSAM's Forster-chart covariance, reordered from [φ, p, v] to [φ, v, p]), so
-//! only the factor is under test here. Mapping (derived in `preint::factor` docs), with
+//! only the factor is under test here. Mapping (derived in `preint::ImuFactor` docs), with
 //! `M = R_jᵀ R_i`, GTSAM order [rot, pos, vel], bias order [acc, gyro]:
 //!
 //! - ComponentWise: `e = [−r_φ, −M r_p, −M r_v]`; Jacobians
@@ -14,7 +14,7 @@
 //! - Logmap (GTSAM 4.3 default): `e = [w, Jl(w)⁻¹(−M r_p), Jl(w)⁻¹(−M r_v)]`, `w = −r_φ`, from
 //!   the component-wise residual; and the factor's own [`ResidualMode::Logmap`] residual
 //!   `r_L` with its Jacobians maps exactly as `e = −P r_L`, `∂e/∂x = −P ∂r_L/∂x` (`P`: [φ, v, p]
-//!   → [rot, pos, vel]; `preint::factor::logmap` docs).
+//!   → [rot, pos, vel]; `preint::ResidualMode` docs).
 //!
 //! Fixtures: `tests/fixtures/gtsam/*.gtsam.json` with their `*.params.json` (states, bias).
 //! The `factor_*` ones are ComponentWise variants; regenerate with

@@ -1,10 +1,10 @@
 //! The covariance against the exact first-order linearisation, deterministic (no Monte Carlo).
 //!
 //! For a preintegration `f(samples)` the first-order covariance under the documented noise
-//! model (`preint::noise`: every stream sample k carries independent white noise
+//! model (`preint::ImuNoise`: every stream sample k carries independent white noise
 //! `n_k = [n_g, n_a]` of covariance `Q_k = diag(Σ_g, Σ_a)/c_k`, `c_k` its cell from its stream
 //! neighbours) is `Σ_k J_k Q_k J_kᵀ`, with `J_k = ∂e/∂n_k` (9×6) and
-//! `e = [Log(ΔR₀ᵀ ΔR), Δv − Δv₀, Δp − Δp₀]` the chart of `preint::measurement`. Here `J_k` is
+//! `e = [Log(ΔR₀ᵀ ΔR), Δv − Δv₀, Δp − Δp₀]` the chart of `preint::PreintegratedImu`. Here `J_k` is
 //! computed by central differences of the *deltas only* (`Level::Deltas`, so nothing of the
 //! covariance recursion is used), for every sample and channel, and `c_k` is written out from
 //! the rustdoc rule. The code's covariance must agree with that sum. (Windows pushed directly

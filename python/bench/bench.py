@@ -5,7 +5,7 @@ own Python wheel, on the same samples (run by hand; the numbers go to docs/PERFO
     python python/bench/bench.py [--rounds 7] [--json]
 
 Cases (EuRoC noise densities, zero bias, a smooth synthetic 200 Hz stream: the formula of
-``preint::sample::synthetic_stream``):
+``preint_sim::synthetic_stream``):
 
 1. 10⁶ samples, midpoint with the 9×9 covariance and bias Jacobians (level "covariance"), in one
    call: ``preint.preintegrate`` (and ``Preintegrator.integrate_arrays`` + ``finish``) against
@@ -45,7 +45,7 @@ CRATE = REPO / "python" / "bench" / "rust"
 
 
 def synthetic_stream(n: int) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64], npt.NDArray[np.float64]]:
-    """N samples at 200 Hz: ``preint::sample::synthetic_stream``'s sinusoidal rates [rad/s] and
+    """N samples at 200 Hz: ``preint_sim::synthetic_stream``'s sinusoidal rates [rad/s] and
     specific force [m/s²]."""
     k = np.arange(n)
     t = k * 0.005

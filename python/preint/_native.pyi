@@ -824,6 +824,7 @@ def calibrate_file(
     pose_spacing: float = 0.5,
     calibration: str | os.PathLike[str] | None = None,
     out: str | os.PathLike[str] | None = None,
+    scheme: str = "midpoint",
     **options: Unpack[_ReaderOptions],
 ) -> dict[str, Any]:
     """``preint calibrate --json`` on a recording, as a dict: the model is chosen as the
@@ -836,8 +837,13 @@ def calibrate_file(
     result; a parameter the motion does not excite is withheld: ``value`` None, ``kept`` its
     initial value), ``pose_spacing`` [s], ``calibration`` (a
     calibration file applied and used as the starting point). ``out``: write the calibration
-    file (OpenVINS kalibr_imu_chain.yaml). Raises CalibrationError (kind ``Failed``) when
-    nothing can be answered, e.g. no still interval; InputError for a bad file or list."""
+    file (OpenVINS kalibr_imu_chain.yaml). ``scheme``: the scheme the known-pose windows are
+    preintegrated with, and recorded in ``out`` (estimate for the scheme that will use the
+    result: euler and galilean lag midpoint and hermite4 by half a sample interval). The
+    result's ``fit`` (``chi2``, ``dof``, ``chi2_dof``, ``credible``, ``why``, …) says whether
+    the residuals are what the noise model predicts, and every ``*_std`` has its
+    ``*_std_scaled`` by √(χ²/dof). Raises CalibrationError (kind ``Failed``) when nothing can
+    be answered, e.g. no still interval; InputError for a bad file or list."""
 
 def read_calibration(path: str | os.PathLike[str]) -> dict[str, Any]:
     """An IMU calibration file (``calibrate_file(out=...)``, ``preint calibrate --out``;

@@ -1,16 +1,15 @@
 //! `preint advise` from Python: the cheapest scheme and lowest rate whose discretisation error
 //! stays below a fraction of the noise σ, from numpy arrays or a recording. The computation and
-//! the result are the command line's (`preint_cli::analysis::{denoise, advise}`,
-//! `preint_cli::commands::advise::to_json`), so the dict equals `preint advise --json`.
+//! the result are the command line's (`preint_analysis::advise`: `advise_samples`, `compute`,
+//! `to_json`), so the dict equals `preint advise --json`.
 
 use crate::calib::{check, noise_arg};
 use crate::convert::samples;
 use crate::errors::Class;
-use crate::io::{ReadArgs, cli_err, json_py};
-use preint_cli::analysis::advise::{evaluate_input, recommend};
-use preint_cli::analysis::denoise::denoise;
-use preint_cli::analysis::input_class::InputClass;
-use preint_cli::commands::advise;
+use crate::io::{ReadArgs, analysis_err, json_py};
+use preint_analysis::advise::{self, Options};
+use preint_analysis::checks::UnitCheck;
+use preint_analysis::input_class::InputClass;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::{Path, PathBuf};
@@ -45,19 +44,20 @@ pub(crate) fn advise_py<'py>(
     let class = input_class(input)?;
     // The command line's checks of --window and --fraction, named as the arguments.
     for (name, v) in [("window", window), ("fraction", fraction)] {
-        preint_cli::checks::positive(name, v).map_err(|e| cli_err(e, Class::Calibration))?;
+        preint_analysis::checks::positive(name, v)
+            .map_err(|e| analysis_err(e, Class::Calibration))?;
     }
     let noise = noise_arg(Some(noise), false)?;
     let s = samples(t_ns, gyro, acc)?;
     check(&s)?;
     let label = Path::new("samples");
-    let args = advise::Args {
+    let options = Options {
         input: ReadArgs {
             path: Some(label.into()),
             check_units: false,
             ..Default::default()
         }
-        .imu_args()?,
+        .imu_input()?,
         noise: PathBuf::from("(given)"),
         window,
         fraction,
@@ -68,29 +68,11 @@ pub(crate) fn advise_py<'py>(
     };
     let json = py
         .detach(|| {
-            preint_cli::checks::no_gaps(&s, label, preint::DEFAULT_MAX_GAP_NS)?;
-            // As the command line: held input is not low-passed.
-            let (signal, cutoffs) = match class {
-                InputClass::Smooth => {
-                    denoise(&s, noise.gyro_noise_density, noise.acc_noise_density)
-                }
-                InputClass::Held => (s.clone(), [None, None]),
-            };
-            let candidates = evaluate_input(&signal, &noise, 9.81, window, fraction, class)?;
-            let recommended = recommend(&candidates)
-                .and_then(|r| candidates.iter().position(|c| std::ptr::eq(c, r)));
-            let rates_not_evaluated = advise::gap_note(&args, &signal, &candidates);
-            let a = advise::Advice {
-                args,
-                samples: s.len(),
-                cutoffs,
-                candidates,
-                recommended,
-                rates_not_evaluated,
-            };
+            preint_analysis::checks::no_gaps(&s, label, preint::DEFAULT_MAX_GAP_NS)?;
+            let a = advise::advise_samples(&options, &s, &noise, None, UnitCheck::Skipped)?;
             Ok(advise::to_json(&a))
         })
-        .map_err(|e| cli_err(e, Class::Calibration))?;
+        .map_err(|e| analysis_err(e, Class::Calibration))?;
     json_py(py, &json)
 }
 
@@ -116,8 +98,8 @@ pub(crate) fn advise_file<'py>(
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let input_class = input_class(input)?;
-    let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_args()?;
-    let args = advise::Args {
+    let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_input()?;
+    let options = Options {
         input_class,
         calibration: None,
         input,
@@ -128,7 +110,7 @@ pub(crate) fn advise_file<'py>(
         to: to_ns,
     };
     let json = py
-        .detach(|| advise::run(&args).map(|o| o.json))
-        .map_err(|e| cli_err(e, Class::Calibration))?;
+        .detach(|| advise::compute(&options).map(|a| advise::to_json(&a)))
+        .map_err(|e| analysis_err(e, Class::Calibration))?;
     json_py(py, &json)
 }

@@ -10,12 +10,12 @@
 
 use crate::convert::samples;
 use crate::errors::{Class, raise};
-use crate::io::{ReadArgs, cli_err};
+use crate::io::{ReadArgs, analysis_err};
 use crate::params::PyNoise;
 use numpy::IntoPyArray;
 use numpy::ndarray::{Array1, Array2};
+use preint_analysis::allan;
 use preint_calib::allan::{AllanStream, ImuAllan, Stillness, StillnessMonitor, StillnessOptions};
-use preint_cli::commands::allan;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
@@ -155,15 +155,14 @@ pub(crate) fn allan_variance_file<'py>(
     check_still: bool,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_args()?;
-    let args = allan::Args {
+    let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_input()?;
+    let opts = allan::Options {
         input,
-        out: None,
         no_still_check: !check_still,
     };
     let r = py
-        .detach(|| allan::compute(&args))
-        .map_err(|e| cli_err(e, Class::Calibration))?;
+        .detach(|| allan::compute(&opts))
+        .map_err(|e| analysis_err(e, Class::Calibration))?;
     let d = allan_dict(py, &r.allan, r.samples as u64, r.block_len, &r.stillness)?;
     d.set_item("source", r.imu)?;
     d.set_item("units_checked", r.units_checked)?;

@@ -11,19 +11,19 @@
 
 use crate::convert::{mat_py, samples, vec_py};
 use crate::errors::{Class, new_err, raise};
-use crate::io::{ReadArgs, cli_err, json_py};
+use crate::io::{ReadArgs, analysis_err, json_py};
 use crate::params::PyNoise;
 use nalgebra::Vector3;
 use numpy::IntoPyArray;
 use numpy::ndarray::Array3;
 use preint::{ImuNoise, ImuSample};
+use preint_analysis::calibrate;
 use preint_calib::bias::known_poses::extras::Estimate;
 use preint_calib::bias::{
     AccBiasPrior, BiasError, MultiPoseCalibration, MultiPoseOptions, StaticCalibration,
     StaticOptions, StillInterval, StillOptions, calibrate_multi_pose, calibrate_static,
     detect_still_intervals, earth_rate_in_body, remove_earth_rate,
 };
-use preint_cli::commands::calibrate;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
@@ -61,7 +61,7 @@ pub(crate) fn noise_arg(obj: Option<&Bound<'_, PyAny>>, default_euroc: bool) -> 
 fn earth_args(latitude: Option<f64>, heading: Option<f64>) -> PyResult<()> {
     let usage = |m: String| new_err(Class::Shape, "Usage", m);
     if let Some(lat) = latitude {
-        preint_cli::earth_args::latitude(&lat.to_string())
+        preint_analysis::parse::latitude(&lat.to_string())
             .map_err(|m| usage(format!("latitude: {m}")))?;
     }
     match heading {
@@ -331,7 +331,8 @@ pub(crate) fn calibrate_multi_pose_py<'py>(
 #[pyfunction]
 #[pyo3(signature = (path=None, *, gyro=None, accel=None, noise=None, poses=None,
     gravity=9.81, from_ns=None, to_ns=None, pose_rot_std=0.0, pose_pos_std=0.0, latitude=None,
-    heading=None, estimate=None, pose_spacing=0.5, calibration=None, out=None, **options))]
+    heading=None, estimate=None, pose_spacing=0.5, calibration=None, out=None,
+    scheme="midpoint", **options))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn calibrate_file<'py>(
     py: Python<'py>,
@@ -351,10 +352,12 @@ pub(crate) fn calibrate_file<'py>(
     pose_spacing: f64,
     calibration: Option<PathBuf>,
     out: Option<PathBuf>,
+    scheme: &str,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_args()?;
+    let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_input()?;
     crate::checks::gravity_magnitude("gravity", gravity)?;
+    let scheme = crate::params::scheme_from(scheme)?;
     earth_args(latitude, heading)?;
     let needs_poses = estimate.is_some() || calibration.is_some();
     if needs_poses && poses.is_none() {
@@ -367,7 +370,7 @@ pub(crate) fn calibrate_file<'py>(
         .map(|e| Estimate::parse(&e))
         .transpose()
         .map_err(|e| raise(Class::Input, e))?;
-    let args = calibrate::Args {
+    let opts = calibrate::Options {
         input,
         poses,
         noise,
@@ -383,9 +386,10 @@ pub(crate) fn calibrate_file<'py>(
         estimate,
         pose_spacing,
         calibration,
+        scheme,
     };
     let json = py
-        .detach(|| calibrate::run(&args).map(|o| o.json))
-        .map_err(|e| cli_err(e, Class::Calibration))?;
+        .detach(|| calibrate::compute(&opts).map(|r| calibrate::to_json(&r)))
+        .map_err(|e| analysis_err(e, Class::Calibration))?;
     json_py(py, &json)
 }

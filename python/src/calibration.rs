@@ -4,12 +4,11 @@
 
 use crate::convert::{SampleArrays, mat_py};
 use crate::errors::{Class, new_err};
-use crate::io::cli_err;
+use crate::io::analysis_err;
 use numpy::IntoPyArray;
 use numpy::ndarray::Array2;
 use preint::ImuSample;
-use preint_cli::CliError;
-use preint_cli::calibration_file;
+use preint_analysis::calibration_file;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
@@ -17,8 +16,8 @@ use std::path::PathBuf;
 /// The file, every failure an `InputError` naming it.
 fn read(path: &std::path::Path) -> PyResult<preint_io::ImuCalibration> {
     calibration_file::read(path).map_err(|e| match e {
-        CliError::Usage(m) => new_err(Class::Input, "Failed", m),
-        e => cli_err(e, Class::Input),
+        preint_analysis::Error::Usage(m) => new_err(Class::Input, "Failed", m),
+        e => analysis_err(e, Class::Input),
     })
 }
 

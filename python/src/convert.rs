@@ -223,7 +223,7 @@ thread_local! {
 }
 
 /// Samples either side of a keyframe window that its preintegration (and the deltas inside
-/// it) may read: `preint::window` uses and checks at most 4 samples beyond the last sample
+/// it) may read: `preint::preintegrate` uses and checks at most 4 samples beyond the last sample
 /// before `t_i` and the first after `t_j` (checks from 3 before to 3 after, a stencil reach of
 /// 1), so the window of the range equals the window of the whole stream.
 pub(crate) const WINDOW_MARGIN: usize = 8;

@@ -2,8 +2,9 @@
 //! text in any units, ROS 1 bag, MCAP, ROS 2 `.db3`, split gyro/accelerometer recordings) and
 //! EuRoC ground truth as numpy arrays, and the recording audit as a dict.
 //!
-//! Every reader is the Rust one (`preint_io`, driven by the command line's `ImuArgs`, so the
-//! options, detection, unit checks and messages are those of `preint --imu ...`): samples in SI
+//! Every reader is the Rust one (`preint_io`, driven by `preint_analysis::ImuInput` as the
+//! command line's reader flags drive it, so the options, detection, unit checks and messages
+//! are those of `preint --imu ...`): samples in SI
 //! units (rad/s, m/s², sensor frame) with integer-nanosecond timestamps, validated (finite,
 //! strictly increasing), a bad file raising `preint.InputError` whose message names the file and
 //! the line (text) or message (containers). `read_imu` holds at most the Rust reader's bound of
@@ -15,24 +16,21 @@ use crate::params::PyNoise;
 use numpy::IntoPyArray;
 use numpy::ndarray::{Array1, Array2};
 use preint::ImuSample;
-use preint_cli::CliError;
-use preint_cli::commands::audit as audit_cmd;
-use preint_cli::imu_args::ImuArgs;
+use preint_analysis::{Error, ImuInput};
 use preint_io::layout::parse_columns;
 use preint_io::{Format, GroundTruthState, SourceInfo, read_euroc_groundtruth};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
 
-/// A command-line error as a typed exception: a reader error as `InputError` (kind: the
-/// `IoError` variant), an invalid option as `ShapeError` (kind `"Usage"`), a refused or failed
-/// computation as `failed` (kind `"Failed"` / `"Refused"`).
-pub(crate) fn cli_err(e: CliError, failed: Class) -> PyErr {
+/// An analysis error as a typed exception: a reader error as `InputError` (kind: the
+/// `IoError` variant), an invalid option as `ShapeError` (kind `"Usage"`), a failed
+/// computation as `failed` (kind `"Failed"`).
+pub(crate) fn analysis_err(e: Error, failed: Class) -> PyErr {
     match e {
-        CliError::Io(e) => raise(Class::Input, e),
-        CliError::Usage(m) => new_err(Class::Shape, "Usage", m),
-        CliError::Failed(m) => new_err(failed, "Failed", m),
-        CliError::Refused { msg, .. } => new_err(failed, "Refused", msg),
+        Error::Io(e) => raise(Class::Input, e),
+        Error::Usage(m) => new_err(Class::Shape, "Usage", m),
+        Error::Failed(m) => new_err(failed, "Failed", m),
     }
 }
 
@@ -159,8 +157,9 @@ impl ReadArgs {
         Ok(a)
     }
 
-    /// The command line's `ImuArgs` for these options (the same checks as its flags).
-    pub(crate) fn imu_args(&self) -> PyResult<ImuArgs> {
+    /// The recording and how to read it for these options (the same checks as the command
+    /// line's flags).
+    pub(crate) fn imu_input(&self) -> PyResult<ImuInput> {
         let usage = |m: &str| new_err(Class::Shape, "Usage", m.to_string());
         match (&self.path, &self.gyro, &self.accel) {
             (Some(_), None, None) | (None, Some(_), Some(_)) => {}
@@ -182,7 +181,7 @@ impl ReadArgs {
             .map(parse_columns)
             .transpose()
             .map_err(|e| new_err(Class::Shape, "Usage", format!("columns: {e}")))?;
-        Ok(ImuArgs {
+        Ok(ImuInput {
             imu: self.path.clone(),
             gyro: self.gyro.clone(),
             accel: self.accel.clone(),
@@ -253,13 +252,13 @@ pub(crate) fn read_imu<'py>(
     accel: Option<PathBuf>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let args = ReadArgs::from_options(path, gyro, accel, options)?.imu_args()?;
+    let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_input()?;
     let (samples, info, report) = py
-        .detach(|| args.read_all_split())
-        .map_err(|e| cli_err(e, Class::Input))?;
+        .detach(|| input.read_all_split())
+        .map_err(|e| analysis_err(e, Class::Input))?;
     let d = samples_dict(py, &samples)?;
     drop(samples);
-    info_into(&d, &args.label(), &info)?;
+    info_into(&d, &input.label(), &info)?;
     d.set_item("split", report.is_some())?;
     d.set_item(
         "accel_white_ratio",
@@ -316,15 +315,15 @@ pub(crate) fn audit<'py>(
     calibration: Option<PathBuf>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_args()?;
-    let args = audit_cmd::Args {
-        input,
-        strict: false,
-        calibration,
-    };
+    let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_input()?;
+    let opts = preint_analysis::audit::Options { input, calibration };
+    let no_unit_check = opts.input.no_unit_check;
     let json = py
-        .detach(|| audit_cmd::run(&args).map(|o| o.json))
-        .map_err(|e| cli_err(e, Class::Input))?;
+        .detach(|| {
+            preint_analysis::audit::compute(&opts)
+                .map(|r| preint_analysis::audit::to_json(&r, no_unit_check))
+        })
+        .map_err(|e| analysis_err(e, Class::Input))?;
     json_py(py, &json)
 }
 

@@ -192,7 +192,7 @@ pub(crate) fn bias_or_zero(b: Option<PyRef<'_, PyBias>>) -> ImuBias {
 #[derive(Clone)]
 pub(crate) struct PyParams(pub PreintParams);
 
-fn scheme_from(name: &str) -> PyResult<Scheme> {
+pub(crate) fn scheme_from(name: &str) -> PyResult<Scheme> {
     Scheme::from_name(name).ok_or_else(|| {
         let names: Vec<_> = Scheme::ALL.iter().map(|s| s.name()).collect();
         shape_err(format!(

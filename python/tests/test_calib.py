@@ -333,6 +333,32 @@ def test_time_offset_from_known_poses_equals_the_command(preint_cli, tmp_path):
     assert "time_offset:" in text and repr(f["time_offset_s"]) in text
 
 
+def test_scheme_and_fit_of_a_known_pose_calibration_equal_the_command(preint_cli, tmp_path):
+    """``calibrate_file(scheme="euler")`` is ``preint calibrate --scheme euler --json``: the
+    same fit and scaled σ; the calibration file records the scheme; an unknown scheme is refused
+    naming the accepted ones."""
+    import json
+    import subprocess
+
+    t0 = 1_403_715_283_262_142_976
+    out = tmp_path / "calib.yaml"
+    f = preint.calibrate_file(EUROC, poses=EUROC_GT, from_ns=t0, to_ns=t0 + 20_000_000_000,
+                              pose_rot_std=1.75e-3, pose_pos_std=0.005,
+                              estimate="time-offset", scheme="euler", out=out)
+    r = subprocess.run([*preint_cli, "calibrate", "--imu", str(EUROC), "--poses", str(EUROC_GT),
+                        "--from", str(t0), "--to", str(t0 + 20_000_000_000),
+                        "--pose-rot-std", "1.75e-3", "--pose-pos-std", "0.005",
+                        "--estimate", "time-offset", "--scheme", "euler", "--json"],
+                       check=True, capture_output=True, text=True)
+    c = json.loads(r.stdout)
+    assert f["scheme"] == c["scheme"] == "euler"
+    assert f["fit"] == c["fit"] and f["fit"]["dof"] > 30
+    assert f["gyro_bias_std_scaled"] == c["gyro_bias_std_scaled"]
+    assert f["time_offset_s"] is not None and 'preint_scheme: "euler"' in out.read_text()
+    with pytest.raises(ValueError, match="unknown scheme"):
+        preint.calibrate_file(EUROC, poses=EUROC_GT, scheme="rk45")
+
+
 def test_estimate_refusals():
     with pytest.raises(preint.InputError, match="give poses"):
         preint.calibrate_file(EUROC, estimate="time-offset")

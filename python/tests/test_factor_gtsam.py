@@ -11,7 +11,7 @@ factors' error is evaluated with GTSAM's own formula on the manifold preintegrat
 factors' `evaluateError` (residual and every Jacobian) on a tangent preintegration of the same
 samples (`test_gtsam_formula_is_the_factors_evaluate_error`).
 
-Mapping (preint's Rust `preint::factor` and `preint::factor::logmap` docs): GTSAM orders the
+Mapping (preint's Rust `preint::ImuFactor` and `preint::ResidualMode` docs): GTSAM orders the
 residual [rot, pos, vel(, b_a, b_g)], the pose perturbation [dw, dt] (= our [δφ, δp] to first
 order, so the Jacobians are equal), velocity in the world frame (= our δv) and the bias
 [acc, gyro]; our residual is [r_φ, r_v, r_p(, r_bg, r_ba)] with bias columns [gyro, acc].

@@ -6,18 +6,74 @@
 //! outputs, with the script that made them): `preint/tests/gtsam_euler.rs` (ΔR, Δv, Δp,
 //! covariance and bias Jacobians of the Euler scheme to 1e-12 relative on nine inputs) and
 //! `preint/tests/factor_gtsam.rs` (factor residual, Jacobians and prediction after the
-//! documented sign/chart mapping). This library only holds helpers that compute
-//! *nothing* that is asserted against: a seeded Gaussian generator (so the suite does not depend
-//! on a particular `rand` version's stream), paths, statistics (median, log-log slope), the JSON
-//! writer for `target/evidence/`, a scene's true state as a `NavState` and the preintegration of
-//! a whole slice of samples (the measurement the tests then check).
+//! documented sign/chart mapping). This library holds no expected value of the code under
+//! test, only the means of getting and judging one: a seeded Gaussian generator (so the suite
+//! does not depend on a particular `rand` version's stream), paths, statistics (median,
+//! log-log slope), the JSON writer for `target/evidence/`, a scene's true state as a
+//! `NavState`, a window of its ideal readings, the preintegration of a whole slice of samples
+//! (the measurement the tests then check), and the Monte Carlo NEES harness
+//! ([`monte_carlo`]: the realisations, NEES `eᵀΣ⁻¹e` with the covariance the code under test
+//! gives, and the χ² mean a correct covariance predicts).
 //!
 //! Environment:
 //! - `PREINT_FULL=1` runs the heavy Monte Carlo / long-stream cases at full size (see each test).
 //! - `EVIDENCE_OUT=DIR` writes the JSON records to `DIR` instead of `<workspace>/target/evidence`.
 
+use nalgebra::Vector3;
 use preint_lie::SO3;
 use std::path::PathBuf;
+
+pub mod monte_carlo;
+
+/// The suite's gravity, `(0, 0, −9.81)` m/s² in the world frame.
+pub fn gravity() -> Vector3<f64> {
+    Vector3::new(0.0, 0.0, -9.81)
+}
+
+/// The constant bias the Monte Carlo scenes' samples carry: `b_g = (0.01, −0.02, 0.015)`
+/// rad/s, `b_a = (0.1, −0.05, 0.2)` m/s².
+pub fn scene_bias() -> preint::ImuBias {
+    preint::ImuBias::new(
+        Vector3::new(0.01, -0.02, 0.015),
+        Vector3::new(0.1, -0.05, 0.2),
+    )
+}
+
+/// A window `[t_i, t_j]` of a scene under the suite's [`gravity`]: the scene's true states at
+/// both ends and its ideal readings (`SceneState::ideal_sample`) every `period_ns` from `t_i`
+/// to `t_j` (both included), each plus a constant bias.
+pub struct SceneWindow {
+    /// The true state at `t_i`.
+    pub state_i: preint::NavState,
+    /// The true state at `t_j`.
+    pub state_j: preint::NavState,
+    /// The noise-free samples.
+    pub clean: Vec<preint::ImuSample>,
+}
+
+impl SceneWindow {
+    /// The window `[t_i_ns, t_j_ns]` of `scene` sampled every `period_ns`, the readings plus
+    /// `bias`.
+    pub fn new(
+        scene: &dyn preint_sim::Scene,
+        (t_i_ns, t_j_ns): (i64, i64),
+        period_ns: i64,
+        bias: &preint::ImuBias,
+    ) -> Self {
+        let clean = (0..=(t_j_ns - t_i_ns) / period_ns)
+            .map(|k| {
+                let t = t_i_ns + k * period_ns;
+                let s = scene.state(preint_sim::t_s(t)).ideal_sample(t, &gravity());
+                preint::ImuSample::new(t, s.gyro + bias.gyro, s.acc + bias.acc)
+            })
+            .collect();
+        Self {
+            state_i: true_state(scene, t_i_ns),
+            state_j: true_state(scene, t_j_ns),
+            clean,
+        }
+    }
+}
 
 /// The scene's exact state at `t_ns` as a [`preint::NavState`]: attitude body → world,
 /// position \[m\] and velocity [m/s] in the world frame.

@@ -13,7 +13,8 @@
 //!
 //! Output: `target/evidence/earth_factor.json`.
 
-use evidence::{Gauss, full_run, mean, noisy_stream, true_state, write_json};
+use evidence::monte_carlo::{MonteCarlo, SampleNoise};
+use evidence::{full_run, mean, true_state, write_json};
 use nalgebra::Vector3;
 use preint::{ImuBias, ImuFactor, ImuNoise, Level, PreintParams, Scheme, SensorPose, preintegrate};
 use preint_lie::SO3;
@@ -37,8 +38,11 @@ fn factor_nees_of_a_rig_moving_in_a_rotating_frame() {
         .unwrap()
         .samples;
     let noise = ImuNoise::euroc();
-    let dt = 0.005;
-    let (sg, sa) = (noise.gyro_sample_std(dt), noise.acc_sample_std(dt));
+    let mc = MonteCarlo {
+        clean: &clean,
+        noise: SampleNoise::at(&noise, 0.005),
+        n: n_real,
+    };
     let (t_i, t_j) = (1_000_000_000, 2_000_000_000);
     let (xi, xj) = (
         true_state(scene.as_ref(), t_i),
@@ -70,15 +74,11 @@ fn factor_nees_of_a_rig_moving_in_a_rotating_frame() {
             ),
         ];
         for (name, p) in variants {
-            let chi2: Vec<f64> = (0..n_real)
-                .map(|r| {
-                    let mut rng = Gauss::new(0xEA27_0000 | r as u64);
-                    let (noisy, _) = noisy_stream(&clean, &mut rng, (sg, sa), None);
-                    let m = preintegrate(&p, &b0, &noisy, t_i, t_j).unwrap();
-                    ImuFactor::new(m).unwrap().chi2(&xi, &xj, &b0)
-                })
-                .collect();
-            let m = mean(&chi2);
+            let chi2 = mc.white(0xEA27_0000, |noisy| {
+                let m = preintegrate(&p, &b0, noisy, t_i, t_j).unwrap();
+                [ImuFactor::new(m).unwrap().chi2(&xi, &xj, &b0)]
+            });
+            let m = mean(&chi2[0]);
             println!(
                 "{:<9} {name:<14} N = {n_real}: mean NEES {m:.3}",
                 scheme.name()

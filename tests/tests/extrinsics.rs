@@ -1,4 +1,4 @@
-//! An IMU away from the body origin (`PreintParams::body_p_sensor`, `preint::extrinsics`):
+//! An IMU away from the body origin (`PreintParams::body_p_sensor`, `preint::SensorPose`):
 //! the body deltas against the exact truth, bias Jacobians against re-integration, the
 //! covariance against Monte Carlo, and merging.
 //!
@@ -11,8 +11,9 @@
 //! Output: `target/evidence/extrinsics.json` (errors per scheme, the alternatives' errors,
 //! mean NEES).
 
-use evidence::{Gauss, full_run, integrate_all as run, mean, noisy_stream, write_json};
-use nalgebra::{SMatrix, SVector, Vector3};
+use evidence::monte_carlo::{MonteCarlo, SampleNoise, combined_error, nees};
+use evidence::{full_run, integrate_all as run, mean, scene_bias, write_json};
+use nalgebra::{SMatrix, Vector3};
 use preint::{
     ImuBias, ImuNoise, ImuSample, Level, LeverArm, PreintParams, PreintegratedImu, Scheme,
     SensorPose, merge, preintegrate,
@@ -230,10 +231,7 @@ fn bias_jacobians_with_a_lever_arm_match_reintegration() {
     let scene = scene_by_name("aggressive").unwrap();
     let pose = mount(0.3);
     let s = sensor_stream(scene.as_ref(), &pose, T_I, T_J, PERIOD);
-    let b0 = ImuBias::new(
-        Vector3::new(0.01, -0.02, 0.015),
-        Vector3::new(0.1, -0.05, 0.2),
-    );
+    let b0 = scene_bias();
     for (mode, scheme) in MODES
         .iter()
         .flat_map(|m| Scheme::ALL.iter().map(move |s| (*m, *s)))
@@ -264,14 +262,6 @@ fn bias_jacobians_with_a_lever_arm_match_reintegration() {
         );
         assert!(err < 1e-6, "{scheme:?}: {err:e}");
     }
-}
-
-fn nees<const N: usize>(e: &SVector<f64, N>, cov: &SMatrix<f64, N, N>) -> f64 {
-    e.dot(
-        &cov.cholesky()
-            .expect("covariance positive definite")
-            .solve(e),
-    )
 }
 
 /// Monte Carlo: with the lever arm the 9-dim NEES of the body deltas (`Level::Covariance`)
@@ -316,13 +306,16 @@ fn nees_runs(
     out: &mut serde_json::Map<String, serde_json::Value>,
 ) {
     let n_real = if full_run() { 20_000 } else { 2_000 };
-    let dt = PERIOD as f64 * 1e-9;
-    let (sg, sa) = (noise.gyro_sample_std(dt), noise.acc_sample_std(dt));
-    let (sbg, sba) = (noise.gyro_bias_step_std(dt), noise.acc_bias_step_std(dt));
     let scene = scene_by_name("aggressive").unwrap();
     let pose = mount(0.3);
     let clean = sensor_stream(scene.as_ref(), &pose, T_I, T_J, PERIOD);
+    let mc = MonteCarlo {
+        clean: &clean,
+        noise: SampleNoise::at(noise, PERIOD as f64 * 1e-9),
+        n: n_real,
+    };
     let b0 = ImuBias::zero();
+    let a = rotation_only(&pose);
     for scheme in Scheme::ALL.iter().copied() {
         let mk = |level| {
             let mut p = PreintParams::from_noise(noise)
@@ -335,27 +328,22 @@ fn nees_runs(
         let (p9, p15) = (mk(Level::Covariance), mk(Level::Combined));
         let m0 = run(&p9, &b0, &clean);
         let m0_15 = run(&p15, &b0, &clean);
-        let (mut n9, mut n15, mut naive) = (vec![], vec![], vec![]);
-        for r in 0..n_real {
-            let mut rng = Gauss::new(0xE7_0000 | r as u64);
-            let (noisy, _) = noisy_stream(&clean, &mut rng, (sg, sa), None);
-            let m = run(&p9, &b0, &noisy);
+        // NEES9 with the body covariance, and with the sensor's covariance rotated only.
+        let f9 = mc.white(0xE7_0000, |noisy| {
+            let m = run(&p9, &b0, noisy);
             let e = m.delta_error(&m0);
-            n9.push(nees(&e, &m.cov));
-            // The sensor's covariance, rotated only.
-            let ms = run(&params_like(&p9, None), &b0, &noisy);
-            let a = rotation_only(&pose);
-            naive.push(nees(&e, &(a * ms.cov * a.transpose())));
-            let mut rng = Gauss::new(0xE7_8000_0000 | r as u64);
-            let (noisy, walk) = noisy_stream(&clean, &mut rng, (sg, sa), Some((sbg, sba)));
-            let m = run(&p15, &b0, &noisy);
-            let mut e15 = SVector::<f64, 15>::zeros();
-            e15.fixed_rows_mut::<9>(0).copy_from(&m.delta_error(&m0_15));
-            e15.fixed_rows_mut::<3>(9).copy_from(&walk.gyro);
-            e15.fixed_rows_mut::<3>(12).copy_from(&walk.acc);
-            n15.push(nees(&e15, &m.cov15));
-        }
-        let (m9, m15, mn) = (mean(&n9), mean(&n15), mean(&naive));
+            let ms = run(&params_like(&p9, None), &b0, noisy);
+            [nees(&e, &m.cov), nees(&e, &(a * ms.cov * a.transpose()))]
+        });
+        let f15 = mc.walk(0xE7_8000_0000, |noisy, walk| {
+            let m = run(&p15, &b0, noisy);
+            [nees(
+                &combined_error(&m.delta_error(&m0_15), walk),
+                &m.cov15,
+            )]
+        });
+        let (n9, naive, n15) = (&f9[0], &f9[1], &f15[0]);
+        let (m9, m15, mn) = (mean(n9), mean(n15), mean(naive));
         let bound15 = 4.0 * (30.0 / n_real as f64).sqrt();
         let sg_density = noise.gyro_noise_density;
         println!(
@@ -408,10 +396,7 @@ fn lever_arm_windows_merge_exactly() {
     let scene = scene_by_name("aggressive").unwrap();
     let pose = mount(0.3);
     let s = sensor_stream(scene.as_ref(), &pose, 0, 3_000_000_000, PERIOD);
-    let b = ImuBias::new(
-        Vector3::new(0.01, -0.02, 0.015),
-        Vector3::new(0.1, -0.05, 0.2),
-    );
+    let b = scene_bias();
     for (mode, scheme) in MODES
         .iter()
         .flat_map(|m| Scheme::ALL.iter().map(move |s| (*m, *s)))

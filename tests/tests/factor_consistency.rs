@@ -43,13 +43,13 @@
 //! Size: N = 2 000 realisations per row (≈ 25 s in the test profile on 2 cores);
 //! `PREINT_FULL=1` runs N = 20 000. Output: `target/evidence/factor_consistency.json`.
 
-use evidence::{Gauss, full_run, integrate_all, mean, noisy_stream, true_state, write_json};
-use nalgebra::Vector3;
+use evidence::monte_carlo::{Chi2Draws, MonteCarlo, SampleNoise, on_two_threads};
+use evidence::{SceneWindow, full_run, gravity, integrate_all, scene_bias, write_json};
 use preint::{
     CombinedImuFactor, ImuBias, ImuFactor, ImuNoise, ImuSample, Level, PreintParams,
     PreintegratedImu, Scheme, merge, preintegrate,
 };
-use preint_sim::{scene_by_name, t_s};
+use preint_sim::scene_by_name;
 
 const T_I: i64 = 1_000_000_000;
 const PERIOD: i64 = 5_000_000;
@@ -63,19 +63,8 @@ fn realisations() -> usize {
     if full_run() { 20_000 } else { 2_000 }
 }
 
-fn bias() -> ImuBias {
-    ImuBias::new(
-        Vector3::new(0.01, -0.02, 0.015),
-        Vector3::new(0.1, -0.05, 0.2),
-    )
-}
-
-fn gravity() -> Vector3<f64> {
-    Vector3::new(0.0, 0.0, -9.81)
-}
-
 fn run(params: &PreintParams, samples: &[ImuSample]) -> PreintegratedImu {
-    integrate_all(params, &bias(), samples)
+    integrate_all(params, &scene_bias(), samples)
 }
 
 /// Ten 1 s windows of the stream, preintegrated on their own and merged.
@@ -84,7 +73,7 @@ fn run_merged(params: &PreintParams, samples: &[ImuSample]) -> PreintegratedImu 
     let mut m: Option<PreintegratedImu> = None;
     let mut t = samples[0].t_ns;
     while t < t_j {
-        let w = preintegrate(params, &bias(), samples, t, t + 1_000_000_000).unwrap();
+        let w = preintegrate(params, &scene_bias(), samples, t, t + 1_000_000_000).unwrap();
         m = Some(match m {
             None => w,
             Some(a) => merge(&a, &w).unwrap(),
@@ -94,55 +83,30 @@ fn run_merged(params: &PreintParams, samples: &[ImuSample]) -> PreintegratedImu 
     m.unwrap()
 }
 
-/// One row of the table: a factor of one scheme on one scene and window.
+/// One row of the table: a factor of one scheme on one scene and window, its χ² draws and
+/// their expected mean (`λ` the noise-free discretisation χ²).
 #[derive(Clone, Debug)]
 struct Row {
     scene: &'static str,
     window_s: i64,
     scheme: &'static str,
-    dim: usize,
-    /// Noise-free discretisation χ² `λ`.
-    disc_chi2: f64,
-    chi2: Vec<f64>,
-}
-
-impl Row {
-    fn expected(&self) -> f64 {
-        self.dim as f64 + self.disc_chi2
-    }
-
-    /// Std of the mean of the χ² draws if the weight is right.
-    fn std_of_mean(&self) -> f64 {
-        ((2.0 * self.dim as f64 + 4.0 * self.disc_chi2) / self.chi2.len() as f64).sqrt()
-    }
-
-    fn z(&self) -> f64 {
-        (mean(&self.chi2) - self.expected()) / self.std_of_mean()
-    }
+    chi2: Chi2Draws,
 }
 
 /// The rows of one scene and window: 9- and 15-dim for every scheme, and the merged 15-dim
 /// rows (10 s windows only).
 fn rows_of(scene_name: &'static str, window_s: i64, n_real: usize, seed: u64) -> Vec<Row> {
     let scene = scene_by_name(scene_name).unwrap();
-    let n = (window_s * 1_000_000_000 / PERIOD) as usize + 1;
+    let b = scene_bias();
     let t_j = T_I + window_s * 1_000_000_000;
-    let (xi, xj) = (
-        true_state(scene.as_ref(), T_I),
-        true_state(scene.as_ref(), t_j),
-    );
-    let b = bias();
-    let clean: Vec<ImuSample> = (0..n as i64)
-        .map(|k| {
-            let t = T_I + k * PERIOD;
-            let s = scene.state(t_s(t)).ideal_sample(t, &gravity());
-            ImuSample::new(t, s.gyro + b.gyro, s.acc + b.acc)
-        })
-        .collect();
+    let w = SceneWindow::new(scene.as_ref(), (T_I, t_j), PERIOD, &b);
+    let (xi, xj, clean) = (w.state_i, w.state_j, w.clean);
     let noise = ImuNoise::euroc();
-    let dt = PERIOD as f64 * 1e-9;
-    let (sg, sa) = (noise.gyro_sample_std(dt), noise.acc_sample_std(dt));
-    let (sbg, sba) = (noise.gyro_bias_step_std(dt), noise.acc_bias_step_std(dt));
+    let mc = MonteCarlo {
+        clean: &clean,
+        noise: SampleNoise::at(&noise, PERIOD as f64 * 1e-9),
+        n: n_real,
+    };
     let merged_schemes: &[usize] = if window_s == 10 { &[1, 2] } else { &[] };
 
     let p9: Vec<PreintParams> = SCHEMES
@@ -158,54 +122,51 @@ fn rows_of(scene_name: &'static str, window_s: i64, n_real: usize, seed: u64) ->
         .iter()
         .map(|p| p.clone().with_level(Level::Combined))
         .collect();
-    let mut rows: Vec<Row> = Vec::new();
-    let mut row = |scheme: &'static str, dim: usize, disc_chi2: f64| {
-        rows.push(Row {
-            scene: scene_name,
-            window_s,
-            scheme,
-            dim,
-            disc_chi2,
-            chi2: Vec::with_capacity(n_real),
-        });
-        rows.len() - 1
+    let chi2_9 = |m: PreintegratedImu| ImuFactor::new(m).unwrap().chi2(&xi, &xj, &b);
+    let chi2_15 = |m: PreintegratedImu, bj: &ImuBias| {
+        CombinedImuFactor::new(m).unwrap().chi2(&xi, &xj, &b, bj)
     };
-    let mut idx9 = vec![];
-    let mut idx15 = vec![];
-    let mut idx_merged = vec![];
+    // Per scheme, then the merged windows.
+    let pims15 = |s: &[ImuSample]| {
+        let merged = merged_schemes.iter().map(|&k| run_merged(&p15[k], s));
+        p15.iter()
+            .map(|p| run(p, s))
+            .chain(merged)
+            .collect::<Vec<_>>()
+    };
+    let f9 = mc.white(seed << 40, |s| {
+        p9.iter().map(|p| chi2_9(run(p, s))).collect::<Vec<_>>()
+    });
+    let f15 = mc.walk((seed << 40) | (1 << 39), |s, walk| {
+        let bj = ImuBias::new(b.gyro + walk.gyro, b.acc + walk.acc);
+        pims15(s)
+            .into_iter()
+            .map(|m| chi2_15(m, &bj))
+            .collect::<Vec<_>>()
+    });
+    let row = |scheme: &'static str, dof: usize, lambda: f64, draws: &[f64]| Row {
+        scene: scene_name,
+        window_s,
+        scheme,
+        chi2: Chi2Draws {
+            dof,
+            lambda,
+            draws: draws.to_vec(),
+        },
+    };
+    let clean15 = pims15(&clean);
+    let mut rows: Vec<Row> = Vec::new();
     for (s, (_, name)) in SCHEMES.iter().enumerate() {
-        let f9 = ImuFactor::new(run(&p9[s], &clean)).unwrap();
-        idx9.push(row(name, 9, f9.chi2(&xi, &xj, &b)));
-        let f15 = CombinedImuFactor::new(run(&p15[s], &clean)).unwrap();
-        idx15.push(row(name, 15, f15.chi2(&xi, &xj, &b, &b)));
+        rows.push(row(name, 9, chi2_9(run(&p9[s], &clean)), &f9[s]));
+        rows.push(row(name, 15, chi2_15(clean15[s].clone(), &b), &f15[s]));
     }
-    for &s in merged_schemes {
-        let f = CombinedImuFactor::new(run_merged(&p15[s], &clean)).unwrap();
+    for (k, &s) in merged_schemes.iter().enumerate() {
         let name = match s {
             1 => "midpoint, 10 merged 1 s windows",
             _ => "hermite4, 10 merged 1 s windows",
         };
-        idx_merged.push((s, row(name, 15, f.chi2(&xi, &xj, &b, &b))));
-    }
-
-    for r in 0..n_real {
-        let mut rng = Gauss::new((seed << 40) | (r as u64));
-        let (noisy, _) = noisy_stream(&clean, &mut rng, (sg, sa), None);
-        for (s, &i) in idx9.iter().enumerate() {
-            let f = ImuFactor::new(run(&p9[s], &noisy)).unwrap();
-            rows[i].chi2.push(f.chi2(&xi, &xj, &b));
-        }
-        let mut rng = Gauss::new((seed << 40) | (1 << 39) | (r as u64));
-        let (noisy, walk) = noisy_stream(&clean, &mut rng, (sg, sa), Some((sbg, sba)));
-        let bj = ImuBias::new(b.gyro + walk.gyro, b.acc + walk.acc);
-        for (s, &i) in idx15.iter().enumerate() {
-            let f = CombinedImuFactor::new(run(&p15[s], &noisy)).unwrap();
-            rows[i].chi2.push(f.chi2(&xi, &xj, &b, &bj));
-        }
-        for &(s, i) in &idx_merged {
-            let f = CombinedImuFactor::new(run_merged(&p15[s], &noisy)).unwrap();
-            rows[i].chi2.push(f.chi2(&xi, &xj, &b, &bj));
-        }
+        let i = SCHEMES.len() + k;
+        rows.push(row(name, 15, chi2_15(clean15[i].clone(), &b), &f15[i]));
     }
     rows
 }
@@ -220,23 +181,8 @@ fn both_factors_are_chi2_consistent_at_the_true_states() {
         ("seed-ellipse", 1),
     ];
     // Two threads (the CI machine has two cores), each taking every other setup.
-    let rows: Vec<Row> = std::thread::scope(|sc| {
-        let handles: Vec<_> = (0..2)
-            .map(|t| {
-                sc.spawn(move || {
-                    setups
-                        .iter()
-                        .enumerate()
-                        .filter(|(i, _)| i % 2 == t)
-                        .flat_map(|(i, (scene, w))| rows_of(scene, *w, n_real, i as u64 + 1))
-                        .collect::<Vec<Row>>()
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .flat_map(|h| h.join().unwrap())
-            .collect()
+    let rows = on_two_threads(&setups, |i, (scene, w)| {
+        rows_of(scene, *w, n_real, i as u64 + 1)
     });
 
     let mut failures = vec![];
@@ -247,8 +193,9 @@ fn both_factors_are_chi2_consistent_at_the_true_states() {
         "scene", "T[s]", "scheme", "dim", "disc. χ²", "expected", "mean χ²", "95 % band", "z"
     );
     for r in &rows {
-        let (m, e, sd, z) = (mean(&r.chi2), r.expected(), r.std_of_mean(), r.z());
-        let band = (e - 1.96 * sd, e + 1.96 * sd);
+        let c = &r.chi2;
+        let (m, e, sd, z) = (c.mean(), c.expected(), c.std_of_mean(), c.z());
+        let band = c.band(1.96);
         let inside = z.abs() <= 1.96;
         if !inside {
             outside95 += 1;
@@ -258,8 +205,8 @@ fn both_factors_are_chi2_consistent_at_the_true_states() {
             r.scene,
             r.window_s,
             r.scheme,
-            r.dim,
-            r.disc_chi2,
+            c.dof,
+            c.lambda,
             e,
             m,
             band.0,
@@ -270,12 +217,12 @@ fn both_factors_are_chi2_consistent_at_the_true_states() {
         if z.abs() > 4.42 {
             failures.push(format!(
                 "{} {} s {} {}-dim: mean χ² {m:.3}, expected {e:.3} ± {sd:.3} (z = {z:.2})",
-                r.scene, r.window_s, r.scheme, r.dim
+                r.scene, r.window_s, r.scheme, c.dof
             ));
         }
         records.push(serde_json::json!({
-            "scene": r.scene, "window_s": r.window_s, "scheme": r.scheme, "dim": r.dim,
-            "discretisation_chi2": r.disc_chi2, "expected_mean": e, "mean_chi2": m,
+            "scene": r.scene, "window_s": r.window_s, "scheme": r.scheme, "dim": c.dof,
+            "discretisation_chi2": c.lambda, "expected_mean": e, "mean_chi2": m,
             "band95": [band.0, band.1], "z": z,
         }));
     }

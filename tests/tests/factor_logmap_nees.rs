@@ -1,6 +1,6 @@
 //! Which residual is consistent over long windows? The mean χ² (NEES) of both factors at the
 //! true states in each [`ResidualMode`]: the component-wise residual `[r_φ, r_v, r_p]` and the
-//! SE₂(3) Logmap residual `Log(D(b)⁻¹ Y)` (`preint::factor::logmap`), each weighted by the
+//! SE₂(3) Logmap residual `Log(D(b)⁻¹ Y)` (`preint::ResidualMode`), each weighted by the
 //! covariance of its chart, and the Logmap residual weighted with the second-order covariance
 //! term of `preint::second_order` added (`logmap+2nd`).
 //!
@@ -33,13 +33,13 @@
 //! euler, midpoint and galilean); about a minute on two cores in the test profile.
 //! Output: `target/evidence/factor_logmap_nees.json`.
 
-use evidence::{Gauss, full_run, integrate_all, mean, noisy_stream, true_state, write_json};
-use nalgebra::Vector3;
+use evidence::monte_carlo::{Chi2Draws, MonteCarlo, SampleNoise, on_two_threads};
+use evidence::{SceneWindow, full_run, gravity, integrate_all, scene_bias, write_json};
 use preint::{
     CombinedImuFactor, ImuBias, ImuFactor, ImuNoise, ImuSample, Level, NavState, PreintParams,
     PreintegratedImu, ResidualMode, Scheme, second_order,
 };
-use preint_sim::{scene_by_name, t_s};
+use preint_sim::scene_by_name;
 
 const T_I: i64 = 1_000_000_000;
 const PERIOD: i64 = 5_000_000;
@@ -55,19 +55,8 @@ fn realisations(noise: &str) -> usize {
     }
 }
 
-fn bias() -> ImuBias {
-    ImuBias::new(
-        Vector3::new(0.01, -0.02, 0.015),
-        Vector3::new(0.1, -0.05, 0.2),
-    )
-}
-
-fn gravity() -> Vector3<f64> {
-    Vector3::new(0.0, 0.0, -9.81)
-}
-
 fn run(params: &PreintParams, samples: &[ImuSample]) -> PreintegratedImu {
-    integrate_all(params, &bias(), samples)
+    integrate_all(params, &scene_bias(), samples)
 }
 
 fn noise(name: &str) -> ImuNoise {
@@ -88,12 +77,11 @@ struct Row {
     scene: &'static str,
     noise: &'static str,
     scheme: Scheme,
-    dim: usize,
     mode: ResidualMode,
     /// Weighted with the second-order covariance term (`preint::second_order`).
     second_order: bool,
-    disc_chi2: f64,
-    chi2: Vec<f64>,
+    /// The χ² draws; `λ` the noise-free discretisation χ² of the variant.
+    chi2: Chi2Draws,
 }
 
 impl Row {
@@ -104,14 +92,8 @@ impl Row {
             (ResidualMode::Logmap, true) => "logmap+2nd",
         }
     }
-    fn expected(&self) -> f64 {
-        self.dim as f64 + self.disc_chi2
-    }
-    fn std_of_mean(&self) -> f64 {
-        ((2.0 * self.dim as f64 + 4.0 * self.disc_chi2) / self.chi2.len() as f64).sqrt()
-    }
     fn z(&self) -> f64 {
-        (mean(&self.chi2) - self.expected()) / self.std_of_mean()
+        self.chi2.z()
     }
 }
 
@@ -125,7 +107,7 @@ const VARIANTS: [(ResidualMode, bool); 3] = [
 fn chi2_9(pim: &PreintegratedImu, mode: ResidualMode, xi: &NavState, xj: &NavState) -> f64 {
     ImuFactor::with_mode(pim.clone(), mode)
         .unwrap()
-        .chi2(xi, xj, &bias())
+        .chi2(xi, xj, &scene_bias())
 }
 
 fn chi2_15(
@@ -136,15 +118,12 @@ fn chi2_15(
 ) -> f64 {
     CombinedImuFactor::with_mode(pim.clone(), mode)
         .unwrap()
-        .chi2(xi, xj, &bias(), bj)
+        .chi2(xi, xj, &scene_bias(), bj)
 }
 
-/// `pim` and, when needed, `pim` with its second-order term.
-fn both(
-    params: &PreintParams,
-    samples: &[ImuSample],
-    pim: PreintegratedImu,
-) -> [PreintegratedImu; 2] {
+/// `pim` and `pim` with its second-order term.
+fn both(params: &PreintParams, samples: &[ImuSample]) -> [PreintegratedImu; 2] {
+    let pim = run(params, samples);
     let term = second_order::covariance(params, samples, &pim).unwrap();
     let big = second_order::inflate(&pim, &term);
     [pim, big]
@@ -159,69 +138,52 @@ fn rows_of(
     seed: u64,
 ) -> Vec<Row> {
     let scene = scene_by_name(scene_name).unwrap();
-    let n = (WINDOW_S * 1_000_000_000 / PERIOD) as usize + 1;
+    let b = scene_bias();
     let t_j = T_I + WINDOW_S * 1_000_000_000;
-    let (xi, xj) = (
-        true_state(scene.as_ref(), T_I),
-        true_state(scene.as_ref(), t_j),
-    );
-    let b = bias();
-    let clean: Vec<ImuSample> = (0..n as i64)
-        .map(|k| {
-            let t = T_I + k * PERIOD;
-            let s = scene.state(t_s(t)).ideal_sample(t, &gravity());
-            ImuSample::new(t, s.gyro + b.gyro, s.acc + b.acc)
-        })
-        .collect();
+    let w = SceneWindow::new(scene.as_ref(), (T_I, t_j), PERIOD, &b);
+    let (xi, xj, clean) = (w.state_i, w.state_j, w.clean);
     let nz = noise(noise_name);
-    let dt = PERIOD as f64 * 1e-9;
-    let (sg, sa) = (nz.gyro_sample_std(dt), nz.acc_sample_std(dt));
-    let (sbg, sba) = (nz.gyro_bias_step_std(dt), nz.acc_bias_step_std(dt));
+    let mc = MonteCarlo {
+        clean: &clean,
+        noise: SampleNoise::at(&nz, PERIOD as f64 * 1e-9),
+        n: n_real,
+    };
     let p9 = PreintParams::from_noise(&nz)
         .with_scheme(scheme)
         .with_level(Level::Covariance)
         .with_gravity(gravity());
     let p15 = p9.clone().with_level(Level::Combined);
-    let (c9, c15) = (
-        both(&p9, &clean, run(&p9, &clean)),
-        both(&p15, &clean, run(&p15, &clean)),
-    );
+    // Every variant reads the same preintegration of the realisation.
+    let variants_9 = |pims: &[PreintegratedImu; 2]| {
+        VARIANTS.map(|(mode, second)| chi2_9(&pims[usize::from(second)], mode, &xi, &xj))
+    };
+    let variants_15 = |pims: &[PreintegratedImu; 2], bj: &ImuBias| {
+        VARIANTS.map(|(mode, second)| chi2_15(&pims[usize::from(second)], mode, (&xi, &xj), bj))
+    };
+    let f9 = mc.white(seed << 40, |s| variants_9(&both(&p9, s)));
+    let f15 = mc.walk((seed << 40) | (1 << 39), |s, walk| {
+        let bj = ImuBias::new(b.gyro + walk.gyro, b.acc + walk.acc);
+        variants_15(&both(&p15, s), &bj)
+    });
+    let lambda = [
+        variants_9(&both(&p9, &clean)),
+        variants_15(&both(&p15, &clean), &b),
+    ];
     let mut rows: Vec<Row> = Vec::new();
-    for dim in [9, 15] {
-        for (mode, second_order) in VARIANTS {
-            let k = usize::from(second_order);
-            let disc_chi2 = if dim == 9 {
-                chi2_9(&c9[k], mode, &xi, &xj)
-            } else {
-                chi2_15(&c15[k], mode, (&xi, &xj), &b)
-            };
+    for (d, (dof, draws)) in [(9, &f9), (15, &f15)].into_iter().enumerate() {
+        for (k, (mode, second_order)) in VARIANTS.into_iter().enumerate() {
             rows.push(Row {
                 scene: scene_name,
                 noise: noise_name,
                 scheme,
-                dim,
                 mode,
                 second_order,
-                disc_chi2,
-                chi2: Vec::with_capacity(n_real),
+                chi2: Chi2Draws {
+                    dof,
+                    lambda: lambda[d][k],
+                    draws: draws[k].clone(),
+                },
             });
-        }
-    }
-    for r in 0..n_real {
-        let mut rng = Gauss::new((seed << 40) | (r as u64));
-        let (noisy, _) = noisy_stream(&clean, &mut rng, (sg, sa), None);
-        let pims = both(&p9, &noisy, run(&p9, &noisy));
-        for (k, (mode, second_order)) in VARIANTS.into_iter().enumerate() {
-            let pim = &pims[usize::from(second_order)];
-            rows[k].chi2.push(chi2_9(pim, mode, &xi, &xj));
-        }
-        let mut rng = Gauss::new((seed << 40) | (1 << 39) | (r as u64));
-        let (noisy, walk) = noisy_stream(&clean, &mut rng, (sg, sa), Some((sbg, sba)));
-        let bj = ImuBias::new(b.gyro + walk.gyro, b.acc + walk.acc);
-        let pims = both(&p15, &noisy, run(&p15, &noisy));
-        for (k, (mode, second_order)) in VARIANTS.into_iter().enumerate() {
-            let pim = &pims[usize::from(second_order)];
-            rows[3 + k].chi2.push(chi2_15(pim, mode, (&xi, &xj), &bj));
         }
     }
     rows
@@ -255,26 +217,8 @@ fn logmap_residual_is_closer_to_its_chi2_than_the_component_wise_one() {
             ]);
         }
     }
-    let rows: Vec<Row> = std::thread::scope(|sc| {
-        let handles: Vec<_> = (0..2)
-            .map(|t| {
-                let setups = &setups;
-                sc.spawn(move || {
-                    setups
-                        .iter()
-                        .enumerate()
-                        .filter(|(i, _)| i % 2 == t)
-                        .flat_map(|(_, (s, nz, sc))| {
-                            rows_of(s, nz, *sc, realisations(nz), seed_of(s, nz))
-                        })
-                        .collect::<Vec<Row>>()
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .flat_map(|h| h.join().unwrap())
-            .collect()
+    let rows = on_two_threads(&setups, |_, (s, nz, sc)| {
+        rows_of(s, nz, *sc, realisations(nz), seed_of(s, nz))
     });
 
     println!(
@@ -292,25 +236,26 @@ fn logmap_residual_is_closer_to_its_chi2_than_the_component_wise_one() {
     );
     let mut records = vec![];
     for r in &rows {
-        let (m, e, sd, z) = (mean(&r.chi2), r.expected(), r.std_of_mean(), r.z());
+        let c = &r.chi2;
+        let (m, e, z, band) = (c.mean(), c.expected(), c.z(), c.band(1.96));
         println!(
             "{:<13} {:<6} {:<9} {:>3} {:<10} {:>10.2e} {:>9.3} {:>9.3}  [{:.3}, {:.3}] {:>7.2}",
             r.scene,
             r.noise,
             r.scheme.name(),
-            r.dim,
+            c.dof,
             r.label(),
-            r.disc_chi2,
+            c.lambda,
             e,
             m,
-            e - 1.96 * sd,
-            e + 1.96 * sd,
+            band.0,
+            band.1,
             z
         );
         records.push(serde_json::json!({
-            "scene": r.scene, "noise": r.noise, "scheme": r.scheme.name(), "dim": r.dim, "residual": r.label(),
-            "discretisation_chi2": r.disc_chi2, "expected_mean": e, "mean_chi2": m,
-            "band95": [e - 1.96 * sd, e + 1.96 * sd], "z": z,
+            "scene": r.scene, "noise": r.noise, "scheme": r.scheme.name(), "dim": c.dof, "residual": r.label(),
+            "discretisation_chi2": c.lambda, "expected_mean": e, "mean_chi2": m,
+            "band95": [band.0, band.1], "z": z,
         }));
     }
 
@@ -332,7 +277,7 @@ fn logmap_residual_is_closer_to_its_chi2_than_the_component_wise_one() {
             cw.scene,
             cw.noise,
             cw.scheme.name(),
-            cw.dim
+            cw.chi2.dof
         );
         match cw.noise {
             "euroc" => {

@@ -33,8 +33,9 @@
 //!
 //! Output: `target/evidence/split_streams.json`.
 
+use evidence::monte_carlo::{nees, realise};
 use evidence::{Gauss, full_run, mean, write_json};
-use nalgebra::{SMatrix, SVector, Vector3};
+use nalgebra::{SVector, Vector3};
 use preint::{
     ImuBias, ImuNoise, ImuSample, Level, PreintParams, PreintegratedImu, Scheme, preintegrate,
 };
@@ -122,6 +123,7 @@ fn merged(
         layout: None,
         units: Units::SI_NS,
         notes: vec![],
+        warnings: Vec::new(),
     };
     let (reader, handle) = merge_with_report(
         channel(gyro.to_vec()),
@@ -155,14 +157,6 @@ fn error(m: &PreintegratedImu, truth: &(SO3, Vector3<f64>, Vector3<f64>)) -> SVe
     SVector::<f64, 9>::from_column_slice(&[r.x, r.y, r.z, v.x, v.y, v.z, p.x, p.y, p.z])
 }
 
-fn nees(e: &SVector<f64, 9>, cov: &SMatrix<f64, 9, 9>) -> f64 {
-    e.dot(
-        &cov.cholesky()
-            .expect("covariance positive definite")
-            .solve(e),
-    )
-}
-
 fn params(noise: &ImuNoise, scheme: Scheme) -> PreintParams {
     PreintParams::from_noise(noise)
         .with_scheme(scheme)
@@ -176,21 +170,21 @@ fn pairs(s: &[ImuSample], gyro: bool) -> Vec<(i64, Vector3<f64>)> {
         .collect()
 }
 
-#[derive(Default)]
-struct Stats {
-    nees: Vec<f64>,
-    dv_sq: Vec<f64>,
+/// The NEES and the squared Δv error of `m` against `reference`.
+fn figures(m: &PreintegratedImu, reference: &Deltas) -> [f64; 2] {
+    let e = error(m, reference);
+    [nees(&e, &m.cov), e.fixed_rows::<3>(3).norm_squared()]
 }
 
-impl Stats {
-    fn push(&mut self, m: &PreintegratedImu, reference: &Deltas) {
-        let e = error(m, reference);
-        self.nees.push(nees(&e, &m.cov));
-        self.dv_sq.push(e.fixed_rows::<3>(3).norm_squared());
-    }
+/// The draws of [`figures`] of one way of merging.
+struct Stats<'a> {
+    nees: &'a [f64],
+    dv_sq: &'a [f64],
+}
 
+impl Stats<'_> {
     fn rms_dv(&self) -> f64 {
-        mean(&self.dv_sq).sqrt()
+        mean(self.dv_sq).sqrt()
     }
 }
 
@@ -232,10 +226,7 @@ fn run(case: &Case, si: usize, name: &str, scheme: Scheme, failures: &mut Vec<St
         error(&m, &truth).fixed_rows::<3>(3).norm()
     };
     let (dv0_ours, dv0_base) = (dv0(&merged(&gyro0, &acc0).0), dv0(&linear(&gyro0, &acc0)));
-    let (mut ours, mut base, mut as_is) = (Stats::default(), Stats::default(), Stats::default());
-    let (mut rho, mut eff_a) = (vec![], vec![]);
-    for r in 0..n_real {
-        let mut rng = Gauss::new(((si as u64) << 40) | r as u64);
+    let draw = |rng: &mut Gauss| {
         let gyro: Vec<_> = gyro0
             .iter()
             .map(|&(t, w)| (t, w + rng.normal3(sg)))
@@ -244,19 +235,35 @@ fn run(case: &Case, si: usize, name: &str, scheme: Scheme, failures: &mut Vec<St
             .iter()
             .map(|&(t, a)| (t, a + rng.normal3(sa)))
             .collect();
-        let (s, report) = merged(&gyro, &acc);
+        (gyro, acc)
+    };
+    // Per realisation: the merge with the effective noise, with the density as is, the
+    // baseline (NEES and squared Δv error of each), then ρ and the effective σ_a.
+    let f = realise(n_real, (si as u64) << 40, draw, |_, (gyro, acc)| {
+        let (s, report) = merged(gyro, acc);
         let eff = effective_noise(&noise, &report);
-        rho.push(report.white_ratio());
-        eff_a.push(eff.acc_noise_density);
         let m = preintegrate(&params(&eff, scheme), &bias, &s, T_I, T_J).unwrap();
-        ours.push(&m, &truth);
-        as_is.push(&preintegrate(&p0, &bias, &s, T_I, T_J).unwrap(), &truth);
-        base.push(
-            &preintegrate(&p0, &bias, &linear(&gyro, &acc), T_I, T_J).unwrap(),
-            &truth,
-        );
-    }
-    let (n_ours, n_base, n_as_is) = (mean(&ours.nees), mean(&base.nees), mean(&as_is.nees));
+        let [ours, as_is, base] = [
+            m,
+            preintegrate(&p0, &bias, &s, T_I, T_J).unwrap(),
+            preintegrate(&p0, &bias, &linear(gyro, acc), T_I, T_J).unwrap(),
+        ]
+        .map(|m| figures(&m, &truth));
+        [
+            ours,
+            as_is,
+            base,
+            [report.white_ratio(), eff.acc_noise_density],
+        ]
+        .concat()
+    });
+    let stats = |k: usize| Stats {
+        nees: &f[2 * k],
+        dv_sq: &f[2 * k + 1],
+    };
+    let (ours, as_is, base) = (stats(0), stats(1), stats(2));
+    let (rho, eff_a) = (&f[6], &f[7]);
+    let (n_ours, n_base, n_as_is) = (mean(ours.nees), mean(base.nees), mean(as_is.nees));
     let sname = format!("{scheme:?}").to_lowercase();
     println!(
         "{}: {name:<13} {sname:<9} N = {n_real}: mean NEES9 merge {n_ours:.3} (density as is \
@@ -266,8 +273,8 @@ fn run(case: &Case, si: usize, name: &str, scheme: Scheme, failures: &mut Vec<St
         case.label,
         ours.rms_dv(),
         base.rms_dv(),
-        mean(&rho),
-        mean(&eff_a)
+        mean(rho),
+        mean(eff_a)
     );
     let tag = format!("{}: {name} {sname}", case.label);
     if (n_ours - 9.0).abs() > 0.3 {
@@ -291,7 +298,7 @@ fn run(case: &Case, si: usize, name: &str, scheme: Scheme, failures: &mut Vec<St
         "mean_nees_9_linear_baseline": n_base,
         "rms_dv_error_merge": ours.rms_dv(), "rms_dv_error_linear": base.rms_dv(),
         "noise_free_dv_error_merge": dv0_ours, "noise_free_dv_error_linear": dv0_base,
-        "mean_white_ratio": mean(&rho), "mean_acc_noise_density_eff": mean(&eff_a),
+        "mean_white_ratio": mean(rho), "mean_acc_noise_density_eff": mean(eff_a),
     })
 }
 

@@ -11,12 +11,19 @@
 //! the fits only use points with at least 8 non-overlapping clusters (N/m ≥ 8).
 //!
 //! # Confidence
-//! Each point carries `σ/√(2(N/m − 1))`, the 1-σ error of an Allan deviation estimated from
-//! `K = N/m` independent clusters (IEEE 952 Annex C; El-Sheimy, Hou, Niu 2008, eq. 11). This is
-//! the non-overlapping figure: the overlapping estimator is somewhat better, so the band is
-//! conservative.
+//! Each point carries its equivalent degrees of freedom ν (`σ̂² ~ σ²χ²_ν/ν`, [`super::edf`]:
+//! Howe, Allan, Barnes 1981; Greenhall and Riley 2003) and the 1-σ error `σ̂/√(2ν)`. ν depends
+//! on the noise, ≈ 1.5 r for white noise and ≈ 0.93 r for a random walk (`r = K − 2`,
+//! K = N/m clusters), against the `K − 1` of K independent clusters (El-Sheimy, Hou, Niu 2008,
+//! eq. 11): the overlapping estimator is better than that for white noise and a little worse
+//! for a random walk, whose long clusters hold few independent pieces of data. The point's
+//! noise is read from the curve's local slope s (least squares over the point and two
+//! neighbours on either side): a share `(1 + 2s)/2` of σ̂² is random walk, the rest white
+//! noise (clamped to [0, 1]), which is exact for a curve of white noise and a random walk,
+//! whose slope runs from −½ to +½. The fits ([`super::fit`]) use ν under the fitted model.
 
 use super::AllanError;
+use super::edf::{NoiseLevels, edf};
 
 /// One point of an Allan deviation curve.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -27,10 +34,13 @@ pub struct AllanPoint {
     pub tau: f64,
     /// Overlapping Allan deviation σ(τ) [signal unit].
     pub adev: f64,
-    /// 1-σ uncertainty of `adev`: `adev/√(2(N/m − 1))` (see the module docs).
+    /// 1-σ uncertainty of `adev`: `adev/√(2ν)` (see the module docs).
     pub adev_err: f64,
     /// Number of non-overlapping clusters N/m (as a real number).
     pub clusters: f64,
+    /// Equivalent degrees of freedom ν of the estimate (`σ̂² ~ σ²χ²_ν/ν`) for the noise the
+    /// curve's local slope shows (module docs).
+    pub edf: f64,
 }
 
 /// Log-spaced cluster sizes `m = round(10^(k/per_decade))`, deduplicated, from 1 to
@@ -53,7 +63,8 @@ pub fn log_spaced_cluster_sizes(max_m: usize, per_decade: usize) -> Vec<usize> {
 }
 
 /// Overlapping Allan deviation of `data` (sample period `dt` \[s\]) at cluster sizes `ms`
-/// (sizes with `2m > N` are skipped). See the module docs for the formula.
+/// (sizes with `2m > N` are skipped), with the EDF and error of every point (the local slopes
+/// are taken over the points computed here). See the module docs for the formulas.
 ///
 /// ```
 /// use preint_calib::allan::allan_deviation;
@@ -109,14 +120,62 @@ pub fn allan_deviation(data: &[f64], dt: f64, ms: &[usize]) -> Result<Vec<AllanP
         // (Δt·d)² / (2τ²) = d² / (2m²).
         let avar = s / (2.0 * (m * m) as f64 * count as f64);
         let adev = avar.sqrt();
-        let clusters = n as f64 / m as f64;
         out.push(AllanPoint {
             m,
             tau,
             adev,
-            adev_err: adev / (2.0 * (clusters - 1.0)).sqrt(),
-            clusters,
+            adev_err: f64::NAN,
+            clusters: n as f64 / m as f64,
+            edf: f64::NAN,
         });
     }
+    let slopes = local_slopes(&out);
+    for (p, slope) in out.iter_mut().zip(slopes) {
+        p.edf = edf(&slope_mix(p, slope), dt, n, p.m);
+        p.adev_err = p.adev / (2.0 * p.edf).sqrt();
+    }
     Ok(out)
+}
+
+/// The white-noise and random-walk levels whose Allan variances at the point's τ are σ̂² split
+/// by the local slope s of log σ against log τ (module docs): the random walk's share is
+/// `(1 + 2s)/2`, clamped to [0, 1] (white noise alone without a finite slope).
+fn slope_mix(p: &AllanPoint, slope: f64) -> NoiseLevels {
+    let walk = if slope.is_finite() {
+        ((1.0 + 2.0 * slope) / 2.0).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let s2 = p.adev * p.adev;
+    NoiseLevels {
+        white: (1.0 - walk) * s2 * p.tau,
+        random_walk: walk * s2 * 3.0 / p.tau,
+    }
+}
+
+/// Local log-log slopes of a curve: least-squares slopes of `ln σ` on `ln τ` over each point
+/// and its two neighbours on either side (NaN for a single point).
+pub(crate) fn local_slopes(pts: &[AllanPoint]) -> Vec<f64> {
+    let lx: Vec<f64> = pts.iter().map(|p| p.tau.ln()).collect();
+    let ly: Vec<f64> = pts.iter().map(|p| p.adev.max(1e-300).ln()).collect();
+    (0..pts.len())
+        .map(|i| {
+            let a = i.saturating_sub(2);
+            let b = (i + 2).min(pts.len() - 1);
+            ls_slope(&lx[a..=b], &ly[a..=b])
+        })
+        .collect()
+}
+
+/// Unweighted least-squares slope of `y` on `x` (NaN for fewer than 2 distinct x).
+pub(crate) fn ls_slope(x: &[f64], y: &[f64]) -> f64 {
+    let k = x.len() as f64;
+    let mx = x.iter().sum::<f64>() / k;
+    let my = y.iter().sum::<f64>() / k;
+    let (mut sxy, mut sxx) = (0.0, 0.0);
+    for (a, b) in x.iter().zip(y) {
+        sxy += (a - mx) * (b - my);
+        sxx += (a - mx) * (a - mx);
+    }
+    if sxx > 0.0 { sxy / sxx } else { f64::NAN }
 }

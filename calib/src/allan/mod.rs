@@ -2,12 +2,16 @@
 //! readings as in allan_variance_ros and kalibr_allan).
 //!
 //! - [`deviation`]: the overlapping Allan deviation `σ(τ)` of one channel at log-spaced cluster
-//!   times, with the 1-σ error of every point.
-//! - [`fit`]: the white-noise density N (slope −½ line fitted on τ ≥ 0.1 s, above the sensor's
-//!   internal filtering, and read at τ = 1 s), the random walk K
-//!   (slope +½ line read at τ = 3 s) and the bias instability B (the curve's floor / 0.664),
-//!   each line kept below the measured curve; upper bounds, flagged, when a slope region is
-//!   missing.
+//!   times, with the equivalent degrees of freedom and 1-σ error of every point.
+//! - [`edf`]: the statistics of the estimator under a noise model: the equivalent degrees of
+//!   freedom of a point and the covariance of two (Greenhall and Riley 2003), the normal
+//!   deviate of a point against the model.
+//! - [`fit`]: the white-noise density N (slope −½ region on τ ≥ 0.1 s, above the sensor's
+//!   internal filtering, read at τ = 1 s) and the random walk K (slope +½ region, read at
+//!   τ = 3 s), one weighted least-squares fit of both with errors from the points' covariance,
+//!   each line kept below every point's upper 4σ limit; upper bounds, flagged, when a slope
+//!   region is missing; the bias instability B (the curve's floor / 0.664); the goodness of
+//!   fit of the model curve.
 //! - [`stream`]: the same from a sample stream in bounded memory ([`AllanStream`], block means
 //!   at a base cluster time τ₀ that grows with the recording's length).
 //! - [`stillness`]: is a streamed recording static ([`StillnessMonitor`])? The Allan variance
@@ -19,12 +23,16 @@
 //! Units: a channel's signal unit `u` (rad/s or m/s²); N in u/√Hz, K in u/s/√Hz (u·√Hz), B in u.
 
 pub mod deviation;
+pub mod edf;
 pub mod fit;
 pub mod stillness;
 pub mod stream;
 
 pub use deviation::{AllanPoint, allan_deviation, log_spaced_cluster_sizes};
-pub use fit::{BIAS_INSTABILITY_FACTOR, CAP_SIGMAS, NoiseFit, WHITE_NOISE_MIN_TAU, fit_noise};
+pub use fit::{
+    BIAS_INSTABILITY_FACTOR, CAP_SIGMAS, MAX_MODEL_Z, ModelDeviation, NoiseFit,
+    WHITE_NOISE_MIN_TAU, fit_noise, model_adev, model_deviation,
+};
 pub use stillness::{Stillness, StillnessMonitor, StillnessOptions};
 pub use stream::{AllanStream, MAX_BASE_BLOCKS};
 
@@ -65,6 +73,9 @@ pub enum AllanError {
     #[error("{0}")]
     TooShort(String),
 }
+
+/// The channels' names, in the order of [`ImuAllan::curves`].
+pub const CHANNELS: [&str; 6] = ["gyro x", "gyro y", "gyro z", "acc x", "acc y", "acc z"];
 
 /// Allan analysis of a six-axis IMU record.
 #[derive(Clone, Debug, PartialEq)]
@@ -179,6 +190,56 @@ impl ImuAllan {
             dt,
             per_decade,
         )
+    }
+
+    /// The goodness of fit of the six channels' models (module docs of [`fit`], "Goodness of
+    /// fit"): `Σz²` and the number of points over all channels as `chi2` and `dof` (no χ²
+    /// distribution: the p-values are NaN), credible while every channel's `max |z|` is at
+    /// most [`MAX_MODEL_Z`]; `why` names the worst channel (`CHANNELS` order), its τ and
+    /// which line misses.
+    pub fn fit(&self) -> crate::Fit {
+        let d: Vec<ModelDeviation> = (0..6)
+            .map(|c| model_deviation(&self.curves[c], &self.fits[c]))
+            .collect();
+        let (chi2, dof) = d
+            .iter()
+            .fold((0.0, 0), |a, d| (a.0 + d.sum_z2, a.1 + d.points));
+        let (worst, w) = d
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.max_abs_z.total_cmp(&b.1.max_abs_z))
+            .unwrap_or((0, &d[0]));
+        let credible = w.max_abs_z <= MAX_MODEL_Z;
+        let line = if w.in_white_range {
+            "white-noise"
+        } else {
+            "random-walk"
+        };
+        let why = if w.points == 0 {
+            "no channel has a fitted line (every N and K is a bound): nothing to compare".into()
+        } else if credible {
+            format!(
+                "the model curves √(N²/τ + K²τ/3) stay within {:.2} statistical errors of the \
+                 measured Allan deviation over their fitted τ ranges ({dof} points; at most \
+                 {MAX_MODEL_Z})",
+                w.max_abs_z
+            )
+        } else {
+            format!(
+                "the model curve of {} misses the measured Allan deviation by {:.1} statistical \
+                 errors at τ = {:.3} s (at most {MAX_MODEL_Z}), in the {line} line's range, the \
+                 curve {} the model; likely cause: a noise the model lacks (bias instability, \
+                 the sensor's filter, a disturbance, motion) shaping the curve where the {line} \
+                 line was fitted, or the line held {} by a point of the curve: read the curve \
+                 before using N and K",
+                CHANNELS[worst],
+                w.max_abs_z,
+                w.tau_at_max,
+                if w.z_at_max > 0.0 { "above" } else { "below" },
+                if w.z_at_max > 0.0 { "down" } else { "up" }
+            )
+        };
+        crate::Fit::from_band(chi2, dof, credible, why)
     }
 
     /// Kalibr noise parameters, aggregated over the three axes of each sensor by the **maximum**

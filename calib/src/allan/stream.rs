@@ -14,9 +14,11 @@
 //! consecutive block means is the mean of the `mb` samples they hold, so each term
 //! `θ_{k+2m} − 2θ_{k+m} + θ_k` is exactly a term of the full overlapping estimator at τ = mτ₀;
 //! with `b = 1` the estimate is the full one, otherwise it takes every `b`-th of its terms
-//! (start times step by τ₀ instead of Δt). Same expectation, the same number of independent
-//! clusters `N/(mb)`, hence the same confidence `σ/√(2(K − 1))` (IEEE Std 952-1997 Annex C;
-//! El-Sheimy, Hou, Niu 2008, eq. 11). τ below τ₀ is not available.
+//! (start times step by τ₀ instead of Δt). Same expectation and the same number of clusters
+//! `N/(mb)`; the EDF of each point ([`super::edf`]) is computed from the block series, so it is
+//! that of this estimator: for white noise 0.45 of the full estimator's at m = 1 (which has b
+//! times as many terms), 0.99 at m = 10, equal beyond; for a random walk 0.96 at m = 1 and
+//! equal from m = 2 (b = 64). τ below τ₀ is not available.
 //!
 //! # Timestamps
 //! As [`super::ImuAllan::from_samples`]: the period is `(t_last − t_first)/(N − 1)` and every

@@ -33,6 +33,10 @@
 //! rad). With an [`AccBiasPrior`] `N(μ_p, diag σ_p²)`, `b_a` is estimated and its standard
 //! deviation is essentially the prior's (the data add only the component along gravity).
 //!
+//! # Goodness of fit
+//! [`StaticCalibration::fit`] tests the per-sample problem: the means' χ² plus the scatter of
+//! the samples about them, so the noise densities are checked against the samples themselves.
+//!
 //! # Outputs
 //! Standard deviations from the solver covariance `(JᵀJ)⁻¹` of the whitened residuals: they are
 //! predicted from the noise densities. The measured per-axis densities
@@ -148,6 +152,23 @@ pub struct StaticCalibration {
     pub iterations: u64,
     /// Why the solver stopped.
     pub stop: StopReason,
+}
+
+impl StaticCalibration {
+    /// The goodness of fit of the per-sample problem (module docs): its χ² is that of the
+    /// means (`chi2`, `dof`) plus the samples' scatter about them, `(N − 1)·Σ var·Δt/σ²` over
+    /// the six axes with `6(N − 1)` more degrees of freedom, so that it tests the white-noise
+    /// densities of `noise` against the samples ([`crate::fit`]). The scatter dominates: the
+    /// fit says whether the stated densities describe this sensor (the measured ones are
+    /// [`StaticCalibration::measured_gyro_density`] and `measured_acc_density`).
+    pub fn fit(&self, noise: &ImuNoise) -> crate::Fit {
+        let n1 = self.samples.saturating_sub(1) as f64;
+        let scatter = |d: &Vector3<f64>, s: f64| n1 * d.norm_squared() / (s * s);
+        let chi2 = self.chi2
+            + scatter(&self.measured_gyro_density, noise.gyro_noise_density)
+            + scatter(&self.measured_acc_density, noise.acc_noise_density);
+        crate::Fit::new(chi2, self.dof + 6 * self.samples.saturating_sub(1))
+    }
 }
 
 struct StaticProblem {

@@ -4,13 +4,14 @@
 //! ([`preint_sim::SceneState::ideal_sample`]) are preintegrated over `[1 s, 1 s + window]` and
 //! compared with the scene's exact deltas ([`preint_sim::exact_deltas`]): rotation error = angle
 //! of `ΔR*ᵀΔR` \[rad\], velocity and position errors = norms [m/s, m]. Cost = measured ns/sample
-//! of the scheme (with covariance and bias Jacobians, [`super::speed::best_ns_per_sample`]) ×
+//! of the scheme (with covariance and bias Jacobians, [`preint_analysis::speed::best_ns_per_sample`]) ×
 //! rate = ns per second of IMU data.
 
-use super::speed::{best_ns_per_sample, synthetic_stream};
-use crate::{CliError, checks, input, scheme};
+use crate::{CliError, input, scheme};
 use nalgebra::Vector3;
 use preint::{ImuBias, ImuNoise, Level, PreintParams, Scheme, preintegrate};
+use preint_analysis::checks;
+use preint_analysis::speed::{best_ns_per_sample, synthetic_stream};
 
 /// One scheme at one rate.
 #[derive(Clone, Debug)]
@@ -60,7 +61,7 @@ pub fn measure(scene_name: &str, rates: &[f64], window_s: f64) -> Result<Vec<Row
         3,
     )?;
     let mut rows = Vec::new();
-    let pb = crate::progress::bar(rates.len() as u64, "bench-steps");
+    let pb = preint_analysis::progress::bar(rates.len() as u64, "bench-steps");
     for &rate in rates {
         if let Some(pb) = &pb {
             pb.set_message(format!("{rate} Hz"));
@@ -68,13 +69,16 @@ pub fn measure(scene_name: &str, rates: &[f64], window_s: f64) -> Result<Vec<Row
         }
         let step = (1e9 / rate).round() as i64;
         if step <= 0 {
-            return Err(CliError::Usage(format!("rate {rate} Hz is too high")));
+            return Err(CliError::Usage(format!(
+                "--rates {rate:e}: above 1e9 Hz, the sample period would be below the 1 ns \
+                 resolution of the timestamps"
+            )));
         }
         // Grid covering the window plus four samples each side (hermite4 needs neighbours).
         let (k0, k1) = (t_i / step - 4, t_j / step + 5);
         if k1 - k0 + 1 > MAX_SAMPLES as i64 {
             return Err(CliError::Usage(format!(
-                "rate {rate} Hz over a {window_s} s window is {} samples, more than \
+                "--rates {rate:e}: {rate} Hz over a {window_s} s window is {} samples, more than \
                  {MAX_SAMPLES} (56 bytes each in memory); lower the rate or the window",
                 k1 - k0 + 1
             )));

@@ -9,7 +9,7 @@
 //!    ([`static_calibration`]).
 //! 5. The Allan deviation of a simulated static hour and its fitted densities ([`allan_hour`]).
 //! 6. `advise` on simulated noisy recordings of [`ADVISE_SCENES`] ([`advise_scene`]).
-//! 7. Throughput per scheme and level ([`super::speed::throughput`]).
+//! 7. Throughput per scheme and level ([`preint_analysis::speed::throughput`]).
 //!
 //! [`conclusions()`] turns these numbers into the statements at the top of the page.
 
@@ -18,12 +18,12 @@ mod conclusions;
 pub use conclusions::conclusions;
 
 use super::accuracy::{self, Row};
-use super::advise::{self, Candidate};
-use super::denoise::denoise;
-use super::speed::{self, Throughput};
 use crate::{CliError, input, scheme};
 use nalgebra::Vector3;
 use preint::{ImuBias, ImuNoise, Level, NavState, PreintParams, Scheme, preintegrate};
+use preint_analysis::advise::{self, Candidate};
+use preint_analysis::denoise::denoise;
+use preint_analysis::speed::{self, Throughput};
 use preint_calib::allan::ImuAllan;
 use preint_calib::bias::StaticCalibration;
 use preint_sim::{Attitude, Rule, SimConfig, rotation_error, t_s};
@@ -100,10 +100,8 @@ pub struct StaticCheck {
 pub struct AllanCheck {
     /// The simulated densities.
     pub simulated: ImuNoise,
-    /// Curves and fits.
+    /// Curves and fits (the fitted densities: [`ImuAllan::to_imu_noise`]).
     pub allan: ImuAllan,
-    /// The fitted densities (maximum over the axes).
-    pub fitted: ImuNoise,
 }
 
 /// Number of `progress` calls of [`compute`].
@@ -254,15 +252,10 @@ pub fn allan_hour() -> Result<AllanCheck, CliError> {
     let hour =
         preint_sim::simulate(st.as_ref(), 100.0, 3600.0, &cfg, 7).map_err(CliError::failed)?;
     let allan = ImuAllan::from_samples(&hour.samples, 10).map_err(CliError::failed)?;
-    let fitted = allan.to_imu_noise();
-    Ok(AllanCheck {
-        simulated,
-        allan,
-        fitted,
-    })
+    Ok(AllanCheck { simulated, allan })
 }
 
-/// `advise` ([`super::advise`], after [`super::denoise`]) on a noisy recording of `scene`
+/// `advise` ([`preint_analysis::advise`], after [`preint_analysis::denoise`]) on a noisy recording of `scene`
 /// ([`ADVISE_RECORDING`], EuRoC densities with bias random walk, seed 1), with the default
 /// window and threshold ([`ADVISE_WINDOW_FRACTION`]).
 pub fn advise_scene(scene: &'static str) -> Result<AdviceCheck, CliError> {

@@ -6,10 +6,10 @@ use super::{
     Axis, Color, Figure, Marker, NEUTRAL, OTHER_COLORS, Panel, Series, Stroke, draw, scheme_color,
 };
 use crate::analysis::accuracy::{Row, order};
-use crate::analysis::advise::Candidate;
 use crate::analysis::report::{hz, pareto_front};
-use crate::format::IMU_AXES;
 use crate::{CliError, scheme};
+use preint_analysis::advise::Candidate;
+use preint_analysis::format::IMU_AXES;
 use preint_calib::allan::ImuAllan;
 use std::path::{Path, PathBuf};
 

@@ -1,16 +1,13 @@
 //! `preint advise`: the cheapest scheme and lowest rate whose discretisation error stays below
 //! a fraction of the noise-induced standard deviation, estimated from the recording itself
-//! (method: [`crate::analysis::advise`], after [`crate::analysis::denoise`]).
+//! (the computation, its fit and its JSON: [`preint_analysis::advise`]); `--strict` makes a fit
+//! that is not credible a refusal (exit 2, after the output).
 
-use crate::analysis::advise::{
-    Candidate, decimation_in_range, evaluate_input, gap_beyond_limit, recommend,
-};
-use crate::analysis::denoise::denoise;
-use crate::analysis::input_class::{InputClass, exactness};
+use crate::fit::fit_text;
 use crate::imu_args::ImuArgs;
-use crate::{CliError, Output, checks, noise, scheme, stream};
-use preint::ImuSample;
-use serde_json::{Value, json};
+use crate::{CliError, Output, scheme};
+use preint_analysis::advise::{Advice, Candidate, Options};
+use preint_analysis::input_class::{InputClass, exactness};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -21,188 +18,80 @@ pub struct Args {
     #[command(flatten)]
     pub input: ImuArgs,
     /// Kalibr imu.yaml with the noise densities.
-    #[arg(long)]
+    #[arg(help_heading = "Analysis", long)]
     pub noise: PathBuf,
     /// Preintegration window (s).
-    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Analysis",
+        long,
+        default_value_t = 1.0,
+        allow_hyphen_values = true
+    )]
     pub window: f64,
     /// Allowed discretisation error as a fraction of the noise σ.
-    #[arg(long, default_value_t = 0.1, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Analysis",
+        long,
+        default_value_t = 0.1,
+        allow_hyphen_values = true
+    )]
     pub fraction: f64,
     /// Analyse only samples with timestamps >= this, in ns.
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(help_heading = "Window", long, allow_hyphen_values = true)]
     pub from: Option<i64>,
     /// Analyse only samples with timestamps <= this, in ns.
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(help_heading = "Window", long, allow_hyphen_values = true)]
     pub to: Option<i64>,
     /// What the input is between samples. smooth: point samples of a smooth signal,
     /// as a MEMS IMU delivers; no scheme is exact, the reference is hermite4 at the recording's
     /// rate. held: rate and specific force constant over each sample interval, as an
     /// integrating IMU (delta-angle/delta-velocity outputs) or a sample-and-hold stream
     /// delivers; galilean is exact for it and is the reference, lower rates average the samples.
-    #[arg(long = "input", value_name = "CLASS", value_enum, default_value_t = InputClass::Smooth)]
-    pub input_class: InputClass,
+    #[arg(help_heading = "Analysis", long = "input", value_name = "CLASS", value_enum, default_value_t = InputClassArg::Smooth)]
+    pub input_class: InputClassArg,
     /// An IMU calibration file (`calibrate --out`, OpenVINS kalibr_imu_chain.yaml or Kalibr
     /// imu.yaml): its intrinsics are applied to the raw samples before the analysis.
-    #[arg(long, value_name = "FILE")]
+    #[arg(help_heading = "Input", long, value_name = "FILE")]
     pub calibration: Option<std::path::PathBuf>,
+    /// Exit with status 2 (after printing the result) when the fit is not credible: the
+    /// recommended (scheme, rate)'s own truncation error would make a factor at the true
+    /// states inconsistent (χ² of the embedded estimate with p < 1e-6 against 9 dof).
+    #[arg(help_heading = "Output", long)]
+    pub strict: bool,
 }
 
-/// The evaluation and the recommendation.
-#[derive(Clone, Debug)]
-pub struct Advice {
-    /// The flags it ran with.
-    pub args: Args,
-    /// Number of samples in the recording.
-    pub samples: usize,
-    /// Low-pass cutoffs \[Hz\] chosen for (gyro, accelerometer); `None`: left unfiltered.
-    pub cutoffs: [Option<f64>; 2],
-    /// Every (scheme, rate) evaluated.
-    pub candidates: Vec<Candidate>,
-    /// Index of the recommended candidate, if any is acceptable.
-    pub recommended: Option<usize>,
-    /// Why the lower rates were not evaluated, when a gap of the recording widened by
-    /// decimation stopped them ([`gap_note`]).
-    pub rates_not_evaluated: Option<String>,
+/// `--input`: the [`InputClass`] as given on the command line.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum InputClassArg {
+    /// Point samples of a smooth signal (a MEMS IMU): reference hermite4, Richardson-checked.
+    #[default]
+    Smooth,
+    /// Rate and specific force constant over each sample interval (integrating IMUs,
+    /// sample-and-hold streams): reference galilean, exact for this input.
+    Held,
 }
 
-impl Advice {
-    /// The recommended candidate, if any.
-    pub fn recommendation(&self) -> Option<&Candidate> {
-        self.recommended.map(|i| &self.candidates[i])
-    }
-}
-
-/// Reads the recording, separates noise from motion and evaluates every scheme and rate.
-pub fn compute(args: &Args) -> Result<Advice, CliError> {
-    checks::positive("--fraction", args.fraction)?;
-    let noise = noise::or_default(Some(&args.noise))?;
-    let mut samples = stream::read_span(&args.input, args.from, args.to, "advise")?;
-    if let Some(path) = &args.calibration {
-        let x = crate::calibration_file::read(path)?.intrinsics;
-        if !x.is_identity() {
-            let c = x.correction();
-            samples.iter_mut().for_each(|s| *s = c.apply(s));
+impl From<InputClassArg> for InputClass {
+    fn from(c: InputClassArg) -> Self {
+        match c {
+            InputClassArg::Smooth => InputClass::Smooth,
+            InputClassArg::Held => InputClass::Held,
         }
     }
-    // Held input is not low-passed: the filter would smear its steps (analysis::advise docs).
-    let (signal, cutoffs) = match args.input_class {
-        InputClass::Smooth => denoise(&samples, noise.gyro_noise_density, noise.acc_noise_density),
-        InputClass::Held => (samples.clone(), [None, None]),
-    };
-    let candidates = evaluate_input(
-        &signal,
-        &noise,
-        9.81,
-        args.window,
-        args.fraction,
-        args.input_class,
-    )?;
-    let recommended =
-        recommend(&candidates).and_then(|r| candidates.iter().position(|c| std::ptr::eq(c, r)));
-    let rates_not_evaluated = gap_note(args, &signal, &candidates);
-    Ok(Advice {
-        args: args.clone(),
-        samples: samples.len(),
-        cutoffs,
-        candidates,
-        recommended,
-        rates_not_evaluated,
-    })
 }
 
-/// When decimation stopped at a gap of the recording ([`gap_beyond_limit`]): which rates were
-/// not evaluated and why, naming the file, the gap and the sample after it.
-pub fn gap_note(args: &Args, samples: &[ImuSample], candidates: &[Candidate]) -> Option<String> {
-    let (first, last) = (samples.first()?, samples.last()?);
-    let dt_s = (last.t_ns - first.t_ns) as f64 * 1e-9 / (samples.len() - 1).max(1) as f64;
-    let next = 2 * candidates.iter().map(|c| c.decimation).max()?;
-    if !decimation_in_range(dt_s, next, args.window) {
-        return None;
-    }
-    let (wide, gap, at) = gap_beyond_limit(samples, next)?;
-    Some(format!(
-        "rates of {:.2} Hz and below are not evaluated: the recording {} has an interval of \
-         {:.6} s before sample {at} (t = {} ns), which the embedded estimate at that rate (one \
-         sample in {}) widens to {:.6} s, above preintegration's gap limit of {} s",
-        1.0 / (dt_s * next as f64),
-        args.input.label(),
-        gap as f64 * 1e-9,
-        samples[at].t_ns,
-        2 * next,
-        wide as f64 * 1e-9,
-        preint::DEFAULT_MAX_GAP_NS as f64 * 1e-9
-    ))
-}
-
-/// `{rot_rad, vel_m_s, pos_m}`.
-fn triple(e: &[f64; 3]) -> Value {
-    json!({"rot_rad": e[0], "vel_m_s": e[1], "pos_m": e[2]})
-}
-
-/// The input class, its reference and exact scheme, and every scheme's order and exactness.
-fn input_json(input: InputClass) -> Value {
-    let schemes: serde_json::Map<String, Value> = scheme::ALL
-        .iter()
-        .map(|&s| {
-            let e = exactness(s);
-            let exact = input.exact_scheme() == Some(s);
-            (
-                scheme::label(s).to_string(),
-                json!({"order_smooth": e.order_smooth, "exact_on": e.exact_on, "exact_for_input": exact}),
-            )
-        })
-        .collect();
-    json!({
-        "input_class": input.label(),
-        "reference_scheme": scheme::label(input.reference()),
-        "exact_scheme": input.exact_scheme().map(scheme::label),
-        "schemes": schemes,
-    })
-}
-
-/// The JSON form: the recommendation, the cutoffs and every candidate.
-pub fn to_json(a: &Advice) -> Value {
-    let rec = a.recommendation();
-    let input = a.args.input_class;
-    let rows: Vec<_> = a
-        .candidates
-        .iter()
-        .map(|c| json!({"scheme": scheme::label(c.scheme), "rate": c.rate_hz, "decimation": c.decimation,
-            "disc_err": triple(&c.disc_err),
-            "ref_dist": c.ref_dist.as_ref().map(triple),
-            "embedded_err": triple(&c.embedded_err),
-            "embedded_chi2": if c.embedded_chi2.is_finite() { json!(c.embedded_chi2) } else { Value::Null },
-            "reference": c.is_reference(),
-            "noise_sigma": triple(&c.noise_sigma),
-            "cost_ns_per_s": c.cost_ns_per_s, "acceptable": c.acceptable}))
-        .collect();
-    let mut out = json!({
-        "recommended_scheme": rec.map(|c| scheme::label(c.scheme)),
-        "recommended_rate": rec.map(|c| c.rate_hz),
-        "recommended_exact": rec.is_some_and(|c| input.exact_scheme() == Some(c.scheme) && c.decimation == 1),
-        "fraction": a.args.fraction, "window_s": a.args.window, "samples": a.samples,
-        "denoise_cutoff_hz": {"gyro": a.cutoffs[0], "acc": a.cutoffs[1]},
-        "candidates": rows,
-        "tangent_order": ["dphi", "dv", "dp"],
-        "method": method(input),
-        "calibration": a.args.calibration.as_ref().map(|p| p.display().to_string()),
-        "rates_not_evaluated": a.rates_not_evaluated,
-    });
-    if let (Value::Object(o), Value::Object(i)) = (&mut out, input_json(input)) {
-        o.extend(i);
-    }
-    out
-}
-
-/// The method in one sentence per input class.
-fn method(input: InputClass) -> &'static str {
-    match input {
-        InputClass::Smooth => {
-            "smooth input: white noise removed by a zero-phase low-pass whose cutoff makes the residual match the noise density; lower rates = every d-th sample; reference = hermite4 at the recording's rate; ref_dist = max over windows of the distance to it; embedded_err = max over windows of preint::truncation::estimate on the candidate's own samples, embedded_chi2 its e^T Sigma^-1 e; disc_err = the larger of the two per component (embedded_err alone for the reference); acceptable when disc_err < fraction * noise_sigma; noise_sigma = sqrt(trace) of each covariance block"
-        }
-        InputClass::Held => {
-            "held input (constant over each sample interval), not filtered; lower rates = means of d consecutive samples held over their d intervals; reference = galilean at the recording's rate, exact for held input; ref_dist = max over windows of the distance to it; embedded_err = max over windows of the distance to galilean on the candidate's own samples (exact for them), embedded_chi2 its e^T Sigma^-1 e; disc_err = the larger of the two per component (embedded_err alone for the reference); acceptable when disc_err < fraction * noise_sigma; noise_sigma = sqrt(trace) of each covariance block"
+impl Args {
+    /// What the library computes on.
+    pub fn options(&self) -> Options {
+        Options {
+            input: self.input.to_input(),
+            noise: self.noise.clone(),
+            window: self.window,
+            fraction: self.fraction,
+            from: self.from,
+            to: self.to,
+            input_class: self.input_class.into(),
+            calibration: self.calibration.clone(),
         }
     }
 }
@@ -210,14 +99,18 @@ fn method(input: InputClass) -> &'static str {
 /// The human summary: the input class and what is exact for it, the cutoffs, a table of every
 /// candidate and the recommendation.
 pub fn to_text(a: &Advice) -> String {
-    let (window, fraction, input) = (a.args.window, a.args.fraction, a.args.input_class);
+    let (window, fraction, input) = (a.options.window, a.options.fraction, a.options.input_class);
     let mut h = String::new();
     let _ = writeln!(
         h,
         "{}: {} samples; window {window} s; threshold {fraction}·σ",
-        a.args.input.path().display(),
+        a.options.input.path().display(),
         a.samples
     );
+    h.push_str(&match &a.source {
+        Some(s) => preint_analysis::recording::input_text(s, &a.unit_check),
+        None => a.unit_check.text(),
+    });
     h.push_str(&input_text(input));
     match input {
         InputClass::Smooth => {
@@ -266,6 +159,9 @@ pub fn to_text(a: &Advice) -> String {
                 }
             );
         }
+    }
+    if let Some(f) = a.fit() {
+        h.push_str(&fit_text(&f, "advice"));
     }
     if input == InputClass::Smooth && a.cutoffs.iter().any(Option::is_none) {
         let _ = writeln!(
@@ -354,9 +250,13 @@ fn table(candidates: &[Candidate]) -> String {
 
 /// Runs `preint advise`.
 pub fn run(args: &Args) -> Result<Output, CliError> {
-    let a = compute(args)?;
-    Ok(Output {
+    let a = preint_analysis::advise::compute(&args.options())?;
+    let output = Output {
         human: to_text(&a),
-        json: to_json(&a),
-    })
+        json: preint_analysis::advise::to_json(&a),
+    };
+    match a.fit() {
+        Some(f) => crate::fit::strict(args.strict, output, &f, "advice"),
+        None => Ok(output),
+    }
 }

@@ -1,33 +1,17 @@
-//! `preint allan`: overlapping Allan deviation of a static recording, fitted white-noise
-//! density (slope −½ read at τ = 1 s), random walk (slope +½ read at τ = 3 s) and bias
-//! instability (flat minimum / 0.664); Kalibr `imu.yaml` (max over axes) and a chart
-//! (IEEE Std 952-1997, annex C).
-//!
-//! Streaming, in bounded memory: the samples are read once and reduced to at most 2²⁰ block
-//! means ([`preint_calib::allan::stream`]: τ₀ = Δt up to 2²⁰ samples, then doubling), so memory
-//! does not grow with the file. Checks before an answer is given:
-//! - **Units** on the first [`UNIT_CHECK_SECONDS`] s (at most [`UNIT_CHECK_MAX_SAMPLES`]
-//!   samples; [`crate::checks::si_units`]), unless `--no-unit-check`.
-//! - **Stillness** over the whole recording ([`preint_calib::allan::stillness`]): a moving
-//!   recording is refused (exit 2) with the fraction of still windows, unless
-//!   `--no-still-check` (for a sensor whose noise the detector takes for motion, e.g. strong
-//!   popcorn noise).
+//! `preint allan`: the overlapping Allan deviation of a static recording and its noise fits
+//! ([`preint_analysis::allan`]: method, checks and the goodness of fit), with `--out` the Kalibr
+//! `imu.yaml` (max over axes) and the charts allan_gyro.svg and allan_acc.svg.
 
 use crate::charts::figures;
-use crate::format::IMU_AXES;
+use crate::fit::fit_text;
 use crate::imu_args::ImuArgs;
-use crate::progress::ReadingBar;
-use crate::{CliError, Output, stream};
-use preint_calib::allan::{AllanStream, ImuAllan, Stillness, StillnessMonitor, StillnessOptions};
+use crate::{CliError, Output};
+use preint_analysis::allan::{AllanRun, Options};
+use preint_analysis::format::IMU_AXES;
+use preint_calib::allan::StillnessOptions;
 use preint_io::write_kalibr_yaml;
-use serde_json::{Value, json};
 use std::fmt::Write as _;
 use std::path::PathBuf;
-
-/// Length of the prefix on which the units are checked \[s\].
-pub const UNIT_CHECK_SECONDS: f64 = 60.0;
-/// Largest number of samples of that prefix (5.6 MB; 60 s up to 1.67 kHz).
-pub const UNIT_CHECK_MAX_SAMPLES: usize = 100_000;
 
 /// Flags of `preint allan`.
 #[derive(clap::Args, Debug, Clone)]
@@ -36,153 +20,49 @@ pub struct Args {
     #[command(flatten)]
     pub input: ImuArgs,
     /// Output directory for the charts allan_gyro.svg and allan_acc.svg and the Kalibr imu.yaml.
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     pub out: Option<PathBuf>,
     /// Skip the check that the recording is static (the Allan deviation of a moving recording
     /// describes the motion, not the sensor's noise).
-    #[arg(long)]
+    #[arg(help_heading = "Input", long)]
     pub no_still_check: bool,
+    /// Exit with status 2 (after printing the result) when the fit is not credible: the model
+    /// curve √(N²/τ + K²τ/3) more than 5 statistical errors from the measured Allan deviation
+    /// somewhere in the τ ranges its lines were fitted on.
+    #[arg(help_heading = "Output", long)]
+    pub strict: bool,
 }
 
-/// The Allan deviations, their fits, and the files written.
-#[derive(Clone, Debug)]
-pub struct AllanRun {
-    /// The IMU file, as printed.
-    pub imu: String,
-    /// Number of samples.
-    pub samples: usize,
-    /// Samples per base block of the curves (τ₀ = `block_len`·Δt).
-    pub block_len: usize,
-    /// Whether the units were checked (`--no-unit-check` not given).
-    pub units_checked: bool,
-    /// The stillness check's findings (refused unless static or `--no-still-check`).
-    pub stillness: Stillness,
-    /// Curves and fits per channel (order [`IMU_AXES`]).
-    pub allan: ImuAllan,
-    /// Charts and `imu.yaml`, when `--out` is given.
-    pub files: Vec<String>,
-}
-
-/// The streamed pass: base blocks, the stillness monitor, and the unit check on the prefix.
-fn read_stream(args: &Args) -> Result<(AllanStream, Stillness), CliError> {
-    let file = args.input.path();
-    let samples = stream::open_checked_prefix(
-        &args.input,
-        None,
-        UNIT_CHECK_MAX_SAMPLES,
-        Some(UNIT_CHECK_SECONDS),
-        stream::EDGE_SAMPLES,
-    )?;
-    let _bar = ReadingBar::start(samples.progress(), "allan");
-    let mut allan = AllanStream::new();
-    let mut still = StillnessMonitor::new(StillnessOptions::default());
-    for s in samples {
-        let s = s?;
-        allan.push(&s).map_err(|e| CliError::failed_in(file, e))?;
-        still.push(&s);
+impl Args {
+    /// What the library computes on.
+    pub fn options(&self) -> Options {
+        Options {
+            input: self.input.to_input(),
+            no_still_check: self.no_still_check,
+        }
     }
-    Ok((allan, still.finish()))
 }
 
 /// Computes the Allan deviations and, with `--out`, writes the two charts and `imu.yaml`.
 pub fn compute(args: &Args) -> Result<AllanRun, CliError> {
-    let file = args.input.path();
-    let (stream, stillness) = read_stream(args)?;
-    if !args.no_still_check {
-        stillness
-            .verdict(&StillnessOptions::default())
-            .map_err(|e| CliError::failed_in(file, format!("{e} (or pass --no-still-check)")))?;
-    }
-    let (samples, block_len) = (stream.samples() as usize, stream.block_len());
-    let a = stream
-        .finish(10)
-        .map_err(|e| CliError::failed_in(file, e))?;
-    let mut files = Vec::new();
+    let mut r = preint_analysis::allan::compute(&args.options())?;
     if let Some(dir) = &args.out {
-        std::fs::create_dir_all(dir).map_err(|e| CliError::failed_in(dir, e))?;
+        std::fs::create_dir_all(dir).map_err(|e| CliError::out_path(dir, e))?;
         for (sensor, name) in [(0, "allan_gyro.svg"), (1, "allan_acc.svg")] {
             let p = dir.join(name);
-            figures::allan(&a, sensor, &p)?;
-            files.push(p.display().to_string());
+            figures::allan(&r.allan, sensor, &p)?;
+            r.files.push(p.display().to_string());
         }
         let y = dir.join("imu.yaml");
-        write_kalibr_yaml(&y, &a.to_imu_noise())?;
-        files.push(y.display().to_string());
+        write_kalibr_yaml(&y, &r.allan.to_imu_noise())?;
+        r.files.push(y.display().to_string());
     }
-    Ok(AllanRun {
-        imu: args.input.label(),
-        samples,
-        block_len,
-        units_checked: !args.input.no_unit_check,
-        stillness,
-        allan: a,
-        files,
-    })
+    Ok(r)
 }
 
-/// The JSON form: per-sensor densities (per axis), bias instability, per-axis details, files.
-pub fn to_json(r: &AllanRun) -> Value {
-    let a = &r.allan;
-    let per_axis: Vec<_> = (0..6)
-        .map(|c| {
-            let f = &a.fits[c];
-            json!({"axis": IMU_AXES[c], "noise_density": f.white_density, "noise_density_err": f.white_density_err,
-                   "noise_density_is_upper_bound": f.white_density_is_bound,
-                   "random_walk": f.random_walk, "random_walk_err": f.random_walk_err,
-                   "random_walk_is_upper_bound": f.random_walk_is_bound,
-                   "bias_instability": f.bias_instability, "bias_instability_tau": f.bias_instability_tau})
-        })
-        .collect();
-    let white = |c0: usize| {
-        (c0..c0 + 3)
-            .map(|c| a.fits[c].white_density)
-            .collect::<Vec<_>>()
-    };
-    let walk = |c0: usize| {
-        (c0..c0 + 3)
-            .map(|c| a.fits[c].random_walk)
-            .collect::<Vec<_>>()
-    };
-    let st = &r.stillness;
-    json!({
-        "samples": r.samples,
-        "sample_period_s": a.dt,
-        "base_tau_s": a.tau0,
-        "block_len": r.block_len,
-        "checks": {
-            "units": if r.units_checked { format!("first {UNIT_CHECK_SECONDS} s") } else { "skipped (--no-unit-check)".into() },
-            "still_fraction": st.still_fraction(),
-            "still_windows": st.still_windows,
-            "windows": st.windows,
-            "max_tilt_deg": st.max_tilt_deg,
-            "step_tilt_deg": st.step_tilt_deg,
-            "max_norm_change_ms2": st.max_norm_change_ms2,
-            "tilt_is_bias_walk": st.tilt_is_bias_walk(),
-        },
-        "gyroscope_noise_density": white(0),
-        "gyroscope_random_walk": walk(0),
-        "accelerometer_noise_density": white(3),
-        "accelerometer_random_walk": walk(3),
-        "bias_instability": (0..6).map(|c| a.fits[c].bias_instability).collect::<Vec<_>>(),
-        "units": {"gyroscope_noise_density": "rad/s/sqrt(Hz)", "gyroscope_random_walk": "rad/s^2/sqrt(Hz)",
-                  "accelerometer_noise_density": "m/s^2/sqrt(Hz)", "accelerometer_random_walk": "m/s^3/sqrt(Hz)",
-                  "bias_instability": "rad/s (gyro), m/s^2 (acc)"},
-        "yaml_aggregate": "maximum over the three axes (conservative)",
-        "per_axis": per_axis,
-        "files": r.files,
-    })
-}
-
-/// The human summary: a table of the fits per axis.
-pub fn to_text(r: &AllanRun) -> String {
-    let a = &r.allan;
-    let mut h = format!(
-        "{}: {} samples at {:.1} Hz ({:.0} s)\n",
-        r.imu,
-        r.samples,
-        1.0 / a.dt,
-        a.dt * r.samples as f64
-    );
+/// `still: …`: the stillness check's findings (with the accelerometer bias walk when it, not
+/// motion, turns gravity) and whether the units were checked.
+fn still_line(r: &AllanRun) -> String {
     let st = &r.stillness;
     let walk = if st.max_tilt_deg > StillnessOptions::default().max_tilt_deg {
         if st.tilt_is_bias_walk() {
@@ -197,9 +77,8 @@ pub fn to_text(r: &AllanRun) -> String {
     } else {
         String::new()
     };
-    let _ = writeln!(
-        h,
-        "still: {:.1} % of {} one-second windows, gravity turns by up to {:.2}°{walk}; units {}",
+    format!(
+        "still: {:.1} % of {} one-second windows, gravity turns by up to {:.2}°{walk}; units {}\n",
         100.0 * st.still_fraction(),
         st.windows,
         st.max_tilt_deg,
@@ -208,7 +87,24 @@ pub fn to_text(r: &AllanRun) -> String {
         } else {
             "not checked"
         }
+    )
+}
+
+/// The human summary: a table of the fits per axis.
+pub fn to_text(r: &AllanRun) -> String {
+    let a = &r.allan;
+    let mut h = format!(
+        "{}: {} samples at {:.1} Hz ({:.0} s)\n",
+        r.imu,
+        r.samples,
+        1.0 / a.dt,
+        a.dt * r.samples as f64
     );
+    h.push_str(&still_line(r));
+    h.push_str(&preint_analysis::recording::input_text(
+        &r.source,
+        &r.unit_check,
+    ));
     if r.block_len > 1 {
         let _ = writeln!(
             h,
@@ -238,6 +134,7 @@ pub fn to_text(r: &AllanRun) -> String {
         h,
         "units: gyro rad/s/√Hz, rad/s²/√Hz, rad/s; acc m/s²/√Hz, m/s³/√Hz, m/s². ≤: upper bound (no region of slope −½ resp. +½ in the data)"
     );
+    h.push_str(&fit_text(&a.fit(), "Allan noise model"));
     let _ = writeln!(
         h,
         "imu.yaml uses the maximum over the axes.{}",
@@ -253,8 +150,9 @@ pub fn to_text(r: &AllanRun) -> String {
 /// Runs `preint allan`.
 pub fn run(args: &Args) -> Result<Output, CliError> {
     let r = compute(args)?;
-    Ok(Output {
+    let output = Output {
         human: to_text(&r),
-        json: to_json(&r),
-    })
+        json: preint_analysis::allan::to_json(&r),
+    };
+    crate::fit::strict(args.strict, output, &r.allan.fit(), "Allan noise model")
 }

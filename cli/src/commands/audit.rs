@@ -1,78 +1,12 @@
 //! `preint audit`: what is wrong with a recording, in one streaming pass in bounded memory
-//! ([`preint_io::audit`]): rate and its drift, Δt histogram and jitter, gaps, duplicate and
-//! out-of-order samples (with their indices and lines), unreadable rows, non-finite readings,
-//! flat tops at an axis' extremes (saturation/clipping), unit plausibility and the fraction of
-//! time the sensor is still.
-//!
-//! A split recording (`--gyro FILE --accel FILE`, or `--gyro-topic`/`--accel-topic` of a
-//! container) is audited channel by channel, with the offsets of the accelerometer stamps from
-//! the nearest gyro stamps ([`preint_io::audit::audit_channels`]).
-//!
-//! With `--calibration FILE` (one stream), the file's intrinsics correct the samples of the unit
-//! checks (the accelerometer's median norm is then that of the corrected samples; timing,
-//! clipping and stillness stay on the raw readings, where the sensor produced them), and the
-//! file is checked against the recording: an info finding states what it applies (largest
-//! scale/misalignment, axis rotation, g-sensitivity, time offset) and the accelerometer's
-//! median norm corrected and raw; a warning says when the intrinsics are beyond a MEMS
-//! sensor's range (10 % scale or misalignment, 0.1 rad, 0.01 (rad/s)/(m/s²)) or when, on a
-//! recording still at least half of the time, the correction moves that norm further from |g|
-//! than the raw one by more than 0.5 %.
-//!
-//! Exit status 0 with a verdict; with `--strict`, exit 2 when a defect is found (the defects
-//! are printed on stderr, each naming counts, indices and lines). With `--no-unit-check` a
-//! unit problem is a warning instead of a defect.
-//!
-//! # JSON (`--json`)
-//! - `imu`, `input` (`format`, `read_as`, `notes`): the recording and how it was read;
-//!   `split`: false.
-//! - `clean` (no defect), `defects`, `warnings`: counts; `findings`: `[{severity` (`defect`,
-//!   `warning`, `info`), `kind`, `message}]`, defects first. Kinds: `empty`, `bad_rows`,
-//!   `stopped`, `non_finite`, `duplicates`, `out_of_order`, `long_gaps`, `gaps`, `rate`,
-//!   `jitter`, `drift`, `clipping`, `constant_axis`, `units`, `still`, `calibration`.
-//! - `calibration`: `{file, model, time_offset_s}` of `--calibration`, or null.
-//! - `samples`; `t_first_ns`, `t_last_ns` (largest stamp), `span_s`.
-//! - `rate`: `nominal_hz` (1 / median Δt), `median_interval_ns`, `resolution_ns` (of the
-//!   median), `mean_interval_ns` (positive intervals), `reference_interval_ns` (median of the
-//!   first 32 768 samples: the unit of the histogram and the gap threshold), `first_tenth_hz`,
-//!   `last_tenth_hz`, `drift_ppm` (last vs first tenth).
-//! - `jitter`: `sd_ns` (standard deviation of Δt, gaps left out), `robust_sd_ns`
-//!   (1.4826 × MAD).
-//! - `histogram`: `[{from, to, count}]`, Δt in multiples of the reference interval, bins
-//!   `(from, to]` (`to` null for the last, unbounded one).
-//! - `gaps` (Δt > 1.5 × reference): `count`, `missing_samples`, `largest`, `first`, and
-//!   `long` (`count`, `first`: gaps above 0.25 s). `duplicates` (`count`, `identical`,
-//!   `first`), `out_of_order` (`count`, `first`). An event is `{index` (0-based sample),
-//!   `at` (`line N` or `message N`), `line` (null for containers), `t_ns`, `dt_ns` (from the
-//!   latest earlier stamp), `prev_at}`.
-//! - `bad_rows`: `count`, `first: [{at, line, message}]`; `stopped`: the error that ended
-//!   reading, or null; `non_finite`: `count`, `first: [{index, at, line}]`.
-//! - `axes`: per axis (`gyro x` … `acc z`) `unit`, `max`, `min`, `constant`,
-//!   `flat_fraction`, `at_max` and `at_min` (`clipped`, `total`: samples at the extreme,
-//!   `samples`, `runs`, `longest`, `first_index`, `first_at`: runs of ≥ 3 equal readings at
-//!   it; clipped when they hold at least half of `total`).
-//! - `units` (on the first 32 768 samples, or null): `samples`, `gravity_median_m_s2`
-//!   (corrected with `--calibration`), `raw_gravity_median_m_s2`,
-//!   `gyro_median_rad_s`, `gyro_scale` (`pairs`, `misfit_deg`: `{deg_per_s, as_read,
-//!   rad_per_s}`, or null), `error` (the unit check's message, or null).
-//! - `still`: `window_samples` (0.5 s), `windows`, `still`, `fraction`.
-//!
-//! A split recording gives `imu`, `split`: true, `clean`, `defects`, `warnings`, `findings`
-//! (kinds as above, prefixed `gyro: ` or `accel: ` in the messages, and `stamps`), `gyro` and
-//! `accel` (each: `samples`, `t_first_ns`, `t_last_ns`, `span_s`, `rate`, `jitter`,
-//! `histogram`, `gaps`, `duplicates`, `out_of_order`, `bad_rows`, `stopped`, `non_finite`),
-//! and `offsets` (accelerometer stamp − nearest gyro stamp: `count`, `mean_ns`, `sd_ns`,
-//! `min_ns`, `max_ns`, `coincident`; samples outside the other stream's span:
-//! `accel_before`, `accel_after`, `gyro_before`, `gyro_after`).
+//! (the findings, the verdict and the JSON: [`preint_analysis::audit`]). Exit status 0 with a
+//! verdict; with `--strict`, exit 2 when a defect is found or the recording is too short to
+//! judge (the defects are printed on stderr, each naming counts, indices and lines).
 
-use crate::imu_args::{ImuArgs, source_json};
-use crate::progress::ReadingBar;
-use crate::{CliError, Output, calibration_file};
-use preint_io::audit::{
-    Audit, AuditOptions, AxisReport, BadRow, Event, EventList, Finding, FlatTop, HISTOGRAM_EDGES,
-    Severity, SplitAudit, Timing, audit_channels, audit_reader,
-};
-use preint_io::{ChannelStream, Format, Location, Sensor, SourceInfo};
-use serde_json::{Map, Value, json};
+use crate::imu_args::ImuArgs;
+use crate::{CliError, Output};
+use preint_analysis::audit::{AuditRun, Options, Report, to_json};
+use preint_io::audit::{Finding, HISTOGRAM_EDGES, Severity, Timing, Verdict};
 use std::fmt::Write as _;
 
 /// Flags of `preint audit`.
@@ -82,378 +16,23 @@ pub struct Args {
     #[command(flatten)]
     pub input: ImuArgs,
     /// Exit with status 2 when a defect is found (for scripts and CI).
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     pub strict: bool,
     /// An IMU calibration file (`calibrate --out`, OpenVINS kalibr_imu_chain.yaml or Kalibr
     /// imu.yaml): its intrinsics correct the samples of the unit checks, and it is checked
     /// against the recording (accelerometer norm at rest, plausible ranges). One stream only.
-    #[arg(long, value_name = "FILE")]
+    #[arg(help_heading = "Input", long, value_name = "FILE")]
     pub calibration: Option<std::path::PathBuf>,
 }
 
-/// What was audited: one stream, or the two channels of a split recording.
-#[derive(Clone, Debug)]
-pub enum Report {
-    /// One stream of IMU samples.
-    Single(Box<Audit>),
-    /// Separate gyro and accelerometer streams.
-    Split(Box<SplitAudit>),
-}
-
-/// An audit and what it was run on.
-#[derive(Clone, Debug)]
-pub struct AuditRun {
-    /// The input, as printed.
-    pub imu: String,
-    /// How it was read (one stream only).
-    pub source: Option<SourceInfo>,
-    /// What was found.
-    pub report: Report,
-    /// The calibration file applied (`--calibration`) and what it holds.
-    pub calibration: Option<(String, preint_io::ImuCalibration)>,
-}
-
-impl AuditRun {
-    /// The findings, defects first.
-    pub fn findings(&self) -> &[Finding] {
-        match &self.report {
-            Report::Single(a) => &a.findings,
-            Report::Split(a) => &a.findings,
+impl Args {
+    /// What the library computes on.
+    pub fn options(&self) -> Options {
+        Options {
+            input: self.input.to_input(),
+            calibration: self.calibration.clone(),
         }
     }
-
-    /// Number of findings of `severity`.
-    pub fn count(&self, severity: Severity) -> usize {
-        self.findings()
-            .iter()
-            .filter(|f| f.severity == severity)
-            .count()
-    }
-}
-
-/// Reads the recording once, sample by sample, and audits it.
-pub fn compute(args: &Args) -> Result<AuditRun, CliError> {
-    let mut opts = AuditOptions::default();
-    let imu = args.input.label();
-    let calibration = match &args.calibration {
-        Some(p) => Some((p.display().to_string(), calibration_file::read(p)?)),
-        None => None,
-    };
-    if let Some((gyro, accel)) = split_channels(&args.input)? {
-        if calibration.is_some() {
-            return Err(CliError::Usage(
-                "--calibration: the intrinsics mix the gyro and accelerometer readings of a \
-                 sample, which a split recording's channels audited apart do not have (merge \
-                 them with `preint convert` first)"
-                    .into(),
-            ));
-        }
-        let audit = audit_channels(gyro, accel, &imu, opts);
-        return Ok(AuditRun {
-            imu,
-            source: None,
-            report: Report::Split(Box::new(audit)),
-            calibration,
-        });
-    }
-    opts.correction = calibration.as_ref().map(|(_, c)| c.intrinsics.correction());
-    let reader = args.input.open()?;
-    let source = reader.info().clone();
-    let progress = reader.progress().clone();
-    let _bar = ReadingBar::start(&progress, "audit");
-    let mut audit = audit_reader(reader, opts);
-    if args.input.no_unit_check {
-        for f in audit.findings.iter_mut().filter(|f| f.kind == "units") {
-            if f.severity == Severity::Defect {
-                f.severity = Severity::Warning;
-            }
-        }
-        audit.findings.sort_by_key(|f| f.severity);
-    }
-    if let Some((name, cal)) = &calibration {
-        audit
-            .findings
-            .extend(calibration_findings(name, cal, &audit));
-        audit.findings.sort_by_key(|f| f.severity);
-    }
-    Ok(AuditRun {
-        imu,
-        source: Some(source),
-        report: Report::Single(Box::new(audit)),
-        calibration,
-    })
-}
-
-/// Largest plausible deviation of a MEMS IMU's scale or misalignment entries from the
-/// identity (10 %), and of its g-sensitivity entries \[(rad/s)/(m/s²)\] (0.01, ≈ 5.6 °/s per g).
-const PLAUSIBLE_SCALE: f64 = 0.1;
-const PLAUSIBLE_G_SENSITIVITY: f64 = 0.01;
-
-/// What the calibration file does to this recording (module docs): an info finding with the
-/// resting accelerometer norm before and after, a warning when the intrinsics are beyond a MEMS
-/// sensor's range or move a mostly still recording's accelerometer norm away from |g|.
-fn calibration_findings(name: &str, cal: &preint_io::ImuCalibration, a: &Audit) -> Vec<Finding> {
-    let x = &cal.intrinsics;
-    let eye = nalgebra::Matrix3::identity();
-    let scale = [(x.t_w - eye).amax(), (x.t_a - eye).amax()]
-        .into_iter()
-        .fold(0.0, f64::max);
-    let angles = [x.r_imu_to_gyro, x.r_imu_to_acc]
-        .iter()
-        .map(|r| preint_lie::SO3::from_matrix(r).log().norm())
-        .fold(0.0, f64::max);
-    let mut out = Vec::new();
-    let td = cal
-        .time_offset_s
-        .map_or(String::from("no time offset"), |t| {
-            format!(
-                "time offset {:+.3} ms (stamps audited as recorded)",
-                t * 1e3
-            )
-        });
-    let g = a.units.as_ref().map_or(String::new(), |u| {
-        format!(
-            "; accelerometer median norm {:.4} m/s² corrected, {:.4} raw",
-            u.gravity_median_m_s2, u.raw_gravity_median_m_s2
-        )
-    });
-    out.push(Finding::new(
-        Severity::Info,
-        "calibration",
-        format!(
-            "{name}: intrinsics ({} model, scale/misalignment up to {:.2} %, axis rotation up \
-             to {:.2} mrad, g-sensitivity up to {:.1e} (rad/s)/(m/s²)) applied to the unit \
-             checks; {td}{g}",
-            x.model.name(),
-            scale * 100.0,
-            angles * 1e3,
-            x.t_g.amax()
-        ),
-    ));
-    if scale > PLAUSIBLE_SCALE || angles > PLAUSIBLE_SCALE || x.t_g.amax() > PLAUSIBLE_G_SENSITIVITY
-    {
-        out.push(Finding::new(
-            Severity::Warning,
-            "calibration",
-            format!(
-                "{name}: intrinsics beyond a MEMS sensor's range (scale/misalignment {:.1} %, \
-                 rotation {:.1} mrad, g-sensitivity {:.1e}): is the file this sensor's, in \
-                 OpenVINS' convention?",
-                scale * 100.0,
-                angles * 1e3,
-                x.t_g.amax()
-            ),
-        ));
-    }
-    if let Some(u) = &a.units {
-        let g0 = preint::PreintParams::default().gravity.norm();
-        let (raw, corr) = (
-            (u.raw_gravity_median_m_s2 - g0).abs(),
-            (u.gravity_median_m_s2 - g0).abs(),
-        );
-        if a.still.fraction() >= 0.5 && corr > raw + 0.005 * g0 {
-            out.push(Finding::new(
-                Severity::Warning,
-                "calibration",
-                format!(
-                    "{name}: on this mostly still recording the corrected accelerometer norm \
-                     ({:.4} m/s²) is further from {g0} than the raw one ({:.4}): is the file \
-                     this sensor's?",
-                    u.gravity_median_m_s2, u.raw_gravity_median_m_s2
-                ),
-            ));
-        }
-    }
-    out
-}
-
-/// The gyro and accelerometer channels of a split recording (`--gyro`/`--accel` files, or
-/// `--gyro-topic`/`--accel-topic` of a container), or `None` for one stream.
-fn split_channels(input: &ImuArgs) -> Result<Option<(ChannelStream, ChannelStream)>, CliError> {
-    use preint_io::{containers::open_channel, split::open_text_channel};
-    let opts = input.options();
-    if let (Some(g), Some(a)) = (&input.gyro, &input.accel) {
-        let gyro = open_text_channel(g, Sensor::Gyro, &opts)?;
-        return Ok(Some((gyro, open_text_channel(a, Sensor::Accel, &opts)?)));
-    }
-    let (Some(path), Some(g), Some(a)) = (&input.imu, &input.gyro_topic, &input.accel_topic) else {
-        return Ok(None);
-    };
-    let format = (input.format.or_else(|| Format::of_file(path)))
-        .filter(|f| f.is_container())
-        .ok_or_else(|| {
-            CliError::Usage(format!(
-                "{}: --gyro-topic and --accel-topic need a bag, MCAP or db3 file",
-                path.display()
-            ))
-        })?;
-    let gyro = open_channel(path, format, g, Sensor::Gyro, &opts)?;
-    Ok(Some((
-        gyro,
-        open_channel(path, format, a, Sensor::Accel, &opts)?,
-    )))
-}
-
-fn line(at: &Location) -> Value {
-    match at {
-        Location::Line(l) => json!(l),
-        _ => Value::Null,
-    }
-}
-
-fn event(e: &Event) -> Value {
-    json!({"index": e.index, "at": e.at.to_string(), "line": line(&e.at), "t_ns": e.t_ns,
-           "dt_ns": e.dt_ns(), "prev_at": e.prev_at.to_string()})
-}
-
-fn events(l: &EventList<Event>) -> Value {
-    json!({"count": l.count, "first": l.first.iter().map(event).collect::<Vec<_>>()})
-}
-
-fn flat(t: &FlatTop) -> Value {
-    json!({"clipped": t.clipped(), "total": t.total, "samples": t.samples, "runs": t.runs,
-           "longest": t.longest,
-           "first_index": t.first.map(|f| f.0), "first_at": t.first.map(|f| f.1.to_string())})
-}
-
-fn axis(a: &AxisReport, samples: u64) -> Value {
-    json!({"axis": a.name, "unit": a.unit, "max": a.max, "min": a.min, "constant": a.constant(),
-           "flat_fraction": a.flat_fraction(samples), "at_max": flat(&a.at_max),
-           "at_min": flat(&a.at_min)})
-}
-
-/// The timing keys of the module docs, from `samples` to `out_of_order`.
-fn timing_json(t: &Timing) -> Map<String, Value> {
-    let mut from = 0.0;
-    let histogram: Vec<Value> = (HISTOGRAM_EDGES.iter().zip(&t.histogram))
-        .map(|(&to, &count)| {
-            let bin = json!({"from": from, "to": to.is_finite().then_some(to), "count": count});
-            from = to;
-            bin
-        })
-        .collect();
-    let mut gaps = events(&t.gaps);
-    gaps["missing_samples"] = json!(t.missing_samples);
-    gaps["largest"] = t.largest_gap.as_ref().map_or(Value::Null, event);
-    gaps["long"] = events(&t.long_gaps);
-    let tenth = t.tenth_rates_hz;
-    let v = json!({
-        "samples": t.samples, "t_first_ns": t.first_t_ns, "t_last_ns": t.last_t_ns,
-        "span_s": t.span_s(),
-        "rate": {"nominal_hz": t.rate_hz(), "median_interval_ns": t.median_ns,
-                 "resolution_ns": t.resolution_ns, "mean_interval_ns": t.mean_ns,
-                 "reference_interval_ns": t.reference_ns,
-                 "first_tenth_hz": tenth.map(|x| x.0), "last_tenth_hz": tenth.map(|x| x.1),
-                 "drift_ppm": t.drift_ppm()},
-        "jitter": {"sd_ns": t.sd_ns, "robust_sd_ns": t.robust_sd_ns},
-        "histogram": histogram,
-        "gaps": gaps, "duplicates": events(&t.duplicates), "out_of_order": events(&t.out_of_order),
-    });
-    match v {
-        Value::Object(m) => m,
-        _ => Map::new(),
-    }
-}
-
-/// `bad_rows`, `stopped` and `non_finite` of the module docs, added to `m`.
-fn reading_json(
-    m: &mut Map<String, Value>,
-    bad_rows: &EventList<BadRow>,
-    stopped: &Option<String>,
-    non_finite: &EventList<(u64, Location)>,
-) {
-    let bad: Vec<Value> = (bad_rows.first.iter())
-        .map(|b| json!({"at": b.at.to_string(), "line": line(&b.at), "message": b.message}))
-        .collect();
-    let nf: Vec<Value> = (non_finite.first.iter())
-        .map(|(i, at)| json!({"index": i, "at": at.to_string(), "line": line(at)}))
-        .collect();
-    m.insert(
-        "bad_rows".into(),
-        json!({"count": bad_rows.count, "first": bad}),
-    );
-    m.insert("stopped".into(), json!(stopped));
-    m.insert(
-        "non_finite".into(),
-        json!({"count": non_finite.count, "first": nf}),
-    );
-}
-
-fn single_json(a: &Audit) -> Map<String, Value> {
-    let mut m = timing_json(&a.timing);
-    m["duplicates"]["identical"] = json!(a.identical_duplicates);
-    reading_json(&mut m, &a.bad_rows, &a.stopped, &a.non_finite);
-    let axes: Vec<Value> = (a.axes.iter().flatten())
-        .map(|x| axis(x, a.timing.samples))
-        .collect();
-    m.insert("axes".into(), json!(axes));
-    let units = a.units.as_ref().map(|u| {
-        json!({"samples": u.samples, "gravity_median_m_s2": u.gravity_median_m_s2,
-               "raw_gravity_median_m_s2": u.raw_gravity_median_m_s2,
-               "gyro_median_rad_s": u.gyro_median_rad_s,
-               "gyro_scale": u.gyro_scale.map(|s| {
-                   let [d, one, rad] = s.median_error.map(f64::to_degrees);
-                   json!({"pairs": s.pairs,
-                          "misfit_deg": {"deg_per_s": d, "as_read": one, "rad_per_s": rad}})
-               }),
-               "error": u.error})
-    });
-    m.insert("units".into(), json!(units));
-    let st = &a.still;
-    m.insert(
-        "still".into(),
-        json!({"window_samples": st.window, "windows": st.windows, "still": st.still,
-               "fraction": st.fraction()}),
-    );
-    m
-}
-
-/// The JSON of a split recording's audit (keys in the module docs, after `split`).
-pub fn split_json(a: &SplitAudit) -> Map<String, Value> {
-    let mut m = Map::new();
-    for c in [&a.gyro, &a.accel] {
-        let mut t = timing_json(&c.timing);
-        reading_json(&mut t, &c.bad_rows, &c.stopped, &c.non_finite);
-        m.insert(c.sensor.to_string(), Value::Object(t));
-    }
-    let o = &a.offsets;
-    m.insert(
-        "offsets".into(),
-        json!({"count": o.count, "mean_ns": o.mean_ns, "sd_ns": o.sd_ns, "min_ns": o.min_ns,
-               "max_ns": o.max_ns, "coincident": o.coincident, "accel_before": o.accel_before,
-               "accel_after": o.accel_after, "gyro_before": o.gyro_before,
-               "gyro_after": o.gyro_after}),
-    );
-    m
-}
-
-/// The JSON form (keys in the module docs).
-pub fn to_json(r: &AuditRun) -> Value {
-    let findings: Vec<Value> = (r.findings().iter())
-        .map(|f| json!({"severity": f.severity.to_string(), "kind": f.kind, "message": f.message}))
-        .collect();
-    let defects = r.count(Severity::Defect);
-    let mut m = Map::new();
-    m.insert("imu".into(), json!(r.imu));
-    if let Some(s) = &r.source {
-        m.insert("input".into(), source_json(s));
-    }
-    m.insert("split".into(), json!(matches!(r.report, Report::Split(_))));
-    m.insert("clean".into(), json!(defects == 0));
-    m.insert("defects".into(), json!(defects));
-    m.insert("warnings".into(), json!(r.count(Severity::Warning)));
-    m.insert("findings".into(), json!(findings));
-    m.insert(
-        "calibration".into(),
-        json!(r.calibration.as_ref().map(|(name, c)| json!({
-            "file": name, "model": c.intrinsics.model.name(), "time_offset_s": c.time_offset_s,
-        }))),
-    );
-    m.extend(match &r.report {
-        Report::Single(a) => single_json(a),
-        Report::Split(a) => split_json(a),
-    });
-    Value::Object(m)
 }
 
 /// The human summary: the verdict, the findings, and the Δt histogram.
@@ -463,7 +42,11 @@ pub fn to_text(r: &AuditRun) -> String {
         None => format!("{} (split: gyro and accelerometer streams)\n", r.imu),
     };
     let defects = r.count(Severity::Defect);
-    let verdict = if defects == 0 { "clean" } else { "DEFECTS" };
+    let verdict = match r.verdict() {
+        Verdict::Clean => "clean",
+        Verdict::Defects => "DEFECTS",
+        Verdict::TooShort => "too short to judge",
+    };
     let _ = writeln!(
         s,
         "verdict: {verdict} ({defects} defects, {} warnings)",
@@ -498,24 +81,30 @@ pub fn to_text(r: &AuditRun) -> String {
 /// Runs `preint audit`; with `--strict`, a defect is an error (exit 2) listing the defects.
 /// The report is printed in both cases.
 pub fn run(args: &Args) -> Result<Output, CliError> {
-    let r = compute(args)?;
+    let r = preint_analysis::audit::compute(&args.options())?;
     let output = Output {
         human: to_text(&r),
-        json: to_json(&r),
+        json: to_json(&r, args.input.no_unit_check),
     };
-    if args.strict && r.count(Severity::Defect) > 0 {
-        let defects: Vec<&str> = (r.findings().iter())
-            .filter(|f| f.severity == Severity::Defect)
-            .map(|f| f.message.as_str())
-            .collect();
+    let verdict = r.verdict();
+    if args.strict && verdict != Verdict::Clean {
+        let why = |keep: &dyn Fn(&Finding) -> bool| {
+            let m: Vec<&str> = (r.findings().iter())
+                .filter(|f| keep(f))
+                .map(|f| f.message.as_str())
+                .collect();
+            (m.len(), m.join(" | "))
+        };
+        let msg = if verdict == Verdict::Defects {
+            let (n, list) = why(&|f| f.severity == Severity::Defect);
+            format!("{}: audit found {n} defects (--strict): {list}", r.imu)
+        } else {
+            let (_, list) = why(&|f| f.kind == "too_short");
+            format!("{}: {list} (--strict)", r.imu)
+        };
         return Err(CliError::Refused {
             output: Box::new(output),
-            msg: format!(
-                "{}: audit found {} defects (--strict): {}",
-                r.imu,
-                defects.len(),
-                defects.join(" | ")
-            ),
+            msg,
         });
     }
     Ok(output)

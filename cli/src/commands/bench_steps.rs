@@ -12,18 +12,23 @@ use std::path::{Path, PathBuf};
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
     /// Built-in scene (each one's motion is described in the preint-sim crate's `scenes` docs).
-    #[arg(long, default_value = "aggressive",
+    #[arg(help_heading = "Scene", long, default_value = "aggressive",
           value_parser = clap::builder::PossibleValuesParser::new(preint_sim::SCENE_NAMES))]
     pub scene: String,
     /// Rates (Hz), comma-separated.
-    #[arg(long, value_delimiter = ',', value_parser = crate::parse::positive, allow_hyphen_values = true,
+    #[arg(help_heading = "Scene", long, value_delimiter = ',', value_parser = preint_analysis::parse::positive, allow_hyphen_values = true,
           default_value = "25,50,100,200,400,800,1600,3200")]
     pub rates: Vec<f64>,
     /// Window length (s).
-    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Scene",
+        long,
+        default_value_t = 1.0,
+        allow_hyphen_values = true
+    )]
     pub window: f64,
     /// Output directory for the charts accuracy_vs_cost_SCENE.svg and convergence_SCENE.svg.
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     pub out: Option<PathBuf>,
 }
 
@@ -42,7 +47,7 @@ pub struct Bench {
 
 /// Writes the accuracy-vs-cost and convergence charts of `rows` into `dir`; returns the paths.
 pub fn write_charts(rows: &[Row], scene: &str, dir: &Path) -> Result<Vec<String>, CliError> {
-    std::fs::create_dir_all(dir).map_err(|e| CliError::failed_in(dir, e))?;
+    std::fs::create_dir_all(dir).map_err(|e| CliError::out_path(dir, e))?;
     let p1 = figures::accuracy_vs_cost(rows, scene, dir)?;
     let p2 = figures::convergence(rows, scene, dir)?;
     Ok(vec![p1.display().to_string(), p2.display().to_string()])

@@ -20,19 +20,29 @@
 //! residual `U r` (`UᵀU = Σ⁻¹`, `U` upper triangular), `χ² = ‖U r‖²` with its χ² quantiles, and
 //! each block's marginal χ² (`r_bᵀ Σ_bb⁻¹ r_b`, 3 dof) to say which part disagrees.
 
-//! The weighting and χ² are [`crate::analysis::consistency`].
+//! The weighting and χ² are [`preint_analysis::consistency`].
+//!
+//! # Goodness of fit
+//! The factor's fit (JSON `fit`, [`preint_calib::fit`]) is its χ² at the ground truth against
+//! `χ²_dof` (9, or 15 with `--combined`): credible when the upper-tail p-value is ≥ 1e-6.
+//! Not credible: a `warning:` line names the block whose marginal χ² is largest (the part that
+//! disagrees); `--strict` makes it a refusal (exit 2, after the output).
 
-use crate::analysis::consistency::{Evaluation, TruthNoise, chi2_quantiles, evaluate};
-use crate::format::list;
+use crate::fit::fit_text;
 use crate::imu_args::ImuArgs;
 use crate::preint_args::PreintArgs;
 use crate::scheme::{self};
-use crate::{CliError, Output, checks, input, stream};
+use crate::{CliError, Output, input};
 use preint::{
-    CombinedImuFactor, ImuBias, ImuFactor, Level, NavState, PreintegratedImu, ResidualMode,
-    preintegrate,
+    CombinedImuFactor, ImuBias, ImuFactor, ImuNoise, Level, NavState, PreintParams,
+    PreintegratedImu, ResidualMode, preintegrate,
 };
-use preint_io::{GroundTruthState, read_euroc_groundtruth};
+use preint_analysis::checks::UnitCheck;
+use preint_analysis::consistency::{Evaluation, TruthNoise, chi2_quantiles, evaluate, fit_json};
+use preint_analysis::format::list;
+use preint_analysis::stream::{self, StreamWindow};
+use preint_analysis::{ImuInput, checks};
+use preint_io::{GroundTruthState, SourceInfo, read_euroc_groundtruth};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -45,38 +55,57 @@ pub struct Args {
     pub input: ImuArgs,
     /// Ground truth (EuRoC state_groundtruth_estimate0 format: p (m), q wxyz body->world,
     /// v (m/s), b_g (rad/s), b_a (m/s^2)), world frame z up.
-    #[arg(long)]
+    #[arg(help_heading = "Ground truth", long)]
     pub poses: PathBuf,
     /// Keyframe i: the ground-truth row nearest to this time (ns).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(help_heading = "Window", long, allow_hyphen_values = true)]
     pub from: i64,
     /// Keyframe j: the ground-truth row nearest to this time (ns).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(help_heading = "Window", long, allow_hyphen_values = true)]
     pub to: i64,
     /// Scheme, noise densities and gravity.
     #[command(flatten)]
     pub preint: PreintArgs,
     /// Evaluate CombinedImuFactor (15-dim residual with the bias change b_j - b_i, weighted
     /// by the covariance with the bias random walk) instead of ImuFactor (9-dim).
-    #[arg(long)]
+    #[arg(help_heading = "Factor", long)]
     pub combined: bool,
     /// Residual: `component` (Forster's [r_phi, r_v, r_p]) or `logmap` (the SE_2(3) logarithm
     /// of predicted^-1 * actual, GTSAM 4.3's default).
-    #[arg(long, value_parser = parse_residual, default_value = ResidualMode::default().name())]
+    #[arg(help_heading = "Factor", long, value_parser = parse_residual, default_value = ResidualMode::default().name())]
     pub residual: ResidualMode,
     /// Standard deviation of the ground truth's attitudes (rad), added to the weight.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Ground truth",
+        long,
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
     pub pose_rot_std: f64,
     /// Standard deviation of the ground truth's positions (m), added to the weight.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Ground truth",
+        long,
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
     pub pose_pos_std: f64,
     /// Standard deviation of the ground truth's velocities (m/s), added to the weight.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Ground truth",
+        long,
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
     pub vel_std: f64,
     /// Weight the factor with the second-order covariance (`preint::second_order`: the
     /// term the first-order covariance misses over long windows with noisy gyroscopes).
-    #[arg(long)]
+    #[arg(help_heading = "Factor", long)]
     pub second_order: bool,
+    /// Exit with status 2 (after printing the result) when the fit is not credible: χ² at the
+    /// ground truth with p < 1e-6 against χ² with 9 (15 with --combined) dof.
+    #[arg(help_heading = "Output", long)]
+    pub strict: bool,
 }
 
 fn parse_residual(s: &str) -> Result<ResidualMode, String> {
@@ -94,6 +123,10 @@ const ORDER: [&str; 15] = [
 pub struct FactorRun {
     /// The IMU file, as printed.
     pub imu: String,
+    /// How it was read.
+    pub source: preint_io::SourceInfo,
+    /// What the unit checks said.
+    pub unit_check: preint_analysis::checks::UnitCheck,
     /// The scheme used.
     pub scheme: preint::Scheme,
     /// `CombinedImuFactor` (else `ImuFactor`).
@@ -118,26 +151,29 @@ pub struct FactorRun {
     pub ev: Evaluation,
 }
 
+/// The factor's fit: its χ² against `χ²_dof`, with the block that disagrees most as the cause.
+pub fn fit(f: &FactorRun) -> preint_calib::Fit {
+    let (b, m) =
+        f.ev.marginal_chi2
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| m.is_finite())
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .map_or(("rotation", f64::NAN), |(b, m)| (BLOCKS[b], *m));
+    preint_calib::Fit::new(f.ev.chi2, f.ev.residual.len()).because(&format!(
+        "the IMU and the ground truth disagree beyond the factor's covariance, most in the {b} \
+         block (marginal χ²₃ = {m:.3}): the noise densities (--noise), the ground truth's own \
+         errors (--pose-rot-std, --pose-pos-std, --vel-std), its biases, or the clocks"
+    ))
+}
+
 fn nav(s: &GroundTruthState) -> NavState {
     NavState::new(s.rotation(), s.p, s.v)
 }
 
-/// Reads the files, preintegrates the window between the keyframes and evaluates the factor.
-pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
-    let tn = TruthNoise {
-        rot_rad: args.pose_rot_std,
-        pos_m: args.pose_pos_std,
-        vel_m_s: args.vel_std,
-    };
-    checks::non_negative("--pose-rot-std", tn.rot_rad)?;
-    checks::non_negative("--pose-pos-std", tn.pos_m)?;
-    checks::non_negative("--vel-std", tn.vel_m_s)?;
-    let level = if args.combined {
-        Level::Combined
-    } else {
-        Level::Covariance
-    };
-    let (noise, mut params) = args.preint.params(level)?;
+/// The ground-truth rows nearest to `--from` and `--to`: two different rows, the first
+/// earlier.
+fn keyframes(args: &Args) -> Result<(GroundTruthState, GroundTruthState), CliError> {
     let gt = read_euroc_groundtruth(&args.poses)?;
     let (gi, gj) = (
         *input::nearest_row(&gt, args.from),
@@ -154,26 +190,62 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
             gj.t_ns
         )));
     }
-    let scheme = params.scheme;
-    // Only the part of the recording the window needs is read (a split recording is merged
-    // whole, for the effective accelerometer density of its merged samples).
-    let w = if args.input.is_split() {
-        let (w, _, split) = stream::split_window(&args.input, Some(gi.t_ns), Some(gj.t_ns))?;
-        crate::noise::apply_split(&noise, split.as_ref(), &mut params);
-        w
-    } else {
-        let stream = stream::open_checked_until(&args.input, Some(gj.t_ns))?;
-        let _bar = crate::progress::ReadingBar::start(stream.progress(), "factor");
-        stream::cut_window(stream, Some(gi.t_ns), Some(gj.t_ns))?
+    Ok((gi, gj))
+}
+
+/// The window `[t_i, t_j]` of the recording, how it was read and its unit checks. Only the
+/// part the window needs is read; a split recording is merged whole, and the effective
+/// accelerometer density of its merged samples is set in `params`.
+fn window(
+    input: &ImuInput,
+    noise: &ImuNoise,
+    params: &mut PreintParams,
+    (t_i, t_j): (i64, i64),
+) -> Result<(StreamWindow, SourceInfo, UnitCheck), CliError> {
+    if input.is_split() {
+        let (w, source, split, units) = stream::split_window(input, Some(t_i), Some(t_j))?;
+        preint_analysis::noise::apply_split(noise, split.as_ref(), params);
+        return Ok((w, source, units));
+    }
+    let stream = stream::open_checked_until(input, Some(t_j))?;
+    let (source, units) = (stream.info().clone(), stream.unit_check().clone());
+    let _bar = preint_analysis::progress::ReadingBar::start(stream.progress(), "factor");
+    let w = stream::cut_window(stream, Some(t_i), Some(t_j))?;
+    Ok((w, source, units))
+}
+
+/// Reads the files, preintegrates the window between the keyframes and evaluates the factor.
+pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
+    checks::window_order(Some(args.from), Some(args.to))?;
+    let tn = TruthNoise {
+        rot_rad: args.pose_rot_std,
+        pos_m: args.pose_pos_std,
+        vel_m_s: args.vel_std,
     };
+    checks::non_negative("--pose-rot-std", tn.rot_rad)?;
+    checks::non_negative("--pose-pos-std", tn.pos_m)?;
+    checks::non_negative("--vel-std", tn.vel_m_s)?;
+    let level = if args.combined {
+        Level::Combined
+    } else {
+        Level::Covariance
+    };
+    let (noise, mut params) = args.preint.params(level)?;
+    if let (true, Some(path)) = (args.combined, &args.preint.noise) {
+        preint_io::read_kalibr_bias_model(path)?;
+    }
+    let (gi, gj) = keyframes(args)?;
+    let scheme = params.scheme;
+    let input = args.input.to_input();
+    let (w, source, unit_check) = window(&input, &noise, &mut params, (gi.t_ns, gj.t_ns))?;
     let samples = w.samples.as_slice();
-    let in_file = |e| CliError::failed_in(args.input.path(), w.in_stream(e));
+    let in_file = |e| CliError::failed_in(input.path(), w.in_stream(e));
     let mut pim = preintegrate(&params, &gi.bias, samples, gi.t_ns, gj.t_ns).map_err(in_file)?;
     if args.second_order {
         let term = preint::second_order::covariance(&params, samples, &pim).map_err(in_file)?;
         pim = preint::second_order::inflate(&pim, &term);
     }
-    let failed = |e: preint::FactorError| CliError::failed_in(args.input.path(), e);
+    let failed = |e: preint::FactorError| CliError::failed_in(input.path(), e);
     let (xi, xj) = (nav(&gi), nav(&gj));
     let ev = if args.combined {
         let f = CombinedImuFactor::with_mode(pim.clone(), args.residual).map_err(failed)?;
@@ -185,7 +257,9 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
         evaluate(r, j.state_i(), j.state_j(), *f.residual_covariance(), tn)?
     };
     Ok(FactorRun {
-        imu: args.input.label(),
+        imu: input.label(),
+        source,
+        unit_check,
         scheme,
         combined: args.combined,
         residual: args.residual,
@@ -229,6 +303,7 @@ pub fn to_json(f: &FactorRun) -> Value {
         .map(|(b, c)| ((*b).to_string(), json!(c)))
         .collect();
     json!({
+        "input": preint_analysis::recording::input_json(&f.source, &f.unit_check),
         "factor": factor_name(f.combined),
         "scheme": scheme::label(f.scheme),
         "residual_mode": f.residual.name(),
@@ -260,6 +335,7 @@ pub fn to_json(f: &FactorRun) -> Value {
         },
         "units": {"residual": "rad, m/s, m (, rad/s, m/s^2) per block", "whitened_residual": "dimensionless",
                   "state": "p m (world), q body->world, v m/s (world), biases rad/s and m/s^2"},
+        "fit": fit_json(&fit(f)),
     })
 }
 
@@ -288,6 +364,10 @@ pub fn to_text(f: &FactorRun) -> String {
         f.pim.delta_t,
         f.samples
     );
+    h.push_str(&preint_analysis::recording::input_text(
+        &f.source,
+        &f.unit_check,
+    ));
     let r = &f.ev.residual;
     let names = [
         "r_φ (rad)",
@@ -319,6 +399,7 @@ pub fn to_text(f: &FactorRun) -> String {
          quantiles 7.81 / 11.34",
         f.ev.chi2
     );
+    h.push_str(&fit_text(&fit(f), "factor at the ground truth"));
     if f.truth_noise.is_exact() {
         let _ = writeln!(
             h,
@@ -332,8 +413,9 @@ pub fn to_text(f: &FactorRun) -> String {
 /// Runs `preint factor`.
 pub fn run(args: &Args) -> Result<Output, CliError> {
     let f = compute(args)?;
-    Ok(Output {
+    let output = Output {
         human: to_text(&f),
         json: to_json(&f),
-    })
+    };
+    crate::fit::strict(args.strict, output, &fit(&f), "factor at the ground truth")
 }

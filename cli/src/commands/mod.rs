@@ -18,7 +18,7 @@ pub mod simulate;
 pub mod speed;
 
 /// Runs the selected subcommand. Nothing non-finite leaves it: an output whose summary holds
-/// `inf` or `NaN` is refused ([`finite`]), the inputs' own checks naming the cause first.
+/// `inf` or `NaN` is refused (`finite`), the inputs' own checks naming the cause first.
 pub fn run(command: &Command) -> Result<Output, CliError> {
     match dispatch(command) {
         Ok(out) => finite(out),
@@ -61,5 +61,30 @@ fn dispatch(command: &Command) -> Result<Output, CliError> {
         Command::Convert(a) => convert::run(a),
         Command::Audit(a) => audit::run(a),
         Command::Report(a) => report::run(a),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    /// An output whose summary holds a non-finite number is refused, naming the line; words
+    /// that contain `inf` (`info`) are not numbers.
+    #[test]
+    fn a_non_finite_summary_is_refused() {
+        let out = |human: &str| Output {
+            human: human.to_string(),
+            json: json!({}),
+        };
+        let e = finite(out("ok\np = [1, -inf] m\n"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("line 2 of the summary") && e.contains("-inf"),
+            "{e}"
+        );
+        assert!(finite(out("σ NaN\n")).is_err());
+        assert!(finite(out("info: inferred, 1e308\n")).is_ok());
     }
 }

@@ -1,8 +1,9 @@
 //! `preint simulate`: an IMU on a built-in scene, written as a EuRoC-style dataset
 //! (`imu.csv`, `groundtruth.csv`, `imu.yaml`).
 
-use crate::{CliError, Output, input, noise};
+use crate::{CliError, Output, input};
 use preint::ImuNoise;
+use preint_analysis::noise;
 use preint_io::read_kalibr_yaml;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
@@ -11,31 +12,36 @@ use std::path::{Path, PathBuf};
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
     /// Built-in scene (each one's motion is described in the preint-sim crate's `scenes` docs).
-    #[arg(long, default_value = "seed-ellipse",
+    #[arg(help_heading = "Scene", long, default_value = "seed-ellipse",
           value_parser = clap::builder::PossibleValuesParser::new(preint_sim::SCENE_NAMES))]
     pub scene: String,
     /// Sample rate (Hz), positive.
-    #[arg(long, default_value_t = 200.0, allow_hyphen_values = true,
-          value_parser = crate::parse::positive)]
+    #[arg(help_heading = "Sensor", long, default_value_t = 200.0, allow_hyphen_values = true,
+          value_parser = preint_analysis::parse::positive)]
     pub rate: f64,
     /// Duration (s), positive.
-    #[arg(long, default_value_t = 10.0, allow_hyphen_values = true,
-          value_parser = crate::parse::positive)]
+    #[arg(help_heading = "Scene", long, default_value_t = 10.0, allow_hyphen_values = true,
+          value_parser = preint_analysis::parse::positive)]
     pub duration: f64,
     /// Noise: a Kalibr imu.yaml, or `none` for noise-free data. Default: EuRoC figures.
-    #[arg(long)]
+    #[arg(help_heading = "Sensor", long)]
     pub noise: Option<String>,
     /// Random seed (same seed, same data on every machine).
-    #[arg(long, default_value_t = 1, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Sensor",
+        long,
+        default_value_t = 1,
+        allow_hyphen_values = true
+    )]
     pub seed: u64,
     /// Output directory (created if missing).
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     pub out: PathBuf,
     /// Mount the IMU at this pose in the body, x,y,z,qw,qx,qy,qz: sensor origin in body
     /// coordinates (m) and the unit quaternion rotating sensor vectors into the body frame.
     /// The samples are the IMU's (rate in its axes, specific force of its point); the ground
     /// truth stays the body's.
-    #[arg(long, value_parser = crate::parse::sensor_pose, allow_hyphen_values = true)]
+    #[arg(help_heading = "Sensor", long, value_parser = preint_analysis::parse::sensor_pose, allow_hyphen_values = true)]
     pub body_p_sensor: Option<preint::SensorPose>,
     /// A rotating world frame (Earth rotation).
     #[command(flatten)]
@@ -69,7 +75,7 @@ pub fn compute(args: &Args) -> Result<Simulation, CliError> {
     };
     cfg.body_p_sensor = args.body_p_sensor;
     cfg.earth_rate = args.earth.rate();
-    let pb = crate::progress::bar(2, "simulate");
+    let pb = preint_analysis::progress::bar(2, "simulate");
     if let Some(pb) = &pb {
         pb.set_message("synthesising the samples and the ground truth");
     }
@@ -79,7 +85,7 @@ pub fn compute(args: &Args) -> Result<Simulation, CliError> {
         pb.inc(1);
         pb.set_message("writing the files");
     }
-    std::fs::create_dir_all(&args.out).map_err(|e| CliError::failed_in(&args.out, e))?;
+    std::fs::create_dir_all(&args.out).map_err(|e| CliError::out_path(&args.out, e))?;
     let yaml_noise = noise_model.unwrap_or(ImuNoise::zero(args.rate));
     let files = preint_sim::write_dataset(&args.out, &data, &yaml_noise)
         .map_err(CliError::failed)?
@@ -103,7 +109,7 @@ pub fn to_json(s: &Simulation) -> Value {
     let a = &s.args;
     json!({"scene": a.scene, "samples": s.samples, "rate_hz": a.rate, "duration_s": a.duration,
         "seed": a.seed, "noise": s.noise.as_ref().map(noise::densities_json), "files": s.files,
-        "earth_rate": a.earth.rate().map(|w| crate::format::list(&w))})
+        "earth_rate": a.earth.rate().map(|w| preint_analysis::format::list(&w))})
 }
 
 /// The human summary: one line.

@@ -1,9 +1,9 @@
 //! `preint speed`: throughput of each scheme on this machine, with and without covariance
-//! (method: [`crate::analysis::speed`]; the median of 11 runs, comparable with the criterion
+//! (method: [`preint_analysis::speed`]; the median of 11 runs, comparable with the criterion
 //! benchmark `cargo bench -p preint`, which reports a mean over its samples).
 
-use crate::analysis::speed::{Throughput, throughput};
 use crate::{CliError, Output, scheme};
+use preint_analysis::speed::{Throughput, throughput};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
 
@@ -19,7 +19,12 @@ const RUNS: usize = 11;
 pub struct Args {
     /// Number of samples to integrate per measurement, 10 to 10⁷ (10⁵ is the criterion
     /// bench's stream).
-    #[arg(long, default_value_t = 100_000, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Benchmark",
+        long,
+        default_value_t = 100_000,
+        allow_hyphen_values = true
+    )]
     pub samples: usize,
 }
 

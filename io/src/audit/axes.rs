@@ -181,7 +181,7 @@ impl FlatTops {
 /// Gravity magnitude of the still criterion \[m/s²\] (as in [`crate::plausibility`]).
 const G: f64 = 9.81;
 
-/// Consecutive windows of `window` samples (the last one possibly shorter) in which the
+/// Consecutive windows of `window` samples (the last one possibly shorter, but at least 5) in which the
 /// accelerometer is steady, by the criterion of [`crate::plausibility::still_windows`]:
 /// largest per-axis standard deviation below 0.2 m/s² and mean norm within 1 m/s² of 9.81.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -246,9 +246,10 @@ impl StillWindows {
         (self.n, self.mean, self.m2) = (0, Vector3::zeros(), Vector3::zeros());
     }
 
-    /// The windows so far, the last partial one included.
+    /// The windows so far, the last partial one included if it holds at least 5 samples
+    /// (fewer say nothing of the accelerometer's spread).
     pub fn finish(mut self) -> Still {
-        if self.n > 0 {
+        if self.n >= 5 {
             self.close();
         }
         self.out

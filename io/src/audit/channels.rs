@@ -102,6 +102,11 @@ impl SplitAudit {
     pub fn is_clean(&self) -> bool {
         self.findings.iter().all(|f| f.severity != Severity::Defect)
     }
+
+    /// Clean, defects, or too short to judge.
+    pub fn verdict(&self) -> findings::Verdict {
+        findings::Verdict::of(&self.findings)
+    }
 }
 
 /// One channel being audited: a prefix for the reference interval, then streaming.
@@ -277,6 +282,7 @@ fn split_findings(g: &ChannelAudit, a: &ChannelAudit, off: &Offsets) -> Vec<Find
             f.push(Finding::new(Severity::Defect, "empty", m));
         }
         findings::reading(&c.bad_rows, &c.stopped, &c.non_finite, &label, &mut f);
+        findings::too_short(&c.timing, &label, &mut f);
         findings::timing(&c.timing, &label, &mut f);
         if let Some(m) = channel_units(c) {
             f.push(Finding::new(

@@ -2,7 +2,8 @@
 //! first indices and lines.
 
 use super::intervals::{Event, EventList, GAP_FACTOR, LONG_GAP_NS, Timing};
-use super::{Audit, AxisReport, BadRow, MIN_FLAT_RUN};
+use super::spikes::SPIKE_SIGMAS;
+use super::{AXES, Audit, AxisReport, BadRow, MIN_FLAT_RUN};
 use crate::error::Location;
 use std::fmt::Write as _;
 
@@ -34,8 +35,9 @@ pub struct Finding {
     /// How bad it is.
     pub severity: Severity,
     /// What it is about: `rate`, `gaps`, `long_gaps`, `duplicates`, `out_of_order`,
-    /// `bad_rows`, `stopped`, `non_finite`, `clipping`, `constant_axis`, `units`, `still`,
-    /// `jitter`, `drift`, `empty`, `stamps` (split streams).
+    /// `bad_rows`, `stopped`, `non_finite`, `impossible`, `spikes`, `clipping`,
+    /// `constant_axis`, `units`, `still`, `jitter`, `drift`, `empty`, `too_short`, `stamps`
+    /// (split streams).
     pub kind: &'static str,
     /// What was found, with counts and the first indices and lines.
     pub message: String,
@@ -54,6 +56,67 @@ impl Finding {
 
 /// Events named in a message (the rest are counted).
 const NAMED: usize = 3;
+
+/// Fewest samples an audit judges: a Δt histogram, a median interval, a jitter and a drift of
+/// fewer than 99 intervals say little.
+pub const MIN_JUDGED_SAMPLES: u64 = 100;
+
+/// Shortest span an audit judges \[s\]: two of the 0.5 s still windows, and the unit checks'
+/// pairs of quasi-static moments are 1 s apart. (The unit checks say on their own when they
+/// need more: a still part of 2 s.)
+pub const MIN_JUDGED_SPAN_S: f64 = 1.0;
+
+/// The overall verdict of an audit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Verdict {
+    /// No defect, and long enough to judge.
+    Clean,
+    /// At least one defect.
+    Defects,
+    /// No defect, but too short to judge (a `too_short` finding).
+    TooShort,
+}
+
+impl Verdict {
+    /// The verdict of `findings`: defects first, then too short, else clean.
+    pub fn of(findings: &[Finding]) -> Self {
+        if findings.iter().any(|f| f.severity == Severity::Defect) {
+            Verdict::Defects
+        } else if findings.iter().any(|f| f.kind == "too_short") {
+            Verdict::TooShort
+        } else {
+            Verdict::Clean
+        }
+    }
+
+    /// `clean`, `defects` or `too_short`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Verdict::Clean => "clean",
+            Verdict::Defects => "defects",
+            Verdict::TooShort => "too_short",
+        }
+    }
+}
+
+/// A `too_short` warning when `t` has fewer than [`MIN_JUDGED_SAMPLES`] samples or spans less
+/// than [`MIN_JUDGED_SPAN_S`] (and any sample at all); `label` prefixes the message.
+pub(crate) fn too_short(t: &Timing, label: &str, f: &mut Vec<Finding>) {
+    let span = t.span_s().unwrap_or(0.0);
+    if t.samples == 0 || (t.samples >= MIN_JUDGED_SAMPLES && span >= MIN_JUDGED_SPAN_S) {
+        return;
+    }
+    f.push(Finding::new(
+        Severity::Warning,
+        "too_short",
+        format!(
+            "{label}too short to judge: {} over {span:.3} s; an audit needs at least \
+             {MIN_JUDGED_SAMPLES} samples over {MIN_JUDGED_SPAN_S} s (the rate, the still \
+             windows and the unit checks rest on too few intervals otherwise)",
+            count(t.samples, "sample", "samples")
+        ),
+    ));
+}
 
 /// Jitter (robust sd of Δt, as a fraction of the median interval) above which a warning is
 /// given: sensor-clocked stamps jitter by far less (EuRoC: 0; KITTI's 0.4 % passes).
@@ -76,7 +139,7 @@ fn count(n: u64, one: &str, many: &str) -> String {
     format!("{n} {}", if n == 1 { one } else { many })
 }
 
-fn list_events(l: &EventList<Event>, one: impl Fn(&Event) -> String) -> String {
+fn list_events<T>(l: &EventList<T>, one: impl Fn(&T) -> String) -> String {
     let names: Vec<String> = l.first.iter().take(NAMED).map(one).collect();
     format!("{}{}", names.join("; "), more(l.count, names.len()))
 }
@@ -92,6 +155,8 @@ pub(crate) fn of_audit(a: &Audit) -> Vec<Finding> {
         ));
     }
     reading(&a.bad_rows, &a.stopped, &a.non_finite, "", &mut f);
+    impossible_and_spikes(a, &mut f);
+    too_short(&a.timing, "", &mut f);
     timing(&a.timing, "", &mut f);
     if a.identical_duplicates > 0
         && let Some(d) = f.iter_mut().find(|x| x.kind == "duplicates")
@@ -113,15 +178,50 @@ pub(crate) fn of_audit(a: &Audit) -> Vec<Finding> {
             Severity::Info,
             "still",
             format!(
-                "still (accelerometer steady) in {:.1} % of {} windows of {} samples",
+                "still (accelerometer steady) in {:.1} % of {} of {} samples",
                 100.0 * a.still.fraction(),
-                a.still.windows,
+                count(a.still.windows, "window", "windows"),
                 a.still.window
             ),
         ));
     }
     f.sort_by_key(|x| x.severity);
     f
+}
+
+/// Findings about readings no IMU produces: beyond any IMU's range (a defect) and
+/// single-sample spikes (a warning).
+fn impossible_and_spikes(a: &Audit, f: &mut Vec<Finding>) {
+    let l = &a.impossible;
+    if l.count > 0 {
+        f.push(Finding::new(
+            Severity::Defect,
+            "impossible",
+            format!(
+                "{} beyond any IMU's range (corrupt rows): {}",
+                count(l.count, "sample", "samples"),
+                list_events(l, |e| format!("index {} ({}): {}", e.index, e.at, e.what))
+            ),
+        ));
+    }
+    let s = &a.spikes;
+    if s.count > 0 {
+        let names = list_events(s, |e| {
+            format!(
+                "index {} ({}) {} = {} {}, {:.0} σ from both neighbours",
+                e.index, e.at, AXES[e.axis].0, e.value, AXES[e.axis].1, e.sigmas
+            )
+        });
+        f.push(Finding::new(
+            Severity::Warning,
+            "spikes",
+            format!(
+                "{} (a reading ≥ {SPIKE_SIGMAS} robust σ of the axis' sample-to-sample change \
+                 from both neighbours, which agree): {names}",
+                count(s.count, "single-sample spike", "single-sample spikes"),
+            ),
+        ));
+    }
 }
 
 /// Findings about reading: bad rows, an early stop, non-finite readings; `label` prefixes the
@@ -134,17 +234,13 @@ pub(crate) fn reading(
     f: &mut Vec<Finding>,
 ) {
     if bad_rows.count > 0 {
-        let names: Vec<&str> = (bad_rows.first.iter().take(NAMED))
-            .map(|r| r.message.as_str())
-            .collect();
         f.push(Finding::new(
             Severity::Defect,
             "bad_rows",
             format!(
-                "{label}{} could not be read: {}{}",
+                "{label}{} could not be read: {}",
                 count(bad_rows.count, "row", "rows"),
-                names.join("; "),
-                more(bad_rows.count, names.len())
+                list_events(bad_rows, |r| r.message.clone())
             ),
         ));
     }
@@ -156,17 +252,13 @@ pub(crate) fn reading(
         ));
     }
     if non_finite.count > 0 {
-        let names: Vec<String> = (non_finite.first.iter().take(NAMED))
-            .map(|(i, at)| format!("index {i} ({at})"))
-            .collect();
         f.push(Finding::new(
             Severity::Defect,
             "non_finite",
             format!(
-                "{label}{} with a non-finite reading: {}{}",
+                "{label}{} with a non-finite reading: {}",
                 count(non_finite.count, "sample", "samples"),
-                names.join("; "),
-                more(non_finite.count, names.len())
+                list_events(non_finite, |(i, at)| format!("index {i} ({at})"))
             ),
         ));
     }
@@ -353,13 +445,18 @@ fn units(a: &Audit, f: &mut Vec<Finding>) {
         "median |a| {:.3} m/s², median |ω| {:.4} rad/s over the first {} samples; {scale}",
         u.gravity_median_m_s2, u.gyro_median_rad_s, u.samples
     );
-    match &u.error {
-        Some(e) => f.push(Finding::new(
+    match (&u.error, u.verdict.as_ref().and_then(|v| v.why())) {
+        (Some(e), _) => f.push(Finding::new(
             Severity::Defect,
             "units",
             format!("{e} ({facts})"),
         )),
-        None => f.push(Finding::new(
+        (None, Some(why)) => f.push(Finding::new(
+            Severity::Warning,
+            "units",
+            format!("unit check inconclusive: {why} ({facts})"),
+        )),
+        (None, None) => f.push(Finding::new(
             Severity::Info,
             "units",
             format!("units plausible: {facts}"),

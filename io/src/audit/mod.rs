@@ -15,18 +15,26 @@
 //!   interval, jitter (standard deviation of the regular intervals, and 1.4826 × MAD), gaps
 //!   (Δt > [`GAP_FACTOR`] × reference; those above [`LONG_GAP_NS`] are defects), duplicates
 //!   and out-of-order samples;
-//! - **readings**: non-finite samples, flat tops at an axis' extremes ([`FlatTop`]:
-//!   saturation/clipping), constant axes, the fraction of 0.5 s windows in which the
-//!   accelerometer is still ([`Still`]);
-//! - **units** ([`UnitCheck`]): [`crate::plausibility::check_units`] and the gyro-scale fit on
-//!   the prefix, the median gravity magnitude and gyro norm.
+//! - **readings**: non-finite samples, readings beyond any IMU's range
+//!   ([`crate::plausibility::limits`]: a corrupt row), single-sample spikes ([`Spike`]: a
+//!   reading far from both neighbours while they agree), flat tops at an axis' extremes
+//!   ([`FlatTop`]: saturation/clipping), constant axes, the fraction of 0.5 s windows in which
+//!   the accelerometer is still ([`Still`]);
+//! - **units** ([`UnitCheck`]): [`crate::plausibility::check_units_read_as`] in the units
+//!   the source was read in ([`AuditOptions::read_as`]) and the gyro-scale fit on the prefix,
+//!   the median gravity magnitude and gyro norm; checks that cannot decide are a warning.
+//!
+//! A recording with fewer than [`MIN_JUDGED_SAMPLES`] samples or shorter than
+//! [`MIN_JUDGED_SPAN_S`] is too short to judge: its verdict is [`Verdict::TooShort`], not
+//! clean (its rate, stillness and units rest on too few intervals).
 //!
 //! Split recordings (separate gyro and accelerometer streams) are audited by
 //! [`audit_channels`]: each channel's timing, and how the accelerometer stamps sit between the
 //! gyro stamps.
 //!
 //! The result is an [`Audit`] with a list of [`Finding`]s (defect, warning, info);
-//! [`Audit::is_clean`] says whether there is no defect.
+//! [`Audit::is_clean`] says whether there is no defect, [`Audit::verdict`] whether the
+//! recording is clean, has defects, or is too short to judge.
 //!
 //! Indices are 0-based positions among the samples the source yields (rows that cannot be
 //! parsed take no index); locations are 1-based lines (messages for containers).
@@ -35,20 +43,30 @@ mod axes;
 mod channels;
 mod findings;
 mod intervals;
+mod spikes;
 
 pub use axes::{AXES, AxisReport, FlatTop, MIN_FLAT_RUN, Still};
 pub use channels::{ChannelAudit, Offsets, SplitAudit, audit_channels};
-pub use findings::{DRIFT_WARNING_PPM, Finding, JITTER_WARNING, Severity};
+pub use findings::{
+    DRIFT_WARNING_PPM, Finding, JITTER_WARNING, MIN_JUDGED_SAMPLES, MIN_JUDGED_SPAN_S, Severity,
+    Verdict,
+};
 pub use intervals::{
     Event, EventList, GAP_FACTOR, HISTOGRAM_EDGES, LONG_GAP_NS, Step, Timing, TimingStats,
     reference_interval,
 };
+pub use spikes::{SPIKE_SIGMAS, Spike};
 
 use crate::error::{IoError, Location};
-use crate::plausibility::{GyroScaleFit, check_units, gyro_scale_fit, median_interval_ns};
+use crate::plausibility::limits::impossible;
+use crate::plausibility::{
+    GyroScaleFit, UnitVerdict, check_units_read_as, gyro_scale_fit, median_interval_ns,
+};
 use crate::reader::{ImuReader, Located};
+use crate::units::Units;
 use axes::{FlatTops, StillWindows};
 use preint::ImuSample;
+use spikes::Spikes;
 
 /// How much an audit keeps.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -63,6 +81,9 @@ pub struct AuditOptions {
     /// readings and stillness are audited on the raw readings, where the sensor produced them.
     /// Default `None`.
     pub correction: Option<preint::intrinsics::Correction>,
+    /// The units the source was read in, whose alternatives the unit checks weigh
+    /// ([`check_units_read_as`]; `None`: unknown). [`audit_reader`] sets them.
+    pub read_as: Option<Units>,
 }
 
 impl Default for AuditOptions {
@@ -71,6 +92,7 @@ impl Default for AuditOptions {
             prefix_samples: 1 << 15,
             max_listed: 20,
             correction: None,
+            read_as: None,
         }
     }
 }
@@ -126,8 +148,21 @@ pub struct UnitCheck {
     /// How well the gyro scaled by π/180, 1 and 180/π explains the turning of gravity
     /// ([`crate::plausibility::gyro_scale_fit`]); `None` with fewer than 10 quasi-static pairs.
     pub gyro_scale: Option<GyroScaleFit>,
-    /// The message of [`crate::plausibility::check_units`] when it refuses the data.
+    /// The message of [`crate::plausibility::check_units_read_as`] when it refuses the data.
     pub error: Option<String>,
+    /// Its verdict when it does not (passed or inconclusive).
+    pub verdict: Option<UnitVerdict>,
+}
+
+/// A reading beyond any IMU's range ([`crate::plausibility::limits`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Impossible {
+    /// 0-based sample index.
+    pub index: u64,
+    /// Where it is in the source.
+    pub at: Location,
+    /// What it reads, and the limit.
+    pub what: String,
 }
 
 /// Everything an audit found (see the module docs).
@@ -143,6 +178,10 @@ pub struct Audit {
     pub stopped: Option<String>,
     /// Samples with a non-finite reading.
     pub non_finite: EventList<(u64, Location)>,
+    /// Samples with a reading beyond any IMU's range.
+    pub impossible: EventList<Impossible>,
+    /// Single-sample spikes.
+    pub spikes: EventList<Spike>,
     /// Duplicates whose readings are also the same as the sample they repeat.
     pub identical_duplicates: u64,
     /// Extremes and flat tops of the six axes (finite samples), if there were any.
@@ -159,6 +198,11 @@ impl Audit {
     /// No defect was found.
     pub fn is_clean(&self) -> bool {
         self.defects().next().is_none()
+    }
+
+    /// Clean, defects, or too short to judge (see the module docs).
+    pub fn verdict(&self) -> Verdict {
+        Verdict::of(&self.findings)
     }
 
     /// The defects.
@@ -182,7 +226,9 @@ struct Streaming {
     timing: TimingStats,
     tops: FlatTops,
     still: StillWindows,
+    spikes: Spikes,
     non_finite: EventList<(u64, Location)>,
+    impossible: EventList<Impossible>,
     identical: u64,
     latest: Option<ImuSample>,
     limit: usize,
@@ -198,10 +244,22 @@ impl Streaming {
         }
         if !(x.gyro.iter().chain(x.acc.iter())).all(|v| v.is_finite()) {
             self.non_finite.push((index, s.at), self.limit);
+            self.spikes.gap();
+            return;
+        }
+        if let Some(what) = impossible(x) {
+            let e = Impossible {
+                index,
+                at: s.at,
+                what,
+            };
+            self.impossible.push(e, self.limit);
+            self.spikes.gap();
             return;
         }
         self.tops.push(&x.gyro, &x.acc, index, s.at);
         self.still.push(&x.acc);
+        self.spikes.push(index, s.at, readings(x));
     }
 }
 
@@ -257,13 +315,19 @@ impl Auditor {
     fn start_streaming(&mut self) {
         let prefix = std::mem::take(&mut self.prefix);
         let reference = reference_interval(prefix.iter().map(|s| s.sample.t_ns));
-        self.units = unit_check(&prefix, self.opts.correction.as_ref());
+        self.units = unit_check(&prefix, &self.opts);
         let limit = self.opts.max_listed;
+        let judged: Vec<[f64; 6]> = (prefix.iter().map(|l| &l.sample))
+            .filter(|s| judged(s))
+            .map(readings)
+            .collect();
         let mut st = Streaming {
             timing: TimingStats::new(reference, limit),
             tops: FlatTops::default(),
             still: StillWindows::new(reference),
+            spikes: Spikes::new(&judged, limit),
             non_finite: EventList::default(),
+            impossible: EventList::default(),
             identical: 0,
             latest: None,
             limit,
@@ -286,6 +350,8 @@ impl Auditor {
             bad_rows: self.errors.bad_rows,
             stopped: self.errors.stopped,
             non_finite: st.non_finite,
+            impossible: st.impossible,
+            spikes: st.spikes.found,
             identical_duplicates: st.identical,
             axes: st.tops.finish(),
             still: st.still.finish(),
@@ -297,30 +363,39 @@ impl Auditor {
     }
 }
 
-/// The unit checks of the module docs on `prefix`, corrected by `correction`.
-fn unit_check(
-    prefix: &[Located],
-    correction: Option<&preint::intrinsics::Correction>,
-) -> Option<UnitCheck> {
-    let finite = |s: &ImuSample| (s.gyro.iter().chain(s.acc.iter())).all(|v| v.is_finite());
-    let mut v: Vec<ImuSample> = prefix.iter().map(|l| l.sample).filter(finite).collect();
+/// The six readings of `s`: gyro x, y, z, accelerometer x, y, z.
+fn readings(s: &ImuSample) -> [f64; 6] {
+    [s.gyro.x, s.gyro.y, s.gyro.z, s.acc.x, s.acc.y, s.acc.z]
+}
+
+/// Whether the readings of `s` are judged by the unit checks, the spikes and the axes: finite
+/// and within any IMU's range.
+fn judged(s: &ImuSample) -> bool {
+    (s.gyro.iter().chain(s.acc.iter())).all(|v| v.is_finite()) && impossible(s).is_none()
+}
+
+/// The unit checks of the module docs on `prefix`, corrected by the options' correction, in
+/// the units the source was read in.
+fn unit_check(prefix: &[Located], opts: &AuditOptions) -> Option<UnitCheck> {
+    let mut v: Vec<ImuSample> = prefix.iter().map(|l| l.sample).filter(judged).collect();
     v.sort_by_key(|s| s.t_ns);
     v.dedup_by_key(|s| s.t_ns);
     if v.len() < 2 {
         return None;
     }
     let raw: Vec<f64> = v.iter().map(|s| s.acc.norm()).collect();
-    if let Some(c) = correction {
+    if let Some(c) = &opts.correction {
         v.iter_mut().for_each(|s| *s = c.apply(s));
     }
     let med = |mut x: Vec<f64>| {
         let mid = x.len() / 2;
         *x.select_nth_unstable_by(mid, f64::total_cmp).1
     };
-    let error = check_units(&v, "").err().map(|e| match e {
-        IoError::Units { msg, .. } => msg,
-        other => other.to_string(),
-    });
+    let (verdict, error) = match check_units_read_as(&v, "", opts.read_as) {
+        Ok(verdict) => (Some(verdict), None),
+        Err(IoError::Units { msg, .. }) => (None, Some(msg)),
+        Err(other) => (None, Some(other.to_string())),
+    };
     Some(UnitCheck {
         samples: v.len(),
         gravity_median_m_s2: med(v.iter().map(|s| s.acc.norm()).collect()),
@@ -328,6 +403,7 @@ fn unit_check(
         gyro_median_rad_s: med(v.iter().map(|s| s.gyro.norm()).collect()),
         gyro_scale: gyro_scale_fit(&v, median_interval_ns(&v) * 1e-9),
         error,
+        verdict,
     })
 }
 
@@ -352,8 +428,13 @@ pub fn audit_stream(
 }
 
 /// Audits the samples of `reader` as its source gives them, without its order and
-/// finiteness checks.
+/// finiteness checks; the unit checks weigh the alternatives of the units it reads in (unless
+/// the options give others).
 pub fn audit_reader(reader: ImuReader, opts: AuditOptions) -> Audit {
     let (samples, info, _) = reader.into_unvalidated();
+    let opts = AuditOptions {
+        read_as: opts.read_as.or(Some(info.units)),
+        ..opts
+    };
     audit_stream(samples, &info.source_name, opts)
 }

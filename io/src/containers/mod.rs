@@ -239,6 +239,7 @@ pub fn open(path: &Path, format: Format, opts: &ReadOptions) -> Result<ImuReader
         layout: None,
         units: Units::SI_NS,
         notes,
+        warnings: Vec::new(),
     };
     let samples = numbered.map(|r| {
         r.map(|(at, t_ns, m)| Located {
@@ -276,6 +277,7 @@ pub fn open_split(
             ),
             stamp_note(opts.stamp),
         ],
+        warnings: Vec::new(),
     };
     crate::split::merge_with_report(g, a, info, opts)
 }

@@ -90,6 +90,34 @@ impl MergeReport {
         }
     }
 
+    /// When the merge shortened the recording to the accelerometer's span (at either end, more
+    /// gyro samples dropped than fall within [`EDGE_ACCEL_INTERVALS`] accelerometer intervals,
+    /// the end the cubic interpolation needs): what was dropped, for a warning.
+    pub fn shortening(&self) -> Option<String> {
+        let (fg, fa) = (self.gyro_rate_hz(), self.accel_rate_hz());
+        let edge = if fg > 0.0 && fa > 0.0 {
+            (EDGE_ACCEL_INTERVALS * fg / fa).ceil() as u64
+        } else {
+            0
+        };
+        if self.dropped_before <= edge && self.dropped_after <= edge {
+            return None;
+        }
+        let span = |s: (i64, i64)| (s.1 - s.0) as f64 * 1e-9;
+        Some(format!(
+            "the split streams overlap over {:.3} s only: the accelerometer runs from {} to {} \
+             ns, so {} gyro samples before and {} after it are dropped (of {} over {:.3} s); the \
+             result is that of the overlap",
+            span(self.merged_span_ns),
+            self.accel_span_ns.0,
+            self.accel_span_ns.1,
+            self.dropped_before,
+            self.dropped_after,
+            self.gyro_samples,
+            span(self.gyro_span_ns),
+        ))
+    }
+
     /// One line for the notes of a source.
     pub fn describe(&self) -> String {
         format!(
@@ -107,6 +135,11 @@ impl MergeReport {
         )
     }
 }
+
+/// Accelerometer intervals at each end of a merge whose gyro samples may be dropped without it
+/// being a shortening of the recording: the cubic needs two accelerometer samples on each side
+/// of a gyro stamp, and the streams' first and last stamps need not coincide.
+pub const EDGE_ACCEL_INTERVALS: f64 = 3.0;
 
 fn rate(n: u64, span: (i64, i64)) -> f64 {
     let s = (span.1 - span.0) as f64 * 1e-9;
@@ -303,7 +336,7 @@ impl WeightAccumulator {
 }
 
 /// The time cell \[s\] of accelerometer sample `i`: half the distance between its neighbours,
-/// or the one interval at an end (the `Centered` rule of `preint::noise`).
+/// or the one interval at an end (the `Centered` rule of `preint::CellRule`).
 fn cell(stamps: &[(i64, i64)], i: i64) -> f64 {
     let at = |k: i64| stamps.iter().find(|&&(s, _)| s == k).map(|&(_, t)| t);
     let t = at(i).unwrap_or(0);

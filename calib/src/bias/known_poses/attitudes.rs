@@ -69,6 +69,11 @@ impl KnownAttitudeCalibration {
     pub fn chi2_per_dof(&self) -> f64 {
         super::per_dof(self.chi2, self.dof)
     }
+
+    /// The goodness of fit: `chi2` against `χ²_dof` ([`crate::fit`]).
+    pub fn fit(&self) -> crate::Fit {
+        crate::Fit::new(self.chi2, self.dof)
+    }
 }
 
 /// Estimates the gyro bias and the requested gyroscope parameters from known attitudes (module

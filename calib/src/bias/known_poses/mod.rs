@@ -20,6 +20,10 @@
 //! correction of the windows' deltas (their Jacobians `J_td`, `J_θ`), with a standard deviation,
 //! and withheld when the motion does not excite them ([`extras::ExcitationLimits`]).
 //!
+//! When the fit is not credible ([`crate::fit`]), [`conventions`] tries the usual convention
+//! errors of a pose file (quaternion order, inverse rotation or pose, world z down, poses of
+//! another frame) and names the one that explains the misfit.
+//!
 //! Because the corrections are first order, the problem is re-linearised: after a solve the
 //! windows are re-integrated at the new bias and calibration and the problem solved again,
 //! until the bias moves by less than 1e-6 and every calibration parameter by less than 1e-3 of
@@ -30,6 +34,7 @@
 //! expect that much model error); dense linear algebra, O(P³) per iteration.
 
 pub mod attitudes;
+pub mod conventions;
 pub mod extras;
 pub mod gravity;
 pub mod pose_noise;
@@ -164,6 +169,11 @@ impl KnownPoseCalibration {
     /// `χ²/dof` (≈ 1 when the noise densities and pose noise are right; NaN for dof = 0).
     pub fn chi2_per_dof(&self) -> f64 {
         per_dof(self.chi2, self.dof)
+    }
+
+    /// The goodness of fit: `chi2` against `χ²_dof` ([`crate::fit`]).
+    pub fn fit(&self) -> crate::Fit {
+        crate::Fit::new(self.chi2, self.dof)
     }
 }
 

@@ -1,7 +1,7 @@
 //! The preintegration-factor residuals of consecutive known poses and their analytic Jacobian.
 //!
 //! For the pair (i, j = i+1), Forster et al. (T-RO 2017) eq. 45 with the first-order bias
-//! correction of eq. 44 (see [`preint::factor`]), `Δt = t_j − t_i`, order **[r_φ, r_v, r_p]**:
+//! correction of eq. 44 (see [`preint::ImuFactor`]), `Δt = t_j − t_i`, order **[r_φ, r_v, r_p]**:
 //!
 //! ```text
 //! r_φ = Log(ΔR(b_g)ᵀ R̃_iᵀ R̃_j)

@@ -187,6 +187,10 @@ pub struct MultiPoseCalibration {
 }
 
 impl MultiPoseCalibration {
+    /// The goodness of fit of the chosen model: `chi2` against `χ²_dof` ([`crate::fit`]).
+    pub fn fit(&self) -> crate::Fit {
+        crate::Fit::new(self.chi2, self.dof)
+    }
     /// The accelerometer matrix `S_a` of the chosen model (identity without scale terms).
     pub fn acc_scale_matrix(&self) -> Matrix3<f64> {
         acc_scale_matrix(

@@ -5,9 +5,9 @@ use super::{
     hz, nees_band_half,
 };
 use crate::analysis::accuracy::{Row, order};
-use crate::analysis::speed::Throughput;
 use crate::scheme;
 use preint::Scheme;
+use preint_analysis::speed::Throughput;
 
 /// `[a, b]` as `a Hz` or `a–b Hz`.
 fn rate_range(a: f64, b: f64) -> String {

@@ -1,111 +1,26 @@
-//! `preint report`: built-in scenes, no input files, one self-contained HTML page.
-//!
-//! Sections, after a conclusions box computed from the figures
-//! ([`crate::analysis::report::conclusions`]): accuracy against cost with the Pareto front
-//! (`seed-ellipse`, `aggressive`), error against rate with the fitted convergence orders, what
-//! `preint advise` recommends on simulated noisy recordings, the cost per sample of each scheme
-//! and level, Monte Carlo NEES per scheme, the gimbal-lock failure of Euler-angle dead
-//! reckoning, a bias calibration from a simulated static recording, and the Allan deviation of
-//! both sensors with the fitted densities (the numbers: [`crate::analysis::report`]). The SVG
-//! charts are written beside `index.html` and also embedded in it.
+//! The sections of the report page, each a heading, its prose, its charts (written into the
+//! output directory and embedded) and its tables.
 
+use super::failed;
 use crate::analysis::accuracy::{Row, order};
-use crate::analysis::advise::Candidate;
 use crate::analysis::report::{
-    self, ADVISE_RECORDING, ADVISE_WINDOW_FRACTION, AdviceCheck, AllanCheck, NEES_RUNS, ReportData,
+    ADVISE_RECORDING, ADVISE_WINDOW_FRACTION, AdviceCheck, AllanCheck, NEES_RUNS, ReportData,
     SPEED_SAMPLES_RUNS, StaticCheck, front_runs, hz, nees_band_half,
 };
 use crate::charts::figures;
-use crate::format::IMU_AXES;
 use crate::html::Page;
-use crate::{CliError, Output, progress, scheme};
-use serde_json::{Value, json};
-use std::path::{Path, PathBuf};
-
-/// Flags of `preint report`.
-#[derive(clap::Args, Debug, Clone)]
-pub struct Args {
-    /// Output directory (index.html and the SVG charts).
-    #[arg(long, default_value = "out/report")]
-    pub out: PathBuf,
-}
-
-/// The report's numbers, its conclusions and the files written.
-#[derive(Clone, Debug)]
-pub struct Report {
-    /// The numbers.
-    pub data: ReportData,
-    /// The conclusions drawn from them (plain text, code between backticks).
-    pub conclusions: Vec<String>,
-    /// The SVG charts, then `index.html`.
-    pub files: Vec<String>,
-}
-
-/// Computes the report's numbers (with a progress bar at a terminal) and writes the page and
-/// its charts into `--out`.
-pub fn compute(args: &Args) -> Result<Report, CliError> {
-    let out = &args.out;
-    std::fs::create_dir_all(out).map_err(|e| CliError::failed_in(out, e))?;
-    let pb = progress::bar(report::STEPS, "report");
-    let data = report::compute(&mut |msg| {
-        if let Some(pb) = &pb {
-            pb.set_message(msg.to_string());
-            pb.inc(1);
-        }
-    })?;
-    if let Some(pb) = &pb {
-        pb.finish_and_clear();
-    }
-    let conclusions = report::conclusions(&data);
-    let files = write_page(&data, &conclusions, out)?;
-    Ok(Report {
-        data,
-        conclusions,
-        files,
-    })
-}
+use crate::{CliError, scheme};
+use preint_analysis::advise::Candidate;
+use preint_analysis::format::IMU_AXES;
+use std::path::Path;
 
 fn e3(x: f64) -> String {
     format!("{x:.3e}")
 }
 
-fn failed(e: String) -> CliError {
-    CliError::Failed(e)
-}
-
-/// Writes the charts and `index.html` into `out`; returns their paths (the page last).
-pub fn write_page(
-    data: &ReportData,
-    conclusions: &[String],
-    out: &Path,
-) -> Result<Vec<String>, CliError> {
-    let mut page = Page::new("preint report: which IMU integration scheme, at which rate");
-    page.p(
-        "Every figure below is computed on this machine by `preint report` from built-in \
-            simulated scenes (no input files); costs are this machine's timings. Schemes: `euler` \
-            (1st order), `midpoint` (2nd order), `hermite4` (4th order, uses the neighbouring \
-            samples), `galilean` (1st order on smooth input, exact for input held over each \
-            interval). Conventions: z-up world, g = (0, 0, −9.81) m/s², right perturbations, \
-            tangent order [δφ, δv, δp], bias order [b_g, b_a].",
-    );
-    page.conclusions(conclusions).toc();
-    let mut files = accuracy_section(&mut page, data, out)?;
-    files.extend(convergence_section(&mut page, data, out)?);
-    files.push(advice_section(&mut page, &data.advice, out)?);
-    speed_section(&mut page, data);
-    nees_section(&mut page, data);
-    files.push(gimbal_lock_section(&mut page, data, out)?);
-    calibration_section(&mut page, &data.calibration);
-    files.extend(allan_section(&mut page, &data.allan, out)?);
-    let index = out.join("index.html");
-    page.write(&index).map_err(failed)?;
-    files.push(index.display().to_string());
-    Ok(files)
-}
-
 /// Accuracy against cost: per scene, the chart and the Pareto front as a table. Returns the
 /// chart paths.
-fn accuracy_section(
+pub(super) fn accuracy_section(
     page: &mut Page,
     data: &ReportData,
     out: &Path,
@@ -152,7 +67,7 @@ fn accuracy_section(
 
 /// Error against rate: per scene, the two-panel chart and the 200 Hz table. Returns the chart
 /// paths.
-fn convergence_section(
+pub(super) fn convergence_section(
     page: &mut Page,
     data: &ReportData,
     out: &Path,
@@ -196,7 +111,7 @@ fn convergence_section(
 }
 
 /// The worst ratio of discretisation error to noise σ over rotation, velocity and position.
-fn worst_ratio(c: &Candidate) -> f64 {
+pub(super) fn worst_ratio(c: &Candidate) -> f64 {
     (0..3)
         .map(|k| c.disc_err[k] / c.noise_sigma[k])
         .fold(0.0, f64::max)
@@ -204,7 +119,11 @@ fn worst_ratio(c: &Candidate) -> f64 {
 
 /// What `advise` recommends on each scene: the chart, the recommendation and, per scheme, its
 /// lowest acceptable rate. Returns the chart's path.
-fn advice_section(page: &mut Page, advice: &[AdviceCheck], out: &Path) -> Result<String, CliError> {
+pub(super) fn advice_section(
+    page: &mut Page,
+    advice: &[AdviceCheck],
+    out: &Path,
+) -> Result<String, CliError> {
     let ((rate, duration), (window, fraction)) = (ADVISE_RECORDING, ADVISE_WINDOW_FRACTION);
     page.h2("What `preint advise` recommends for a noisy recording");
     page.p(&format!("`preint advise` on a simulated {duration} s recording of each scene at {rate} Hz with \
@@ -284,7 +203,7 @@ fn advice_section(page: &mut Page, advice: &[AdviceCheck], out: &Path) -> Result
 }
 
 /// The speed table: median ns per sample per scheme and level.
-fn speed_section(page: &mut Page, data: &ReportData) {
+pub(super) fn speed_section(page: &mut Page, data: &ReportData) {
     let (samples, runs) = SPEED_SAMPLES_RUNS;
     page.h2("Speed: cost per sample");
     page.p(&format!("Median of {runs} runs of `Preintegrator::integrate_slice` over a synthetic smooth \
@@ -314,7 +233,7 @@ fn speed_section(page: &mut Page, data: &ReportData) {
 }
 
 /// The NEES table.
-fn nees_section(page: &mut Page, data: &ReportData) {
+pub(super) fn nees_section(page: &mut Page, data: &ReportData) {
     page.h2("Covariance consistency (Monte Carlo NEES)");
     let rows: Vec<Vec<String>> = data
         .nees
@@ -336,7 +255,11 @@ fn nees_section(page: &mut Page, data: &ReportData) {
 }
 
 /// The gimbal-lock chart. Returns its path.
-fn gimbal_lock_section(page: &mut Page, data: &ReportData, out: &Path) -> Result<String, CliError> {
+pub(super) fn gimbal_lock_section(
+    page: &mut Page,
+    data: &ReportData,
+    out: &Path,
+) -> Result<String, CliError> {
     page.h2("Where methods fail: Euler angles at gimbal lock");
     let path = out.join("gimbal_lock.svg");
     figures::attitude_error(
@@ -349,7 +272,7 @@ fn gimbal_lock_section(page: &mut Page, data: &ReportData, out: &Path) -> Result
 }
 
 /// The static calibration against the true biases.
-fn calibration_section(page: &mut Page, c: &StaticCheck) {
+pub(super) fn calibration_section(page: &mut Page, c: &StaticCheck) {
     page.h2("Bias calibration from a simulated static recording");
     let (truth, cal) = (&c.truth, &c.cal);
     let rows: Vec<Vec<String>> = (0..3)
@@ -373,7 +296,11 @@ fn calibration_section(page: &mut Page, c: &StaticCheck) {
 
 /// The Allan charts of both sensors and the fitted densities per axis. Returns the charts'
 /// paths.
-fn allan_section(page: &mut Page, a: &AllanCheck, out: &Path) -> Result<Vec<String>, CliError> {
+pub(super) fn allan_section(
+    page: &mut Page,
+    a: &AllanCheck,
+    out: &Path,
+) -> Result<Vec<String>, CliError> {
     page.h2("Allan deviation of a simulated static hour");
     let sim = &a.simulated;
     page.p(&format!("One hour at rest at {} Hz with EuRoC densities and bias random walk. The fitted white-noise \
@@ -414,82 +341,4 @@ fn allan_section(page: &mut Page, a: &AllanCheck, out: &Path) -> Result<Vec<Stri
         &rows,
     );
     Ok(files)
-}
-
-/// The JSON form: the files, the conclusions and a summary (200 Hz errors per scene, NEES, the
-/// calibration, `advise`'s recommendations, ns per sample).
-pub fn to_json(r: &Report) -> Value {
-    let mut summary = serde_json::Map::new();
-    for (scene, rows) in &r.data.accuracy {
-        let at200: Vec<Value> = rows
-            .iter()
-            .filter(|r| r.rate == 200.0)
-            .map(|r| {
-                json!({"scheme": scheme::label(r.scheme), "rot_err": r.err[0],
-                            "vel_err": r.err[1], "pos_err": r.err[2]})
-            })
-            .collect();
-        summary.insert(scene.to_string(), json!(at200));
-    }
-    let nees: serde_json::Map<String, Value> = r
-        .data
-        .nees
-        .iter()
-        .map(|(scene, s, n)| (format!("{scene}/{}", scheme::label(*s)), json!(n)))
-        .collect();
-    summary.insert("nees".into(), Value::Object(nees));
-    let StaticCheck { truth, cal } = &r.data.calibration;
-    summary.insert(
-        "static_calibration".into(),
-        json!({"gyro_bias": [cal.gyro_bias.x, cal.gyro_bias.y, cal.gyro_bias.z],
-               "gyro_bias_std": [cal.gyro_bias_std.x, cal.gyro_bias_std.y, cal.gyro_bias_std.z],
-               "truth": [truth.gyro.x, truth.gyro.y, truth.gyro.z]}),
-    );
-    let advise: serde_json::Map<String, Value> = r
-        .data
-        .advice
-        .iter()
-        .map(|a| {
-            let c = a.recommendation();
-            let v = json!({"recommended_scheme": c.map(|c| scheme::label(c.scheme)),
-                           "recommended_rate": c.map(|c| c.rate_hz)});
-            (a.scene.to_string(), v)
-        })
-        .collect();
-    summary.insert("advise".into(), Value::Object(advise));
-    let speed: Vec<Value> = r
-        .data
-        .speed
-        .iter()
-        .map(|t| {
-            json!({"scheme": scheme::label(t.scheme), "deltas": t.deltas,
-                   "covariance": t.covariance, "combined": t.combined})
-        })
-        .collect();
-    summary.insert("ns_per_sample".into(), json!(speed));
-    json!({"files": r.files, "conclusions": r.conclusions, "summary": summary})
-}
-
-/// The human summary: where the page is, and the conclusions.
-pub fn to_text(r: &Report) -> String {
-    let index = r.files.last().map_or("", String::as_str);
-    let mut h = format!(
-        "wrote {index} (charts beside it: {})\nconclusions:\n",
-        r.files.len().saturating_sub(1)
-    );
-    for c in &r.conclusions {
-        h.push_str("- ");
-        h.push_str(c);
-        h.push('\n');
-    }
-    h
-}
-
-/// Runs `preint report`.
-pub fn run(args: &Args) -> Result<Output, CliError> {
-    let r = compute(args)?;
-    Ok(Output {
-        human: to_text(&r),
-        json: to_json(&r),
-    })
 }

@@ -6,21 +6,21 @@
 //! sample is the wall-clock time of the whole run over N. The criterion benchmark
 //! `cargo bench -p preint` measures the same loop.
 
-use crate::{CliError, scheme};
+use crate::Error;
 use preint::{ImuBias, ImuNoise, ImuSample, Level, PreintParams, Preintegrator, Scheme};
 pub use preint_sim::synthetic_stream;
 use std::time::Instant;
 
 /// One run: the ns/sample of `scheme` at `level` over `samples`.
-pub fn one_run(scheme: Scheme, level: Level, samples: &[ImuSample]) -> Result<f64, CliError> {
+pub fn one_run(scheme: Scheme, level: Level, samples: &[ImuSample]) -> Result<f64, Error> {
     let mut params = PreintParams::from_noise(&ImuNoise::euroc())
         .with_scheme(scheme)
         .with_level(level);
     params.keep_samples = false;
-    let mut p = Preintegrator::new(params, ImuBias::zero()).map_err(CliError::failed)?;
+    let mut p = Preintegrator::new(params, ImuBias::zero()).map_err(Error::failed)?;
     let t0 = Instant::now();
-    p.integrate_slice(samples).map_err(CliError::failed)?;
-    let m = p.finish().map_err(CliError::failed)?;
+    p.integrate_slice(samples).map_err(Error::failed)?;
+    let m = p.finish().map_err(Error::failed)?;
     let dt = t0.elapsed().as_secs_f64();
     std::hint::black_box(&m);
     Ok(dt * 1e9 / samples.len() as f64)
@@ -34,7 +34,7 @@ pub fn best_ns_per_sample(
     level: Level,
     samples: &[ImuSample],
     runs: usize,
-) -> Result<Vec<f64>, CliError> {
+) -> Result<Vec<f64>, Error> {
     let mut best = vec![f64::INFINITY; schemes.len()];
     for _ in 0..runs.max(1) {
         for (b, &scheme) in best.iter_mut().zip(schemes) {
@@ -50,7 +50,7 @@ pub fn median_ns_per_sample(
     level: Level,
     samples: &[ImuSample],
     runs: usize,
-) -> Result<f64, CliError> {
+) -> Result<f64, Error> {
     let mut t = (0..runs.max(1))
         .map(|_| one_run(scheme, level, samples))
         .collect::<Result<Vec<_>, _>>()?;
@@ -73,14 +73,15 @@ pub struct Throughput {
 
 /// [`Throughput`] of every scheme over a synthetic stream of `samples` samples, the median of
 /// `runs` runs each.
-pub fn throughput(samples: usize, runs: usize) -> Result<Vec<Throughput>, CliError> {
+pub fn throughput(samples: usize, runs: usize) -> Result<Vec<Throughput>, Error> {
     let stream = synthetic_stream(samples);
-    let pb = crate::progress::bar(scheme::ALL.len() as u64, "speed");
-    let rows = scheme::ALL
-        .into_iter()
+    let pb = crate::progress::bar(Scheme::ALL.len() as u64, "speed");
+    let rows = Scheme::ALL
+        .iter()
+        .copied()
         .map(|scheme| {
             if let Some(pb) = &pb {
-                pb.set_message(scheme::label(scheme));
+                pb.set_message(scheme.name());
             }
             let row = Throughput {
                 scheme,

@@ -1,8 +1,8 @@
 //! Noise densities: read from a Kalibr `imu.yaml`, or the EuRoC figures when none is given.
 
-use crate::CliError;
+use crate::Error;
 use preint::ImuNoise;
-use preint_io::read_kalibr_yaml;
+use preint_io::read_kalibr_noise_model;
 use preint_io::split::MergeReport;
 use serde_json::{Value, json};
 use std::path::Path;
@@ -10,11 +10,12 @@ use std::path::Path;
 /// What [`source`] prints when no noise file is given.
 pub const DEFAULT_SOURCE: &str = "EuRoC / ADIS16448 defaults (no --noise)";
 
-/// Reads the Kalibr `imu.yaml` at `path`, or returns the EuRoC (ADIS16448) figures
-/// ([`ImuNoise::euroc`]) when there is none.
-pub fn or_default(path: Option<&Path>) -> Result<ImuNoise, CliError> {
+/// Reads the Kalibr `imu.yaml` at `path` to weight measurements with (white-noise densities
+/// positive, every value within an IMU's range: [`preint_io::read_kalibr_noise_model`]), or
+/// returns the EuRoC (ADIS16448) figures ([`ImuNoise::euroc`]) when there is none.
+pub fn or_default(path: Option<&Path>) -> Result<ImuNoise, Error> {
     Ok(match path {
-        Some(p) => read_kalibr_yaml(p)?,
+        Some(p) => read_kalibr_noise_model(p)?,
         None => ImuNoise::euroc(),
     })
 }

@@ -16,7 +16,7 @@
 use preint::{ImuSample, Scheme};
 
 /// The input class `advise` is told the recording belongs to.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum InputClass {
     /// Point samples of a smooth signal (a MEMS IMU): reference hermite4, Richardson-checked.
     #[default]

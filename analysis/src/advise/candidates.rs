@@ -2,8 +2,8 @@
 //! fraction of the noise-induced standard deviation of the preintegrated deltas.
 //!
 //! Method (everything estimated from the recording itself; the input class, smooth or held, is
-//! declared by the user: [`super::input_class`]):
-//! 0. Smooth input: the white noise is separated from the motion (see [`super::denoise`]):
+//! declared by the user: [`crate::input_class`]):
+//! 0. Smooth input: the white noise is separated from the motion (see [`crate::denoise`]):
 //!    discretisation error is a property of the motion, and comparing noisy decimated samples
 //!    would measure the noise (it enters a decimated-vs-full difference at ≈ σ√(d − 1)). Held
 //!    input is not filtered (a low-pass would smear its steps), and its lower rates average the
@@ -33,9 +33,17 @@
 //!    where costs within 15 % of the cheapest count as equal and the simplest scheme among them
 //!    wins.
 
-use super::input_class::InputClass;
-use super::speed::{best_ns_per_sample, synthetic_stream};
-use crate::{CliError, scheme};
+//!
+//! # Goodness of fit
+//! [`fit`]: the embedded estimate's χ² `êᵀΣ⁻¹ê` (max over windows) of the recommended
+//! candidate (of the reference when none is acceptable) against `χ²₉`: the discretisation
+//! error alone would then make an `ImuFactor` at the true states fail a χ² test. Credible
+//! when its upper-tail p-value is ≥ 1e-6 ([`preint_calib::fit`]); a χ² far below 9 is the
+//! aim here, not a pessimistic noise model, and is not flagged.
+
+use crate::Error;
+use crate::input_class::InputClass;
+use crate::speed::{best_ns_per_sample, synthetic_stream};
 use nalgebra::SVector;
 use preint::{
     ImuBias, ImuNoise, ImuSample, Level, PreintParams, PreintegratedImu, Scheme, preintegrate,
@@ -106,12 +114,12 @@ fn sigma(m: &PreintegratedImu) -> [f64; 3] {
 }
 /// Window starts \[ns\] and the window length \[ns\]: evenly spread over the recording, at
 /// most 24, leaving 64 sample periods on each side for hermite4's neighbours.
-fn windows(samples: &[ImuSample], window_s: f64) -> Result<(Vec<i64>, i64), CliError> {
+fn windows(samples: &[ImuSample], window_s: f64) -> Result<(Vec<i64>, i64), Error> {
     let n = samples.len();
     let span = samples[n - 1].t_ns - samples[0].t_ns;
     let w_ns = (window_s * 1e9).round() as i64;
     if w_ns <= 0 || w_ns > span {
-        return Err(CliError::Usage(format!(
+        return Err(Error::Usage(format!(
             "--window {window_s} s must be positive and at most the recording's length ({:.3} s)",
             span as f64 * 1e-9
         )));
@@ -119,7 +127,7 @@ fn windows(samples: &[ImuSample], window_s: f64) -> Result<(Vec<i64>, i64), CliE
     let margin = 64 * (span / (n as i64 - 1).max(1));
     let usable = span - w_ns - 2 * margin;
     if usable < 0 {
-        return Err(CliError::Usage(format!(
+        return Err(Error::Usage(format!(
             "recording of {:.3} s ({n} samples) too short for a {window_s} s window: advise needs \
              the window plus 64 samples on each side ({:.3} s in all); give a shorter --window",
             span as f64 * 1e-9,
@@ -151,7 +159,7 @@ pub fn evaluate(
     gravity: f64,
     window_s: f64,
     fraction: f64,
-) -> Result<Vec<Candidate>, CliError> {
+) -> Result<Vec<Candidate>, Error> {
     evaluate_input(
         samples,
         noise,
@@ -193,8 +201,8 @@ pub fn evaluate_input(
     window_s: f64,
     fraction: f64,
     input: InputClass,
-) -> Result<Vec<Candidate>, CliError> {
-    let fail = |e: preint::PreintError| CliError::Failed(e.to_string());
+) -> Result<Vec<Candidate>, Error> {
+    let fail = |e: preint::PreintError| Error::Failed(e.to_string());
     let (starts, w_ns) = windows(samples, window_s)?;
     let n = samples.len();
     let dt_s = (samples[n - 1].t_ns - samples[0].t_ns) as f64 * 1e-9 / (n - 1) as f64;
@@ -209,7 +217,7 @@ pub fn evaluate_input(
     // Cost per sample does not depend on the rate: measured once per scheme (best of 11 runs,
     // the schemes taking turns, so that a busy machine rarely decides a tie).
     let ns = best_ns_per_sample(
-        &scheme::ALL,
+        Scheme::ALL,
         Level::Covariance,
         &synthetic_stream(20_000),
         11,
@@ -227,7 +235,7 @@ pub fn evaluate_input(
             // [`gap_beyond_limit`] names it; lower rates widen it further.
             break;
         }
-        let mut max = [Maxima::default(); scheme::ALL.len()];
+        let mut max = [Maxima::default(); Scheme::ALL.len()];
         for &t0 in &starts {
             if let Some(pb) = &pb {
                 pb.inc(1);
@@ -235,18 +243,18 @@ pub fn evaluate_input(
             let (t_i, t_j) = keyframes(&dec, t0, w_ns);
             let reference =
                 preintegrate(&reference_params, &bias, samples, t_i, t_j).map_err(fail)?;
-            let ms = scheme::ALL
+            let ms = Scheme::ALL
                 .iter()
                 .map(|&s| preintegrate(&params(s, Level::Covariance), &bias, &dec, t_i, t_j))
                 .collect::<Result<Vec<_>, _>>()
                 .map_err(fail)?;
             // Held input: the scheme exact on it, on the candidate's own samples, is exact for
             // them.
-            let held_exact = scheme::ALL
+            let held_exact = Scheme::ALL
                 .iter()
                 .position(|&s| Some(s) == InputClass::Held.exact_scheme())
                 .map(|k| &ms[k]);
-            for (ks, (&s, m)) in scheme::ALL.iter().zip(&ms).enumerate() {
+            for (ks, (&s, m)) in Scheme::ALL.iter().zip(&ms).enumerate() {
                 let est = match (input, held_exact) {
                     (InputClass::Held, Some(g)) => m.delta_error(g),
                     _ => {
@@ -259,7 +267,7 @@ pub fn evaluate_input(
             }
         }
         let rate = 1.0 / (dt_s * d as f64);
-        for (ks, &s) in scheme::ALL.iter().enumerate() {
+        for (ks, &s) in Scheme::ALL.iter().enumerate() {
             let mx = max[ks];
             let is_ref = d == 1 && s == reference_scheme;
             let disc_err = if is_ref {
@@ -316,6 +324,39 @@ pub fn gap_beyond_limit(samples: &[ImuSample], d: usize) -> Option<(i64, i64, us
     }
     let (gap, at) = longest(1)?;
     Some((wide, gap, at))
+}
+
+/// The advice's fit (module docs): the embedded χ² of the recommended candidate, or of the
+/// reference when none is acceptable, against `χ²₉`. `None` without a candidate.
+pub fn fit(candidates: &[Candidate], recommended: Option<&Candidate>) -> Option<preint_calib::Fit> {
+    let c = recommended.or_else(|| candidates.iter().find(|c| c.is_reference()))?;
+    let mut f = preint_calib::Fit::new(c.embedded_chi2, 9);
+    f.pessimistic = false;
+    let what = format!(
+        "{} at {:.1} Hz{}",
+        c.scheme.name(),
+        c.rate_hz,
+        if recommended.is_some() {
+            " (recommended)"
+        } else {
+            " (the reference; none is acceptable)"
+        }
+    );
+    f.why = if f.credible {
+        format!(
+            "{what}: its truncation error adds χ² = {:.3e} (max over windows, 9 dof, p = {:.3}) to \
+             a factor at the true states",
+            c.embedded_chi2, f.p_value
+        )
+    } else {
+        format!(
+            "{what}: its truncation error alone adds χ² = {:.3e} (max over windows, 9 dof) to a \
+             factor at the true states, which would then be inconsistent; likely cause: the \
+             rate is too low for the motion: use hermite4 or record faster",
+            c.embedded_chi2
+        )
+    };
+    Some(f)
 }
 
 /// Costs within this factor of the cheapest count as equal: run-to-run timing on a shared

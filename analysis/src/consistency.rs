@@ -6,10 +6,15 @@
 //! `S = diag(σ_R² I, σ_p² I, σ_v² I)` in the `NavState` tangent [δφ, δp, δv]. The whitened
 //! residual is `U r` with `UᵀU = Σ⁻¹` (`U` upper triangular), `χ² = ‖U r‖²`; block b's marginal
 //! χ² is `r_bᵀ Σ_bb⁻¹ r_b` (3 dof).
+//!
+//! The goodness of fit as every command prints it in JSON ([`preint_calib::fit`]):
+//! [`fit_json`], the top-level `fit` object.
 
-use crate::CliError;
+use crate::Error;
 use nalgebra::{SMatrix, SVector};
 use preint::sqrt_information;
+use preint_calib::Fit;
+use serde_json::{Value, json};
 
 /// The standard deviations of the ground truth's own errors (0: exact).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -50,7 +55,7 @@ pub fn evaluate<const R: usize>(
     jac_j: SMatrix<f64, R, 9>,
     cov: SMatrix<f64, R, R>,
     tn: TruthNoise,
-) -> Result<Evaluation, CliError> {
+) -> Result<Evaluation, Error> {
     let mut s = SMatrix::<f64, 9, 9>::zeros();
     for k in 0..3 {
         s[(k, k)] = tn.rot_rad.powi(2);
@@ -58,7 +63,7 @@ pub fn evaluate<const R: usize>(
         s[(6 + k, 6 + k)] = tn.vel_m_s.powi(2);
     }
     let sigma = cov + jac_i * s * jac_i.transpose() + jac_j * s * jac_j.transpose();
-    let u = sqrt_information(&sigma).map_err(|e| CliError::Failed(format!("weight: {e}")))?;
+    let u = sqrt_information(&sigma).map_err(|e| Error::Failed(format!("weight: {e}")))?;
     let w = u * r;
     let marginal_chi2 = (0..R / 3)
         .map(|b| {
@@ -73,6 +78,21 @@ pub fn evaluate<const R: usize>(
         chi2: w.norm_squared(),
         marginal_chi2,
     })
+}
+
+/// The `fit` object: `{chi2, dof, chi2_dof, p_value, p_value_lower, credible, pessimistic,
+/// scale, why}` (`scale` = √(χ²/dof), the factor of every `*_std_scaled`); the p-values are
+/// left out when the χ² has no distribution (`allan`'s correlated points).
+pub fn fit_json(f: &Fit) -> Value {
+    let mut v = json!({"chi2": f.chi2, "dof": f.dof, "chi2_dof": f.chi2_dof,
+        "credible": f.credible, "pessimistic": f.pessimistic, "scale": f.scale(), "why": f.why});
+    // A fit whose χ² has no distribution (Allan's correlated points) has no p-values: the
+    // keys are left out rather than written as null.
+    if f.p_value.is_finite() && f.p_value_lower.is_finite() {
+        v["p_value"] = json!(f.p_value);
+        v["p_value_lower"] = json!(f.p_value_lower);
+    }
+    v
 }
 
 /// χ² quantiles (scipy.stats.chi2.ppf) for 3, 9 and 15 degrees of freedom: (0.95, 0.99).
