@@ -146,7 +146,7 @@ impl Args {
             latitude: self.latitude,
             heading: self.heading,
             out: self.out.clone(),
-            scheme: self.scheme.into(),
+            scheme: self.scheme,
         }
     }
 }
