@@ -295,7 +295,11 @@ fn top_level_modules_form_no_import_cycle() {
         "fast",
         "propagation",
         "preintegrator",
+        "sample",
+        "noise",
+        "params",
         "measurement",
+        "navstate",
     ] {
         assert!(g.contains_key(dir), "{dir} not found in {:?}", g.keys());
     }
