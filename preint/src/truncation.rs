@@ -24,6 +24,12 @@
 //!   scheme on every other sample: with `e_2h ≈ 2ᑫ e_h`, `D_h ⊖ D_2h ≈ e_h − e_2h`, so
 //!   `e ≈ −(D_h ⊖ D_2h) / (2ᑫ − 1)` (`q = 4`: 15).
 //!
+//! The returned [`TruncationEstimate`] carries the companion's covariance: that of `hermite4`
+//! on the samples themselves (the noise it responds to) for the upsampled companion, the
+//! measurement's own for Richardson. The estimate costs two extra integrations of the window
+//! (one of them on four times the samples) or one, on request (`integrate --truncation` on the
+//! command line).
+//!
 //! `⊖` is the chart of [`PreintegratedImu`], order [δφ, δv, δp]. The estimate is as good as
 //! the motion is smooth at the scale of the samples; the evidence suite measures it against the
 //! true error on every scene and rate of `preint bench-steps`.

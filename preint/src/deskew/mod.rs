@@ -22,6 +22,15 @@
 //! [`Level::Deltas`](crate::Level) `preintegrate` takes its quaternion fast path, and the two
 //! agree to round-off (`preint/tests/deskew.rs`). At `t = t_i` the deltas are the identity.
 //!
+//! The functions: [`deltas_at`] (the deltas, [`DeltasAt`], at a sorted list of times in
+//! `[t_i, t_j]`), [`states_at`] (the predicted states, through [`predict`], so gravity and
+//! `omega_coriolis` are handled as at the window's end) and [`deskew_points`]. Under them is
+//! the cursor [`WindowDeltas`]: built once per window (the stream checked as `preintegrate`
+//! checks it), then [`WindowDeltas::at`] for non-decreasing times. The pass keeps the deltas and
+//! the scheme's carry at its last 16 nodes. On the command line `preint integrate --at
+//! T1,T2,…` prints the deltas (with `--initial-state`, the states) at those times, JSON key
+//! `at`.
+//!
 //! Cost: O(N + M) for N stream samples and M sorted queries, one step per stream interval plus
 //! at most three per query; the public functions allocate their output vector and one box for
 //! the pass, [`WindowDeltas::at`] nothing. Only deltas are computed (no covariance).

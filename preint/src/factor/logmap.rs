@@ -1,5 +1,17 @@
 //! The SE₂(3) Logmap residual of both factors (its definition, Jacobians and weight:
 //! [`ResidualMode`]).
+//!
+//! The mode is chosen when a factor is built (`ImuFactor::with_mode`,
+//! `CombinedImuFactor::with_mode`; `new` takes the default, [`ResidualMode::Logmap`]). The
+//! Logmap mode reuses the component-wise residual and Jacobians of `factor/mod.rs` and maps them.
+//! Why it is the default: at the true states over 10 s windows the component-wise χ² is
+//! over-confident once the rotation noise is not tiny (numbers on [`ResidualMode::default`];
+//! 9-dim 22.4 / 30.1 on `aggressive` / `seed-ellipse` at σ_g = 0.05 rad/s/√Hz, σ_a = 0.1
+//! m/s²/√Hz, where the Logmap one is 10.5 / 11.8; `docs/EVIDENCE.md`), and at EuRoC
+//! densities both are identical. What the Logmap residual keeps over 9 is not its chart but the
+//! first-order covariance, which the second-order term ([`crate::second_order`]) completes. On
+//! the command line `preint factor --residual component|logmap` selects the mode and prints it
+//! (`residual_mode` in the JSON).
 
 use super::FactorJacobians;
 use crate::bias_correction::Corrected;
@@ -88,7 +100,7 @@ impl Default for ResidualMode {
     /// [`ResidualMode::Logmap`], as in GTSAM 4.3. At the true states over 10 s windows
     /// (hermite4, 200 Hz, 8 000 realisations, `tests/tests/factor_logmap_nees.rs`) both modes
     /// give the same mean χ² at EuRoC densities (8.93–8.95 / 14.99–15.06 for 9 / 15 dof), while
-    /// at the seed course's densities (σ_g = 0.015 rad/s/√Hz, σ_a = 0.019 m/s²/√Hz) the
+    /// at the noisy-MEMS densities σ_g = 0.015 rad/s/√Hz, σ_a = 0.019 m/s²/√Hz the
     /// component-wise residual is over-confident (9-dim 10.85 / 13.31 on `aggressive` /
     /// `seed-ellipse`, 15-dim 16.71 / 18.71) and the Logmap one much closer (9.23 / 9.56,
     /// 15.17 / 15.47), inside the band with the second-order covariance of
