@@ -1,5 +1,5 @@
 //! The IMU factor at the true states of a moving rig in a rotating frame, with the IMU away
-//! from the body origin: both frames of issue-level concern at once, with noise.
+//! from the body origin: both frame effects at once, with noise.
 //!
 //! Setup. Scene `aggressive` (the body's motion in the navigation frame), simulated in a frame
 //! rotating at ω = (0.02, −0.03, 0.035) rad/s (|ω| = 0.05 rad/s, about 700 times the Earth

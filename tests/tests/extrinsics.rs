@@ -265,15 +265,15 @@ fn bias_jacobians_with_a_lever_arm_match_reintegration() {
 }
 
 /// Monte Carlo: with the lever arm the 9-dim NEES of the body deltas (`Level::Covariance`)
-/// and the 15-dim NEES with bias random walk (`Level::Combined`) are χ²-consistent. The seed
-/// course's noise densities (gyro 0.015 rad/s/√Hz, so that the gyroscope noise moved into the
-/// velocity rows by the lever arm is a visible share of them) and 2 000 realisations (std of
+/// and the 15-dim NEES with bias random walk (`Level::Combined`) are χ²-consistent. The
+/// noisy-MEMS densities (gyro 0.015 rad/s/√Hz, accelerometer 0.019 m/s²/√Hz, so that the
+/// gyroscope noise moved into the velocity rows by the lever arm is a visible share of them) and 2 000 realisations (std of
 /// the mean 0.095 for 9 dof): asserted within 9 ± 0.3 and 15 ± 4√(30/N). Without the end-rate
 /// terms (the covariance of the sensor's deltas rotated into the body) the mean is reported
 /// and must fall outside the band.
 ///
 /// `LeverArm::Centripetal` (GTSAM's model) is checked the same way at ten times the EuRoC
-/// densities (those of the GTSAM fixture): at the seed course's gyro noise its per-sample
+/// densities (those of the GTSAM fixture): at the noisy-MEMS gyro noise its per-sample
 /// `ω × (ω × r)` rectifies the noise (`E[n × (n × r)] = −2σ²r` per sample, 0.027 m/s over this
 /// window), which no first-order covariance holds; its mean NEES there is reported.
 #[test]
@@ -475,8 +475,8 @@ fn numeric_cov(
     num
 }
 
-/// Seed-course densities, every (lever-arm model, scheme) pair and its parameters at
-/// `Level::Covariance` with the mount of [`mount`].
+/// The noisy-MEMS densities (σ_g = 0.015 rad/s/√Hz, σ_a = 0.019 m/s²/√Hz), every (lever-arm
+/// model, scheme) pair and its parameters at `Level::Covariance` with the mount of [`mount`].
 fn covariance_cases() -> Vec<(LeverArm, Scheme, ImuNoise, PreintParams)> {
     let noise = ImuNoise {
         gyro_noise_density: 0.015,
@@ -502,7 +502,7 @@ fn covariance_cases() -> Vec<(LeverArm, Scheme, ImuNoise, PreintParams)> {
 
 /// The 9×9 covariance with a lever arm, both models, every scheme, against the covariance
 /// built from numeric derivatives ([`numeric_cov`]; each sample's cell by the scheme's rule on
-/// its neighbours). 0.1 s at 200 Hz on `aggressive`, seed-course densities.
+/// its neighbours). 0.1 s at 200 Hz on `aggressive`, the noisy-MEMS densities.
 #[test]
 fn lever_arm_covariance_matches_numeric_derivatives() {
     let scene = scene_by_name("aggressive").unwrap();

@@ -11,7 +11,7 @@
 //! white noise of three density pairs drawn by the suite's seeded generator:
 //!
 //! - `euroc`: σ_g = 1.6968e-4 rad/s/√Hz, σ_a = 2.0e-3 m/s²/√Hz (EuRoC / ADIS16448);
-//! - `seed`: σ_g = 0.015, σ_a = 0.019 (the seed course's);
+//! - `seed`: σ_g = 0.015 rad/s/√Hz, σ_a = 0.019 m/s²/√Hz (a noisy MEMS IMU);
 //! - `high`: σ_g = 0.05, σ_a = 0.1 (`PREINT_FULL=1` only);
 //!
 //! with the EuRoC random walk. Every variant reads the same preintegration of the same stream
@@ -20,7 +20,7 @@
 //! variant), its 95 % band `k + λ ± 1.96 √((2k + 4λ)/N)`.
 //!
 //! Asserted: (1) at EuRoC densities every variant is inside `k + λ ± 4.42 √((2k + 4λ)/N)` (the
-//! band a correct weight misses with probability 1e-5); (2) at the seed densities the
+//! band a correct weight misses with probability 1e-5); (2) at the `seed` densities the
 //! component-wise mean is above that band (over-confident: the rotation error's coupling into
 //! velocity and position, charted linearly), the Logmap mean is closer to `k + λ` than the
 //! component-wise one, and the second-order term brings the Logmap mean closer still and inside
