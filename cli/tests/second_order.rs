@@ -72,7 +72,7 @@ fn integrate_reports_a_positive_term_that_matters_only_for_a_noisy_gyro() {
     // The mean χ² it accounts for: the Monte Carlo excess of the first-order weight on this
     // scene is 0.23 (9 dof, `tests/tests/factor_logmap_nees.rs`).
     let inc = out["second_order"]["chi2_increase"].as_f64().unwrap();
-    println!("seed densities: chi2 increase {inc:.3}");
+    println!("noisy-MEMS densities: chi2 increase {inc:.3}");
     assert!((0.1..0.6).contains(&inc), "{inc}");
 
     let dir = tmp("second-order-euroc");
