@@ -308,6 +308,17 @@ fn bad_inputs_give_typed_errors() {
         ImuAllan::from_channels([&a, &a, &a, &a, &a, &b], 0.01, 10),
         Err(AllanError::LengthMismatch(100, 99))
     );
+    // Readings that never change: the curve is 0 everywhere, no noise to read (not a density
+    // of 0, nor an infinite bound).
+    let still = vec![9.81; 4001];
+    let curve = allan_deviation(&still, 0.005, &log_spaced_cluster_sizes(2000, 10)).unwrap();
+    assert!(curve.iter().all(|p| p.adev == 0.0));
+    assert_eq!(fit_noise(&curve, 5), Err(AllanError::NoNoise(5)));
+    assert!(
+        AllanError::NoNoise(5)
+            .to_string()
+            .starts_with("acc z: the readings never change")
+    );
 }
 
 /// White noise plus a sinusoidal disturbance (independent generator [`synth`] plus

@@ -170,6 +170,14 @@ fn write_files(dir: &Path) -> Files {
     let mut nan = csv(EUROC_HEADER, &rows[..500]);
     nan = nan.replacen(&format!("{}", rows[100].1[3]), "NaN", 1);
     w("nan.csv", &nan);
+    // A stuck sensor: every reading the same for 20 s.
+    let still = vec![[0.0, 0.0, 0.0, 0.0, 0.0, 9.81]; 4000];
+    let stuck: Vec<_> = rows[..4000]
+        .iter()
+        .zip(&still)
+        .map(|((t, _), v)| (*t, *v))
+        .collect();
+    w("stuck.csv", &csv(EUROC_HEADER, &stuck));
     let mut inf = csv(EUROC_HEADER, &rows[..500]);
     inf = inf.replacen(&format!("{}", rows[100].1[0]), "inf", 1);
     w("inf.csv", &inf);
@@ -285,6 +293,7 @@ fn cases(f: &Files) -> Vec<Case> {
         c("integrate one row", s(&["integrate", "--imu", &p("one.csv")]), Refuse(&["one.csv", "1 sample"])),
         c("audit one row", s(&["audit", "--imu", &p("one.csv")]), RefuseOrWarn(&["one.csv"], &["too short"])),
         c("integrate NaN value", s(&["integrate", "--imu", &p("nan.csv")]), Refuse(&["nan.csv:"])),
+        c("allan stuck sensor", s(&["allan", "--imu", &p("stuck.csv")]), Refuse(&["stuck.csv", "never change"])),
         c("allan inf value", s(&["allan", "--imu", &p("inf.csv")]), Refuse(&["inf.csv:"])),
         c("convert duplicate stamp", s(&["convert", "--imu", &p("dup.csv"), "--out", &out("dup.csv")]), Refuse(&["dup.csv:", "duplicate"])),
         c("integrate decreasing stamps", s(&["integrate", "--imu", &p("decreasing.csv")]), Refuse(&["decreasing.csv:", "decreases"])),

@@ -267,33 +267,49 @@ pub fn evaluate_input(
             }
         }
         let rate = 1.0 / (dt_s * d as f64);
-        for (ks, &s) in Scheme::ALL.iter().enumerate() {
-            let mx = max[ks];
-            let is_ref = d == 1 && s == reference_scheme;
-            let disc_err = if is_ref {
-                mx.est
-            } else {
-                [0, 1, 2].map(|k| mx.dist[k].max(mx.est[k]))
-            };
-            out.push(Candidate {
-                scheme: s,
-                decimation: d,
-                rate_hz: rate,
-                disc_err,
-                ref_dist: (!is_ref).then_some(mx.dist),
-                embedded_err: mx.est,
-                embedded_chi2: mx.chi2,
-                noise_sigma: mx.sigma,
-                cost_ns_per_s: ns[ks] * rate,
-                acceptable: (0..3).all(|k| disc_err[k] < fraction * mx.sigma[k]),
-            });
-        }
+        let is_ref = |s: Scheme| d == 1 && s == reference_scheme;
+        out.extend(rate_candidates(&max, d, rate, &ns, fraction, is_ref));
         d *= 2;
     }
     if let Some(pb) = pb {
         pb.finish_and_clear();
     }
     Ok(out)
+}
+
+/// The candidates of every scheme at decimation `d` (rate `rate` \[Hz\]) from their maxima
+/// over the windows: the discretisation error is the larger of the distance to the reference
+/// and the embedded estimate (the estimate alone for the reference itself, `is_ref`);
+/// acceptable when each of its three parts is below `fraction` of the noise σ.
+fn rate_candidates(
+    max: &[Maxima],
+    d: usize,
+    rate: f64,
+    ns_per_sample: &[f64],
+    fraction: f64,
+    is_ref: impl Fn(Scheme) -> bool,
+) -> Vec<Candidate> {
+    let row = |(ks, &s): (usize, &Scheme)| {
+        let mx = max[ks];
+        let disc_err = if is_ref(s) {
+            mx.est
+        } else {
+            [0, 1, 2].map(|k| mx.dist[k].max(mx.est[k]))
+        };
+        Candidate {
+            scheme: s,
+            decimation: d,
+            rate_hz: rate,
+            disc_err,
+            ref_dist: (!is_ref(s)).then_some(mx.dist),
+            embedded_err: mx.est,
+            embedded_chi2: mx.chi2,
+            noise_sigma: mx.sigma,
+            cost_ns_per_s: ns_per_sample[ks] * rate,
+            acceptable: (0..3).all(|k| disc_err[k] < fraction * mx.sigma[k]),
+        }
+    };
+    Scheme::ALL.iter().enumerate().map(row).collect()
 }
 
 /// Whether the decimation `d` of a stream sampled every `dt_s` s is one [`evaluate_input`]

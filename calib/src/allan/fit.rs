@@ -307,7 +307,8 @@ fn solve_nonnegative(h: [[f64; 2]; 2], b: [f64; 2]) -> (f64, f64) {
 }
 
 /// Fits N, K and B to one channel's curve (see the module docs). `channel` only labels errors.
-/// Error: no point with ≥ 8 clusters ([`AllanError::NoWhiteNoiseRegion`]).
+/// Errors: no point with ≥ 8 clusters ([`AllanError::NoWhiteNoiseRegion`]); a curve that is 0
+/// at every reliable τ, readings that never change ([`AllanError::NoNoise`]).
 ///
 /// ```
 /// use preint_calib::allan::{allan_deviation, fit_noise, log_spaced_cluster_sizes};
@@ -329,6 +330,9 @@ pub fn fit_noise(pts: &[AllanPoint], channel: usize) -> Result<NoiseFit, AllanEr
     let reliable: Vec<&AllanPoint> = pts.iter().filter(|p| p.clusters >= MIN_CLUSTERS).collect();
     if reliable.is_empty() {
         return Err(AllanError::NoWhiteNoiseRegion(channel));
+    }
+    if reliable.iter().all(|p| p.adev == 0.0) {
+        return Err(AllanError::NoNoise(channel));
     }
     // The white-noise floor: 0.1 s, or the longest reliable τ when shorter (module docs).
     let tau_w = reliable

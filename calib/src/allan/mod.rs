@@ -63,6 +63,13 @@ pub enum AllanError {
     /// without a slope −½ region gives an upper bound on N instead, see [`NoiseFit`].)
     #[error("channel {0}: no point with at least 8 clusters, white-noise density not fitted")]
     NoWhiteNoiseRegion(usize),
+    /// The channel's readings never change: its Allan deviation is 0 at every τ, so there is
+    /// no noise to read (a stuck channel, or one quantised more coarsely than its noise).
+    #[error(
+        "{}: the readings never change (Allan deviation 0 at every τ), so there is no noise to measure: a stuck channel, or one quantised more coarsely than its noise",
+        CHANNELS.get(*.0).copied().unwrap_or("channel")
+    )]
+    NoNoise(usize),
     /// Channels have different lengths.
     #[error("channel lengths differ ({0} vs {1})")]
     LengthMismatch(usize, usize),

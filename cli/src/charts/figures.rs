@@ -275,6 +275,12 @@ pub fn allan(a: &ImuAllan, sensor: usize, path: &Path) -> Result<(), CliError> {
             );
         }
     }
+    write(path, &allan_figure(sensor, series))
+}
+
+/// The Allan figure of one sensor (`0` gyroscope, `1` accelerometer): its channels' `series`
+/// and the legend keys of the fitted lines and read-off points.
+fn allan_figure(sensor: usize, mut series: Vec<Series>) -> Figure {
     series.extend([
         Series::key("white noise N/√τ", NEUTRAL, Stroke::Dashed, Marker::None),
         Series::key("random walk K√(τ/3)", NEUTRAL, Stroke::Dotted, Marker::None),
@@ -286,7 +292,7 @@ pub fn allan(a: &ImuAllan, sensor: usize, path: &Path) -> Result<(), CliError> {
     } else {
         ("Allan deviation: accelerometer", "σ(τ) [m/s²]")
     };
-    let fig = Figure {
+    Figure {
         title: title.into(),
         panels: vec![Panel {
             title: String::new(),
@@ -294,8 +300,7 @@ pub fn allan(a: &ImuAllan, sensor: usize, path: &Path) -> Result<(), CliError> {
             y: Axis::log(y_label),
             series,
         }],
-    };
-    write(path, &fig)
+    }
 }
 
 /// Writes an attitude-error-against-time chart (log error axis) of named `(t [s], error

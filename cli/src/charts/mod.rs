@@ -8,6 +8,7 @@
 //! colours.
 
 pub mod figures;
+mod scale;
 mod svg;
 
 use preint::Scheme;

@@ -140,6 +140,39 @@ pub(super) fn advice_section(
         .collect();
     figures::advice(&scenes, fraction, &path)?;
     page.svg(&path, &format!("Worst ratio of discretisation error to noise σ (over rotation, velocity and position) against rate; below the grey dashed line ({fraction}·σ) a (scheme, rate) is acceptable; the black ring marks the recommendation.")).map_err(failed)?;
+    let rows = advice_rows(advice, rate);
+    page.p("Per scheme, its lowest acceptable rate:");
+    page.table(
+        &[
+            "scene",
+            "scheme",
+            "rate [Hz]",
+            "worst error / σ",
+            "cost [µs per s of data]",
+            "",
+        ],
+        &rows,
+    );
+    let cut = |c: Option<f64>| c.map_or("none".into(), |c| format!("{c:.2} Hz"));
+    let cuts: Vec<String> = advice
+        .iter()
+        .map(|a| {
+            format!(
+                "`{}` gyro {}, accelerometer {}",
+                a.scene,
+                cut(a.cutoffs[0]),
+                cut(a.cutoffs[1])
+            )
+        })
+        .collect();
+    page.p(&format!("Low-pass cutoffs found: {}.", cuts.join("; ")));
+    Ok(path.display().to_string())
+}
+
+/// The advice table's rows: per scene and scheme its lowest acceptable rate, its worst error
+/// over σ, its cost and whether it is the recommendation (`none up to` the recording's `rate`
+/// when no rate is acceptable).
+fn advice_rows(advice: &[AdviceCheck], rate: f64) -> Vec<Vec<String>> {
     let mut rows = Vec::new();
     for a in advice {
         let rec = a.recommendation();
@@ -174,32 +207,7 @@ pub(super) fn advice_section(
             });
         }
     }
-    page.p("Per scheme, its lowest acceptable rate:");
-    page.table(
-        &[
-            "scene",
-            "scheme",
-            "rate [Hz]",
-            "worst error / σ",
-            "cost [µs per s of data]",
-            "",
-        ],
-        &rows,
-    );
-    let cut = |c: Option<f64>| c.map_or("none".into(), |c| format!("{c:.2} Hz"));
-    let cuts: Vec<String> = advice
-        .iter()
-        .map(|a| {
-            format!(
-                "`{}` gyro {}, accelerometer {}",
-                a.scene,
-                cut(a.cutoffs[0]),
-                cut(a.cutoffs[1])
-            )
-        })
-        .collect();
-    page.p(&format!("Low-pass cutoffs found: {}.", cuts.join("; ")));
-    Ok(path.display().to_string())
+    rows
 }
 
 /// The speed table: median ns per sample per scheme and level.
