@@ -5,7 +5,7 @@
 use clap::builder::{PossibleValue, TypedValueParser};
 use clap::error::ErrorKind;
 
-/// The integration scheme as given on the command line: [`preint::Scheme`] itself.
+/// The integration scheme as given on the command line: `preint::Scheme` itself.
 pub use preint::Scheme;
 
 /// Every scheme, in the order of every table and chart (the registry's).

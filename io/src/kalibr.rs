@@ -15,7 +15,7 @@ const KALIBR_KEYS: [&str; 5] = [
     "update_rate",
 ];
 
-/// Largest value of each key of [`KALIBR_KEYS`], in its unit: 1 rad/s/√Hz, 1 rad/s²/√Hz,
+/// Largest value of each key of `KALIBR_KEYS`, in its unit: 1 rad/s/√Hz, 1 rad/s²/√Hz,
 /// 10 m/s²/√Hz, 10 m/s³/√Hz, 1 MHz. The noisiest MEMS gyroscopes have white-noise densities
 /// near 0.1 °/s/√Hz (1.7e-3 rad/s/√Hz) and accelerometers near 1 mg/√Hz (0.01 m/s²/√Hz);
 /// random walks are smaller still (EuRoC's ADIS16448: 1.9e-5 rad/s²/√Hz, 3e-3 m/s³/√Hz). The

@@ -16,7 +16,7 @@
 //!   (EuRoC `imu.csv`, `groundtruth.csv`, Kalibr `imu.yaml`).
 //! - [`rotating`]: the ideal readings in a navigation frame rotating at ω_ie (Earth rotation,
 //!   [`SimConfig::earth_rate`]).
-//! - [`bench`]: [`synthetic_stream`], the stream every speed figure is measured on.
+//! - [`bench`](mod@bench): [`synthetic_stream`], the stream every speed figure is measured on.
 //! - [`deadreckon`]: [`dead_reckon`] with Euler / midpoint rules and quaternion / matrix-Exp /
 //!   ZYX-Euler-angle attitude; [`euler_zyx_angles`], the raw Euler-angle states.
 

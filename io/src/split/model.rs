@@ -91,7 +91,7 @@ impl MergeReport {
     }
 
     /// When the merge shortened the recording to the accelerometer's span (at either end, more
-    /// gyro samples dropped than fall within [`EDGE_ACCEL_INTERVALS`] accelerometer intervals,
+    /// gyro samples dropped than fall within `EDGE_ACCEL_INTERVALS` accelerometer intervals,
     /// the end the cubic interpolation needs): what was dropped, for a warning.
     pub fn shortening(&self) -> Option<String> {
         let (fg, fa) = (self.gyro_rate_hz(), self.accel_rate_hz());
