@@ -40,6 +40,7 @@ pub mod audit;
 pub mod calibrate;
 pub mod calibration_file;
 pub mod checks;
+pub mod chi2_windows;
 pub mod consistency;
 pub mod denoise;
 pub mod error;

@@ -72,6 +72,9 @@ const EXAMPLES: &[(&str, &str, &[&str])] = &[
     ("*", "pose_rot_std", &["1.75e-3"]),
     ("*", "pose_pos_std", &["0.005"]),
     ("factor", "vel_std", &["0.01"]),
+    ("factor", "bias_gyro_std", &["1e-4"]),
+    ("factor", "bias_acc_std", &["0.01"]),
+    ("factor", "window", &["0.5,1,2"]),
     // calibrate.
     ("calibrate", "estimate", &["time-offset,gyro-intrinsics", "--poses", EUROC_GT]),
     ("calibrate", "pose_spacing", &["0.25", "--poses", EUROC_GT]),

@@ -38,7 +38,9 @@ use preint::{
     PreintegratedImu, ResidualMode, preintegrate,
 };
 use preint_analysis::checks::UnitCheck;
-use preint_analysis::consistency::{Evaluation, TruthNoise, chi2_quantiles, evaluate, fit_json};
+use preint_analysis::consistency::{
+    Evaluation, ResidualJacobians, TruthNoise, chi2_quantiles, evaluate, fit_json,
+};
 use preint_analysis::format::list;
 use preint_analysis::stream::{self, StreamWindow};
 use preint_analysis::{ImuInput, checks};
@@ -47,8 +49,10 @@ use serde_json::{Value, json};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-/// Flags of `preint factor`.
+/// Flags of `preint factor`: one window (`--from`, `--to`) or many (`--window`), exactly one
+/// of the two.
 #[derive(clap::Args, Debug, Clone)]
+#[command(group(clap::ArgGroup::new("span").required(true).multiple(true).args(["from", "to", "window"])))]
 pub struct Args {
     /// The recording and how to read it.
     #[command(flatten)]
@@ -58,11 +62,37 @@ pub struct Args {
     #[arg(help_heading = "Ground truth", long)]
     pub poses: PathBuf,
     /// Keyframe i: the ground-truth row nearest to this time (ns).
-    #[arg(help_heading = "Window", long, allow_hyphen_values = true)]
-    pub from: i64,
+    #[arg(
+        help_heading = "Window",
+        long,
+        allow_hyphen_values = true,
+        requires = "to",
+        conflicts_with = "window"
+    )]
+    pub from: Option<i64>,
     /// Keyframe j: the ground-truth row nearest to this time (ns).
-    #[arg(help_heading = "Window", long, allow_hyphen_values = true)]
-    pub to: i64,
+    #[arg(
+        help_heading = "Window",
+        long,
+        allow_hyphen_values = true,
+        requires = "from",
+        conflicts_with = "window"
+    )]
+    pub to: Option<i64>,
+    /// Instead of --from/--to: back-to-back windows of each length (s, comma-separated) over
+    /// the span where the recording and the ground truth overlap, keyframes at the ground-truth
+    /// rows nearest to each window edge; per length the windows' χ² against χ²_dof (mean,
+    /// median, fraction above the 0.99 quantile, Kolmogorov–Smirnov p-value, the share of each
+    /// block) and a verdict on the noise model. The fit is the χ² summed over all windows of
+    /// all lengths against their total dof.
+    #[arg(
+        help_heading = "Window",
+        long,
+        value_name = "S[,S…]",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    pub window: Option<Vec<f64>>,
     /// Scheme, noise densities and gravity.
     #[command(flatten)]
     pub preint: PreintArgs,
@@ -98,6 +128,26 @@ pub struct Args {
         allow_hyphen_values = true
     )]
     pub vel_std: f64,
+    /// Standard deviation (per axis) of the ground truth's gyroscope bias (rad/s), added to the
+    /// weight through the measurement's bias Jacobian: Σ += J_bg σ² J_bgᵀ.
+    #[arg(
+        help_heading = "Ground truth",
+        long,
+        value_name = "RAD_PER_S",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
+    pub bias_gyro_std: f64,
+    /// Standard deviation (per axis) of the ground truth's accelerometer bias (m/s^2), added to
+    /// the weight through the measurement's bias Jacobian: Σ += J_ba σ² J_baᵀ.
+    #[arg(
+        help_heading = "Ground truth",
+        long,
+        value_name = "M_PER_S2",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
+    pub bias_acc_std: f64,
     /// Weight the factor with the second-order covariance (`preint::second_order`: the
     /// term the first-order covariance misses over long windows with noisy gyroscopes).
     #[arg(help_heading = "Factor", long)]
@@ -163,7 +213,8 @@ pub fn fit(f: &FactorRun) -> preint_calib::Fit {
     preint_calib::Fit::new(f.ev.chi2, f.ev.residual.len()).because(&format!(
         "the IMU and the ground truth disagree beyond the factor's covariance, most in the {b} \
          block (marginal χ²₃ = {m:.3}): the noise densities (--noise), the ground truth's own \
-         errors (--pose-rot-std, --pose-pos-std, --vel-std), its biases, or the clocks"
+         errors (--pose-rot-std, --pose-pos-std, --vel-std, --bias-gyro-std, --bias-acc-std), \
+         or the clocks"
     ))
 }
 
@@ -173,19 +224,19 @@ fn nav(s: &GroundTruthState) -> NavState {
 
 /// The ground-truth rows nearest to `--from` and `--to`: two different rows, the first
 /// earlier.
-fn keyframes(args: &Args) -> Result<(GroundTruthState, GroundTruthState), CliError> {
+fn keyframes(
+    args: &Args,
+    (from, to): (i64, i64),
+) -> Result<(GroundTruthState, GroundTruthState), CliError> {
     let gt = read_euroc_groundtruth(&args.poses)?;
-    let (gi, gj) = (
-        *input::nearest_row(&gt, args.from),
-        *input::nearest_row(&gt, args.to),
-    );
+    let (gi, gj) = (*input::nearest_row(&gt, from), *input::nearest_row(&gt, to));
     if gj.t_ns <= gi.t_ns {
         return Err(CliError::Usage(format!(
             "{}: the ground-truth rows nearest to --from {} and --to {} are at {} and {} ns; \
              they must be two different rows, the first earlier",
             args.poses.display(),
-            args.from,
-            args.to,
+            from,
+            to,
             gi.t_ns,
             gj.t_ns
         )));
@@ -196,66 +247,143 @@ fn keyframes(args: &Args) -> Result<(GroundTruthState, GroundTruthState), CliErr
 /// The window `[t_i, t_j]` of the recording, how it was read and its unit checks. Only the
 /// part the window needs is read; a split recording is merged whole, and the effective
 /// accelerometer density of its merged samples is set in `params`.
-fn window(
+/// `None` for `t_i` and `t_j`: the whole recording.
+pub(crate) fn window(
     input: &ImuInput,
     noise: &ImuNoise,
     params: &mut PreintParams,
-    (t_i, t_j): (i64, i64),
+    (t_i, t_j): (Option<i64>, Option<i64>),
 ) -> Result<(StreamWindow, SourceInfo, UnitCheck), CliError> {
     if input.is_split() {
-        let (w, source, split, units) = stream::split_window(input, Some(t_i), Some(t_j))?;
+        let (w, source, split, units) = stream::split_window(input, t_i, t_j)?;
         preint_analysis::noise::apply_split(noise, split.as_ref(), params);
         return Ok((w, source, units));
     }
-    let stream = stream::open_checked_until(input, Some(t_j))?;
+    let stream = stream::open_checked_until(input, t_j)?;
     let (source, units) = (stream.info().clone(), stream.unit_check().clone());
     let _bar = preint_analysis::progress::ReadingBar::start(stream.progress(), "factor");
-    let w = stream::cut_window(stream, Some(t_i), Some(t_j))?;
+    let w = stream::cut_window(stream, t_i, t_j)?;
     Ok((w, source, units))
 }
 
-/// Reads the files, preintegrates the window between the keyframes and evaluates the factor.
-pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
-    checks::window_order(Some(args.from), Some(args.to))?;
+/// The ground truth's own errors (`--pose-rot-std`, `--pose-pos-std`, `--vel-std`,
+/// `--bias-gyro-std`, `--bias-acc-std`), each checked finite and non-negative.
+pub(crate) fn truth_noise(args: &Args) -> Result<TruthNoise, CliError> {
     let tn = TruthNoise {
         rot_rad: args.pose_rot_std,
         pos_m: args.pose_pos_std,
         vel_m_s: args.vel_std,
+        bias_gyro_rad_s: args.bias_gyro_std,
+        bias_acc_m_s2: args.bias_acc_std,
     };
     checks::non_negative("--pose-rot-std", tn.rot_rad)?;
     checks::non_negative("--pose-pos-std", tn.pos_m)?;
     checks::non_negative("--vel-std", tn.vel_m_s)?;
+    checks::non_negative("--bias-gyro-std", tn.bias_gyro_rad_s)?;
+    checks::non_negative("--bias-acc-std", tn.bias_acc_m_s2)?;
+    Ok(tn)
+}
+
+/// The noise model and parameters at the factor's level (the bias random walk with
+/// `--combined`, whose noise file must hold it).
+pub(crate) fn noise_params(args: &Args) -> Result<(ImuNoise, PreintParams), CliError> {
     let level = if args.combined {
         Level::Combined
     } else {
         Level::Covariance
     };
-    let (noise, mut params) = args.preint.params(level)?;
+    let (noise, params) = args.preint.params(level)?;
     if let (true, Some(path)) = (args.combined, &args.preint.noise) {
         preint_io::read_kalibr_bias_model(path)?;
     }
-    let (gi, gj) = keyframes(args)?;
-    let scheme = params.scheme;
-    let input = args.input.to_input();
-    let (w, source, unit_check) = window(&input, &noise, &mut params, (gi.t_ns, gj.t_ns))?;
-    let samples = w.samples.as_slice();
-    let in_file = |e| CliError::failed_in(input.path(), w.in_stream(e));
-    let mut pim = preintegrate(&params, &gi.bias, samples, gi.t_ns, gj.t_ns).map_err(in_file)?;
+    Ok((noise, params))
+}
+
+/// Why a window could not be evaluated: preintegration (indices in `samples`), the factor or
+/// its weight.
+#[derive(Debug)]
+pub(crate) enum WindowError {
+    Preint(preint::PreintError),
+    Factor(preint::FactorError),
+    Weight(preint_analysis::Error),
+}
+
+impl std::fmt::Display for WindowError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            WindowError::Preint(e) => write!(f, "{e}"),
+            WindowError::Factor(e) => write!(f, "{e}"),
+            WindowError::Weight(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+/// The error of a window of `w`, in the recording's terms (sample indices of the stream).
+fn in_window(e: WindowError, input: &ImuInput, w: &StreamWindow) -> CliError {
+    match e {
+        WindowError::Preint(e) => CliError::failed_in(input.path(), w.in_stream(e)),
+        WindowError::Factor(e) => CliError::failed_in(input.path(), e),
+        WindowError::Weight(e) => e.into(),
+    }
+}
+
+/// The window `[gi, gj]` of `samples` preintegrated with the ground truth's bias at i (and the
+/// second-order term with `--second-order`), its factor evaluated at the ground truth.
+pub(crate) fn evaluate_window(
+    args: &Args,
+    params: &PreintParams,
+    samples: &[preint::ImuSample],
+    (gi, gj): (&GroundTruthState, &GroundTruthState),
+    tn: TruthNoise,
+) -> Result<(PreintegratedImu, Evaluation), WindowError> {
+    use WindowError as E;
+    let mut pim = preintegrate(params, &gi.bias, samples, gi.t_ns, gj.t_ns).map_err(E::Preint)?;
     if args.second_order {
-        let term = preint::second_order::covariance(&params, samples, &pim).map_err(in_file)?;
+        let term = preint::second_order::covariance(params, samples, &pim).map_err(E::Preint)?;
         pim = preint::second_order::inflate(&pim, &term);
     }
-    let failed = |e: preint::FactorError| CliError::failed_in(input.path(), e);
-    let (xi, xj) = (nav(&gi), nav(&gj));
+    let (xi, xj) = (nav(gi), nav(gj));
     let ev = if args.combined {
-        let f = CombinedImuFactor::with_mode(pim.clone(), args.residual).map_err(failed)?;
+        let f = CombinedImuFactor::with_mode(pim.clone(), args.residual).map_err(E::Factor)?;
         let (r, j) = f.evaluate(&xi, &xj, &gi.bias, &gj.bias);
-        evaluate(r, j.state_i(), j.state_j(), *f.residual_covariance(), tn)?
+        evaluate(r, jacobians(&j), *f.residual_covariance(), tn)
     } else {
-        let f = ImuFactor::with_mode(pim.clone(), args.residual).map_err(failed)?;
+        let f = ImuFactor::with_mode(pim.clone(), args.residual).map_err(E::Factor)?;
         let (r, j) = f.evaluate(&xi, &xj, &gi.bias);
-        evaluate(r, j.state_i(), j.state_j(), *f.residual_covariance(), tn)?
+        evaluate(r, jacobians(&j), *f.residual_covariance(), tn)
+    }
+    .map_err(E::Weight)?;
+    Ok((pim, ev))
+}
+
+fn jacobians<const R: usize>(j: &preint::FactorJacobians<R>) -> ResidualJacobians<R> {
+    ResidualJacobians {
+        state_i: j.state_i(),
+        state_j: j.state_j(),
+        bias_i: j.bias_i(),
+    }
+}
+
+/// Reads the files, preintegrates the window between the keyframes and evaluates the factor.
+pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
+    let (Some(from), Some(to)) = (args.from, args.to) else {
+        return Err(CliError::Usage(
+            "give --from NS --to NS (one window) or --window S[,S…] (windows over the whole \
+             recording)"
+                .into(),
+        ));
     };
+    checks::window_order(Some(from), Some(to))?;
+    let tn = truth_noise(args)?;
+    let (noise, mut params) = noise_params(args)?;
+    let (gi, gj) = keyframes(args, (from, to))?;
+    let scheme = params.scheme;
+    let input = args.input.to_input();
+    let (w, source, unit_check) =
+        window(&input, &noise, &mut params, (Some(gi.t_ns), Some(gj.t_ns)))?;
+    let samples = w.samples.as_slice();
+    let (pim, ev) = evaluate_window(args, &params, samples, (&gi, &gj), tn)
+        .map_err(|e| in_window(e, &input, &w))?;
     Ok(FactorRun {
         imu: input.label(),
         source,
@@ -266,7 +394,7 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
         second_order: args.second_order,
         gi,
         gj,
-        requested: (args.from, args.to),
+        requested: (from, to),
         samples: input::count_in(samples, gi.t_ns, gj.t_ns),
         pim,
         truth_noise: tn,
@@ -277,6 +405,13 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
 fn state_json(s: &GroundTruthState) -> Value {
     json!({"t_ns": s.t_ns, "p": list(&s.p), "q_wxyz": [s.q.w, s.q.i, s.q.j, s.q.k], "v": list(&s.v),
            "bias_gyro": list(&s.bias.gyro), "bias_acc": list(&s.bias.acc)})
+}
+
+/// The ground truth's own errors in the JSON: `{rot_rad, pos_m, vel_m_s, bias_gyro_rad_s,
+/// bias_acc_m_s2}`.
+pub(crate) fn truth_noise_json(t: &TruthNoise) -> Value {
+    json!({"rot_rad": t.rot_rad, "pos_m": t.pos_m, "vel_m_s": t.vel_m_s,
+           "bias_gyro_rad_s": t.bias_gyro_rad_s, "bias_acc_m_s2": t.bias_acc_m_s2})
 }
 
 fn bias_json(b: &ImuBias) -> Value {
@@ -325,8 +460,7 @@ pub fn to_json(f: &FactorRun) -> Value {
         "consistent_at_0_99": f.ev.chi2 <= q99,
         "marginal_chi2": marginal,
         "marginal_chi2_quantiles": {"dof": 3, "0.95": m95, "0.99": m99},
-        "ground_truth_noise": {"rot_rad": f.truth_noise.rot_rad, "pos_m": f.truth_noise.pos_m,
-                               "vel_m_s": f.truth_noise.vel_m_s},
+        "ground_truth_noise": truth_noise_json(&f.truth_noise),
         "weight": match (f.combined, f.residual) {
             (true, ResidualMode::ComponentWise) => "residual_cov15 (covariance of [r_phi, r_v, r_p, r_bg, r_ba]) + ground-truth noise through the Jacobians",
             (false, ResidualMode::ComponentWise) => "cov (covariance of [r_phi, r_v, r_p]) + ground-truth noise through the Jacobians",
@@ -404,14 +538,19 @@ pub fn to_text(f: &FactorRun) -> String {
         let _ = writeln!(
             h,
             "weight: the factor's covariance only (the ground truth is taken as exact; give \
-             --pose-rot-std, --pose-pos-std, --vel-std for its own errors)"
+             --pose-rot-std, --pose-pos-std, --vel-std, --bias-gyro-std, --bias-acc-std for its \
+             own errors)"
         );
     }
     h
 }
 
-/// Runs `preint factor`.
+/// Runs `preint factor`: one window (`--from`, `--to`) or many (`--window`,
+/// [`super::factor_windows`]).
 pub fn run(args: &Args) -> Result<Output, CliError> {
+    if let Some(lengths) = &args.window {
+        return super::factor_windows::run(args, lengths);
+    }
     let f = compute(args)?;
     let output = Output {
         human: to_text(&f),

@@ -1,0 +1,303 @@
+//! `preint factor --window S[,S…]`: the IMU factor at the ground truth over a whole recording,
+//! back-to-back windows of each length: is the noise model consistent with this IMU and this
+//! ground truth, and from which window length on does it fail?
+//!
+//! The span is where the recording and the ground truth overlap; windows of length `L` start
+//! at its beginning and follow each other without overlap (`⌊span/L⌋` of them). Each window's
+//! keyframes are the ground-truth rows nearest to its edges, and its factor is evaluated as
+//! the one-window form does ([`super::factor`]: 9-dof `ImuFactor`, 15-dof `CombinedImuFactor`
+//! with `--combined`, the same weight). A window is skipped (and counted) when it cannot be
+//! evaluated: no ground-truth row within `L/2` of an edge, two edges on the same row, fewer
+//! than 2 samples, a gap (consecutive samples more than [`GAP_FACTOR`] median sample
+//! intervals apart) or a preintegration or weight that fails.
+//!
+//! The statistics per length and the verdict are [`preint_analysis::chi2_windows`]. The fit
+//! (JSON `fit`) is the χ² summed over all windows of all lengths against their total dof.
+
+use super::factor::{self, Args};
+use crate::{CliError, Output, input};
+use preint::ImuSample;
+use preint_analysis::chi2_windows::{self, LengthSummary, Verdict, WindowChi2};
+use preint_analysis::consistency::{TruthNoise, fit_json};
+use preint_analysis::stream::EDGE_SAMPLES;
+use preint_io::{GroundTruthState, read_euroc_groundtruth};
+use serde_json::{Value, json};
+use std::fmt::Write as _;
+
+/// Consecutive samples further apart than this many median sample intervals are a gap.
+pub const GAP_FACTOR: f64 = 5.0;
+/// Most windows of one length.
+const MAX_WINDOWS: i64 = 1_000_000;
+const BLOCKS: [&str; 5] = ["rotation", "velocity", "position", "gyro_bias", "acc_bias"];
+
+/// Everything `factor --window` computes.
+#[derive(Clone, Debug)]
+pub struct WindowsRun {
+    /// The IMU file, as printed.
+    pub imu: String,
+    /// The span where the recording and the ground truth overlap [ns].
+    pub span_ns: (i64, i64),
+    /// One summary per `--window` length, in the order given.
+    pub lengths: Vec<LengthSummary>,
+    /// What they say about the noise model.
+    pub verdict: Verdict,
+    /// The ground truth's own errors added to the weight.
+    pub truth_noise: TruthNoise,
+    /// `CombinedImuFactor` (else `ImuFactor`).
+    pub combined: bool,
+}
+
+fn check_lengths(lengths: &[f64]) -> Result<(), CliError> {
+    if lengths.is_empty() {
+        return Err(CliError::Usage(
+            "--window needs at least one length (s), e.g. --window 0.5,1,2".into(),
+        ));
+    }
+    for &l in lengths {
+        if !(l.is_finite() && l > 0.0) {
+            return Err(CliError::Usage(format!(
+                "--window: every length must be a positive number of seconds, got {l}"
+            )));
+        }
+    }
+    Ok(())
+}
+
+fn median_step(t: impl Iterator<Item = i64>) -> Option<f64> {
+    let t: Vec<i64> = t.collect();
+    let mut d: Vec<i64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    d.sort_unstable();
+    d.get(d.len() / 2).map(|&x| x as f64)
+}
+
+/// The samples a window `[t_i, t_j]` needs, with [`EDGE_SAMPLES`] on each side; `None` for a
+/// gap or fewer than 2 samples inside.
+fn window_samples(samples: &[ImuSample], (t_i, t_j): (i64, i64), dt: f64) -> Option<&[ImuSample]> {
+    let a = samples.partition_point(|s| s.t_ns < t_i);
+    let b = samples.partition_point(|s| s.t_ns <= t_j);
+    if b < a + 2 {
+        return None;
+    }
+    let (lo, hi) = (
+        a.saturating_sub(EDGE_SAMPLES),
+        (b + EDGE_SAMPLES).min(samples.len()),
+    );
+    let inner = &samples[a.saturating_sub(1)..(b + 1).min(samples.len())];
+    let gap = inner
+        .windows(2)
+        .any(|w| (w[1].t_ns - w[0].t_ns) as f64 > GAP_FACTOR * dt);
+    (!gap).then_some(&samples[lo..hi])
+}
+
+/// The windows of one length: their χ² and block shares, and how many were skipped.
+fn windows_of(
+    args: &Args,
+    params: &preint::PreintParams,
+    (samples, gt): (&[ImuSample], &[GroundTruthState]),
+    (span, dt): ((i64, i64), f64),
+    (length_ns, tn): (i64, TruthNoise),
+) -> (Vec<WindowChi2>, usize) {
+    let n = (span.1 - span.0) / length_ns;
+    let (mut out, mut skipped) = (Vec::new(), 0);
+    for k in 0..n {
+        let (a, b) = (span.0 + k * length_ns, span.0 + (k + 1) * length_ns);
+        let (gi, gj) = (input::nearest_row(gt, a), input::nearest_row(gt, b));
+        let far = |g: &GroundTruthState, t: i64| 2 * (g.t_ns - t).abs() > length_ns;
+        let evaluated = (gj.t_ns > gi.t_ns && !far(gi, a) && !far(gj, b))
+            .then(|| window_samples(samples, (gi.t_ns, gj.t_ns), dt))
+            .flatten()
+            .map(|w| factor::evaluate_window(args, params, w, (gi, gj), tn));
+        match evaluated {
+            Some(Ok((_, ev))) if ev.chi2.is_finite() => out.push(WindowChi2 {
+                chi2: ev.chi2,
+                share: ev.chi2_share,
+            }),
+            _ => skipped += 1,
+        }
+    }
+    (out, skipped)
+}
+
+/// Reads the files and evaluates the factor over back-to-back windows of every length.
+pub fn compute(args: &Args, lengths: &[f64]) -> Result<WindowsRun, CliError> {
+    check_lengths(lengths)?;
+    let tn = factor::truth_noise(args)?;
+    let (noise, mut params) = factor::noise_params(args)?;
+    let gt = read_euroc_groundtruth(&args.poses)?;
+    let input = args.input.to_input();
+    let (w, _, _) = factor::window(&input, &noise, &mut params, (None, None))?;
+    let samples = w.samples.as_slice();
+    let (Some(s0), Some(s1), Some(g0), Some(g1)) =
+        (samples.first(), samples.last(), gt.first(), gt.last())
+    else {
+        return Err(CliError::Usage(format!(
+            "{} or {} is empty: --window needs samples and ground truth",
+            input.label(),
+            args.poses.display()
+        )));
+    };
+    let span = (s0.t_ns.max(g0.t_ns), s1.t_ns.min(g1.t_ns));
+    if span.1 <= span.0 {
+        return Err(CliError::Usage(format!(
+            "{} ({} to {} ns) and {} ({} to {} ns) do not overlap: --window needs the ground \
+             truth of the recording",
+            input.label(),
+            s0.t_ns,
+            s1.t_ns,
+            args.poses.display(),
+            g0.t_ns,
+            g1.t_ns
+        )));
+    }
+    let dt = median_step(samples.iter().map(|s| s.t_ns)).unwrap_or(f64::INFINITY);
+    let dof = if args.combined { 15 } else { 9 };
+    let mut summaries = Vec::new();
+    for &l in lengths {
+        let length_ns = (l * 1e9).round() as i64;
+        if length_ns <= 0 || (span.1 - span.0) / length_ns.max(1) > MAX_WINDOWS {
+            return Err(CliError::Usage(format!(
+                "--window {l}: more than {MAX_WINDOWS} windows of {l} s in the {:.3} s span; \
+                 give a longer length",
+                (span.1 - span.0) as f64 * 1e-9
+            )));
+        }
+        let (windows, skipped) =
+            windows_of(args, &params, (samples, &gt), (span, dt), (length_ns, tn));
+        summaries.push(chi2_windows::summarise(l, dof, &windows, skipped));
+    }
+    Ok(WindowsRun {
+        imu: input.label(),
+        span_ns: span,
+        verdict: chi2_windows::verdict(&summaries),
+        lengths: summaries,
+        truth_noise: tn,
+        combined: args.combined,
+    })
+}
+
+/// The fit of the whole set: the χ² summed over all windows of all lengths against their
+/// total dof.
+pub fn fit(r: &WindowsRun) -> preint_calib::Fit {
+    let chi2: f64 = r.lengths.iter().map(|l| l.chi2_sum).sum();
+    let dof: usize = r.lengths.iter().map(|l| l.count * l.dof).sum();
+    preint_calib::Fit::new(chi2, dof).because(&format!(
+        "the IMU and the ground truth disagree beyond the factor's covariance over the windows \
+         ({}): the noise densities (--noise), the ground truth's own errors (--pose-rot-std, \
+         --pose-pos-std, --vel-std, --bias-gyro-std, --bias-acc-std), or the clocks",
+        r.verdict.text()
+    ))
+}
+
+fn length_json(l: &LengthSummary) -> Value {
+    let mut v =
+        json!({"length_s": l.length_s, "count": l.count, "skipped": l.skipped, "dof": l.dof});
+    match &l.stats {
+        Some(s) => {
+            v["mean_chi2"] = json!(s.mean);
+            v["median_chi2"] = json!(s.median);
+            v["fraction_above_p99"] = json!(s.fraction_above_p99);
+            v["ks_statistic"] = json!(s.ks_statistic);
+            if let Some(p) = s.ks_p_value {
+                v["ks_p_value"] = json!(p);
+            }
+            let share: serde_json::Map<String, Value> = BLOCKS
+                .iter()
+                .zip(&s.block_share)
+                .map(|(b, x)| ((*b).to_string(), json!(x)))
+                .collect();
+            v["block_share"] = Value::Object(share);
+        }
+        None => v["note"] = json!("fewer than 2 windows: no statistics for this length"),
+    }
+    v
+}
+
+fn verdict_json(v: &Verdict) -> Value {
+    let mut j = json!({"kind": v.kind(), "text": v.text()});
+    match v {
+        Verdict::Optimistic {
+            factor,
+            from_length_s,
+        } => {
+            j["factor"] = json!(factor);
+            j["from_length_s"] = json!(from_length_s);
+        }
+        Verdict::Pessimistic { factor } => j["factor"] = json!(factor),
+        Verdict::Consistent | Verdict::Undetermined => {}
+    }
+    j
+}
+
+/// The JSON form: `{windows: [...], verdict, span_ns, factor, ground_truth_noise, fit}`.
+pub fn to_json(r: &WindowsRun) -> Value {
+    json!({
+        "factor": if r.combined { "CombinedImuFactor" } else { "ImuFactor" },
+        "span_ns": [r.span_ns.0, r.span_ns.1],
+        "windows": r.lengths.iter().map(length_json).collect::<Vec<_>>(),
+        "verdict": verdict_json(&r.verdict),
+        "ground_truth_noise": factor::truth_noise_json(&r.truth_noise),
+        "fit": fit_json(&fit(r)),
+    })
+}
+
+/// The human summary: one row per length, then the verdict.
+pub fn to_text(r: &WindowsRun) -> String {
+    let mut h = String::new();
+    let _ = writeln!(
+        h,
+        "{}: {} at the ground truth over {:.3} s ({} → {} ns), back-to-back windows",
+        r.imu,
+        if r.combined {
+            "CombinedImuFactor"
+        } else {
+            "ImuFactor"
+        },
+        (r.span_ns.1 - r.span_ns.0) as f64 * 1e-9,
+        r.span_ns.0,
+        r.span_ns.1
+    );
+    let _ = writeln!(
+        h,
+        "{:>8} {:>6} {:>7} {:>10} {:>10} {:>8} {:>9} {:>9}  share rot / vel / pos{}",
+        "length s",
+        "count",
+        "skipped",
+        "mean χ²",
+        "median χ²",
+        "χ²/dof",
+        ">p99",
+        "KS p",
+        if r.combined { " / bg / ba" } else { "" }
+    );
+    for l in &r.lengths {
+        let head = format!("{:>8} {:>6} {:>7}", l.length_s, l.count, l.skipped);
+        let Some(s) = &l.stats else {
+            let _ = writeln!(h, "{head}  fewer than 2 windows: no statistics");
+            continue;
+        };
+        let shares: Vec<String> = s.block_share.iter().map(|x| format!("{x:.3}")).collect();
+        let _ = writeln!(
+            h,
+            "{head} {:>10.3} {:>10.3} {:>8.3} {:>8.1} % {:>9}  {}",
+            s.mean,
+            s.median,
+            s.mean / l.dof as f64,
+            100.0 * s.fraction_above_p99,
+            s.ks_p_value.map_or("—".into(), |p| format!("{p:.2e}")),
+            shares.join(" / ")
+        );
+    }
+    let _ = writeln!(h, "verdict: {}", r.verdict.text());
+    h.push_str(&crate::fit::fit_text(&fit(r), "factor over the windows"));
+    h
+}
+
+/// Runs `preint factor --window`.
+pub fn run(args: &Args, lengths: &[f64]) -> Result<Output, CliError> {
+    let r = compute(args, lengths)?;
+    let output = Output {
+        human: to_text(&r),
+        json: to_json(&r),
+    };
+    crate::fit::strict(args.strict, output, &fit(&r), "factor over the windows")
+}
