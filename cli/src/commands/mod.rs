@@ -12,7 +12,6 @@ pub mod bench_steps;
 pub mod calibrate;
 pub mod convert;
 pub mod factor;
-pub mod factor_windows;
 pub mod integrate;
 pub mod report;
 pub mod simulate;

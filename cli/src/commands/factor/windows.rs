@@ -5,7 +5,7 @@
 //! The span is where the recording and the ground truth overlap; windows of length `L` start
 //! at its beginning and follow each other without overlap (`⌊span/L⌋` of them). Each window's
 //! keyframes are the ground-truth rows nearest to its edges, and its factor is evaluated as
-//! the one-window form does ([`super::factor`]: 9-dof `ImuFactor`, 15-dof `CombinedImuFactor`
+//! the one-window form does ([`super`]: 9-dof `ImuFactor`, 15-dof `CombinedImuFactor`
 //! with `--combined`, the same weight). A window is skipped (and counted) when it cannot be
 //! evaluated: no ground-truth row within `L/2` of an edge, two edges on the same row, fewer
 //! than 2 samples, a gap (consecutive samples more than [`GAP_FACTOR`] median sample
@@ -14,7 +14,8 @@
 //! The statistics per length and the verdict are [`preint_analysis::chi2_windows`]. The fit
 //! (JSON `fit`) is the χ² summed over all windows of all lengths against their total dof.
 
-use super::factor::{self, Args};
+use super::evaluate::{evaluate_window, noise_params, truth_noise, window};
+use super::{Args, truth_noise_json};
 use crate::{CliError, Output, input};
 use preint::ImuSample;
 use preint_analysis::chi2_windows::{self, LengthSummary, Verdict, WindowChi2};
@@ -106,7 +107,7 @@ fn windows_of(
         let evaluated = (gj.t_ns > gi.t_ns && !far(gi, a) && !far(gj, b))
             .then(|| window_samples(samples, (gi.t_ns, gj.t_ns), dt))
             .flatten()
-            .map(|w| factor::evaluate_window(args, params, w, (gi, gj), tn));
+            .map(|w| evaluate_window(args, params, w, (gi, gj), tn));
         match evaluated {
             Some(Ok((_, ev))) if ev.chi2.is_finite() => out.push(WindowChi2 {
                 chi2: ev.chi2,
@@ -121,11 +122,11 @@ fn windows_of(
 /// Reads the files and evaluates the factor over back-to-back windows of every length.
 pub fn compute(args: &Args, lengths: &[f64]) -> Result<WindowsRun, CliError> {
     check_lengths(lengths)?;
-    let tn = factor::truth_noise(args)?;
-    let (noise, mut params) = factor::noise_params(args)?;
+    let tn = truth_noise(args)?;
+    let (noise, mut params) = noise_params(args)?;
     let gt = read_euroc_groundtruth(&args.poses)?;
     let input = args.input.to_input();
-    let (w, _, _) = factor::window(&input, &noise, &mut params, (None, None))?;
+    let (w, _, _) = window(&input, &noise, &mut params, (None, None))?;
     let samples = w.samples.as_slice();
     let (Some(s0), Some(s1), Some(g0), Some(g1)) =
         (samples.first(), samples.last(), gt.first(), gt.last())
@@ -235,7 +236,7 @@ pub fn to_json(r: &WindowsRun) -> Value {
         "span_ns": [r.span_ns.0, r.span_ns.1],
         "windows": r.lengths.iter().map(length_json).collect::<Vec<_>>(),
         "verdict": verdict_json(&r.verdict),
-        "ground_truth_noise": factor::truth_noise_json(&r.truth_noise),
+        "ground_truth_noise": truth_noise_json(&r.truth_noise),
         "fit": fit_json(&fit(r)),
     })
 }
