@@ -56,7 +56,7 @@ pub struct Chi2Stats {
 /// One window length: how many windows, how many skipped and their statistics.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LengthSummary {
-    /// The window length [s].
+    /// The window length \[s\].
     pub length_s: f64,
     /// Windows evaluated.
     pub count: usize,
@@ -182,7 +182,7 @@ pub enum Verdict {
     Optimistic {
         /// √(mean χ²/dof) at `from_length_s`.
         factor: f64,
-        /// The shortest such length [s].
+        /// The shortest such length \[s\].
         from_length_s: f64,
     },
     /// The mean `χ²/dof` of all windows is below 0.75: the σ are `factor` = √(χ²/dof) times
