@@ -5,51 +5,12 @@
 //! generic scheme contract, `scheme_contract.rs`), the same stored samples, the same error at
 //! the same index for a bad sample, and the same state after it.
 
+mod common;
+
 use nalgebra::Vector3;
+
+use common::slices::{deltas_only as make, jittered as stream, one_by_one};
 use preint::{ImuBias, ImuSample, Level, PreintError, PreintParams, Preintegrator, Scheme};
-
-fn stream(n: usize) -> Vec<ImuSample> {
-    (0..n as i64)
-        .map(|k| {
-            let t = k as f64 * 5e-3;
-            // Slightly uneven stamps, so that every interval has its own h.
-            let jitter = (k * 7919 % 13) * 10_000;
-            ImuSample::new(
-                k * 5_000_000 + jitter,
-                Vector3::new(
-                    0.4 * (1.3 * t).sin(),
-                    0.3 * (0.7 * t).cos(),
-                    0.2 + 0.5 * t.sin(),
-                ),
-                Vector3::new(
-                    0.6 * (0.9 * t).sin(),
-                    0.2 * t.cos(),
-                    9.81 + 0.3 * (2.1 * t).sin(),
-                ),
-            )
-        })
-        .collect()
-}
-
-fn make(scheme: Scheme, keep: bool) -> Preintegrator {
-    let mut prm = PreintParams::default()
-        .with_scheme(scheme)
-        .with_level(Level::Deltas);
-    prm.keep_samples = keep;
-    let bias = ImuBias::new(
-        Vector3::new(0.01, -0.02, 0.005),
-        Vector3::new(0.1, 0.05, -0.2),
-    );
-    Preintegrator::new(prm, bias).unwrap()
-}
-
-/// One by one, stopping at the first error like `integrate_slice` does.
-fn one_by_one(pi: &mut Preintegrator, s: &[ImuSample]) -> Result<(), PreintError> {
-    for x in s {
-        pi.integrate(x)?;
-    }
-    Ok(())
-}
 
 /// Makes sample `s` invalid, given the sample before it.
 type Spoil = fn(&mut ImuSample, &ImuSample);

@@ -159,3 +159,4 @@ pub fn compose(a: &PreintegratedImu, b: &PreintegratedImu) -> (SO3, V3, V3) {
 pub mod factor_vars;
 pub mod gtsam_fixture;
 pub mod linearisation;
+pub mod slices;
