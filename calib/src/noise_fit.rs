@@ -178,7 +178,9 @@ pub struct NoiseFit {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum NoiseFitError {
     /// Too few windows.
-    #[error("{windows} windows for {free} free parameters: give a longer recording or more window lengths")]
+    #[error(
+        "{windows} windows for {free} free parameters: give a longer recording or more window lengths"
+    )]
     TooFewWindows {
         /// Windows given.
         windows: usize,
@@ -189,7 +191,9 @@ pub enum NoiseFitError {
     #[error("parameter {0:?}: the start or held value must be finite and ≥ 0")]
     BadValue(Param),
     /// `Σ_w(θ)` is not positive definite.
-    #[error("the covariance of window {0} is not positive definite at the start: give non-zero start values")]
+    #[error(
+        "the covariance of window {0} is not positive definite at the start: give non-zero start values"
+    )]
     Singular(usize),
 }
 

@@ -63,7 +63,11 @@ fn recovers_the_parameters_of_synthetic_windows() {
     }
     let theta = SVector::<f64, PARAMS>::from_fn(|k, _| TRUTH[k] * TRUTH[k]);
     let at_truth = evaluate(&w, &theta).ok().unwrap().ll;
-    assert!(f.log_likelihood >= at_truth - 1e-9, "{} < {at_truth}", f.log_likelihood);
+    assert!(
+        f.log_likelihood >= at_truth - 1e-9,
+        "{} < {at_truth}",
+        f.log_likelihood
+    );
 }
 
 /// Over 200 seeded trials, the 3σ interval of each parameter covers its true value in at
