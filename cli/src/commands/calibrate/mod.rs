@@ -38,7 +38,7 @@ pub struct Args {
     /// `--estimate noise`: the window lengths (s, comma-separated), back-to-back windows of
     /// each; several lengths separate white noise, random walk and the ground truth's error.
     #[arg(
-        help_heading = "Noise estimate",
+        help_heading = "Ground truth",
         long,
         value_name = "S[,S…]",
         value_delimiter = ',',
@@ -48,7 +48,7 @@ pub struct Args {
     pub window: Vec<f64>,
     /// `--estimate noise`: the ground truth's velocity error in m/s, held (not fitted).
     #[arg(
-        help_heading = "Noise estimate",
+        help_heading = "Ground truth",
         long,
         value_name = "M/S",
         allow_hyphen_values = true
@@ -56,7 +56,7 @@ pub struct Args {
     pub vel_std: Option<f64>,
     /// `--estimate noise`: the ground truth's gyroscope-bias error in rad/s, held (not fitted).
     #[arg(
-        help_heading = "Noise estimate",
+        help_heading = "Ground truth",
         long,
         value_name = "RAD/S",
         allow_hyphen_values = true
@@ -65,7 +65,7 @@ pub struct Args {
     /// `--estimate noise`: the ground truth's accelerometer-bias error in m/s², held (not
     /// fitted).
     #[arg(
-        help_heading = "Noise estimate",
+        help_heading = "Ground truth",
         long,
         value_name = "M/S2",
         allow_hyphen_values = true
