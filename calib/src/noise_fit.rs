@@ -393,7 +393,8 @@ fn estimates(
                 let st = cov[(i, i)].max(0.0).sqrt();
                 let value = theta[k].sqrt();
                 let std = st / (2.0 * value);
-                let withheld = (!(std <= value)).then_some(Withheld::NotSeparable);
+                let separable = std <= value;
+                let withheld = (!separable).then_some(Withheld::NotSeparable);
                 return ParamEstimate {
                     param,
                     value,
