@@ -78,14 +78,13 @@ pub struct ResidualJacobians<const R: usize> {
     pub bias_i: SMatrix<f64, R, 6>,
 }
 
-/// Weights the residual `r` (Jacobians `jac`) by `cov` plus the ground truth's errors `tn`
-/// (module docs).
-pub fn evaluate<const R: usize>(
-    r: SVector<f64, R>,
-    jac: ResidualJacobians<R>,
-    cov: SMatrix<f64, R, R>,
+/// The covariance the ground truth's errors `tn` add to a residual with Jacobians `jac`:
+/// `J_i S J_iᵀ + J_j S J_jᵀ + J_b S_b J_bᵀ` (module docs; the bias rows of a combined factor
+/// left out of `J_b`). Linear in the squared σ of `tn`.
+pub fn truth_covariance<const R: usize>(
+    jac: &ResidualJacobians<R>,
     tn: TruthNoise,
-) -> Result<Evaluation, Error> {
+) -> SMatrix<f64, R, R> {
     let mut s = SMatrix::<f64, 9, 9>::zeros();
     let mut sb = SMatrix::<f64, 6, 6>::zeros();
     for k in 0..3 {
@@ -100,7 +99,18 @@ pub fn evaluate<const R: usize>(
         jb.row_mut(row).fill(0.0);
     }
     let (ji, jj) = (jac.state_i, jac.state_j);
-    let sigma = cov + ji * s * ji.transpose() + jj * s * jj.transpose() + jb * sb * jb.transpose();
+    ji * s * ji.transpose() + jj * s * jj.transpose() + jb * sb * jb.transpose()
+}
+
+/// Weights the residual `r` (Jacobians `jac`) by `cov` plus the ground truth's errors `tn`
+/// (module docs).
+pub fn evaluate<const R: usize>(
+    r: SVector<f64, R>,
+    jac: ResidualJacobians<R>,
+    cov: SMatrix<f64, R, R>,
+    tn: TruthNoise,
+) -> Result<Evaluation, Error> {
+    let sigma = cov + truth_covariance(&jac, tn);
     let u = sqrt_information(&sigma).map_err(|e| Error::Failed(format!("weight: {e}")))?;
     let w = u * r;
     let info_r = u.transpose() * w;

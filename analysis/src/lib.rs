@@ -47,6 +47,7 @@ pub mod error;
 pub mod format;
 pub mod input_class;
 pub mod noise;
+pub mod noise_windows;
 pub mod parse;
 pub mod progress;
 pub mod recording;

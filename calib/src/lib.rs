@@ -24,6 +24,8 @@
 //! - [`gauss_newton`]: the solver every estimator uses ([`solve`], [`LeastSquares`],
 //!   [`GaussNewton`]), run by argmin's executor; covariance and unobservable directions of the
 //!   estimate ([`Solution`]).
+//! - [`noise_fit`]: maximum-likelihood noise densities, bias random walks and ground-truth
+//!   errors from IMU factor residuals at known states (Fisher scoring, [`noise_fit::fit`]).
 //! - [`numdiff`]: forward, central and Ridders differentiation of any `Fn(&X) -> Y` between
 //!   [`preint_lie::Manifold`]s (Ceres `NumericDiffCostFunction` semantics).
 //! - [`checker`]: analytic Jacobian blocks against Ridders' numeric Jacobian (in the spirit of
@@ -44,6 +46,7 @@ pub mod bias;
 pub mod checker;
 pub mod fit;
 pub mod gauss_newton;
+pub mod noise_fit;
 pub mod numdiff;
 
 pub use bias::{

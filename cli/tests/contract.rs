@@ -77,6 +77,10 @@ const EXAMPLES: &[(&str, &str, &[&str])] = &[
     ("factor", "window", &["0.5,1,2"]),
     // calibrate.
     ("calibrate", "estimate", &["time-offset,gyro-intrinsics", "--poses", EUROC_GT]),
+    ("calibrate", "window", &["0.5,1,2,4", "--estimate", "noise", "--poses", EUROC_GT]),
+    ("calibrate", "vel_std", &["0.01", "--estimate", "noise", "--poses", EUROC_GT]),
+    ("calibrate", "bias_gyro_std", &["1e-4", "--estimate", "noise", "--poses", EUROC_GT]),
+    ("calibrate", "bias_acc_std", &["0.01", "--estimate", "noise", "--poses", EUROC_GT]),
     ("calibrate", "pose_spacing", &["0.25", "--poses", EUROC_GT]),
     ("*", "latitude", &["47.4"]),
     ("calibrate", "heading", &["30", "--latitude", "47.4"]),

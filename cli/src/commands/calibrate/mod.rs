@@ -3,6 +3,7 @@
 //! [`preint_analysis::calibrate`]); `--strict` makes a fit that is not credible a refusal
 //! (exit 2, after the output).
 
+mod noise;
 mod text;
 
 pub use text::to_text;
@@ -29,9 +30,47 @@ pub struct Args {
     /// Known-pose problem: parameters estimated beside the biases, comma-separated, from
     /// time-offset, gyro-intrinsics, g-sensitivity, accel-intrinsics (OpenVINS' kalibr model:
     /// Tw and R_IMUtoGYRO, Tg, Ta). Each is printed with its σ, or withheld (not applied, not
-    /// written) when the motion does not excite it.
+    /// written) when the motion does not excite it. `noise` (alone): the maximum-likelihood
+    /// noise densities, bias random walks and the ground truth's own errors from ImuFactors
+    /// over back-to-back windows (--window) between EuRoC ground-truth states (--poses).
     #[arg(help_heading = "Known poses", long, value_name = "LIST", requires = "poses", value_parser = parse_estimate)]
-    pub estimate: Option<Estimate>,
+    pub estimate: Option<EstimateList>,
+    /// `--estimate noise`: the window lengths (s, comma-separated), back-to-back windows of
+    /// each; several lengths separate white noise, random walk and the ground truth's error.
+    #[arg(
+        help_heading = "Ground truth",
+        long,
+        value_name = "S[,S…]",
+        value_delimiter = ',',
+        default_value = "0.5,1,2,4",
+        allow_hyphen_values = true
+    )]
+    pub window: Vec<f64>,
+    /// `--estimate noise`: the ground truth's velocity error in m/s, held (not fitted).
+    #[arg(
+        help_heading = "Ground truth",
+        long,
+        value_name = "M/S",
+        allow_hyphen_values = true
+    )]
+    pub vel_std: Option<f64>,
+    /// `--estimate noise`: the ground truth's gyroscope-bias error in rad/s, held (not fitted).
+    #[arg(
+        help_heading = "Ground truth",
+        long,
+        value_name = "RAD/S",
+        allow_hyphen_values = true
+    )]
+    pub bias_gyro_std: Option<f64>,
+    /// `--estimate noise`: the ground truth's accelerometer-bias error in m/s², held (not
+    /// fitted).
+    #[arg(
+        help_heading = "Ground truth",
+        long,
+        value_name = "M/S2",
+        allow_hyphen_values = true
+    )]
+    pub bias_acc_std: Option<f64>,
     /// Known-pose problem: spacing of the poses used, in s.
     #[arg(
         help_heading = "Known poses",
@@ -69,23 +108,25 @@ pub struct Args {
     /// Use only samples (and poses) with timestamps <= this, in ns.
     #[arg(help_heading = "Window", long, allow_hyphen_values = true)]
     pub to: Option<i64>,
-    /// Known-pose problem: standard deviation of the given attitudes in rad (0: exact).
-    /// E.g. 1.75e-3 (0.1°) and --pose-pos-std 0.005 for motion capture such as EuRoC's.
+    /// Known-pose problem: standard deviation of the given attitudes in rad (default 0:
+    /// exact). E.g. 1.75e-3 (0.1°) and --pose-pos-std 0.005 for motion capture such as
+    /// EuRoC's. With `--estimate noise`: held at this value (else fitted).
     #[arg(
         help_heading = "Known poses",
         long,
-        default_value_t = 0.0,
+        value_name = "RAD",
         allow_hyphen_values = true
     )]
-    pub pose_rot_std: f64,
-    /// Known-pose problem: standard deviation of the given positions in m (0: exact).
+    pub pose_rot_std: Option<f64>,
+    /// Known-pose problem: standard deviation of the given positions in m (default 0: exact).
+    /// With `--estimate noise`: held at this value (else fitted).
     #[arg(
         help_heading = "Known poses",
         long,
-        default_value_t = 0.0,
+        value_name = "M",
         allow_hyphen_values = true
     )]
-    pub pose_pos_std: f64,
+    pub pose_pos_std: Option<f64>,
     /// Pose of the IMU in the body frame, x,y,z,qw,qx,qy,qz (m; quaternion rotating sensor
     /// vectors into the body frame). Known-pose problem: the poses are the body's and the
     /// preintegration removes the lever arm. Static problem: roll and pitch are also given for
@@ -133,15 +174,15 @@ impl Args {
         Options {
             input: self.input.to_input(),
             poses: self.poses.clone(),
-            estimate: self.estimate,
+            estimate: self.estimate.map(|e| e.extras),
             pose_spacing: self.pose_spacing,
             calibration: self.calibration.clone(),
             noise: self.noise.clone(),
             gravity: self.gravity,
             from: self.from,
             to: self.to,
-            pose_rot_std: self.pose_rot_std,
-            pose_pos_std: self.pose_pos_std,
+            pose_rot_std: self.pose_rot_std.unwrap_or(0.0),
+            pose_pos_std: self.pose_pos_std.unwrap_or(0.0),
             body_p_sensor: self.body_p_sensor,
             latitude: self.latitude,
             heading: self.heading,
@@ -151,13 +192,56 @@ impl Args {
     }
 }
 
+/// `--estimate`'s list: the known-pose problem's parameters, or `noise` alone.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct EstimateList {
+    /// The known-pose problem's parameters.
+    pub extras: Estimate,
+    /// The noise model (`noise`).
+    pub noise: bool,
+}
+
 /// `--estimate`'s list.
-fn parse_estimate(list: &str) -> Result<Estimate, String> {
-    Estimate::parse(list)
+fn parse_estimate(list: &str) -> Result<EstimateList, String> {
+    let names: Vec<&str> = list.split(',').map(str::trim).collect();
+    let noise = names.contains(&"noise");
+    let rest: Vec<&str> = names.into_iter().filter(|n| *n != "noise").collect();
+    let extras = Estimate::parse(&rest.join(",")).map_err(|e| format!("{e} or noise"))?;
+    if noise && extras.any() {
+        return Err(format!(
+            "`noise` is estimated on its own (a fit of the noise model at the ground truth, not \
+             the known-pose problem): give --estimate noise, or --estimate {}",
+            rest.join(",")
+        ));
+    }
+    Ok(EstimateList { extras, noise })
+}
+
+/// Flags that only `--estimate noise` reads: refused without it.
+fn check_noise_flags(args: &Args) -> Result<(), CliError> {
+    let noise = args.estimate.is_some_and(|e| e.noise);
+    let only = [
+        ("--vel-std", args.vel_std.is_some()),
+        ("--bias-gyro-std", args.bias_gyro_std.is_some()),
+        ("--bias-acc-std", args.bias_acc_std.is_some()),
+    ];
+    for (flag, given) in only {
+        if given && !noise {
+            return Err(CliError::Usage(format!(
+                "{flag} is a ground-truth error of --estimate noise; give --poses GT \
+                 --estimate noise, or leave it out"
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Runs `preint calibrate`.
 pub fn run(args: &Args) -> Result<Output, CliError> {
+    check_noise_flags(args)?;
+    if args.estimate.is_some_and(|e| e.noise) {
+        return noise::run(args);
+    }
     let r = preint_analysis::calibrate::compute(&args.options())?;
     let output = Output {
         human: to_text(&r),

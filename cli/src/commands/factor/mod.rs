@@ -28,7 +28,7 @@
 //! Not credible: a `warning:` line names the block whose marginal χ² is largest (the part that
 //! disagrees); `--strict` makes it a refusal (exit 2, after the output).
 
-mod evaluate;
+pub(crate) mod evaluate;
 pub mod windows;
 
 use crate::fit::fit_text;

@@ -48,7 +48,7 @@ pub struct WindowsRun {
     pub combined: bool,
 }
 
-fn check_lengths(lengths: &[f64]) -> Result<(), CliError> {
+pub(crate) fn check_lengths(lengths: &[f64]) -> Result<(), CliError> {
     if lengths.is_empty() {
         return Err(CliError::Usage(
             "--window needs at least one length (s), e.g. --window 0.5,1,2".into(),
@@ -90,14 +90,14 @@ fn window_samples(samples: &[ImuSample], (t_i, t_j): (i64, i64), dt: f64) -> Opt
     (!gap).then_some(&samples[lo..hi])
 }
 
-/// The windows of one length: their χ² and block shares, and how many were skipped.
-fn windows_of(
-    args: &Args,
-    params: &preint::PreintParams,
+/// The back-to-back windows of one length over `span` (module docs): `f` of each window's
+/// samples and keyframes, or `None` (counted as skipped) when it cannot be evaluated.
+pub(crate) fn for_each_window<T>(
     (samples, gt): (&[ImuSample], &[GroundTruthState]),
     (span, dt): ((i64, i64), f64),
-    (length_ns, tn): (i64, TruthNoise),
-) -> (Vec<WindowChi2>, usize) {
+    length_ns: i64,
+    mut f: impl FnMut(&[ImuSample], (&GroundTruthState, &GroundTruthState)) -> Option<T>,
+) -> (Vec<T>, usize) {
     let n = (span.1 - span.0) / length_ns;
     let (mut out, mut skipped) = (Vec::new(), 0);
     for k in 0..n {
@@ -107,16 +107,78 @@ fn windows_of(
         let evaluated = (gj.t_ns > gi.t_ns && !far(gi, a) && !far(gj, b))
             .then(|| window_samples(samples, (gi.t_ns, gj.t_ns), dt))
             .flatten()
-            .map(|w| evaluate_window(args, params, w, (gi, gj), tn));
+            .and_then(|w| f(w, (gi, gj)));
         match evaluated {
-            Some(Ok((_, ev))) if ev.chi2.is_finite() => out.push(WindowChi2 {
-                chi2: ev.chi2,
-                share: ev.chi2_share,
-            }),
-            _ => skipped += 1,
+            Some(x) => out.push(x),
+            None => skipped += 1,
         }
     }
     (out, skipped)
+}
+
+/// The windows of one length: their χ² and block shares, and how many were skipped.
+fn windows_of(
+    args: &Args,
+    params: &preint::PreintParams,
+    data: (&[ImuSample], &[GroundTruthState]),
+    span_dt: ((i64, i64), f64),
+    (length_ns, tn): (i64, TruthNoise),
+) -> (Vec<WindowChi2>, usize) {
+    for_each_window(data, span_dt, length_ns, |w, g| {
+        match evaluate_window(args, params, w, g, tn) {
+            Ok((_, ev)) if ev.chi2.is_finite() => Some(WindowChi2 {
+                chi2: ev.chi2,
+                share: ev.chi2_share,
+            }),
+            _ => None,
+        }
+    })
+}
+
+/// The span where `samples` and `gt` overlap [ns], and the median sample interval [ns];
+/// `what` names the mode in the errors (e.g. `--window`).
+pub(crate) fn overlap(
+    samples: &[ImuSample],
+    gt: &[GroundTruthState],
+    (imu, poses): (&str, &std::path::Path),
+    what: &str,
+) -> Result<((i64, i64), f64), CliError> {
+    let (Some(s0), Some(s1), Some(g0), Some(g1)) =
+        (samples.first(), samples.last(), gt.first(), gt.last())
+    else {
+        return Err(CliError::Usage(format!(
+            "{imu} or {} is empty: {what} needs samples and ground truth",
+            poses.display()
+        )));
+    };
+    let span = (s0.t_ns.max(g0.t_ns), s1.t_ns.min(g1.t_ns));
+    if span.1 <= span.0 {
+        return Err(CliError::Usage(format!(
+            "{imu} ({} to {} ns) and {} ({} to {} ns) do not overlap: {what} needs the ground \
+             truth of the recording",
+            s0.t_ns,
+            s1.t_ns,
+            poses.display(),
+            g0.t_ns,
+            g1.t_ns
+        )));
+    }
+    let dt = median_step(samples.iter().map(|s| s.t_ns)).unwrap_or(f64::INFINITY);
+    Ok((span, dt))
+}
+
+/// The number of nanoseconds of a window length `l` [s], refused when `span` would hold more
+/// than [`MAX_WINDOWS`] of them.
+pub(crate) fn length_ns(l: f64, span: (i64, i64)) -> Result<i64, CliError> {
+    let length_ns = (l * 1e9).round() as i64;
+    if length_ns <= 0 || (span.1 - span.0) / length_ns.max(1) > MAX_WINDOWS {
+        return Err(CliError::Usage(format!(
+            "--window {l}: more than {MAX_WINDOWS} windows of {l} s in the {:.3} s span; \
+             give a longer length",
+            (span.1 - span.0) as f64 * 1e-9
+        )));
+    }
+    Ok(length_ns)
 }
 
 /// Reads the files and evaluates the factor over back-to-back windows of every length.
@@ -128,40 +190,11 @@ pub fn compute(args: &Args, lengths: &[f64]) -> Result<WindowsRun, CliError> {
     let input = args.input.to_input();
     let (w, _, _) = window(&input, &noise, &mut params, (None, None))?;
     let samples = w.samples.as_slice();
-    let (Some(s0), Some(s1), Some(g0), Some(g1)) =
-        (samples.first(), samples.last(), gt.first(), gt.last())
-    else {
-        return Err(CliError::Usage(format!(
-            "{} or {} is empty: --window needs samples and ground truth",
-            input.label(),
-            args.poses.display()
-        )));
-    };
-    let span = (s0.t_ns.max(g0.t_ns), s1.t_ns.min(g1.t_ns));
-    if span.1 <= span.0 {
-        return Err(CliError::Usage(format!(
-            "{} ({} to {} ns) and {} ({} to {} ns) do not overlap: --window needs the ground \
-             truth of the recording",
-            input.label(),
-            s0.t_ns,
-            s1.t_ns,
-            args.poses.display(),
-            g0.t_ns,
-            g1.t_ns
-        )));
-    }
-    let dt = median_step(samples.iter().map(|s| s.t_ns)).unwrap_or(f64::INFINITY);
+    let (span, dt) = overlap(samples, &gt, (&input.label(), &args.poses), "--window")?;
     let dof = if args.combined { 15 } else { 9 };
     let mut summaries = Vec::new();
     for &l in lengths {
-        let length_ns = (l * 1e9).round() as i64;
-        if length_ns <= 0 || (span.1 - span.0) / length_ns.max(1) > MAX_WINDOWS {
-            return Err(CliError::Usage(format!(
-                "--window {l}: more than {MAX_WINDOWS} windows of {l} s in the {:.3} s span; \
-                 give a longer length",
-                (span.1 - span.0) as f64 * 1e-9
-            )));
-        }
+        let length_ns = length_ns(l, span)?;
         let (windows, skipped) =
             windows_of(args, &params, (samples, &gt), (span, dt), (length_ns, tn));
         summaries.push(chi2_windows::summarise(l, dof, &windows, skipped));

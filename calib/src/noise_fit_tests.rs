@@ -1,0 +1,145 @@
+use super::*;
+use rand::rngs::StdRng;
+use rand::{RngExt, SeedableRng};
+use rand_distr::StandardNormal;
+
+/// How each basis grows with the window length `T` (white noise ∝ T, random walk ∝ T³, the
+/// ground truth's error independent of T, its bias error ∝ T²).
+const POWER: [i32; PARAMS] = [1, 1, 3, 3, 0, 0, 0, 2, 2];
+
+/// True `√θ`, of order 1 so that every basis matters.
+const TRUTH: [f64; PARAMS] = [1.0, 0.8, 0.6, 0.5, 1.2, 0.9, 0.7, 0.4, 0.3];
+
+fn normal(rng: &mut StdRng) -> f64 {
+    rng.sample(StandardNormal)
+}
+
+/// `windows` windows of lengths 0.5, 1, 2, 4 s in turn; each basis `T^p M Mᵀ` with `M` a
+/// random 9×3 matrix (rank 3, as the real ones), `r ~ N(0, Σ(θ))`.
+fn synthetic(rng: &mut StdRng, truth: &[f64; PARAMS], windows: usize) -> Vec<NoiseWindow> {
+    (0..windows)
+        .map(|i| {
+            let t: f64 = [0.5, 1.0, 2.0, 4.0][i % 4];
+            let basis: [SMatrix<f64, 9, 9>; PARAMS] = std::array::from_fn(|k| {
+                let m = SMatrix::<f64, 9, 3>::from_fn(|_, _| normal(rng));
+                m * m.transpose() * t.powi(POWER[k]) / 3.0
+            });
+            let theta = SVector::<f64, PARAMS>::from_fn(|k, _| truth[k] * truth[k]);
+            let s = sigma(
+                &NoiseWindow {
+                    length_s: t,
+                    r: SVector::zeros(),
+                    basis,
+                },
+                &theta,
+            );
+            let l = s.cholesky().expect("positive definite").l();
+            let z = SVector::<f64, 9>::from_fn(|_, _| normal(rng));
+            NoiseWindow {
+                length_s: t,
+                r: l * z,
+                basis,
+            }
+        })
+        .collect()
+}
+
+/// One draw: every parameter recovered within 3σ, the χ²/dof after near 1, ℓ no lower than at
+/// the truth.
+#[test]
+fn recovers_the_parameters_of_synthetic_windows() {
+    let mut rng = StdRng::seed_from_u64(7);
+    let w = synthetic(&mut rng, &TRUTH, 200);
+    let f = fit(&w, &NoiseFitOptions::default()).unwrap();
+    for (p, truth) in f.params.iter().zip(TRUTH) {
+        assert!(p.withheld.is_none(), "{p:?}");
+        assert!((p.value - truth).abs() < 3.0 * p.std, "{p:?} vs {truth}");
+        assert!(p.std < 0.25 * truth, "{p:?}");
+    }
+    for l in &f.per_length {
+        assert_eq!(l.count, 50);
+        assert!((l.after - 1.0).abs() < 0.2, "{l:?}");
+        assert!(l.before.is_nan(), "no start values: Σ singular at 0");
+    }
+    let theta = SVector::<f64, PARAMS>::from_fn(|k, _| TRUTH[k] * TRUTH[k]);
+    let at_truth = evaluate(&w, &theta).ok().unwrap().ll;
+    assert!(
+        f.log_likelihood >= at_truth - 1e-9,
+        "{} < {at_truth}",
+        f.log_likelihood
+    );
+}
+
+/// Over 200 seeded trials, the 3σ interval of each parameter covers its true value in at
+/// least 95 % of them.
+#[test]
+fn three_sigma_coverage_over_seeded_trials() {
+    let trials = 200;
+    let mut covered = [0usize; PARAMS];
+    for seed in 0..trials {
+        let mut rng = StdRng::seed_from_u64(1000 + seed);
+        let w = synthetic(&mut rng, &TRUTH, 96);
+        let f = fit(&w, &NoiseFitOptions::default()).unwrap();
+        for (k, p) in f.params.iter().enumerate() {
+            let (t, s) = p.theta;
+            if (t - TRUTH[k] * TRUTH[k]).abs() <= 3.0 * s {
+                covered[k] += 1;
+            }
+        }
+    }
+    for (k, c) in covered.iter().enumerate() {
+        let rate = *c as f64 / trials as f64;
+        eprintln!("{:?}: 3σ coverage {rate}", Param::ALL[k]);
+        assert!(rate >= 0.95, "{:?}: coverage {rate}", Param::ALL[k]);
+    }
+}
+
+/// A parameter whose true value is 0 ends on the bound, withheld with a small 2σ upper bound,
+/// and the others are still recovered.
+#[test]
+fn a_zero_parameter_is_a_bound_not_a_value() {
+    let mut truth = TRUTH;
+    truth[5] = 0.0;
+    let mut rng = StdRng::seed_from_u64(3);
+    let w = synthetic(&mut rng, &truth, 200);
+    let f = fit(&w, &NoiseFitOptions::default()).unwrap();
+    let p = &f.params[5];
+    match p.withheld {
+        Some(Withheld::AtBound { upper }) => assert!(upper < 0.5, "{upper}"),
+        Some(Withheld::NotSeparable) => assert!(p.value < 0.5, "{p:?}"),
+        other => panic!("σ_p reported as {other:?} {p:?}"),
+    }
+    for k in [0, 1, 4, 6] {
+        let q = &f.params[k];
+        assert!((q.value - truth[k]).abs() < 3.0 * q.std, "{q:?}");
+    }
+}
+
+/// A held parameter keeps its value and σ 0; the χ² before uses the start and held values.
+#[test]
+fn held_parameters_and_the_chi2_before() {
+    let mut rng = StdRng::seed_from_u64(11);
+    let w = synthetic(&mut rng, &TRUTH, 120);
+    let mut opts = NoiseFitOptions {
+        start: TRUTH.map(|x| 2.0 * x),
+        ..NoiseFitOptions::default()
+    };
+    opts.held[4] = Some(TRUTH[4]);
+    let f = fit(&w, &opts).unwrap();
+    assert_eq!(f.params[4].withheld, Some(Withheld::Held));
+    assert_eq!(f.params[4].value, TRUTH[4]);
+    for l in &f.per_length {
+        // Most σ doubled: χ²/dof near 1/4 before, near 1 after.
+        assert!(l.before < 0.45, "{l:?}");
+        assert!((l.after - 1.0).abs() < 0.25, "{l:?}");
+    }
+    assert!(matches!(
+        fit(&w[..1], &opts),
+        Err(NoiseFitError::TooFewWindows { .. })
+    ));
+    opts.start[0] = f64::NAN;
+    assert_eq!(
+        fit(&w, &opts).unwrap_err(),
+        NoiseFitError::BadValue(Param::GyroNoiseDensity)
+    );
+}
