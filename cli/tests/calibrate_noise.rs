@@ -180,6 +180,22 @@ fn refusals_name_the_flags() {
         e.contains("--vel-std") && e.contains("--estimate noise"),
         "{e}"
     );
+    // --window is read by --estimate noise only: refused without it, not ignored.
+    let o = run(&[
+        "calibrate",
+        "--imu",
+        &imu,
+        "--poses",
+        &gt,
+        "--window",
+        "1,2",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("--window") && e.contains("--estimate noise"),
+        "{e}"
+    );
     let o = run(&[
         "calibrate",
         "--imu",

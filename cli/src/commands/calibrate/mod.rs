@@ -35,17 +35,17 @@ pub struct Args {
     /// over back-to-back windows (--window) between EuRoC ground-truth states (--poses).
     #[arg(help_heading = "Known poses", long, value_name = "LIST", requires = "poses", value_parser = parse_estimate)]
     pub estimate: Option<EstimateList>,
-    /// `--estimate noise`: the window lengths (s, comma-separated), back-to-back windows of
-    /// each; several lengths separate white noise, random walk and the ground truth's error.
+    /// `--estimate noise`: the window lengths (s, comma-separated; default 0.5,1,2,4),
+    /// back-to-back windows of each; several lengths separate white noise, random walk and the
+    /// ground truth's error.
     #[arg(
         help_heading = "Ground truth",
         long,
         value_name = "S[,S…]",
         value_delimiter = ',',
-        default_value = "0.5,1,2,4",
         allow_hyphen_values = true
     )]
-    pub window: Vec<f64>,
+    pub window: Option<Vec<f64>>,
     /// `--estimate noise`: the ground truth's velocity error in m/s, held (not fitted).
     #[arg(
         help_heading = "Ground truth",
@@ -221,6 +221,7 @@ fn parse_estimate(list: &str) -> Result<EstimateList, String> {
 fn check_noise_flags(args: &Args) -> Result<(), CliError> {
     let noise = args.estimate.is_some_and(|e| e.noise);
     let only = [
+        ("--window", args.window.is_some()),
         ("--vel-std", args.vel_std.is_some()),
         ("--bias-gyro-std", args.bias_gyro_std.is_some()),
         ("--bias-acc-std", args.bias_acc_std.is_some()),
@@ -228,8 +229,8 @@ fn check_noise_flags(args: &Args) -> Result<(), CliError> {
     for (flag, given) in only {
         if given && !noise {
             return Err(CliError::Usage(format!(
-                "{flag} is a ground-truth error of --estimate noise; give --poses GT \
-                 --estimate noise, or leave it out"
+                "{flag} is read by --estimate noise only; give --poses GT --estimate noise, \
+                 or leave it out"
             )));
         }
     }

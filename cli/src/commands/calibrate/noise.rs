@@ -25,6 +25,9 @@ use preint_io::read_euroc_groundtruth;
 use serde_json::{Map, Value, json};
 use std::fmt::Write as _;
 
+/// The window lengths \[s\] when `--window` is not given.
+const DEFAULT_WINDOWS_S: [f64; 4] = [0.5, 1.0, 2.0, 4.0];
+
 /// The JSON key of each parameter, in the order of [`Param::ALL`].
 const KEYS: [&str; PARAMS] = [
     "gyroscope_noise_density",
@@ -73,7 +76,7 @@ fn compute(args: &Args) -> Result<NoiseRun, CliError> {
                 .into(),
         )
     })?;
-    let lengths = &args.window;
+    let lengths: &[f64] = args.window.as_deref().unwrap_or(&DEFAULT_WINDOWS_S);
     check_lengths(lengths)?;
     checks::gravity("--gravity", args.gravity)?;
     let held = held(args)?;
