@@ -93,7 +93,7 @@ fn compute(args: &Args) -> Result<NoiseRun, CliError> {
     let (w, _, _) = window(&input, &start, &mut params, (args.from, args.to))?;
     let samples = w.samples.as_slice();
     let (span, dt) = overlap(samples, &gt, (&input.label(), poses), "--estimate noise")?;
-    let mut sorted = lengths.clone();
+    let mut sorted = lengths.to_vec();
     sorted.sort_by(f64::total_cmp);
     sorted.dedup();
     let (mut windows, mut skipped) = (Vec::new(), Vec::new());
