@@ -144,69 +144,35 @@ fn the_fit_on_one_half_is_consistent_on_the_other() {
 /// ground-truth error without it: refused, naming the flags.
 #[test]
 fn refusals_name_the_flags() {
-    let imu = repo(IMU);
-    let o = run(&["calibrate", "--imu", &imu, "--estimate", "noise"]);
-    assert_eq!(o.status.code(), Some(2));
-    let e = String::from_utf8_lossy(&o.stderr);
-    assert!(e.contains("--poses"), "{e}");
-    let gt = repo(GT);
-    let o = run(&[
-        "calibrate",
-        "--imu",
-        &imu,
-        "--poses",
-        &gt,
-        "--estimate",
-        "noise,time-offset",
-    ]);
-    assert_eq!(o.status.code(), Some(2));
-    let e = String::from_utf8_lossy(&o.stderr);
-    assert!(
-        e.contains("--estimate noise") && e.contains("time-offset"),
-        "{e}"
-    );
-    let o = run(&[
-        "calibrate",
-        "--imu",
-        &imu,
-        "--poses",
-        &gt,
-        "--vel-std",
-        "0.01",
-    ]);
-    assert_eq!(o.status.code(), Some(2));
-    let e = String::from_utf8_lossy(&o.stderr);
-    assert!(
-        e.contains("--vel-std") && e.contains("--estimate noise"),
-        "{e}"
-    );
-    // --window is read by --estimate noise only: refused without it, not ignored.
-    let o = run(&[
-        "calibrate",
-        "--imu",
-        &imu,
-        "--poses",
-        &gt,
-        "--window",
-        "1,2",
-    ]);
-    assert_eq!(o.status.code(), Some(2));
-    let e = String::from_utf8_lossy(&o.stderr);
-    assert!(
-        e.contains("--window") && e.contains("--estimate noise"),
-        "{e}"
-    );
-    let o = run(&[
-        "calibrate",
-        "--imu",
-        &imu,
-        "--poses",
-        &gt,
-        "--estimate",
-        "noise",
-        "--window",
-        "0",
-    ]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("--window"));
+    let (imu, gt) = (repo(IMU), repo(GT));
+    let base = ["calibrate", "--imu", imu.as_str()];
+    let with_poses = ["calibrate", "--imu", imu.as_str(), "--poses", gt.as_str()];
+    let cases: [(Vec<&str>, &[&str]); 5] = [
+        ([&base[..], &["--estimate", "noise"]].concat(), &["--poses"]),
+        (
+            [&with_poses[..], &["--estimate", "noise,time-offset"]].concat(),
+            &["--estimate noise", "time-offset"],
+        ),
+        (
+            [&with_poses[..], &["--vel-std", "0.01"]].concat(),
+            &["--vel-std", "--estimate noise"],
+        ),
+        // --window is read by --estimate noise only: refused without it, not ignored.
+        (
+            [&with_poses[..], &["--window", "1,2"]].concat(),
+            &["--window", "--estimate noise"],
+        ),
+        (
+            [&with_poses[..], &["--estimate", "noise", "--window", "0"]].concat(),
+            &["--window"],
+        ),
+    ];
+    for (args, phrases) in cases {
+        let o = run(&args);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {e}");
+        for p in phrases {
+            assert!(e.contains(p), "{args:?}: {p:?} not in {e}");
+        }
+    }
 }
