@@ -12,7 +12,7 @@
 //!   drifts, and the combined propagation carries that drift into the deltas. The test checks
 //!   it against a Monte Carlo of drifting biases.
 //! - `A_{σ_R}`, `A_{σ_p}`, `A_{σ_v}`, `A_{σ_bg}`, `A_{σ_ba}`:
-//!   [`consistency::truth_covariance`] with that σ at 1 and the others 0.
+//!   [`truth_covariance`] with that σ at 1 and the others 0.
 //!
 //! The residual is the component-wise `[r_φ, r_v, r_p]` at the ground truth, the preintegration
 //! at the ground truth's bias at i (as `factor` evaluates it).

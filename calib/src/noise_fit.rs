@@ -92,7 +92,7 @@ impl Param {
 /// One window: its residual and the basis of its covariance, `Σ(θ) = Σ_k θ_k basis[k]`.
 #[derive(Clone, Debug)]
 pub struct NoiseWindow {
-    /// The window's length [s] (groups the χ² per length).
+    /// The window's length \[s\] (groups the χ² per length).
     pub length_s: f64,
     /// The residual `r` (order [r_φ, r_v, r_p]).
     pub r: SVector<f64, 9>,
@@ -149,7 +149,7 @@ pub struct ParamEstimate {
 /// χ² of the windows of one length.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LengthChi2 {
-    /// The length [s].
+    /// The length \[s\].
     pub length_s: f64,
     /// Windows of that length.
     pub count: usize,
