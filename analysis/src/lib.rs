@@ -12,9 +12,11 @@
 //! - The commands both faces run, each as `Options` → `compute` → a result struct →
 //!   `to_json`: [`advise`] (the cheapest scheme and lowest rate, after [`denoise`], for the
 //!   [`input_class`] declared), [`allan`] (Allan deviation and noise fits), [`calibrate`]
-//!   (biases, time offset, intrinsics, with the problem the data makes observable), [`audit`]
-//!   (what is wrong with a recording).
+//!   (biases, time offset, intrinsics, with the problem the data makes observable; the noise
+//!   model from ground truth, [`calibrate::noise_model`]), [`audit`] (what is wrong with a
+//!   recording).
 //! - Other analyses: [`consistency`] (a factor's χ² at ground truth; the `fit` object),
+//!   [`truth_windows`] (back-to-back windows over a recording and its ground truth),
 //!   [`speed`] (throughput of each scheme on this machine).
 //! - Printing helpers: [`format`](mod@format) (matrices as JSON and text), [`progress`] (bars
 //!   on stderr, at a terminal only).
@@ -53,6 +55,7 @@ pub mod progress;
 pub mod recording;
 pub mod speed;
 pub mod stream;
+pub mod truth_windows;
 
 pub use error::Error;
 pub use recording::ImuInput;

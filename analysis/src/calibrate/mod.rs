@@ -48,6 +48,7 @@
 
 mod json;
 mod known;
+pub mod noise_model;
 
 pub use json::{calibrated_json, earth_note, to_json};
 
@@ -105,6 +106,34 @@ pub struct Options {
     pub out: Option<PathBuf>,
     /// Known-pose problem: the scheme the windows are preintegrated with (`--scheme`).
     pub scheme: preint::Scheme,
+}
+
+/// `--estimate`'s list: the known-pose problem's parameters, or `noise` alone (the noise
+/// model of [`noise_model`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct EstimateList {
+    /// The known-pose problem's parameters.
+    pub extras: Estimate,
+    /// The noise model (`noise`).
+    pub noise: bool,
+}
+
+impl EstimateList {
+    /// Parses a comma-separated list of [`Estimate`]'s names, or `noise` alone.
+    pub fn parse(list: &str) -> Result<EstimateList, String> {
+        let names: Vec<&str> = list.split(',').map(str::trim).collect();
+        let noise = names.contains(&"noise");
+        let rest: Vec<&str> = names.into_iter().filter(|n| *n != "noise").collect();
+        let extras = Estimate::parse(&rest.join(",")).map_err(|e| format!("{e} or noise"))?;
+        if noise && extras.any() {
+            return Err(format!(
+                "`noise` is estimated on its own (a fit of the noise model at the ground truth, \
+                 not the known-pose problem): give --estimate noise, or --estimate {}",
+                rest.join(",")
+            ));
+        }
+        Ok(EstimateList { extras, noise })
+    }
 }
 
 /// The problem solved and its estimates.

@@ -12,8 +12,7 @@ use crate::fit::strict;
 use crate::imu_args::ImuArgs;
 use crate::scheme::SchemeParser;
 use crate::{CliError, Output};
-use preint_analysis::calibrate::Options;
-use preint_calib::bias::known_poses::extras::Estimate;
+use preint_analysis::calibrate::{EstimateList, Options};
 use std::path::PathBuf;
 
 /// Flags of `preint calibrate`.
@@ -33,7 +32,7 @@ pub struct Args {
     /// written) when the motion does not excite it. `noise` (alone): the maximum-likelihood
     /// noise densities, bias random walks and the ground truth's own errors from ImuFactors
     /// over back-to-back windows (--window) between EuRoC ground-truth states (--poses).
-    #[arg(help_heading = "Known poses", long, value_name = "LIST", requires = "poses", value_parser = parse_estimate)]
+    #[arg(help_heading = "Known poses", long, value_name = "LIST", requires = "poses", value_parser = EstimateList::parse)]
     pub estimate: Option<EstimateList>,
     /// `--estimate noise`: the window lengths (s, comma-separated; default 0.5,1,2,4),
     /// back-to-back windows of each; several lengths separate white noise, random walk and the
@@ -190,31 +189,6 @@ impl Args {
             scheme: self.scheme,
         }
     }
-}
-
-/// `--estimate`'s list: the known-pose problem's parameters, or `noise` alone.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct EstimateList {
-    /// The known-pose problem's parameters.
-    pub extras: Estimate,
-    /// The noise model (`noise`).
-    pub noise: bool,
-}
-
-/// `--estimate`'s list.
-fn parse_estimate(list: &str) -> Result<EstimateList, String> {
-    let names: Vec<&str> = list.split(',').map(str::trim).collect();
-    let noise = names.contains(&"noise");
-    let rest: Vec<&str> = names.into_iter().filter(|n| *n != "noise").collect();
-    let extras = Estimate::parse(&rest.join(",")).map_err(|e| format!("{e} or noise"))?;
-    if noise && extras.any() {
-        return Err(format!(
-            "`noise` is estimated on its own (a fit of the noise model at the ground truth, not \
-             the known-pose problem): give --estimate noise, or --estimate {}",
-            rest.join(",")
-        ));
-    }
-    Ok(EstimateList { extras, noise })
 }
 
 /// Flags that only `--estimate noise` reads: refused without it.

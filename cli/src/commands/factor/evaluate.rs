@@ -8,11 +8,10 @@ use preint::{
     CombinedImuFactor, ImuFactor, ImuNoise, Level, NavState, PreintParams, PreintegratedImu,
     preintegrate,
 };
-use preint_analysis::checks::UnitCheck;
 use preint_analysis::consistency::{Evaluation, ResidualJacobians, TruthNoise, evaluate};
-use preint_analysis::stream::{self, StreamWindow};
+use preint_analysis::stream::StreamWindow;
 use preint_analysis::{ImuInput, checks};
-use preint_io::{GroundTruthState, SourceInfo, read_euroc_groundtruth};
+use preint_io::{GroundTruthState, read_euroc_groundtruth};
 
 fn nav(s: &GroundTruthState) -> NavState {
     NavState::new(s.rotation(), s.p, s.v)
@@ -40,27 +39,7 @@ pub(super) fn keyframes(
     Ok((gi, gj))
 }
 
-/// The window `[t_i, t_j]` of the recording, how it was read and its unit checks. Only the
-/// part the window needs is read; a split recording is merged whole, and the effective
-/// accelerometer density of its merged samples is set in `params`.
-/// `None` for `t_i` and `t_j`: the whole recording.
-pub(crate) fn window(
-    input: &ImuInput,
-    noise: &ImuNoise,
-    params: &mut PreintParams,
-    (t_i, t_j): (Option<i64>, Option<i64>),
-) -> Result<(StreamWindow, SourceInfo, UnitCheck), CliError> {
-    if input.is_split() {
-        let (w, source, split, units) = stream::split_window(input, t_i, t_j)?;
-        preint_analysis::noise::apply_split(noise, split.as_ref(), params);
-        return Ok((w, source, units));
-    }
-    let stream = stream::open_checked_until(input, t_j)?;
-    let (source, units) = (stream.info().clone(), stream.unit_check().clone());
-    let _bar = preint_analysis::progress::ReadingBar::start(stream.progress(), "factor");
-    let w = stream::cut_window(stream, t_i, t_j)?;
-    Ok((w, source, units))
-}
+pub(crate) use preint_analysis::truth_windows::read_window as window;
 
 /// The ground truth's own errors (`--pose-rot-std`, `--pose-pos-std`, `--vel-std`,
 /// `--bias-gyro-std`, `--bias-acc-std`), each checked finite and non-negative.

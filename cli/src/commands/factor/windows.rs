@@ -2,33 +2,29 @@
 //! back-to-back windows of each length: is the noise model consistent with this IMU and this
 //! ground truth, and from which window length on does it fail?
 //!
-//! The span is where the recording and the ground truth overlap; windows of length `L` start
-//! at its beginning and follow each other without overlap (`⌊span/L⌋` of them). Each window's
-//! keyframes are the ground-truth rows nearest to its edges, and its factor is evaluated as
-//! the one-window form does ([`super`]: 9-dof `ImuFactor`, 15-dof `CombinedImuFactor`
-//! with `--combined`, the same weight). A window is skipped (and counted) when it cannot be
-//! evaluated: no ground-truth row within `L/2` of an edge, two edges on the same row, fewer
-//! than 2 samples, a gap (consecutive samples more than [`GAP_FACTOR`] median sample
-//! intervals apart) or a preintegration or weight that fails.
+//! The windows are [`preint_analysis::truth_windows`]' (back-to-back over the span where the
+//! recording and the ground truth overlap, keyframes at the ground-truth rows nearest to their
+//! edges), and each window's factor is evaluated as the one-window form does ([`super`]: 9-dof
+//! `ImuFactor`, 15-dof `CombinedImuFactor` with `--combined`, the same weight). A window is
+//! skipped (and counted) when it cannot be cut ([`preint_analysis::truth_windows`]: no
+//! ground-truth row within `L/2` of an edge, two edges on the same row, fewer than 2 samples,
+//! a gap of more than [`GAP_FACTOR`](preint_analysis::truth_windows::GAP_FACTOR) median
+//! sample intervals) or a preintegration or weight fails.
 //!
 //! The statistics per length and the verdict are [`preint_analysis::chi2_windows`]. The fit
 //! (JSON `fit`) is the χ² summed over all windows of all lengths against their total dof.
 
 use super::evaluate::{evaluate_window, noise_params, truth_noise, window};
 use super::{Args, truth_noise_json};
-use crate::{CliError, Output, input};
+use crate::{CliError, Output};
 use preint::ImuSample;
 use preint_analysis::chi2_windows::{self, LengthSummary, Verdict, WindowChi2};
 use preint_analysis::consistency::{TruthNoise, fit_json};
-use preint_analysis::stream::EDGE_SAMPLES;
+use preint_analysis::truth_windows::{check_lengths, for_each_window, length_ns, overlap};
 use preint_io::{GroundTruthState, read_euroc_groundtruth};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
 
-/// Consecutive samples further apart than this many median sample intervals are a gap.
-pub const GAP_FACTOR: f64 = 5.0;
-/// Most windows of one length.
-const MAX_WINDOWS: i64 = 1_000_000;
 const BLOCKS: [&str; 5] = ["rotation", "velocity", "position", "gyro_bias", "acc_bias"];
 
 /// Everything `factor --window` computes.
@@ -48,74 +44,6 @@ pub struct WindowsRun {
     pub combined: bool,
 }
 
-pub(crate) fn check_lengths(lengths: &[f64]) -> Result<(), CliError> {
-    if lengths.is_empty() {
-        return Err(CliError::Usage(
-            "--window needs at least one length (s), e.g. --window 0.5,1,2".into(),
-        ));
-    }
-    for &l in lengths {
-        if !(l.is_finite() && l > 0.0) {
-            return Err(CliError::Usage(format!(
-                "--window: every length must be a positive number of seconds, got {l}"
-            )));
-        }
-    }
-    Ok(())
-}
-
-fn median_step(t: impl Iterator<Item = i64>) -> Option<f64> {
-    let t: Vec<i64> = t.collect();
-    let mut d: Vec<i64> = t.windows(2).map(|w| w[1] - w[0]).collect();
-    d.sort_unstable();
-    d.get(d.len() / 2).map(|&x| x as f64)
-}
-
-/// The samples a window `[t_i, t_j]` needs, with [`EDGE_SAMPLES`] on each side; `None` for a
-/// gap or fewer than 2 samples inside.
-fn window_samples(samples: &[ImuSample], (t_i, t_j): (i64, i64), dt: f64) -> Option<&[ImuSample]> {
-    let a = samples.partition_point(|s| s.t_ns < t_i);
-    let b = samples.partition_point(|s| s.t_ns <= t_j);
-    if b < a + 2 {
-        return None;
-    }
-    let (lo, hi) = (
-        a.saturating_sub(EDGE_SAMPLES),
-        (b + EDGE_SAMPLES).min(samples.len()),
-    );
-    let inner = &samples[a.saturating_sub(1)..(b + 1).min(samples.len())];
-    let gap = inner
-        .windows(2)
-        .any(|w| (w[1].t_ns - w[0].t_ns) as f64 > GAP_FACTOR * dt);
-    (!gap).then_some(&samples[lo..hi])
-}
-
-/// The back-to-back windows of one length over `span` (module docs): `f` of each window's
-/// samples and keyframes, or `None` (counted as skipped) when it cannot be evaluated.
-pub(crate) fn for_each_window<T>(
-    (samples, gt): (&[ImuSample], &[GroundTruthState]),
-    (span, dt): ((i64, i64), f64),
-    length_ns: i64,
-    mut f: impl FnMut(&[ImuSample], (&GroundTruthState, &GroundTruthState)) -> Option<T>,
-) -> (Vec<T>, usize) {
-    let n = (span.1 - span.0) / length_ns;
-    let (mut out, mut skipped) = (Vec::new(), 0);
-    for k in 0..n {
-        let (a, b) = (span.0 + k * length_ns, span.0 + (k + 1) * length_ns);
-        let (gi, gj) = (input::nearest_row(gt, a), input::nearest_row(gt, b));
-        let far = |g: &GroundTruthState, t: i64| 2 * (g.t_ns - t).abs() > length_ns;
-        let evaluated = (gj.t_ns > gi.t_ns && !far(gi, a) && !far(gj, b))
-            .then(|| window_samples(samples, (gi.t_ns, gj.t_ns), dt))
-            .flatten()
-            .and_then(|w| f(w, (gi, gj)));
-        match evaluated {
-            Some(x) => out.push(x),
-            None => skipped += 1,
-        }
-    }
-    (out, skipped)
-}
-
 /// The windows of one length: their χ² and block shares, and how many were skipped.
 fn windows_of(
     args: &Args,
@@ -133,52 +61,6 @@ fn windows_of(
             _ => None,
         }
     })
-}
-
-/// The span where `samples` and `gt` overlap [ns], and the median sample interval [ns];
-/// `what` names the mode in the errors (e.g. `--window`).
-pub(crate) fn overlap(
-    samples: &[ImuSample],
-    gt: &[GroundTruthState],
-    (imu, poses): (&str, &std::path::Path),
-    what: &str,
-) -> Result<((i64, i64), f64), CliError> {
-    let (Some(s0), Some(s1), Some(g0), Some(g1)) =
-        (samples.first(), samples.last(), gt.first(), gt.last())
-    else {
-        return Err(CliError::Usage(format!(
-            "{imu} or {} is empty: {what} needs samples and ground truth",
-            poses.display()
-        )));
-    };
-    let span = (s0.t_ns.max(g0.t_ns), s1.t_ns.min(g1.t_ns));
-    if span.1 <= span.0 {
-        return Err(CliError::Usage(format!(
-            "{imu} ({} to {} ns) and {} ({} to {} ns) do not overlap: {what} needs the ground \
-             truth of the recording",
-            s0.t_ns,
-            s1.t_ns,
-            poses.display(),
-            g0.t_ns,
-            g1.t_ns
-        )));
-    }
-    let dt = median_step(samples.iter().map(|s| s.t_ns)).unwrap_or(f64::INFINITY);
-    Ok((span, dt))
-}
-
-/// The number of nanoseconds of a window length `l` [s], refused when `span` would hold more
-/// than [`MAX_WINDOWS`] of them.
-pub(crate) fn length_ns(l: f64, span: (i64, i64)) -> Result<i64, CliError> {
-    let length_ns = (l * 1e9).round() as i64;
-    if length_ns <= 0 || (span.1 - span.0) / length_ns.max(1) > MAX_WINDOWS {
-        return Err(CliError::Usage(format!(
-            "--window {l}: more than {MAX_WINDOWS} windows of {l} s in the {:.3} s span; \
-             give a longer length",
-            (span.1 - span.0) as f64 * 1e-9
-        )));
-    }
-    Ok(length_ns)
 }
 
 /// Reads the files and evaluates the factor over back-to-back windows of every length.
