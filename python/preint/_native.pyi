@@ -816,8 +816,8 @@ def calibrate_file(
     gravity: float = 9.81,
     from_ns: int | None = None,
     to_ns: int | None = None,
-    pose_rot_std: float = 0.0,
-    pose_pos_std: float = 0.0,
+    pose_rot_std: float | None = None,
+    pose_pos_std: float | None = None,
     latitude: float | None = None,
     heading: float | None = None,
     estimate: str | None = None,
@@ -825,6 +825,10 @@ def calibrate_file(
     calibration: str | os.PathLike[str] | None = None,
     out: str | os.PathLike[str] | None = None,
     scheme: str = "midpoint",
+    window: Sequence[float] | None = None,
+    vel_std: float | None = None,
+    bias_gyro_std: float | None = None,
+    bias_acc_std: float | None = None,
     **options: Unpack[_ReaderOptions],
 ) -> dict[str, Any]:
     """``preint calibrate --json`` on a recording, as a dict: the model is chosen as the
@@ -842,8 +846,22 @@ def calibrate_file(
     result: euler and galilean lag midpoint and hermite4 by half a sample interval). The
     result's ``fit`` (``chi2``, ``dof``, ``chi2_dof``, ``credible``, ``why``, …) says whether
     the residuals are what the noise model predicts, and every ``*_std`` has its
-    ``*_std_scaled`` by √(χ²/dof). Raises CalibrationError (kind ``Failed``) when nothing can
-    be answered, e.g. no still interval; InputError for a bad file or list."""
+    ``*_std_scaled`` by √(χ²/dof). ``pose_rot_std`` [rad], ``pose_pos_std`` [m]: the poses'
+    standard deviations (None: 0, exact).
+
+    ``estimate="noise"`` (alone, with a EuRoC ground truth as ``poses``): ``preint calibrate
+    --estimate noise --json``, the maximum-likelihood noise densities, bias random walks and
+    the ground truth's own errors from ImuFactors over back-to-back windows of each length of
+    ``window`` [s] (default [0.5, 1, 2, 4]); result ``noise``, ``ground_truth_error``,
+    ``withheld``, ``per_length``, ``fit``. ``noise`` is the starting point (else a moment
+    estimate); a ground-truth error given (``pose_rot_std`` [rad], ``pose_pos_std`` [m],
+    ``vel_std`` [m/s], ``bias_gyro_std`` [rad/s], ``bias_acc_std`` [m/s²]) is held at that
+    value, the others are fitted; ``out`` writes the fitted model as a Kalibr imu.yaml.
+    ``window``, ``vel_std``, ``bias_gyro_std`` and ``bias_acc_std`` are refused without it.
+
+    Raises CalibrationError (kind ``Failed``) when nothing can be answered, e.g. no still
+    interval; InputError for a bad file or list; ShapeError (kind ``Usage``) for a bad
+    value."""
 
 def read_calibration(path: str | os.PathLike[str]) -> dict[str, Any]:
     """An IMU calibration file (``calibrate_file(out=...)``, ``preint calibrate --out``;

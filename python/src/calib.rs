@@ -1,6 +1,6 @@
 //! Calibration from Python: static (one attitude) and multi-position bias calibration from
-//! numpy arrays (`preint_calib::bias`), `preint calibrate` on a recording, and the
-//! still-interval detector.
+//! numpy arrays (`preint_calib::bias`), `preint calibrate` on a recording (the noise model from
+//! ground truth with `estimate="noise"`), and the still-interval detector.
 //!
 //! Conventions (`preint_calib::bias`): world z up, gravity `(0, 0, −gravity)` m/s²; the
 //! accelerometer measures specific force (+gravity on the up axis at rest); biases in the
@@ -17,8 +17,7 @@ use nalgebra::Vector3;
 use numpy::IntoPyArray;
 use numpy::ndarray::Array3;
 use preint::{ImuNoise, ImuSample};
-use preint_analysis::calibrate;
-use preint_calib::bias::known_poses::extras::Estimate;
+use preint_analysis::calibrate::{self, noise_model};
 use preint_calib::bias::{
     AccBiasPrior, BiasError, MultiPoseCalibration, MultiPoseOptions, StaticCalibration,
     StaticOptions, StillInterval, StillOptions, calibrate_multi_pose, calibrate_static,
@@ -324,15 +323,17 @@ pub(crate) fn calibrate_multi_pose_py<'py>(
 }
 
 /// calibrate(path=None, *, gyro=None, accel=None, ..., noise=None, poses=None, gravity=9.81,
-/// from_ns=None, to_ns=None, pose_rot_std=0.0, pose_pos_std=0.0, latitude=None, heading=None,
-/// estimate=None, pose_spacing=0.5, calibration=None, out=None)
+/// from_ns=None, to_ns=None, pose_rot_std=None, pose_pos_std=None, latitude=None, heading=None,
+/// estimate=None, pose_spacing=0.5, calibration=None, out=None, scheme="midpoint", window=None,
+/// vel_std=None, bias_gyro_std=None, bias_acc_std=None)
 ///
 /// `preint calibrate --json` on a recording, as a dict (docs in `_native.pyi`).
 #[pyfunction]
 #[pyo3(signature = (path=None, *, gyro=None, accel=None, noise=None, poses=None,
-    gravity=9.81, from_ns=None, to_ns=None, pose_rot_std=0.0, pose_pos_std=0.0, latitude=None,
+    gravity=9.81, from_ns=None, to_ns=None, pose_rot_std=None, pose_pos_std=None, latitude=None,
     heading=None, estimate=None, pose_spacing=0.5, calibration=None, out=None,
-    scheme="midpoint", **options))]
+    scheme="midpoint", window=None, vel_std=None, bias_gyro_std=None, bias_acc_std=None,
+    **options))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn calibrate_file<'py>(
     py: Python<'py>,
@@ -344,8 +345,8 @@ pub(crate) fn calibrate_file<'py>(
     gravity: f64,
     from_ns: Option<i64>,
     to_ns: Option<i64>,
-    pose_rot_std: f64,
-    pose_pos_std: f64,
+    pose_rot_std: Option<f64>,
+    pose_pos_std: Option<f64>,
     latitude: Option<f64>,
     heading: Option<f64>,
     estimate: Option<String>,
@@ -353,6 +354,10 @@ pub(crate) fn calibrate_file<'py>(
     calibration: Option<PathBuf>,
     out: Option<PathBuf>,
     scheme: &str,
+    window: Option<Vec<f64>>,
+    vel_std: Option<f64>,
+    bias_gyro_std: Option<f64>,
+    bias_acc_std: Option<f64>,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let input = ReadArgs::from_options(path, gyro, accel, options)?.imu_input()?;
@@ -367,9 +372,47 @@ pub(crate) fn calibrate_file<'py>(
         ));
     }
     let estimate = estimate
-        .map(|e| Estimate::parse(&e))
+        .map(|e| calibrate::EstimateList::parse(&e))
         .transpose()
         .map_err(|e| raise(Class::Input, e))?;
+    let ground_truth = [
+        ("window", window.is_some()),
+        ("vel_std", vel_std.is_some()),
+        ("bias_gyro_std", bias_gyro_std.is_some()),
+        ("bias_acc_std", bias_acc_std.is_some()),
+    ];
+    if estimate.is_some_and(|e| e.noise) {
+        let opts = noise_model::NoiseOptions {
+            input,
+            poses,
+            window,
+            noise,
+            gravity,
+            from: from_ns,
+            to: to_ns,
+            pose_rot_std,
+            pose_pos_std,
+            vel_std,
+            bias_gyro_std,
+            bias_acc_std,
+            body_p_sensor: None,
+            scheme,
+            out,
+        };
+        let json = py
+            .detach(|| noise_model::compute(&opts).map(|r| noise_model::to_json(&r)))
+            .map_err(|e| analysis_err(e, Class::Calibration))?;
+        return json_py(py, &json);
+    }
+    if let Some((name, _)) = ground_truth.iter().find(|(_, given)| *given) {
+        return Err(raise(
+            Class::Input,
+            format!(
+                "{name} is read by estimate=\"noise\" only; give poses=GT, estimate=\"noise\", \
+                 or leave it out"
+            ),
+        ));
+    }
     let opts = calibrate::Options {
         input,
         poses,
@@ -377,13 +420,13 @@ pub(crate) fn calibrate_file<'py>(
         gravity,
         from: from_ns,
         to: to_ns,
-        pose_rot_std,
-        pose_pos_std,
+        pose_rot_std: pose_rot_std.unwrap_or(0.0),
+        pose_pos_std: pose_pos_std.unwrap_or(0.0),
         body_p_sensor: None,
         latitude,
         heading,
         out,
-        estimate,
+        estimate: estimate.map(|e| e.extras),
         pose_spacing,
         calibration,
         scheme,

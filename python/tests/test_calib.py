@@ -432,3 +432,52 @@ def test_apply_intrinsics_is_integrate_calibration(preint_cli, tmp_path, euroc_i
     np.testing.assert_allclose(m.delta_v, cli["delta_v"], rtol=0, atol=1e-12)
     np.testing.assert_allclose(m.delta_p, cli["delta_p"], rtol=0, atol=1e-12)
     np.testing.assert_allclose(m.delta_R, cli["delta_R"], rtol=0, atol=1e-12)
+
+
+# --- Noise model from ground truth ---------------------------------------------------------------
+
+
+def test_noise_model_from_ground_truth_equals_the_command(preint_cli, tmp_path):
+    """``calibrate_file(estimate="noise")`` is ``preint calibrate --estimate noise --json``
+    (the whole dict, from the same JSON), the Kalibr imu.yaml of ``out`` holds the fitted
+    accelerometer density, and EuRoC's accelerometer comes out noisier than its datasheet's
+    2e-3 m/s²/√Hz."""
+    import json
+    import subprocess
+
+    t0 = 1_403_715_283_262_142_976  # 10 s into the ground truth; 30 s keep the test cheap
+    t1 = t0 + 30_000_000_000
+    out = tmp_path / "fitted.yaml"
+    f = preint.calibrate_file(EUROC, poses=EUROC_GT, noise=EUROC_NOISE, from_ns=t0, to_ns=t1,
+                              estimate="noise", window=[0.5, 1, 2, 4], vel_std=None,
+                              bias_gyro_std=None, bias_acc_std=None, out=out)
+    r = subprocess.run([*preint_cli, "calibrate", "--imu", str(EUROC), "--poses", str(EUROC_GT),
+                        "--noise", str(EUROC_NOISE), "--from", str(t0), "--to", str(t1),
+                        "--estimate", "noise", "--window", "0.5,1,2,4", "--out", str(out),
+                        "--json"],
+                       check=True, capture_output=True, text=True)
+    c = json.loads(r.stdout)
+    assert f == c
+    assert f["estimate"] == "noise" and f["written"] == str(out)
+    assert [row["length_s"] for row in f["per_length"]] == [0.5, 1.0, 2.0, 4.0]
+    assert [row["count"] for row in f["per_length"]] == [60, 30, 15, 7]
+    acc = f["noise"]["accelerometer_noise_density"]
+    assert acc > 2e-3
+    (line,) = [x for x in out.read_text().splitlines()
+               if x.startswith("accelerometer_noise_density:")]
+    assert float(line.split(":")[1].split("#")[0]) == acc
+
+
+def test_noise_model_arguments_are_refused_without_estimate_noise():
+    """``window``, ``vel_std``, ``bias_gyro_std``, ``bias_acc_std`` are read by
+    ``estimate="noise"`` only, and ``noise`` is estimated on its own; a held value must be
+    non-negative (the command's flag named)."""
+    for kw in ({"window": [1.0]}, {"vel_std": 0.01}, {"bias_gyro_std": 1e-4},
+               {"bias_acc_std": 1e-3}):
+        (name,) = kw
+        with pytest.raises(preint.InputError, match=f"{name} is read by estimate=\"noise\""):
+            preint.calibrate_file(EUROC, poses=EUROC_GT, **kw)
+    with pytest.raises(preint.InputError, match="`noise` is estimated on its own"):
+        preint.calibrate_file(EUROC, poses=EUROC_GT, estimate="noise,time-offset")
+    with pytest.raises(preint.ShapeError, match="--vel-std"):
+        preint.calibrate_file(EUROC, poses=EUROC_GT, estimate="noise", vel_std=-1.0)
