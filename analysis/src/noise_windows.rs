@@ -15,7 +15,8 @@
 //!   [`truth_covariance`] with that σ at 1 and the others 0.
 //!
 //! The residual is the component-wise `[r_φ, r_v, r_p]` at the ground truth, the preintegration
-//! at the ground truth's bias at i (as `factor` evaluates it).
+//! at the ground truth's bias at i (as `factor` evaluates it); [`gravity_jacobian`] is its
+//! exact derivative with respect to the world gravity vector.
 
 use crate::consistency::{ResidualJacobians, TruthNoise, truth_covariance};
 use nalgebra::{Matrix3, SMatrix};
@@ -138,7 +139,24 @@ pub fn noise_window(
     for k in 0..5 {
         basis[4 + k] = unit(k);
     }
-    Ok(NoiseWindow { length_s, r, basis })
+    Ok(NoiseWindow {
+        length_s,
+        r,
+        basis,
+        gravity_jacobian: gravity_jacobian(gi, (span.1 - span.0) as f64 * 1e-9),
+    })
+}
+
+/// `∂r/∂g` of the component-wise residual at the state `gi` over `dt_s` \[s\]: zero in
+/// rotation, `−R_iᵀ Δt` in velocity and `−½ R_iᵀ Δt²` in position (the residual's
+/// `R_iᵀ(v_j − v_i − g Δt)` and `R_iᵀ(p_j − p_i − v_i Δt − ½ g Δt²)`).
+pub fn gravity_jacobian(gi: &GroundTruthState, dt_s: f64) -> SMatrix<f64, 9, 3> {
+    let rt = gi.rotation().matrix().transpose();
+    let mut g = SMatrix::<f64, 9, 3>::zeros();
+    g.fixed_view_mut::<3, 3>(3, 0).copy_from(&(rt * -dt_s));
+    g.fixed_view_mut::<3, 3>(6, 0)
+        .copy_from(&(rt * (-0.5 * dt_s * dt_s)));
+    g
 }
 
 #[cfg(test)]

@@ -2,7 +2,8 @@
 //! given by other callers): comma-separated vectors (negative numbers allowed in both
 //! `--flag -1,2,3` and `--flag=-1,2,3` forms) and positive numbers, and the physical ranges of
 //! the quantities they carry (a value outside its range is refused, naming the flag):
-//! - gravity magnitude ([`gravity`]): [0, [`MAX_GRAVITY_M_S2`] = 100] m/s²;
+//! - gravity magnitude ([`gravity`]): [0, [`MAX_GRAVITY_M_S2`] = 100] m/s²; a gravity vector
+//!   ([`gravity_vector`]): its norm in the same range;
 //! - rate of a rotating navigation frame ([`frame_rate`]): |ω| ≤ [`MAX_FRAME_RATE_RAD_S`] =
 //!   100 rad/s;
 //! - lever arm of `--body-p-sensor` ([`sensor_pose`]): |r| ≤ [`MAX_LEVER_ARM_M`] = 1000 m;
@@ -96,6 +97,20 @@ pub fn gravity(s: &str) -> Result<f64, String> {
     }
 }
 
+/// Parses a world-frame gravity vector `x,y,z` \[m/s²\] (e.g. the `gravity.vector` of
+/// `calibrate --estimate noise`): finite, with norm at most [`MAX_GRAVITY_M_S2`].
+pub fn gravity_vector(s: &str) -> Result<Vector3<f64>, String> {
+    let g = vec3(s)?;
+    if g.norm() > MAX_GRAVITY_M_S2 {
+        return Err(format!(
+            "a gravity vector of {s} m/s^2 has norm {:.4e}, above any planet's {MAX_GRAVITY_M_S2} \
+             m/s^2 (the Earth's is 9.81): is it in another unit?",
+            g.norm()
+        ));
+    }
+    Ok(g)
+}
+
 /// Largest rotation rate of a rotating navigation frame \[rad/s\]: 100 (955 rpm). The Earth
 /// turns at 7.29e-5 rad/s; turntables, centrifuges and GTSAM's fast-rotating test frames at
 /// up to a few rad/s. A frame turning faster is a typo (a rate in deg/s, or rpm).
@@ -173,6 +188,17 @@ mod tests {
         for bad in ["-1", "100.5", "1e308", "inf", "nan", "g"] {
             assert!(gravity(bad).unwrap_err().contains("[0, 100]"), "{bad}");
         }
+        assert_eq!(
+            gravity_vector("0.0375,-0.0012,-9.8099"),
+            Ok(Vector3::new(0.0375, -0.0012, -9.8099))
+        );
+        assert!(
+            gravity_vector("0,0,-100.1")
+                .unwrap_err()
+                .contains("another unit")
+        );
+        assert!(gravity_vector("0,nan,-9.81").is_err());
+        assert!(gravity_vector("0,-9.81").unwrap_err().contains("three"));
         assert!(frame_rate("0,0,7.292115e-5").is_ok());
         assert!(frame_rate("0,60,80").is_ok());
         let e = frame_rate("1e10,0,0").unwrap_err();

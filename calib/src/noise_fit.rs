@@ -30,8 +30,19 @@
 //! windows cannot separate it from the others). Windows of several lengths separate the white
 //! noise (`∝ T` in rotation), the random walk (`∝ T³`) and the ground truth's error
 //! (independent of `T`).
+//!
+//! The ground truth's world frame need not be aligned with gravity (a motion-capture frame is
+//! levelled to a fraction of a degree): with [`NoiseFitOptions::fit_gravity`] the residual's
+//! mean `G_w δg` is fitted too, `G_w = ∂r_w/∂g` the residual's (exactly linear) dependence on the
+//! world gravity vector ([`gravity`]). The correction is kept only when the Bayesian
+//! information criterion supports its three parameters (`2Δℓ > 3 ln n`, `n` the residual
+//! components; G. Schwarz, *Ann. Statist.* 6(2), 1978); otherwise the fit without it stands and
+//! the correction is reported as not supported.
 
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
+
+pub mod gravity;
+pub use gravity::GravityEstimate;
 
 /// Number of parameters.
 pub const PARAMS: usize = 9;
@@ -98,6 +109,9 @@ pub struct NoiseWindow {
     pub r: SVector<f64, 9>,
     /// `A_k`, in the order of [`Param::ALL`].
     pub basis: [SMatrix<f64, 9, 9>; PARAMS],
+    /// `G = ∂r/∂g`, the residual's Jacobian with respect to the world gravity vector
+    /// \[(rad, m/s, m) per m/s²\] (zero when the mean is not fitted).
+    pub gravity_jacobian: SMatrix<f64, 9, 3>,
 }
 
 /// Why a parameter has no fitted value.
@@ -172,6 +186,8 @@ pub struct NoiseFit {
     pub log_likelihood: f64,
     /// Per window length, in increasing length.
     pub per_length: Vec<LengthChi2>,
+    /// The world gravity correction, when [`NoiseFitOptions::fit_gravity`] asked for it.
+    pub gravity: Option<GravityEstimate>,
 }
 
 /// Why the estimator cannot answer.
@@ -207,18 +223,23 @@ fn sigma(w: &NoiseWindow, theta: &SVector<f64, PARAMS>) -> SMatrix<f64, 9, 9> {
     (0..PARAMS).fold(SMatrix::zeros(), |s, k| s + w.basis[k] * theta[k])
 }
 
-/// `ℓ`, `g` and `F` at `θ`; `None` when some `Σ_w` is not positive definite.
-fn evaluate(windows: &[NoiseWindow], theta: &SVector<f64, PARAMS>) -> Result<Eval, usize> {
+/// `ℓ`, `g` and `F` at `θ` for the residuals `res` (one per window); the index of the first
+/// window whose `Σ_w` is not positive definite otherwise.
+fn evaluate(
+    windows: &[NoiseWindow],
+    res: &[SVector<f64, 9>],
+    theta: &SVector<f64, PARAMS>,
+) -> Result<Eval, usize> {
     let mut e = Eval {
         ll: 0.0,
         grad: SVector::zeros(),
         fisher: SMatrix::zeros(),
     };
-    for (i, w) in windows.iter().enumerate() {
+    for (i, (w, r)) in windows.iter().zip(res).enumerate() {
         let chol = sigma(w, theta).cholesky().ok_or(i)?;
         let logdet: f64 = 2.0 * chol.l_dirty().diagonal().map(f64::ln).sum();
-        let u = chol.solve(&w.r);
-        e.ll -= 0.5 * (logdet + w.r.dot(&u));
+        let u = chol.solve(r);
+        e.ll -= 0.5 * (logdet + r.dot(&u));
         let b: Vec<SMatrix<f64, 9, 9>> = w.basis.iter().map(|a| chol.solve(a)).collect();
         for k in 0..PARAMS {
             e.grad[k] += 0.5 * (u.dot(&(w.basis[k] * u)) - b[k].trace());
@@ -299,6 +320,9 @@ pub struct NoiseFitOptions {
     pub held: [Option<f64>; PARAMS],
     /// Most Fisher-scoring iterations.
     pub max_iterations: usize,
+    /// Fit the world gravity correction (module docs; needs each window's
+    /// [`NoiseWindow::gravity_jacobian`]).
+    pub fit_gravity: bool,
 }
 
 impl Default for NoiseFitOptions {
@@ -307,12 +331,27 @@ impl Default for NoiseFitOptions {
             start: [0.0; PARAMS],
             held: [None; PARAMS],
             max_iterations: 100,
+            fit_gravity: false,
         }
     }
 }
 
-/// The maximum-likelihood estimate of `θ` from `windows` (module docs).
+/// The maximum-likelihood estimate of `θ` from `windows` (module docs), and of the world
+/// gravity correction when `opts.fit_gravity`.
 pub fn fit(windows: &[NoiseWindow], opts: &NoiseFitOptions) -> Result<NoiseFit, NoiseFitError> {
+    let plain = fit_with(windows, opts, false)?;
+    if !opts.fit_gravity {
+        return Ok(plain);
+    }
+    let with = fit_with(windows, opts, true)?;
+    Ok(gravity::select(plain, with, 9 * windows.len()))
+}
+
+fn fit_with(
+    windows: &[NoiseWindow],
+    opts: &NoiseFitOptions,
+    fit_gravity: bool,
+) -> Result<NoiseFit, NoiseFitError> {
     let free: Vec<usize> = (0..PARAMS).filter(|&k| opts.held[k].is_none()).collect();
     if windows.len() * 9 < 2 * free.len().max(1) || windows.len() < 2 {
         return Err(NoiseFitError::TooFewWindows {
@@ -328,22 +367,31 @@ pub fn fit(windows: &[NoiseWindow], opts: &NoiseFitOptions) -> Result<NoiseFit, 
         }
         theta[k] = v * v;
     }
-    let before = evaluate(windows, &theta).ok().map(|_| theta);
+    let raw: Vec<SVector<f64, 9>> = windows.iter().map(|w| w.r).collect();
+    let before = evaluate(windows, &raw, &theta).ok().map(|_| theta);
     for &k in &free {
         if theta[k] == 0.0 {
             theta[k] = moment_start(windows, k, free.len());
         }
     }
-    let mut e = evaluate(windows, &theta).map_err(NoiseFitError::Singular)?;
+    let mut dg = SVector::<f64, 3>::zeros();
+    let mut res = raw.clone();
+    let mut e = evaluate(windows, &res, &theta).map_err(NoiseFitError::Singular)?;
     let mut iterations = 0;
     while iterations < opts.max_iterations {
         iterations += 1;
+        if fit_gravity {
+            // Block coordinate ascent: the mean at θ is a generalised least-squares solve.
+            dg = gravity::correction(windows, &theta).0;
+            res = gravity::shifted(windows, &dg);
+            e = evaluate(windows, &res, &theta).map_err(NoiseFitError::Singular)?;
+        }
         let d = step(&e, &theta, &free);
         let mut alpha = 1.0;
         let mut accepted = None;
         for _ in 0..30 {
             let t = (theta + d * alpha).map(|x| x.max(0.0));
-            if let Ok(n) = evaluate(windows, &t)
+            if let Ok(n) = evaluate(windows, &res, &t)
                 && n.ll >= e.ll - 1e-12 * e.ll.abs()
             {
                 accepted = Some((t, n));
@@ -360,11 +408,19 @@ pub fn fit(windows: &[NoiseWindow], opts: &NoiseFitOptions) -> Result<NoiseFit, 
             break;
         }
     }
+    let gravity = fit_gravity.then(|| GravityEstimate {
+        correction: dg,
+        cov: gravity::correction(windows, &theta).1,
+        lr: 0.0,
+        penalty: 0.0,
+        supported: true,
+    });
     Ok(NoiseFit {
         params: estimates(&e, &theta, &free, opts),
         iterations,
         log_likelihood: e.ll,
-        per_length: per_length(windows, before.as_ref(), &theta),
+        per_length: per_length(windows, (&raw, before.as_ref()), (&res, &theta)),
+        gravity,
     })
 }
 
@@ -421,17 +477,28 @@ fn estimates(
         .collect()
 }
 
-/// `rᵀ Σ(θ)⁻¹ r` of one window (NaN when `Σ` is not positive definite).
+/// `rᵀ Σ(θ)⁻¹ r` of one window at the given gravity (NaN when `Σ` is not positive definite).
 pub fn chi2(w: &NoiseWindow, theta: &SVector<f64, PARAMS>) -> f64 {
+    chi2_of(w, &w.r, theta)
+}
+
+/// `rᵀ Σ(θ)⁻¹ r` of one window at the world gravity corrected by `dg` \[m/s²\].
+pub fn chi2_corrected(w: &NoiseWindow, theta: &SVector<f64, PARAMS>, dg: &SVector<f64, 3>) -> f64 {
+    chi2_of(w, &(w.r + w.gravity_jacobian * dg), theta)
+}
+
+fn chi2_of(w: &NoiseWindow, r: &SVector<f64, 9>, theta: &SVector<f64, PARAMS>) -> f64 {
     sigma(w, theta)
         .cholesky()
-        .map_or(f64::NAN, |c| w.r.dot(&c.solve(&w.r)))
+        .map_or(f64::NAN, |c| r.dot(&c.solve(r)))
 }
+
+type Residuals<'a> = &'a [SVector<f64, 9>];
 
 fn per_length(
     windows: &[NoiseWindow],
-    before: Option<&SVector<f64, PARAMS>>,
-    after: &SVector<f64, PARAMS>,
+    (raw, before): (Residuals, Option<&SVector<f64, PARAMS>>),
+    (res, after): (Residuals, &SVector<f64, PARAMS>),
 ) -> Vec<LengthChi2> {
     let mut lengths: Vec<f64> = windows.iter().map(|w| w.length_s).collect();
     lengths.sort_by(f64::total_cmp);
@@ -439,14 +506,20 @@ fn per_length(
     lengths
         .into_iter()
         .map(|l| {
-            let of: Vec<&NoiseWindow> = windows.iter().filter(|w| w.length_s == l).collect();
+            let of: Vec<usize> = (0..windows.len())
+                .filter(|&i| windows[i].length_s == l)
+                .collect();
             let n = of.len() as f64;
-            let sum = |t: &SVector<f64, PARAMS>| of.iter().map(|w| chi2(w, t)).sum::<f64>();
-            let chi2_after = sum(after);
+            let sum = |r: Residuals, t: &SVector<f64, PARAMS>| {
+                of.iter()
+                    .map(|&i| chi2_of(&windows[i], &r[i], t))
+                    .sum::<f64>()
+            };
+            let chi2_after = sum(res, after);
             LengthChi2 {
                 length_s: l,
                 count: of.len(),
-                before: before.map_or(f64::NAN, |t| sum(t) / (9.0 * n)),
+                before: before.map_or(f64::NAN, |t| sum(raw, t) / (9.0 * n)),
                 after: chi2_after / (9.0 * n),
                 chi2_after,
             }

@@ -26,6 +26,11 @@ pub struct PreintArgs {
     /// Gravity magnitude G (m/s^2, from 0 to 100); gravity is (0, 0, -G).
     #[arg(help_heading = "Preintegration", long, default_value_t = 9.81, value_parser = preint_analysis::parse::gravity, allow_hyphen_values = true)]
     pub gravity: f64,
+    /// Gravity as a world-frame vector x,y,z (m/s^2, norm at most 100), for a world frame not
+    /// levelled with gravity (a motion-capture frame; `calibrate --estimate noise` prints the
+    /// vector that fits as gravity.vector). Replaces (0, 0, -G) of --gravity.
+    #[arg(help_heading = "Preintegration", long, value_name = "X,Y,Z", value_parser = preint_analysis::parse::gravity_vector, allow_hyphen_values = true)]
+    pub gravity_vector: Option<Vector3<f64>>,
     /// Pose of the IMU in the body frame, x,y,z,qw,qx,qy,qz: sensor origin in body coordinates
     /// (m) and the unit quaternion rotating sensor vectors into the body frame. The output is
     /// then the body's motion (lever arm and rotation removed exactly); biases stay the IMU's.
@@ -62,7 +67,10 @@ impl PreintArgs {
         let params = PreintParams::from_noise(&noise)
             .with_scheme(self.scheme)
             .with_level(level)
-            .with_gravity(Vector3::new(0.0, 0.0, -self.gravity));
+            .with_gravity(
+                self.gravity_vector
+                    .unwrap_or(Vector3::new(0.0, 0.0, -self.gravity)),
+            );
         let params = PreintParams {
             body_p_sensor: self.body_p_sensor,
             lever_arm: self.lever_arm,

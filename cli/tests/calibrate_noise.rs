@@ -37,10 +37,16 @@ fn gt_mid() -> i64 {
     (t[0] + t[t.len() - 1]) / 2
 }
 
-/// Mean χ²/dof per window length of `factor --window 0.5,1,2` on the given files.
-fn factor_chi2_dof(imu: &Path, gt: &Path, noise: &str, truth: [f64; 5]) -> Vec<f64> {
+/// Per window length of `factor --window 0.5,1,2` on the given files (with `extra` flags):
+/// the mean χ²/dof, the fraction of windows above χ²₉(0.99) and the number of windows.
+fn factor_chi2_dof(
+    (imu, gt): (&Path, &Path),
+    noise: &str,
+    truth: [f64; 5],
+    extra: &[&str],
+) -> Vec<(f64, f64, f64)> {
     let t: Vec<String> = truth.iter().map(|x| format!("{x:e}")).collect();
-    let j = json(&[
+    let args = [
         "factor",
         "--imu",
         imu.to_str().unwrap(),
@@ -60,12 +66,19 @@ fn factor_chi2_dof(imu: &Path, gt: &Path, noise: &str, truth: [f64; 5]) -> Vec<f
         &t[3],
         "--bias-acc-std",
         &t[4],
-    ]);
+    ];
+    let j = json(&[&args[..], extra].concat());
     j["windows"]
         .as_array()
         .unwrap()
         .iter()
-        .map(|w| w["mean_chi2"].as_f64().unwrap() / 9.0)
+        .map(|w| {
+            (
+                w["mean_chi2"].as_f64().unwrap() / 9.0,
+                w["fraction_above_p99"].as_f64().unwrap(),
+                w["count"].as_f64().unwrap(),
+            )
+        })
         .collect()
 }
 
@@ -73,9 +86,12 @@ fn truth_error(j: &Value, key: &str) -> f64 {
     j["ground_truth_error"][key].as_f64().unwrap_or(0.0)
 }
 
-/// Fitted on the first half, the noise model and ground-truth errors bring the held-out
-/// second half's mean χ²/dof at 2 s into [0.75, 1.4] and nearer 1 than the datasheet densities
-/// with the usual motion-capture errors (1.71 there), and at 0.5 s from 0.31 into [0.6, 1.3].
+/// Fitted on the first half (densities, ground-truth errors and the world gravity vector),
+/// the noise model makes the 9-dim factor weighted with the in-window bias drift consistent on
+/// the held-out second half: mean χ²/dof ≤ 1.3 at 0.5, 1 and 2 s, ≥ 0.75 at 2 s, at most 5 %
+/// of the windows (or one) above χ²₉(0.99) at each length. The datasheet densities with the
+/// usual motion-capture errors are optimistic at 2 s, and so is the fitted model in GTSAM's
+/// white-noise-only weight (the fitted random walk is then left out).
 #[test]
 fn the_fit_on_one_half_is_consistent_on_the_other() {
     let dir = tmp("noise-fit-halves");
@@ -105,8 +121,8 @@ fn the_fit_on_one_half_is_consistent_on_the_other() {
         out.to_str().unwrap(),
     ]);
     eprintln!(
-        "fitted half: {} {} {}",
-        j["noise"], j["ground_truth_error"], j["per_length"]
+        "fitted half: {} {} {} {}",
+        j["noise"], j["ground_truth_error"], j["per_length"], j["gravity"]
     );
     let rows = j["per_length"].as_array().unwrap();
     assert_eq!(rows.len(), 4);
@@ -120,6 +136,14 @@ fn the_fit_on_one_half_is_consistent_on_the_other() {
         acc > 2.0e-3,
         "EuRoC's accelerometer is noisier than its datasheet: {acc}"
     );
+    // The vicon2gt world frame is tilted from gravity by about a quarter of a degree.
+    let g = &j["gravity"];
+    assert_eq!(g["supported"], true, "{g}");
+    let tilt = g["tilt_deg"].as_f64().unwrap();
+    assert!((0.1..0.5).contains(&tilt), "{g}");
+    assert!(tilt > 5.0 * g["tilt_deg_std"].as_f64().unwrap(), "{g}");
+    let v: Vec<f64> = (0..3).map(|k| g["vector"][k].as_f64().unwrap()).collect();
+    let gv = format!("--gravity-vector={},{},{}", v[0], v[1], v[2]);
     let truth = [
         "rot_std",
         "pos_std",
@@ -128,15 +152,31 @@ fn the_fit_on_one_half_is_consistent_on_the_other() {
         "bias_acc_std",
     ]
     .map(|k| truth_error(&j, k));
-    let before = factor_chi2_dof(&imu2, &gt2, &repo(NOISE), [1.75e-3, 0.005, 0.01, 0.0, 0.0]);
-    let after = factor_chi2_dof(&imu2, &gt2, out.to_str().unwrap(), truth);
-    eprintln!("held-out half, χ²/dof at 0.5, 1, 2 s: before {before:?}, after {after:?}");
-    // Measured: before 0.31 / 0.83 / 1.71, after 0.74 / 1.19 / 1.33 at 0.5 / 1 / 2 s.
-    assert!((0.75..=1.4).contains(&after[2]), "{after:?}");
-    assert!((0.6..=1.3).contains(&after[0]), "{after:?}");
+    let held_out = (imu2.as_path(), gt2.as_path());
+    let fitted = out.to_str().unwrap();
+    let before = factor_chi2_dof(
+        held_out,
+        &repo(NOISE),
+        [1.75e-3, 0.005, 0.01, 0.0, 0.0],
+        &[],
+    );
+    let white_only = factor_chi2_dof(held_out, fitted, truth, &[&gv]);
+    let after = factor_chi2_dof(held_out, fitted, truth, &[&gv, "--in-window-drift"]);
+    eprintln!(
+        "held-out half, (χ²/dof, fraction above χ²(0.99)) at 0.5, 1, 2 s: datasheet \
+         {before:?}, fitted with white-noise weight {white_only:?}, fitted with the in-window \
+         drift {after:?}"
+    );
+    // Measured: datasheet 0.31 / 0.83 / 1.71; fitted, white-noise weight 0.70 / 1.17 / 1.58;
+    // fitted with the drift 0.65 / 0.96 / 0.82, no window above χ²(0.99).
+    for (mean, above, count) in &after {
+        assert!(*mean <= 1.3, "{after:?}");
+        assert!(*above <= 0.05 || above * count <= 1.0, "{after:?}");
+    }
+    assert!(after[2].0 >= 0.75, "{after:?}");
     assert!(
-        (after[2] - 1.0).abs() < (before[2] - 1.0).abs(),
-        "{before:?} → {after:?}"
+        before[2].0 > 1.3 && white_only[2].0 > 1.3,
+        "{before:?} {white_only:?}"
     );
 }
 

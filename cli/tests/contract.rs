@@ -47,6 +47,7 @@ const EXAMPLES: &[(&str, &str, &[&str])] = &[
     // Preintegration flags (PreintArgs).
     ("*", "noise", &[EUROC_NOISE]),
     ("*", "gravity", &["9.80665"]),
+    ("*", "gravity_vector", &["-0.0414,0.0007,-9.8072"]),
     ("*", "body_p_sensor", &["0.1,0,0,1,0,0,0"]),
     ("*", "lever_arm", &["centripetal"]),
     ("*", "bias_correction", &["group"]),

@@ -467,8 +467,11 @@ def predict(pim: PreintegratedImu, state_i: NavState, bias_i: ImuBias | None = N
 class ImuFactor:
     """Forster's IMU factor between (state_i, state_j, bias_i), 9-dim residual
     [r_φ, r_v, r_p] (rad, m/s, m). `residual`: "logmap" (SE₂(3), GTSAM 4.3 `Logmap`, default)
-    or "component" (Forster eq. 45, GTSAM `ComponentWise`). Raises FactorError for a
-    measurement below level "covariance" or with a covariance that is not positive definite.
+    or "component" (Forster eq. 45, GTSAM `ComponentWise`). Weighted by pim.cov (GTSAM's
+    weight) or, with `in_window_drift=True`, by the [δφ, δv, δp] block of pim.cov15, which
+    adds the bias random walk within the window (needs level "combined"). Raises FactorError
+    for a measurement below the level its weight needs or with a covariance that is not
+    positive definite.
 
     Jacobians: dict {"state_i": 9×9, "state_j": 9×9, "bias_i": 9×6}; state columns
     [δφ, δp, δv] (NavState.retract), bias columns [δb_g, δb_a]. GTSAM's error is −Q r in its
@@ -476,10 +479,15 @@ class ImuFactor:
     """
 
     RESIDUAL_ORDER: tuple[str, str, str]
-    def __new__(cls, pim: PreintegratedImu, residual: str = "logmap") -> ImuFactor: ...
+    def __new__(
+        cls, pim: PreintegratedImu, residual: str = "logmap", *, in_window_drift: bool = False
+    ) -> ImuFactor: ...
     @property
     def residual_mode(self) -> str:
         """ "logmap" or "component"."""
+    @property
+    def in_window_drift(self) -> bool:
+        """Whether the weight includes the bias random walk within the window."""
     @property
     def pim(self) -> PreintegratedImu:
         """The measurement (a copy)."""
@@ -520,9 +528,15 @@ class CombinedImuFactor:
     """
 
     RESIDUAL_ORDER: tuple[str, str, str, str, str]
-    def __new__(cls, pim: PreintegratedImu, residual: str = "logmap") -> CombinedImuFactor: ...
+    def __new__(
+        cls, pim: PreintegratedImu, residual: str = "logmap", *, in_window_drift: bool = False
+    ) -> CombinedImuFactor:
+        """`in_window_drift=True` raises FactorError: this weight always includes it."""
     @property
     def residual_mode(self) -> str: ...
+    @property
+    def in_window_drift(self) -> bool:
+        """True: the weight includes the bias random walk within the window."""
     @property
     def pim(self) -> PreintegratedImu: ...
     @property

@@ -8,7 +8,7 @@
 //! factor; R×6, columns [δb_g, δb_a]).
 
 use crate::convert::{mat_py, svec_py};
-use crate::errors::{Class, raise, shape_err};
+use crate::errors::{Class, new_err, raise, shape_err};
 use crate::measurement::PyMeasurement;
 use crate::navstate::{PyNavState, bias_or_hat, predict_checked};
 use crate::params::PyBias;
@@ -34,17 +34,22 @@ type State<'a> = PyRef<'a, PyNavState>;
 /// A bias argument of a factor method.
 type Bias<'a> = PyRef<'a, PyBias>;
 
-/// Pickle state of a factor: its residual mode's name and the measurement's bytes.
+/// Pickle state of a factor: its residual mode's name (with [`DRIFT_SUFFIX`] for an
+/// `ImuFactor` weighted with the in-window drift) and the measurement's bytes.
 fn factor_state<'py>(
     py: Python<'py>,
-    mode: ResidualMode,
+    mode: &'static str,
     pim: &preint::PreintegratedImu,
 ) -> (&'static str, Bound<'py, PyBytes>) {
     (
-        mode.name(),
+        mode,
         PyBytes::new(py, &crate::state::encode_measurement(pim)),
     )
 }
+
+/// The suffix of a pickled residual mode whose `ImuFactor` weight includes the in-window
+/// bias drift.
+const DRIFT_SUFFIX: &str = "+in_window_drift";
 
 /// The Python methods of both factor classes, written once for the pyclass `$py` wrapping the
 /// Rust factor `$factor` (Python name `$name`), whose bias arguments after the two states are
@@ -63,10 +68,18 @@ macro_rules! factor_pymethods {
         $(#[doc = $chi2_doc:tt])* chi2;
     ) => {
         impl $py {
-            fn build(pim: preint::PreintegratedImu, mode: &str) -> PyResult<Self> {
-                $factor::with_mode(pim, mode_from(mode)?)
-                    .map(Self)
-                    .map_err(|e| raise(Class::Factor, e))
+            /// The factor of `pim` with the residual `mode` (its pickled name may carry
+            /// [`DRIFT_SUFFIX`]) and, when `in_window_drift`, the drift-inclusive weight.
+            fn build(
+                pim: preint::PreintegratedImu,
+                mode: &str,
+                in_window_drift: bool,
+            ) -> PyResult<Self> {
+                let (mode, pickled_drift) = match mode.strip_suffix(DRIFT_SUFFIX) {
+                    Some(m) => (m, true),
+                    None => (mode, false),
+                };
+                Self::construct(pim, mode_from(mode)?, in_window_drift || pickled_drift).map(Self)
             }
 
             /// `(residual, {"state_i", "state_j", bias blocks})` as numpy.
@@ -89,15 +102,26 @@ macro_rules! factor_pymethods {
             const RESIDUAL_ORDER: $order_ty = $order;
 
             #[new]
-            #[pyo3(signature = (pim, residual="logmap"))]
-            fn new(pim: PyRef<'_, PyMeasurement>, residual: &str) -> PyResult<Self> {
-                Self::build(pim.0.clone(), residual)
+            #[pyo3(signature = (pim, residual="logmap", *, in_window_drift=false))]
+            fn new(
+                pim: PyRef<'_, PyMeasurement>,
+                residual: &str,
+                in_window_drift: bool,
+            ) -> PyResult<Self> {
+                Self::build(pim.0.clone(), residual, in_window_drift)
             }
 
             /// The residual this factor evaluates: "logmap" or "component".
             #[getter]
             fn residual_mode(&self) -> &'static str {
                 self.0.residual_mode().name()
+            }
+
+            /// Whether the weight includes the bias random walk within the window (an
+            /// `ImuFactor` built with `in_window_drift=True`; a `CombinedImuFactor` always).
+            #[getter]
+            fn in_window_drift(&self) -> bool {
+                self.drift()
             }
 
             /// The preintegrated measurement this factor reads (a copy).
@@ -188,21 +212,24 @@ macro_rules! factor_pymethods {
                 let ctor = py.get_type::<Self>().getattr("_from_state")?.unbind();
                 Ok((
                     ctor,
-                    factor_state(py, self.0.residual_mode(), self.0.preintegrated()),
+                    factor_state(py, self.pickled_mode(), self.0.preintegrated()),
                 ))
             }
 
             /// Inverse of `__reduce__`'s state (pickle).
             #[staticmethod]
             fn _from_state(mode: &str, state: &[u8]) -> PyResult<Self> {
-                Self::build(crate::state::decode_measurement(state)?, mode)
+                Self::build(crate::state::decode_measurement(state)?, mode, false)
             }
         }
     };
 }
 
 /// Forster's IMU factor between `(state_i, state_j, bias_i)` (Rust `ImuFactor`):
-/// `ImuFactor(pim, residual="logmap")`, weighted by the measurement's 9×9 covariance. Needs a
+/// `ImuFactor(pim, residual="logmap", *, in_window_drift=False)`, weighted by the
+/// measurement's 9×9 covariance `cov` (GTSAM's weight) or, with `in_window_drift=True`, by the
+/// [δφ, δv, δp] block of `cov15`, which adds the bias random walk within the window (Rust
+/// `ImuFactor::with_in_window_drift`; needs level "combined"). Needs a
 /// measurement preintegrated at level "covariance" or "combined"; raises `FactorError`
 /// otherwise, or when the covariance is not positive definite (e.g. zero noise). Such a
 /// measurement has bias Jacobians, so every `bias_i` is corrected for (a level "deltas"
@@ -229,6 +256,31 @@ pub(crate) struct PyImuFactor(pub ImuFactor);
 impl PyImuFactor {
     fn biases(&self, bias_i: Option<PyRef<'_, PyBias>>) -> (ImuBias,) {
         (bias_or_hat(bias_i, self.0.preintegrated()),)
+    }
+
+    fn construct(
+        pim: preint::PreintegratedImu,
+        mode: ResidualMode,
+        in_window_drift: bool,
+    ) -> PyResult<ImuFactor> {
+        if in_window_drift {
+            ImuFactor::with_in_window_drift(pim, mode)
+        } else {
+            ImuFactor::with_mode(pim, mode)
+        }
+        .map_err(|e| raise(Class::Factor, e))
+    }
+
+    fn drift(&self) -> bool {
+        self.0.in_window_drift()
+    }
+
+    fn pickled_mode(&self) -> &'static str {
+        match (self.0.residual_mode(), self.0.in_window_drift()) {
+            (ResidualMode::Logmap, true) => "logmap+in_window_drift",
+            (ResidualMode::ComponentWise, true) => "component+in_window_drift",
+            (m, false) => m.name(),
+        }
     }
 }
 
@@ -275,6 +327,31 @@ impl PyCombinedImuFactor {
     ) -> (ImuBias, ImuBias) {
         let bi = bias_or_hat(bias_i, self.0.preintegrated());
         (bi, bias_j.map(|b| b.0).unwrap_or(bi))
+    }
+
+    /// `in_window_drift` is refused: this factor's weight always includes the random walk.
+    fn construct(
+        pim: preint::PreintegratedImu,
+        mode: ResidualMode,
+        in_window_drift: bool,
+    ) -> PyResult<CombinedImuFactor> {
+        if in_window_drift {
+            return Err(new_err(
+                Class::Factor,
+                "InWindowDrift",
+                "in_window_drift: CombinedImuFactor's weight always includes the bias random walk"
+                    .into(),
+            ));
+        }
+        CombinedImuFactor::with_mode(pim, mode).map_err(|e| raise(Class::Factor, e))
+    }
+
+    fn drift(&self) -> bool {
+        true
+    }
+
+    fn pickled_mode(&self) -> &'static str {
+        self.0.residual_mode().name()
     }
 }
 

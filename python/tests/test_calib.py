@@ -440,8 +440,9 @@ def test_apply_intrinsics_is_integrate_calibration(preint_cli, tmp_path, euroc_i
 def test_noise_model_from_ground_truth_equals_the_command(preint_cli, tmp_path):
     """``calibrate_file(estimate="noise")`` is ``preint calibrate --estimate noise --json``
     (the whole dict, from the same JSON), the Kalibr imu.yaml of ``out`` holds the fitted
-    accelerometer density, and EuRoC's accelerometer comes out noisier than its datasheet's
-    2e-3 m/s²/√Hz."""
+    accelerometer density, EuRoC's accelerometer comes out noisier than its datasheet's
+    2e-3 m/s²/√Hz, and the vicon2gt world frame is tilted from gravity by about 0.24° (the
+    whole recording's estimate, within 3σ of this slice's)."""
     import json
     import subprocess
 
@@ -466,6 +467,10 @@ def test_noise_model_from_ground_truth_equals_the_command(preint_cli, tmp_path):
     (line,) = [x for x in out.read_text().splitlines()
                if x.startswith("accelerometer_noise_density:")]
     assert float(line.split(":")[1].split("#")[0]) == acc
+    g = f["gravity"]
+    assert g["supported"] and g["likelihood_ratio"] > g["bic_penalty"]
+    assert abs(g["tilt_deg"] - 0.236) < 3 * g["tilt_deg_std"]
+    assert g["vector"] == [a + d for a, d in zip(g["given"], g["correction"])]
 
 
 def test_noise_model_arguments_are_refused_without_estimate_noise():

@@ -385,6 +385,31 @@ def test_factors_pickle_exactly(pim, states, cls, mode):
     assert other != f
 
 
+@pytest.mark.parametrize("mode", MODES)
+def test_in_window_drift_weight_pickles_and_needs_the_combined_level(pim, states, mode):
+    """``ImuFactor(pim, in_window_drift=True)`` weights by ``pim.cov15[:9, :9]`` (component
+    form), which exceeds ``pim.cov``; it pickles as itself, not as the plain factor; a
+    level-"covariance" measurement and a ``CombinedImuFactor`` refuse it."""
+    xi, xj, bi, _ = states
+    f = preint.ImuFactor(pim, mode, in_window_drift=True)
+    plain = preint.ImuFactor(pim, mode)
+    assert f.in_window_drift and not plain.in_window_drift and f != plain
+    if mode == "component":
+        assert np.array_equal(f.residual_covariance, pim.cov15[:9, :9])
+    assert np.trace(f.residual_covariance) > np.trace(plain.residual_covariance)
+    assert f.chi2(xi, xj, bi) < plain.chi2(xi, xj, bi)
+    g = pickle.loads(pickle.dumps(f))
+    assert g == f and g.in_window_drift and g.residual_mode == mode
+    assert np.array_equal(g.sqrt_information, f.sqrt_information)
+    with pytest.raises(preint.FactorError) as e:
+        preint.ImuFactor(measurement(level="covariance"), mode, in_window_drift=True)
+    assert e.value.kind == "LevelTooLow"
+    with pytest.raises(preint.FactorError) as e:
+        preint.CombinedImuFactor(pim, mode, in_window_drift=True)
+    assert e.value.kind == "InWindowDrift"
+    assert preint.CombinedImuFactor(pim, mode).in_window_drift
+
+
 # ----------------------------------------------------------------------------- errors
 def test_factor_errors_are_typed(pim):
     with pytest.raises(preint.FactorError) as e:

@@ -10,9 +10,15 @@
 //! when not given). `out` writes a Kalibr `imu.yaml` (a withheld density keeps its start
 //! value).
 //!
+//! The world gravity vector is fitted with them (the ground truth's frame need not be levelled)
+//! and kept when the information criterion supports it; the χ² "after" is then at the fitted
+//! gravity, which `factor --gravity-vector` takes.
+//!
 //! JSON: `{estimate: "noise", noise, ground_truth_error, withheld: [{parameter, reason,
 //! upper_bound?}], per_length: [{length_s, count, skipped, chi2_dof_before, chi2_dof_after}],
-//! iterations, log_likelihood, update_rate_hz, fit, written?}`.
+//! gravity: {given, vector, vector_std, correction, magnitude, tilt_deg, tilt_deg_std,
+//! supported, likelihood_ratio, bic_penalty, use}, iterations, log_likelihood,
+//! update_rate_hz, fit, written?}` (vectors in m/s², world frame).
 
 use crate::consistency::fit_json;
 use crate::noise_windows::noise_window;
@@ -91,6 +97,8 @@ pub struct NoiseRun {
     pub rate_hz: f64,
     /// The densities the fit started from (EuRoC's without `noise`).
     pub start: ImuNoise,
+    /// The world gravity vector the windows were preintegrated with \[m/s²\], `(0, 0, −G)`.
+    pub gravity_given: Vector3<f64>,
     /// The Kalibr imu.yaml written to `out`, when given.
     pub written: Option<PathBuf>,
 }
@@ -172,6 +180,7 @@ fn fit_windows(o: &NoiseOptions) -> Result<NoiseRun, Error> {
     let opts = NoiseFitOptions {
         start: st,
         held,
+        fit_gravity: true,
         ..NoiseFitOptions::default()
     };
     let mut fit = noise_fit::fit(&windows, &opts).map_err(|e| {
@@ -190,6 +199,7 @@ fn fit_windows(o: &NoiseOptions) -> Result<NoiseRun, Error> {
         skipped,
         rate_hz: 1e9 / dt,
         start,
+        gravity_given: params.gravity,
         written: None,
     })
 }
@@ -292,8 +302,47 @@ pub fn to_json(r: &NoiseRun) -> Value {
         "update_rate_hz": r.rate_hz,
         "fit": fit_json(&fit(r)),
     });
+    if let Some(g) = gravity_json(r) {
+        j["gravity"] = g;
+    }
     if let Some(p) = &r.written {
         j["written"] = json!(p.display().to_string());
     }
     j
+}
+
+/// The world gravity vector that fits \[m/s², world frame\] (given plus correction), when
+/// the fit estimated one (supported or not: [`preint_calib::noise_fit::GravityEstimate`]).
+pub fn fitted_gravity(r: &NoiseRun) -> Option<Vector3<f64>> {
+    r.fit
+        .gravity
+        .as_ref()
+        .map(|g| r.gravity_given + g.correction)
+}
+
+/// `gravity`: the world gravity vector that fits (module docs of [`preint_calib::noise_fit`])
+/// beside the given one, its tilt from it, and whether the information criterion supports it.
+fn gravity_json(r: &NoiseRun) -> Option<Value> {
+    let g = r.fit.gravity.as_ref()?;
+    let g0 = r.gravity_given;
+    let v = fitted_gravity(r)?;
+    let list = |x: &Vector3<f64>| json!([x[0], x[1], x[2]]);
+    let std = g.cov.diagonal().map(|d| d.max(0.0).sqrt());
+    Some(json!({
+        "given": list(&g0),
+        "vector": list(&v),
+        "vector_std": list(&std),
+        "correction": list(&g.correction),
+        "magnitude": v.norm(),
+        "tilt_deg": g.tilt_from(&g0).to_degrees(),
+        "tilt_deg_std": g.tilt_std_from(&g0).to_degrees(),
+        "supported": g.supported,
+        "likelihood_ratio": g.lr,
+        "bic_penalty": g.penalty,
+        "use": if g.supported {
+            format!("factor --gravity-vector={},{},{}", v[0], v[1], v[2])
+        } else {
+            "not supported by the windows: keep the given gravity".into()
+        },
+    }))
 }

@@ -98,7 +98,7 @@ use nalgebra::{SMatrix, SVector};
 /// `∂e_{pos,vel}/∂δφ_i += M [r_{p,v}]×` and `∂e_{pos,vel}/∂δφ_j −= [M r_{p,v}]×`; GTSAM's bias
 /// order is [b_a, b_g]. Tested against GTSAM 4.3 fixtures in `preint/tests/factor_gtsam.rs`.
 #[derive(Clone, Debug, PartialEq)]
-pub struct ImuFactor(Weighted<9>);
+pub struct ImuFactor(Weighted<9>, bool);
 
 impl ImuFactor {
     /// Builds the factor; computes the square-root information of `pim.cov`.
@@ -134,7 +134,28 @@ impl ImuFactor {
     /// residual by `T cov Tᵀ` ([`ResidualMode::Logmap`](crate::ResidualMode::Logmap)). Errors as [`new`](Self::new).
     pub fn with_mode(pim: PreintegratedImu, mode: ResidualMode) -> Result<Self, FactorError> {
         let cov = pim.cov;
-        Weighted::new(pim, Level::Covariance, "cov", cov, mode).map(Self)
+        Weighted::new(pim, Level::Covariance, "cov", cov, mode).map(|w| Self(w, false))
+    }
+
+    /// Builds the factor weighted by the covariance of its residual when the true bias drifts
+    /// within the window as the parameters' bias random walk says, while the factor holds it at
+    /// its value at i: the [δφ, δv, δp] block of `pim.cov15` (`cov` plus the drift's effect on
+    /// the deltas, the 9×9 marginal of the combined propagation of Forster et al. 2017, App. C).
+    /// [`new`](Self::new) weights by `cov` alone, as GTSAM's `ImuFactor` does, which is
+    /// optimistic by that drift on windows of seconds. Needs a [`Level::Combined`] measurement;
+    /// otherwise errors as [`new`](Self::new).
+    pub fn with_in_window_drift(
+        pim: PreintegratedImu,
+        mode: ResidualMode,
+    ) -> Result<Self, FactorError> {
+        let cov = pim.cov15.fixed_view::<9, 9>(0, 0).into_owned();
+        Weighted::new(pim, Level::Combined, "cov15", cov, mode).map(|w| Self(w, true))
+    }
+
+    /// Whether the weight includes the in-window bias drift
+    /// ([`with_in_window_drift`](Self::with_in_window_drift)).
+    pub fn in_window_drift(&self) -> bool {
+        self.1
     }
 
     /// The residual this factor evaluates.

@@ -49,6 +49,33 @@ fn to_text(r: &NoiseRun) -> String {
         };
         let _ = writeln!(h, "  {:<28} {line}", KEYS[k]);
     }
+    if let (Some(g), Some(v)) = (&r.fit.gravity, noise_model::fitted_gravity(r)) {
+        let g0 = r.gravity_given;
+        let std = g.cov.diagonal().map(|d| d.max(0.0).sqrt()).max();
+        let _ = writeln!(
+            h,
+            "  world gravity                ({:.4}, {:.4}, {:.4}) ± {std:.1e} m/s², tilted \
+             {:.3} ± {:.3}° from ({}, {}, {}): {} (2Δℓ = {:.1}, BIC penalty {:.1})",
+            v[0],
+            v[1],
+            v[2],
+            g.tilt_from(&g0).to_degrees(),
+            g.tilt_std_from(&g0).to_degrees(),
+            g0[0],
+            g0[1],
+            g0[2],
+            if g.supported {
+                format!(
+                    "fitted; give factor --gravity-vector={},{},{}",
+                    v[0], v[1], v[2]
+                )
+            } else {
+                "not supported by the windows; the given gravity kept".to_string()
+            },
+            g.lr,
+            g.penalty
+        );
+    }
     let _ = writeln!(
         h,
         "{:>8} {:>6} {:>7} {:>14} {:>13}",
@@ -70,6 +97,13 @@ fn to_text(r: &NoiseRun) -> String {
             h,
             "noise model written to {} (Kalibr imu.yaml; withheld densities at their start value)",
             p.display()
+        );
+    }
+    if r.fit.params[2..4].iter().any(|p| p.withheld.is_none()) {
+        h.push_str(
+            "the χ² after includes the bias random walk within each window: a 9-dim ImuFactor \
+             is weighted with it by `factor --in-window-drift` (ImuFactor::with_in_window_drift); \
+             CombinedImuFactor always is\n",
         );
     }
     h

@@ -60,15 +60,15 @@ pub(crate) fn truth_noise(args: &Args) -> Result<TruthNoise, CliError> {
 }
 
 /// The noise model and parameters at the factor's level (the bias random walk with
-/// `--combined`, whose noise file must hold it).
+/// `--combined` or `--in-window-drift`, whose noise file must hold it).
 pub(crate) fn noise_params(args: &Args) -> Result<(ImuNoise, PreintParams), CliError> {
-    let level = if args.combined {
+    let level = if args.combined || args.in_window_drift {
         Level::Combined
     } else {
         Level::Covariance
     };
     let (noise, params) = args.preint.params(level)?;
-    if let (true, Some(path)) = (args.combined, &args.preint.noise) {
+    if let (true, Some(path)) = (args.combined || args.in_window_drift, &args.preint.noise) {
         preint_io::read_kalibr_bias_model(path)?;
     }
     Ok((noise, params))
@@ -123,7 +123,12 @@ pub(crate) fn evaluate_window(
         let (r, j) = f.evaluate(&xi, &xj, &gi.bias, &gj.bias);
         evaluate(r, jacobians(&j), *f.residual_covariance(), tn)
     } else {
-        let f = ImuFactor::with_mode(pim.clone(), args.residual).map_err(E::Factor)?;
+        let f = if args.in_window_drift {
+            ImuFactor::with_in_window_drift(pim.clone(), args.residual)
+        } else {
+            ImuFactor::with_mode(pim.clone(), args.residual)
+        }
+        .map_err(E::Factor)?;
         let (r, j) = f.evaluate(&xi, &xj, &gi.bias);
         evaluate(r, jacobians(&j), *f.residual_covariance(), tn)
     }

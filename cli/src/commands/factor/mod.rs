@@ -14,7 +14,11 @@
 //! `--residual component|logmap` picks the factor's [`ResidualMode`] (default: the library's,
 //! [`ResidualMode::default`]); the weight is then the covariance of that residual
 //! (`ImuFactor::residual_covariance`). `--second-order` adds the second-order covariance term
-//! of `preint::second_order` to the measurement's covariance first.
+//! of `preint::second_order` to the measurement's covariance first. `--in-window-drift`
+//! weights `ImuFactor` with the bias random walk's effect within the window
+//! (`ImuFactor::with_in_window_drift`: `cov15`'s [δφ, δv, δp] block) instead of `cov`, which
+//! leaves it out as GTSAM's `ImuFactor` does. `--gravity-vector` replaces `(0, 0, −G)` with
+//! a world-frame vector (a ground-truth frame not levelled with gravity).
 //!
 //! Printed: the residual (order [r_φ, r_v, r_p] or [r_φ, r_v, r_p, r_bg, r_ba]), the whitened
 //! residual `U r` (`UᵀU = Σ⁻¹`, `U` upper triangular), `χ² = ‖U r‖²` with its χ² quantiles, and
@@ -97,6 +101,11 @@ pub struct Args {
     /// by the covariance with the bias random walk) instead of ImuFactor (9-dim).
     #[arg(help_heading = "Factor", long)]
     pub combined: bool,
+    /// Weight ImuFactor (9-dim) with the covariance that includes the bias random walk within
+    /// the window (the [dphi, dv, dp] block of the combined covariance; needs the random walks
+    /// in --noise) instead of the white noise alone (GTSAM's ImuFactor).
+    #[arg(help_heading = "Factor", long, conflicts_with = "combined")]
+    pub in_window_drift: bool,
     /// Residual: `component` (Forster's [r_phi, r_v, r_p]) or `logmap` (the SE_2(3) logarithm
     /// of predicted^-1 * actual, GTSAM 4.3's default).
     #[arg(help_heading = "Factor", long, value_parser = parse_residual, default_value = ResidualMode::default().name())]
@@ -178,6 +187,10 @@ pub struct FactorRun {
     pub scheme: preint::Scheme,
     /// `CombinedImuFactor` (else `ImuFactor`).
     pub combined: bool,
+    /// `ImuFactor` weighted with the in-window bias drift (`--in-window-drift`).
+    pub in_window_drift: bool,
+    /// The world gravity vector \[m/s²\] (`--gravity`, `--gravity-vector`).
+    pub gravity: nalgebra::Vector3<f64>,
     /// The factor's residual.
     pub residual: ResidualMode,
     /// Weighted with the second-order covariance term (`--second-order`).
@@ -241,6 +254,8 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
         unit_check,
         scheme,
         combined: args.combined,
+        in_window_drift: args.in_window_drift,
+        gravity: params.gravity,
         residual: args.residual,
         second_order: args.second_order,
         gi,
@@ -269,11 +284,21 @@ fn bias_json(b: &ImuBias) -> Value {
     json!({"gyro": list(&b.gyro), "acc": list(&b.acc)})
 }
 
-fn factor_name(combined: bool) -> &'static str {
+pub(crate) fn factor_name(combined: bool) -> &'static str {
     if combined {
         "CombinedImuFactor"
     } else {
         "ImuFactor"
+    }
+}
+
+/// The factor as printed: its name, and the weight's in-window drift when it has it.
+pub(crate) fn factor_label(combined: bool, in_window_drift: bool) -> String {
+    let name = factor_name(combined);
+    if in_window_drift {
+        format!("{name} weighted with the in-window bias drift")
+    } else {
+        name.to_string()
     }
 }
 
@@ -291,6 +316,8 @@ pub fn to_json(f: &FactorRun) -> Value {
     json!({
         "input": preint_analysis::recording::input_json(&f.source, &f.unit_check),
         "factor": factor_name(f.combined),
+        "in_window_drift": f.in_window_drift,
+        "gravity": list(&f.gravity),
         "scheme": scheme::label(f.scheme),
         "residual_mode": f.residual.name(),
         "second_order": f.second_order,
@@ -314,8 +341,10 @@ pub fn to_json(f: &FactorRun) -> Value {
         "ground_truth_noise": truth_noise_json(&f.truth_noise),
         "weight": match (f.combined, f.residual) {
             (true, ResidualMode::ComponentWise) => "residual_cov15 (covariance of [r_phi, r_v, r_p, r_bg, r_ba]) + ground-truth noise through the Jacobians",
+            (false, ResidualMode::ComponentWise) if f.in_window_drift => "cov15[0..9, 0..9] (covariance of [r_phi, r_v, r_p] with the in-window bias drift) + ground-truth noise through the Jacobians",
             (false, ResidualMode::ComponentWise) => "cov (covariance of [r_phi, r_v, r_p]) + ground-truth noise through the Jacobians",
             (true, ResidualMode::Logmap) => "diag(T, I6) residual_cov15 diag(T, I6)^T, T = diag(I, dR^T, dR^T) (covariance of the Logmap residual) + ground-truth noise through the Jacobians",
+            (false, ResidualMode::Logmap) if f.in_window_drift => "T C T^T, C = cov15[0..9, 0..9] (with the in-window bias drift), T = diag(I, dR^T, dR^T) (covariance of the Logmap residual) + ground-truth noise through the Jacobians",
             (false, ResidualMode::Logmap) => "T cov T^T, T = diag(I, dR^T, dR^T) (covariance of the Logmap residual [phi, Jl^-1 dR^T r_v, Jl^-1 dR^T r_p]) + ground-truth noise through the Jacobians",
         },
         "units": {"residual": "rad, m/s, m (, rad/s, m/s^2) per block", "whitened_residual": "dimensionless",
@@ -334,7 +363,7 @@ pub fn to_text(f: &FactorRun) -> String {
         "{}: {} ({} residual{}) at the ground truth, scheme {}, keyframes {} → {} ns (nearest rows \
          to {} and {}), Δt = {:.6} s, {} samples",
         f.imu,
-        factor_name(f.combined),
+        factor_label(f.combined, f.in_window_drift),
         f.residual.name(),
         if f.second_order {
             ", second-order covariance"

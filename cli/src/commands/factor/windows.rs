@@ -42,6 +42,10 @@ pub struct WindowsRun {
     pub truth_noise: TruthNoise,
     /// `CombinedImuFactor` (else `ImuFactor`).
     pub combined: bool,
+    /// `ImuFactor` weighted with the in-window bias drift (`--in-window-drift`).
+    pub in_window_drift: bool,
+    /// The world gravity vector \[m/s²\] (`--gravity`, `--gravity-vector`).
+    pub gravity: nalgebra::Vector3<f64>,
 }
 
 /// The windows of one length: their χ² and block shares, and how many were skipped.
@@ -88,6 +92,8 @@ pub fn compute(args: &Args, lengths: &[f64]) -> Result<WindowsRun, CliError> {
         lengths: summaries,
         truth_noise: tn,
         combined: args.combined,
+        in_window_drift: args.in_window_drift,
+        gravity: params.gravity,
     })
 }
 
@@ -144,10 +150,13 @@ fn verdict_json(v: &Verdict) -> Value {
     j
 }
 
-/// The JSON form: `{windows: [...], verdict, span_ns, factor, ground_truth_noise, fit}`.
+/// The JSON form: `{windows: [...], verdict, span_ns, factor, in_window_drift, gravity
+/// (m/s², world frame), ground_truth_noise, fit}`.
 pub fn to_json(r: &WindowsRun) -> Value {
     json!({
-        "factor": if r.combined { "CombinedImuFactor" } else { "ImuFactor" },
+        "factor": super::factor_name(r.combined),
+        "in_window_drift": r.in_window_drift,
+        "gravity": [r.gravity[0], r.gravity[1], r.gravity[2]],
         "span_ns": [r.span_ns.0, r.span_ns.1],
         "windows": r.lengths.iter().map(length_json).collect::<Vec<_>>(),
         "verdict": verdict_json(&r.verdict),
@@ -163,11 +172,7 @@ pub fn to_text(r: &WindowsRun) -> String {
         h,
         "{}: {} at the ground truth over {:.3} s ({} → {} ns), back-to-back windows",
         r.imu,
-        if r.combined {
-            "CombinedImuFactor"
-        } else {
-            "ImuFactor"
-        },
+        super::factor_label(r.combined, r.in_window_drift),
         (r.span_ns.1 - r.span_ns.0) as f64 * 1e-9,
         r.span_ns.0,
         r.span_ns.1
