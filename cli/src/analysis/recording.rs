@@ -168,6 +168,8 @@ pub struct RecordingData {
     pub still: Option<StaticCheck>,
     /// Where the costs were timed.
     pub machine: Machine,
+    /// The unit checks were skipped (`--no-unit-check`).
+    pub no_unit_check: bool,
 }
 
 /// An unreadable input fails the report; any other error is kept as the section's reason.
@@ -225,6 +227,7 @@ pub fn compute(o: &Options, progress: &mut dyn FnMut(&str)) -> Result<RecordingD
         truth,
         still,
         machine: Machine::this(),
+        no_unit_check: o.input.no_unit_check,
     })
 }
 

@@ -65,7 +65,22 @@ fn advice_statement(d: &RecordingData) -> String {
         Err(e) => return format!("`preint advise` cannot answer on this recording: {e}"),
     };
     let ok = a.candidates.iter().filter(|c| c.acceptable).count();
-    match a.recommendation() {
+    let mut caveats = Vec::new();
+    if a.cutoffs.iter().any(Option::is_none) {
+        caveats.push(
+            "no low-pass cutoff leaves white noise of the given density on every sensor \
+             (vibration, or densities set too low), so that content counts as motion here",
+        );
+    }
+    if d.still.is_some() {
+        caveats.push("the recording is static: there is little motion to discretise");
+    }
+    let caveat = if caveats.is_empty() {
+        String::new()
+    } else {
+        format!(" Caveat: {}.", caveats.join("; "))
+    };
+    let statement = match a.recommendation() {
         Some(c) => format!(
             "On its own motion this recording needs `{}` at {:.1} Hz with keyframes {window} s \
              apart: its worst discretisation error is {:.3}·σ of the noise (threshold \
@@ -82,7 +97,8 @@ fn advice_statement(d: &RecordingData) -> String {
              keyframes below {fraction}·σ at the rates evaluated: use `hermite4` at the full \
              rate, or record faster."
         ),
-    }
+    };
+    statement + &caveat
 }
 
 /// `χ²/dof` means per length, as `0.5 s: 1.02, 1 s: 1.10`.

@@ -387,10 +387,11 @@ pub fn to_json(r: &RecordingReport) -> Value {
     let d = &r.data;
     let a = &d.audit;
     let rec = d.advice.as_ref().ok().and_then(|a| a.recommendation());
+    let audit = preint_analysis::audit::to_json(a, d.no_unit_check);
     let mut summary = json!({
         "imu": d.imu,
-        "audit": {"verdict": format!("{:?}", a.verdict()).to_lowercase(),
-                  "findings": a.findings().len(),
+        "audit": {"verdict": audit["verdict"], "clean": audit["clean"],
+                  "defects": audit["defects"], "warnings": audit["warnings"],
                   "still_fraction": recording::still_fraction(a)},
         "advise": {"recommended_scheme": rec.map(|c| scheme::label(c.scheme)),
                    "recommended_rate": rec.map(|c| c.rate_hz),
