@@ -1,7 +1,8 @@
 //! The numbers of `preint report --imu`, on the user's recording:
 //!
 //! 1. the audit ([`preint_analysis::audit`]) and its verdict;
-//! 2. `advise` on the recording's own motion ([`preint_analysis::advise::advise_samples`]);
+//! 2. `advise` on the recording's own motion ([`preint_analysis::advise::advise_samples`]),
+//!    with the given densities (for a static recording without `--noise`, its Allan ones);
 //! 3. with ground truth: the IMU factor's consistency per window length ([`consistency`])
 //!    with the given noise model and with the one fitted by
 //!    [`preint_analysis::calibrate::noise_model`], whose Kalibr `imu.yaml` is written;
@@ -162,6 +163,9 @@ pub struct RecordingData {
     pub noise: (ImuNoise, String),
     /// `advise` on the recording, or why it could not answer.
     pub advice: Result<Advice, String>,
+    /// The densities `advise` ran with, in words: the given ones, or for a static recording
+    /// without `--noise` the Allan densities.
+    pub advice_noise: String,
     /// With `--poses`: the consistency and the noise fit.
     pub truth: Option<TruthCheck>,
     /// For a static recording: the Allan deviation and the static calibration.
@@ -206,24 +210,32 @@ pub fn compute(o: &Options, progress: &mut dyn FnMut(&str)) -> Result<RecordingD
     progress("audit");
     let noise = preint_analysis::noise::or_default(o.noise.as_deref())?;
     let source = preint_analysis::noise::source(o.noise.as_deref());
-    let advice = kept(advise_recording(o, &noise))?;
-    progress("advise");
-    let truth = match &o.poses {
-        Some(poses) => Some(truth_check(o, poses, &noise)?),
-        None => None,
-    };
-    progress("ground truth");
     let still = if is_static(&audit) {
         Some(static_check(o)?)
     } else {
         None
     };
     progress("static");
+    let advice_noise = match (&o.noise, &still) {
+        (None, Some(StaticCheck { allan: Ok(a), .. })) => (
+            a.allan.to_imu_noise(),
+            format!("the Allan densities of `{ALLAN_YAML}`"),
+        ),
+        _ => (noise, "the given densities".to_string()),
+    };
+    let advice = kept(advise_recording(o, &advice_noise.0))?;
+    progress("advise");
+    let truth = match &o.poses {
+        Some(poses) => Some(truth_check(o, poses, &noise)?),
+        None => None,
+    };
+    progress("ground truth");
     Ok(RecordingData {
         imu: o.input.label(),
         audit,
         noise: (noise, source),
         advice,
+        advice_noise: advice_noise.1,
         truth,
         still,
         machine: Machine::this(),

@@ -68,7 +68,7 @@ fn advice_statement(d: &RecordingData) -> String {
     let mut caveats = Vec::new();
     if a.cutoffs.iter().any(Option::is_none) {
         caveats.push(
-            "no low-pass cutoff leaves white noise of the given density on every sensor \
+            "no low-pass cutoff leaves white noise of the densities used on every sensor \
              (vibration, or densities set too low), so that content counts as motion here",
         );
     }

@@ -163,7 +163,7 @@ fn advice_section(page: &mut Page, d: &RecordingData, out: &Path) -> Result<Vec<
             return Ok(Vec::new());
         }
     };
-    page.p(&format!("`preint advise` on the recording itself: the white noise of the given densities is removed by a zero-phase low-pass, each scheme's discretisation error over {window} s windows (keyframes {window} s apart) is measured at the recording's rate and at decimated rates against `hermite4` at the full rate, and compared with the noise-induced σ of the preintegrated deltas. Acceptable: all three errors (rotation, velocity, position) below {fraction}·σ; recommended: the cheapest acceptable (scheme, rate). Costs are this machine's."));
+    page.p(&format!("`preint advise` on the recording itself: the white noise of {} is removed by a zero-phase low-pass, each scheme's discretisation error over {window} s windows (keyframes {window} s apart) is measured at the recording's rate and at decimated rates against `hermite4` at the full rate, and compared with the noise-induced σ of the preintegrated deltas. Acceptable: all three errors (rotation, velocity, position) below {fraction}·σ; recommended: the cheapest acceptable (scheme, rate). Costs are this machine's.", d.advice_noise));
     let name = "recording";
     let scenes: Vec<Advised> = vec![(name, a.candidates.as_slice(), a.recommended)];
     let path = out.join("advise.svg");
