@@ -18,6 +18,7 @@
 //! statrs' `ChiSquared` distribution function.
 
 use crate::consistency::chi2_quantiles;
+use serde_json::{Map, Value, json};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 /// Mean `χ²/dof` above which a window length is optimistic.
@@ -257,6 +258,53 @@ impl Verdict {
             Verdict::Undetermined => "undetermined",
         }
     }
+}
+
+/// The blocks of a factor's residual, as the JSON names them.
+const BLOCKS: [&str; 5] = ["rotation", "velocity", "position", "gyro_bias", "acc_bias"];
+
+/// One length's summary as JSON: `{length_s, count, skipped, dof, mean_chi2, median_chi2,
+/// fraction_above_p99, ks_statistic, ks_p_value?, block_share}` (a `note` instead of the
+/// statistics with fewer than 2 windows).
+pub fn length_json(l: &LengthSummary) -> Value {
+    let mut v =
+        json!({"length_s": l.length_s, "count": l.count, "skipped": l.skipped, "dof": l.dof});
+    match &l.stats {
+        Some(s) => {
+            v["mean_chi2"] = json!(s.mean);
+            v["median_chi2"] = json!(s.median);
+            v["fraction_above_p99"] = json!(s.fraction_above_p99);
+            v["ks_statistic"] = json!(s.ks_statistic);
+            if let Some(p) = s.ks_p_value {
+                v["ks_p_value"] = json!(p);
+            }
+            let share: Map<String, Value> = BLOCKS
+                .iter()
+                .zip(&s.block_share)
+                .map(|(b, x)| ((*b).to_string(), json!(x)))
+                .collect();
+            v["block_share"] = Value::Object(share);
+        }
+        None => v["note"] = json!("fewer than 2 windows: no statistics for this length"),
+    }
+    v
+}
+
+/// The verdict as JSON: `{kind, text}` and its `factor` (and `from_length_s`).
+pub fn verdict_json(v: &Verdict) -> Value {
+    let mut j = json!({"kind": v.kind(), "text": v.text()});
+    match v {
+        Verdict::Optimistic {
+            factor,
+            from_length_s,
+        } => {
+            j["factor"] = json!(factor);
+            j["from_length_s"] = json!(from_length_s);
+        }
+        Verdict::Pessimistic { factor } => j["factor"] = json!(factor),
+        Verdict::Consistent | Verdict::Undetermined => {}
+    }
+    j
 }
 
 #[cfg(test)]

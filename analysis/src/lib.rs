@@ -16,6 +16,7 @@
 //!   model from ground truth, [`calibrate::noise_model`]), [`audit`] (what is wrong with a
 //!   recording).
 //! - Other analyses: [`consistency`] (a factor's χ² at ground truth; the `fit` object),
+//!   [`factor_windows`] (the IMU factor at ground truth over one window or many),
 //!   [`truth_windows`] (back-to-back windows over a recording and its ground truth),
 //!   [`speed`] (throughput of each scheme on this machine).
 //! - Printing helpers: [`format`](mod@format) (matrices as JSON and text), [`progress`] (bars
@@ -46,6 +47,7 @@ pub mod chi2_windows;
 pub mod consistency;
 pub mod denoise;
 pub mod error;
+pub mod factor_windows;
 pub mod format;
 pub mod input_class;
 pub mod noise;

@@ -106,6 +106,8 @@ pub enum Command {
     /// Audit a recording: rate, drift, jitter, gaps, duplicates, out-of-order samples, clipping,
     /// units, stillness; a verdict, exit 2 on a defect with --strict.
     Audit(crate::commands::audit::Args),
-    /// Everything above on built-in scenes, into one HTML page with charts.
+    /// Everything above on built-in scenes, into one HTML page with charts; with --imu, on a
+    /// recording: audit, advice, with --poses the noise model's consistency and its fit, for a
+    /// static recording Allan and the static calibration.
     Report(report::Args),
 }

@@ -108,6 +108,19 @@ impl Page {
         self
     }
 
+    /// A paragraph (backticks: code) ending in a link to `href`, a file beside the page, shown
+    /// as its name in code.
+    pub fn p_link(&mut self, text: &str, href: &str) -> &mut Self {
+        let _ = writeln!(
+            self.body,
+            "<p>{} <a href=\"{}\"><code>{}</code></a></p>",
+            inline(text),
+            esc(href),
+            esc(href)
+        );
+        self
+    }
+
     /// The conclusions box: a heading and one list item per statement (backticks: code).
     pub fn conclusions(&mut self, items: &[String]) -> &mut Self {
         self.body.push_str(

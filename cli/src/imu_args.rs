@@ -13,7 +13,9 @@ use std::path::PathBuf;
 pub struct ImuArgs {
     /// IMU recording: EuRoC/TUM-VI CSV, UZH-FPV imu.txt, KITTI text, any delimited text (see
     /// --columns and the unit flags), ROS 1 bag, MCAP or ROS 2 db3 (see --topic).
-    #[arg(help_heading = "Input", long, required_unless_present_all = ["gyro", "accel"], conflicts_with_all = ["gyro", "accel"])]
+    // Required unless `--gyro` (which requires `--accel`): one `unless` id, so that a command
+    // whose recording is optional can lift the requirement (`report`).
+    #[arg(help_heading = "Input", long, required_unless_present = "gyro", conflicts_with_all = ["gyro", "accel"])]
     pub imu: Option<PathBuf>,
     /// A split recording's gyroscope file (rows t, wx, wy, wz), with --accel.
     #[arg(help_heading = "Input", long, requires = "accel")]

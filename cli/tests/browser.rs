@@ -1,5 +1,5 @@
-//! `preint report`'s page in a real browser: headless Chromium lays it out at 800 and 1 400 px
-//! wide, and nothing may stick out of the window, every chart must have rendered within it, and
+//! `preint report`'s pages (built-in scenes, and `--imu` on a slice of EuRoC V1_01) in a real
+//! browser: headless Chromium lays them out at 800 and 1 400 px wide, and nothing may stick out of the window, every chart must have rendered within it, and
 //! the conclusions box must be there and non-empty.
 //!
 //! Method: the page is copied beside itself with a probe script appended. Chromium loads the
@@ -160,8 +160,8 @@ fn measure(browser: &Path, page: &Path, width: u32, work: &Path) -> Value {
     serde_json::from_str(&percent_decode(&dom[start..end])).expect("probe JSON")
 }
 
-/// Checks the measurements at one window width.
-fn check(m: &Value, width: u32) {
+/// Checks the measurements at one window width (at least `min_charts` charts).
+fn check(m: &Value, width: u32, min_charts: usize) {
     let num = |k: &str| m[k].as_f64().unwrap_or_else(|| panic!("{k} in {m}"));
     assert_eq!(
         num("innerWidth"),
@@ -181,7 +181,11 @@ fn check(m: &Value, width: u32) {
         over.len()
     );
     let charts = m["charts"].as_array().unwrap();
-    assert!(charts.len() >= 8, "{} charts at {width} px", charts.len());
+    assert!(
+        charts.len() >= min_charts,
+        "{} charts at {width} px",
+        charts.len()
+    );
     assert_eq!(charts.len() as f64, num("figures"), "one chart per figure");
     for c in charts {
         let (w, h) = (c["width"].as_f64().unwrap(), c["height"].as_f64().unwrap());
@@ -228,6 +232,44 @@ fn report_page_fits_the_window_in_chromium() {
             "{said} not in {conclusions:#?}"
         );
     }
+    lay_out(&html, &d, 8);
+}
+
+/// The page on a recording (`report --imu`, the first 25 s of EuRoC V1_01 with its ground
+/// truth) passes the same checks.
+#[test]
+fn report_imu_page_fits_the_window_in_chromium() {
+    let d = tmp("browser-imu");
+    let imu = common::head_rows(
+        "tests/data/euroc/V1_01_easy_imu0.csv",
+        &d,
+        "imu25.csv",
+        5000,
+    );
+    let gt = common::repo("tests/data/euroc/V1_01_easy_groundtruth_vicon2gt.csv");
+    let out = d.join("out");
+    let j = json(&[
+        "report",
+        "--imu",
+        imu.to_str().unwrap(),
+        "--poses",
+        &gt,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(j["conclusions"].as_array().unwrap().len() >= 3, "{j}");
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    for needle in [
+        "<script", "<link", "<img", "<iframe", "url(http", "@import", "src=",
+    ] {
+        assert!(!html.contains(needle), "the page contains {needle}");
+    }
+    lay_out(&html, &out, 1);
+}
+
+/// Lays out `html` (written in `dir`) in Chromium at 800 and 1 400 px and checks it, or says
+/// that it skipped without Chromium (fails instead with `PREINT_BROWSER_TEST=required`).
+fn lay_out(html: &str, dir: &Path, min_charts: usize) {
     let Some(browser) = chromium() else {
         let required = std::env::var("PREINT_BROWSER_TEST").is_ok_and(|v| v == "required");
         assert!(
@@ -241,14 +283,14 @@ fn report_page_fits_the_window_in_chromium() {
         );
         return;
     };
-    let probe = d.join("index-probe.html");
+    let probe = dir.join("index-probe.html");
     std::fs::write(
         &probe,
         html.replacen("</body>", &format!("{PROBE}</body>"), 1),
     )
     .unwrap();
     for width in [800, 1400] {
-        let m = measure(&browser, &probe, width, &d);
-        check(&m, width);
+        let m = measure(&browser, &probe, width, dir);
+        check(&m, width, min_charts);
     }
 }

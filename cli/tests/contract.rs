@@ -76,6 +76,10 @@ const EXAMPLES: &[(&str, &str, &[&str])] = &[
     ("factor", "bias_gyro_std", &["1e-4"]),
     ("factor", "bias_acc_std", &["0.01"]),
     ("factor", "window", &["0.5,1,2"]),
+    // report --imu.
+    ("report", "vel_std", &["0.01"]),
+    ("report", "bias_gyro_std", &["1e-4"]),
+    ("report", "bias_acc_std", &["0.01"]),
     // calibrate.
     ("calibrate", "estimate", &["time-offset,gyro-intrinsics", "--poses", EUROC_GT]),
     ("calibrate", "window", &["0.5,1,2,4", "--estimate", "noise", "--poses", EUROC_GT]),
@@ -240,9 +244,8 @@ fn exercise(cli: &Cli) {
         Command::Advise(a) => Some(&a.input),
         Command::Convert(a) => Some(&a.input),
         Command::Audit(a) => Some(&a.input),
-        Command::Simulate(_) | Command::BenchSteps(_) | Command::Speed(_) | Command::Report(_) => {
-            None
-        }
+        Command::Report(a) => a.input.as_ref(),
+        Command::Simulate(_) | Command::BenchSteps(_) | Command::Speed(_) => None,
     };
     if let Some(i) = input {
         let i = i.to_input();

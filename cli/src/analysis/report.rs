@@ -290,6 +290,13 @@ pub fn advise_scene(scene: &'static str) -> Result<AdviceCheck, CliError> {
     })
 }
 
+/// The worst ratio of discretisation error to noise σ over rotation, velocity and position.
+pub fn worst_ratio(c: &Candidate) -> f64 {
+    (0..3)
+        .map(|k| c.disc_err[k] / c.noise_sigma[k])
+        .fold(0.0, f64::max)
+}
+
 /// Indices of the Pareto-optimal points when minimising both coordinates (cost, error), in
 /// order of increasing cost.
 pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {

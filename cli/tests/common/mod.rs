@@ -53,6 +53,18 @@ pub fn repo(p: &str) -> String {
         .to_string()
 }
 
+/// The header line and the first `rows` data rows of the repository file `src`, written to
+/// `dir/name` (a short slice of a recording); returns the path.
+pub fn head_rows(src: &str, dir: &Path, name: &str, rows: usize) -> PathBuf {
+    let text = std::fs::read_to_string(repo(src)).unwrap();
+    let kept: String = text
+        .lines()
+        .take(rows + 1)
+        .map(|l| format!("{l}\n"))
+        .collect();
+    write(dir, name, &kept)
+}
+
 /// Writes `text` to `dir/name` and returns the path.
 pub fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let p = dir.join(name);

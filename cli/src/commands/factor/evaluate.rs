@@ -1,21 +1,16 @@
 //! What both forms of `factor` share: the keyframes and the window read from the recording,
-//! the ground truth's errors and the noise model from the flags, and one window's factor
-//! evaluated at the ground truth.
+//! the ground truth's errors, the noise model and the factor from the flags (the factor at the
+//! ground truth: [`preint_analysis::factor_windows`]).
 
 use super::Args;
 use crate::{CliError, input};
-use preint::{
-    CombinedImuFactor, ImuFactor, ImuNoise, Level, NavState, PreintParams, PreintegratedImu,
-    preintegrate,
-};
-use preint_analysis::consistency::{Evaluation, ResidualJacobians, TruthNoise, evaluate};
+use preint::{ImuNoise, Level, PreintParams};
+use preint_analysis::consistency::TruthNoise;
+use preint_analysis::factor_windows::FactorKind;
+pub(crate) use preint_analysis::factor_windows::WindowError;
 use preint_analysis::stream::StreamWindow;
 use preint_analysis::{ImuInput, checks};
 use preint_io::{GroundTruthState, read_euroc_groundtruth};
-
-fn nav(s: &GroundTruthState) -> NavState {
-    NavState::new(s.rotation(), s.p, s.v)
-}
 
 /// The ground-truth rows nearest to `--from` and `--to`: two different rows, the first
 /// earlier.
@@ -74,25 +69,6 @@ pub(crate) fn noise_params(args: &Args) -> Result<(ImuNoise, PreintParams), CliE
     Ok((noise, params))
 }
 
-/// Why a window could not be evaluated: preintegration (indices in `samples`), the factor or
-/// its weight.
-#[derive(Debug)]
-pub(crate) enum WindowError {
-    Preint(preint::PreintError),
-    Factor(preint::FactorError),
-    Weight(preint_analysis::Error),
-}
-
-impl std::fmt::Display for WindowError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            WindowError::Preint(e) => write!(f, "{e}"),
-            WindowError::Factor(e) => write!(f, "{e}"),
-            WindowError::Weight(e) => write!(f, "{e}"),
-        }
-    }
-}
-
 /// The error of a window of `w`, in the recording's terms (sample indices of the stream).
 pub(super) fn in_window(e: WindowError, input: &ImuInput, w: &StreamWindow) -> CliError {
     match e {
@@ -102,44 +78,14 @@ pub(super) fn in_window(e: WindowError, input: &ImuInput, w: &StreamWindow) -> C
     }
 }
 
-/// The window `[gi, gj]` of `samples` preintegrated with the ground truth's bias at i (and the
-/// second-order term with `--second-order`), its factor evaluated at the ground truth.
-pub(crate) fn evaluate_window(
-    args: &Args,
-    params: &PreintParams,
-    samples: &[preint::ImuSample],
-    (gi, gj): (&GroundTruthState, &GroundTruthState),
-    tn: TruthNoise,
-) -> Result<(PreintegratedImu, Evaluation), WindowError> {
-    use WindowError as E;
-    let mut pim = preintegrate(params, &gi.bias, samples, gi.t_ns, gj.t_ns).map_err(E::Preint)?;
-    if args.second_order {
-        let term = preint::second_order::covariance(params, samples, &pim).map_err(E::Preint)?;
-        pim = preint::second_order::inflate(&pim, &term);
-    }
-    let (xi, xj) = (nav(gi), nav(gj));
-    let ev = if args.combined {
-        let f = CombinedImuFactor::with_mode(pim.clone(), args.residual).map_err(E::Factor)?;
-        let (r, j) = f.evaluate(&xi, &xj, &gi.bias, &gj.bias);
-        evaluate(r, jacobians(&j), *f.residual_covariance(), tn)
-    } else {
-        let f = if args.in_window_drift {
-            ImuFactor::with_in_window_drift(pim.clone(), args.residual)
-        } else {
-            ImuFactor::with_mode(pim.clone(), args.residual)
+impl Args {
+    /// Which factor, residual and weight the flags ask for.
+    pub(crate) fn kind(&self) -> FactorKind {
+        FactorKind {
+            combined: self.combined,
+            in_window_drift: self.in_window_drift,
+            residual: self.residual,
+            second_order: self.second_order,
         }
-        .map_err(E::Factor)?;
-        let (r, j) = f.evaluate(&xi, &xj, &gi.bias);
-        evaluate(r, jacobians(&j), *f.residual_covariance(), tn)
-    }
-    .map_err(E::Weight)?;
-    Ok((pim, ev))
-}
-
-fn jacobians<const R: usize>(j: &preint::FactorJacobians<R>) -> ResidualJacobians<R> {
-    ResidualJacobians {
-        state_i: j.state_i(),
-        state_j: j.state_j(),
-        bias_i: j.bias_i(),
     }
 }

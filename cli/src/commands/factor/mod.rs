@@ -40,10 +40,11 @@ use crate::imu_args::ImuArgs;
 use crate::preint_args::PreintArgs;
 use crate::scheme::{self};
 use crate::{CliError, Output, input};
-use evaluate::{evaluate_window, in_window, keyframes, noise_params, truth_noise, window};
+use evaluate::{in_window, keyframes, noise_params, truth_noise, window};
 use preint::{ImuBias, PreintegratedImu, ResidualMode};
 use preint_analysis::checks;
 use preint_analysis::consistency::{Evaluation, TruthNoise, chi2_quantiles, fit_json};
+use preint_analysis::factor_windows::evaluate_window;
 use preint_analysis::format::list;
 use preint_io::GroundTruthState;
 use serde_json::{Value, json};
@@ -246,7 +247,7 @@ pub fn compute(args: &Args) -> Result<FactorRun, CliError> {
     let (w, source, unit_check) =
         window(&input, &noise, &mut params, (Some(gi.t_ns), Some(gj.t_ns)))?;
     let samples = w.samples.as_slice();
-    let (pim, ev) = evaluate_window(args, &params, samples, (&gi, &gj), tn)
+    let (pim, ev) = evaluate_window(&args.kind(), &params, samples, (&gi, &gj), tn)
         .map_err(|e| in_window(e, &input, &w))?;
     Ok(FactorRun {
         imu: input.label(),

@@ -2,7 +2,8 @@
 //! back-to-back windows of each length: is the noise model consistent with this IMU and this
 //! ground truth, and from which window length on does it fail?
 //!
-//! The windows are [`preint_analysis::truth_windows`]' (back-to-back over the span where the
+//! The windows are [`preint_analysis::truth_windows`]' and their factors
+//! [`preint_analysis::factor_windows`]' (back-to-back over the span where the
 //! recording and the ground truth overlap, keyframes at the ground-truth rows nearest to their
 //! edges), and each window's factor is evaluated as the one-window form does ([`super`]: 9-dof
 //! `ImuFactor`, 15-dof `CombinedImuFactor` with `--combined`, the same weight). A window is
@@ -14,18 +15,16 @@
 //! The statistics per length and the verdict are [`preint_analysis::chi2_windows`]. The fit
 //! (JSON `fit`) is the χ² summed over all windows of all lengths against their total dof.
 
-use super::evaluate::{evaluate_window, noise_params, truth_noise, window};
+use super::evaluate::{noise_params, truth_noise, window};
 use super::{Args, truth_noise_json};
 use crate::{CliError, Output};
-use preint::ImuSample;
-use preint_analysis::chi2_windows::{self, LengthSummary, Verdict, WindowChi2};
+use preint_analysis::chi2_windows::{self, LengthSummary, Verdict, length_json, verdict_json};
 use preint_analysis::consistency::{TruthNoise, fit_json};
-use preint_analysis::truth_windows::{check_lengths, for_each_window, length_ns, overlap};
-use preint_io::{GroundTruthState, read_euroc_groundtruth};
+use preint_analysis::factor_windows::per_length;
+use preint_analysis::truth_windows::{check_lengths, overlap};
+use preint_io::read_euroc_groundtruth;
 use serde_json::{Value, json};
 use std::fmt::Write as _;
-
-const BLOCKS: [&str; 5] = ["rotation", "velocity", "position", "gyro_bias", "acc_bias"];
 
 /// Everything `factor --window` computes.
 #[derive(Clone, Debug)]
@@ -48,25 +47,6 @@ pub struct WindowsRun {
     pub gravity: nalgebra::Vector3<f64>,
 }
 
-/// The windows of one length: their χ² and block shares, and how many were skipped.
-fn windows_of(
-    args: &Args,
-    params: &preint::PreintParams,
-    data: (&[ImuSample], &[GroundTruthState]),
-    span_dt: ((i64, i64), f64),
-    (length_ns, tn): (i64, TruthNoise),
-) -> (Vec<WindowChi2>, usize) {
-    for_each_window(data, span_dt, length_ns, |w, g| {
-        match evaluate_window(args, params, w, g, tn) {
-            Ok((_, ev)) if ev.chi2.is_finite() => Some(WindowChi2 {
-                chi2: ev.chi2,
-                share: ev.chi2_share,
-            }),
-            _ => None,
-        }
-    })
-}
-
 /// Reads the files and evaluates the factor over back-to-back windows of every length.
 pub fn compute(args: &Args, lengths: &[f64]) -> Result<WindowsRun, CliError> {
     check_lengths(lengths)?;
@@ -77,14 +57,14 @@ pub fn compute(args: &Args, lengths: &[f64]) -> Result<WindowsRun, CliError> {
     let (w, _, _) = window(&input, &noise, &mut params, (None, None))?;
     let samples = w.samples.as_slice();
     let (span, dt) = overlap(samples, &gt, (&input.label(), &args.poses), "--window")?;
-    let dof = if args.combined { 15 } else { 9 };
-    let mut summaries = Vec::new();
-    for &l in lengths {
-        let length_ns = length_ns(l, span)?;
-        let (windows, skipped) =
-            windows_of(args, &params, (samples, &gt), (span, dt), (length_ns, tn));
-        summaries.push(chi2_windows::summarise(l, dof, &windows, skipped));
-    }
+    let summaries = per_length(
+        &args.kind(),
+        &params,
+        (samples, &gt),
+        (span, dt),
+        lengths,
+        tn,
+    )?;
     Ok(WindowsRun {
         imu: input.label(),
         span_ns: span,
@@ -108,46 +88,6 @@ pub fn fit(r: &WindowsRun) -> preint_calib::Fit {
          --pose-pos-std, --vel-std, --bias-gyro-std, --bias-acc-std), or the clocks",
         r.verdict.text()
     ))
-}
-
-fn length_json(l: &LengthSummary) -> Value {
-    let mut v =
-        json!({"length_s": l.length_s, "count": l.count, "skipped": l.skipped, "dof": l.dof});
-    match &l.stats {
-        Some(s) => {
-            v["mean_chi2"] = json!(s.mean);
-            v["median_chi2"] = json!(s.median);
-            v["fraction_above_p99"] = json!(s.fraction_above_p99);
-            v["ks_statistic"] = json!(s.ks_statistic);
-            if let Some(p) = s.ks_p_value {
-                v["ks_p_value"] = json!(p);
-            }
-            let share: serde_json::Map<String, Value> = BLOCKS
-                .iter()
-                .zip(&s.block_share)
-                .map(|(b, x)| ((*b).to_string(), json!(x)))
-                .collect();
-            v["block_share"] = Value::Object(share);
-        }
-        None => v["note"] = json!("fewer than 2 windows: no statistics for this length"),
-    }
-    v
-}
-
-fn verdict_json(v: &Verdict) -> Value {
-    let mut j = json!({"kind": v.kind(), "text": v.text()});
-    match v {
-        Verdict::Optimistic {
-            factor,
-            from_length_s,
-        } => {
-            j["factor"] = json!(factor);
-            j["from_length_s"] = json!(from_length_s);
-        }
-        Verdict::Pessimistic { factor } => j["factor"] = json!(factor),
-        Verdict::Consistent | Verdict::Undetermined => {}
-    }
-    j
 }
 
 /// The JSON form: `{windows: [...], verdict, span_ns, factor, in_window_drift, gravity

@@ -1,6 +1,7 @@
-//! `preint report`: built-in scenes, no input files, one self-contained HTML page.
+//! `preint report`: one self-contained HTML page, on built-in scenes (no input files) or,
+//! with `--imu`, on the user's recording ([`recording`]).
 //!
-//! Sections, after a conclusions box computed from the figures
+//! On the built-in scenes, the sections, after a conclusions box computed from the figures
 //! ([`crate::analysis::report::conclusions`]): accuracy against cost with the Pareto front
 //! (`seed-ellipse`, `aggressive`), error against rate with the fitted convergence orders, what
 //! `preint advise` recommends on simulated noisy recordings, the cost per sample of each scheme
@@ -11,11 +12,13 @@
 
 use crate::analysis::report::{self, ReportData, StaticCheck};
 use crate::html::Page;
+use crate::imu_args::ImuArgs;
 use crate::{CliError, Output, scheme};
 use preint_analysis::progress;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 
+pub mod recording;
 mod sections;
 
 use sections::{
@@ -23,12 +26,75 @@ use sections::{
     gimbal_lock_section, nees_section, speed_section,
 };
 
-/// Flags of `preint report`.
+/// Flags of `preint report`: without `--imu`, the built-in scenes; with it, the recording
+/// ([`recording`]).
 #[derive(clap::Args, Debug, Clone)]
+#[command(mut_arg("imu", |a| a.required_unless_present(clap::builder::Resettable::<clap::Id>::Reset)))]
 pub struct Args {
-    /// Output directory (index.html and the SVG charts).
+    /// Output directory (index.html and the SVG charts; with --imu also the fitted imu.yaml).
     #[arg(help_heading = "Output", long, default_value = "out/report")]
     pub out: PathBuf,
+    /// A recording to report on instead of the built-in scenes (with the reader flags): the
+    /// audit's verdict, the scheme and keyframe rate its motion needs, with --poses the
+    /// consistency of the noise model per window length and the fitted noise model, and for a
+    /// static recording the Allan deviation and the static calibration.
+    #[command(flatten)]
+    pub input: Option<ImuArgs>,
+    /// With --imu: EuRoC ground truth with velocities and biases (p (m), q wxyz body->world,
+    /// v (m/s), b_g (rad/s), b_a (m/s^2)), for the consistency per window length and the
+    /// fitted noise model.
+    #[arg(help_heading = "Ground truth", long)]
+    pub poses: Option<PathBuf>,
+    /// With --imu: Kalibr imu.yaml with the noise densities (default: EuRoC figures).
+    #[arg(help_heading = "Sensor model", long)]
+    pub noise: Option<PathBuf>,
+    /// With --poses: standard deviation of the ground truth's attitudes (rad), added to the
+    /// weight with the given noise (else 0) and held in the noise fit (else fitted).
+    #[arg(
+        help_heading = "Ground truth",
+        long,
+        value_name = "RAD",
+        allow_hyphen_values = true
+    )]
+    pub pose_rot_std: Option<f64>,
+    /// With --poses: standard deviation of the ground truth's positions (m), added to the
+    /// weight with the given noise (else 0) and held in the noise fit (else fitted).
+    #[arg(
+        help_heading = "Ground truth",
+        long,
+        value_name = "M",
+        allow_hyphen_values = true
+    )]
+    pub pose_pos_std: Option<f64>,
+    /// With --poses: standard deviation of the ground truth's velocities (m/s), added to the
+    /// weight with the given noise (else 0) and held in the noise fit (else fitted).
+    #[arg(
+        help_heading = "Ground truth",
+        long,
+        value_name = "M/S",
+        allow_hyphen_values = true
+    )]
+    pub vel_std: Option<f64>,
+    /// With --poses: standard deviation (per axis) of the ground truth's gyroscope bias
+    /// (rad/s), added to the weight through the measurement's bias Jacobian with the given
+    /// noise (else 0) and held in the noise fit (else fitted).
+    #[arg(
+        help_heading = "Ground truth",
+        long,
+        value_name = "RAD/S",
+        allow_hyphen_values = true
+    )]
+    pub bias_gyro_std: Option<f64>,
+    /// With --poses: standard deviation (per axis) of the ground truth's accelerometer bias
+    /// (m/s^2), added to the weight through the measurement's bias Jacobian with the given
+    /// noise (else 0) and held in the noise fit (else fitted).
+    #[arg(
+        help_heading = "Ground truth",
+        long,
+        value_name = "M/S2",
+        allow_hyphen_values = true
+    )]
+    pub bias_acc_std: Option<f64>,
 }
 
 /// The report's numbers, its conclusions and the files written.
@@ -156,12 +222,17 @@ pub fn to_json(r: &Report) -> Value {
 
 /// The human summary: where the page is, and the conclusions.
 pub fn to_text(r: &Report) -> String {
-    let index = r.files.last().map_or("", String::as_str);
+    text(&r.files, &r.conclusions)
+}
+
+/// Where the page is (the last of `files`; the others beside it), and the conclusions.
+fn text(files: &[String], conclusions: &[String]) -> String {
+    let index = files.last().map_or("", String::as_str);
     let mut h = format!(
         "wrote {index} (charts beside it: {})\nconclusions:\n",
-        r.files.len().saturating_sub(1)
+        files.len().saturating_sub(1)
     );
-    for c in &r.conclusions {
+    for c in conclusions {
         h.push_str("- ");
         h.push_str(c);
         h.push('\n');
@@ -169,8 +240,12 @@ pub fn to_text(r: &Report) -> String {
     h
 }
 
-/// Runs `preint report`.
+/// Runs `preint report`: on the recording with `--imu` ([`recording::run`]), else on the
+/// built-in scenes.
 pub fn run(args: &Args) -> Result<Output, CliError> {
+    if let Some(o) = recording::options(args)? {
+        return recording::run(&o);
+    }
     let r = compute(args)?;
     Ok(Output {
         human: to_text(&r),

@@ -5,13 +5,14 @@ use super::failed;
 use crate::analysis::accuracy::{Row, order};
 use crate::analysis::report::{
     ADVISE_RECORDING, ADVISE_WINDOW_FRACTION, AdviceCheck, AllanCheck, NEES_RUNS, ReportData,
-    SPEED_SAMPLES_RUNS, StaticCheck, front_runs, hz, nees_band_half,
+    SPEED_SAMPLES_RUNS, StaticCheck, front_runs, hz, nees_band_half, worst_ratio,
 };
 use crate::charts::figures;
 use crate::html::Page;
 use crate::{CliError, scheme};
 use preint_analysis::advise::Candidate;
 use preint_analysis::format::IMU_AXES;
+use preint_calib::allan::ImuAllan;
 use std::path::Path;
 
 fn e3(x: f64) -> String {
@@ -110,13 +111,6 @@ pub(super) fn convergence_section(
     Ok(files)
 }
 
-/// The worst ratio of discretisation error to noise σ over rotation, velocity and position.
-pub(super) fn worst_ratio(c: &Candidate) -> f64 {
-    (0..3)
-        .map(|k| c.disc_err[k] / c.noise_sigma[k])
-        .fold(0.0, f64::max)
-}
-
 /// What `advise` recommends on each scene: the chart, the recommendation and, per scheme, its
 /// lowest acceptable rate. Returns the chart's path.
 pub(super) fn advice_section(
@@ -134,13 +128,13 @@ pub(super) fn advice_section(
         velocity, position) below {fraction}·σ. Recommended: the cheapest acceptable (scheme, rate); \
         costs within 15 % of the cheapest count as equal and the simplest scheme among them wins."));
     let path = out.join("advise.svg");
-    let scenes: Vec<(&str, &[Candidate], Option<usize>)> = advice
+    let scenes: Vec<Advised> = advice
         .iter()
         .map(|a| (a.scene, a.candidates.as_slice(), a.recommended))
         .collect();
     figures::advice(&scenes, fraction, &path)?;
     page.svg(&path, &format!("Worst ratio of discretisation error to noise σ (over rotation, velocity and position) against rate; below the grey dashed line ({fraction}·σ) a (scheme, rate) is acceptable; the black ring marks the recommendation.")).map_err(failed)?;
-    let rows = advice_rows(advice, rate);
+    let rows = advice_rows(&scenes, rate);
     page.p("Per scheme, its lowest acceptable rate:");
     page.table(
         &[
@@ -169,22 +163,25 @@ pub(super) fn advice_section(
     Ok(path.display().to_string())
 }
 
-/// The advice table's rows: per scene and scheme its lowest acceptable rate, its worst error
-/// over σ, its cost and whether it is the recommendation (`none up to` the recording's `rate`
-/// when no rate is acceptable).
-fn advice_rows(advice: &[AdviceCheck], rate: f64) -> Vec<Vec<String>> {
+/// One recording `advise` ran on: its name, every (scheme, rate) evaluated and the index of
+/// the recommendation.
+pub(super) type Advised<'a> = (&'a str, &'a [Candidate], Option<usize>);
+
+/// The advice table's rows: per recording and scheme its lowest acceptable rate, its worst
+/// error over σ, its cost and whether it is the recommendation (`none up to` the recording's
+/// `rate` \[Hz\] when no rate is acceptable).
+pub(super) fn advice_rows(advice: &[Advised], rate: f64) -> Vec<Vec<String>> {
     let mut rows = Vec::new();
-    for a in advice {
-        let rec = a.recommendation();
+    for &(scene, candidates, recommended) in advice {
+        let rec = recommended.map(|i| &candidates[i]);
         for s in scheme::ALL {
-            let ok = a
-                .candidates
+            let ok = candidates
                 .iter()
                 .filter(|c| c.scheme == s && c.acceptable)
                 .min_by(|x, y| x.rate_hz.total_cmp(&y.rate_hz));
             rows.push(match ok {
                 Some(c) => vec![
-                    format!("`{}`", a.scene),
+                    format!("`{scene}`"),
                     scheme::label(s).into(),
                     hz(c.rate_hz),
                     format!("{:.3}", worst_ratio(c)),
@@ -197,7 +194,7 @@ fn advice_rows(advice: &[AdviceCheck], rate: f64) -> Vec<Vec<String>> {
                     .into(),
                 ],
                 None => vec![
-                    format!("`{}`", a.scene),
+                    format!("`{scene}`"),
                     scheme::label(s).into(),
                     format!("none up to {} Hz", hz(rate)),
                     "".into(),
@@ -302,6 +299,28 @@ pub(super) fn calibration_section(page: &mut Page, c: &StaticCheck) {
     page.p(&format!("`acc_bias`: {}", cal.acc_bias_note));
 }
 
+/// The Allan charts of both sensors (`allan_gyro.svg`, `allan_acc.svg` in `out`), embedded
+/// with their captions. Returns their paths.
+pub(super) fn allan_charts(
+    page: &mut Page,
+    allan: &ImuAllan,
+    out: &Path,
+) -> Result<Vec<String>, CliError> {
+    let mut files = Vec::new();
+    for (sensor, name, unit) in [(0, "gyro", "rad/s"), (1, "acc", "m/s²")] {
+        let path = out.join(format!("allan_{name}.svg"));
+        figures::allan(allan, sensor, &path)?;
+        let what = if sensor == 0 {
+            "gyroscope"
+        } else {
+            "accelerometer"
+        };
+        page.svg(&path, &format!("Overlapping Allan deviation of the three {what} axes [{unit}], with the fitted white-noise (dashed) and random-walk (dotted) lines in each axis' colour; the diamonds mark N at τ = 1 s and the squares K at τ = 3 s.")).map_err(failed)?;
+        files.push(path.display().to_string());
+    }
+    Ok(files)
+}
+
 /// The Allan charts of both sensors and the fitted densities per axis. Returns the charts'
 /// paths.
 pub(super) fn allan_section(
@@ -314,18 +333,7 @@ pub(super) fn allan_section(
     page.p(&format!("One hour at rest at {} Hz with EuRoC densities and bias random walk. The fitted white-noise \
         line (slope −½) read at τ = 1 s gives the noise density N, the random-walk line (slope +½) read at \
         τ = 3 s gives K; the Kalibr `imu.yaml` that `preint allan` writes takes the maximum over the axes.", sim.update_rate_hz));
-    let mut files = Vec::new();
-    for (sensor, name, unit) in [(0, "gyro", "rad/s"), (1, "acc", "m/s²")] {
-        let path = out.join(format!("allan_{name}.svg"));
-        figures::allan(&a.allan, sensor, &path)?;
-        let what = if sensor == 0 {
-            "gyroscope"
-        } else {
-            "accelerometer"
-        };
-        page.svg(&path, &format!("Overlapping Allan deviation of the three {what} axes [{unit}], with the fitted white-noise (dashed) and random-walk (dotted) lines in each axis' colour; the diamonds mark N at τ = 1 s and the squares K at τ = 3 s.")).map_err(failed)?;
-        files.push(path.display().to_string());
-    }
+    let files = allan_charts(page, &a.allan, out)?;
     let (sn, sk) = (
         [sim.gyro_noise_density, sim.acc_noise_density],
         [sim.gyro_random_walk, sim.acc_random_walk],
