@@ -834,7 +834,7 @@ def calibrate_file(
     pose_pos_std: float | None = None,
     latitude: float | None = None,
     heading: float | None = None,
-    estimate: str | None = None,
+    estimate: str | Sequence[str] | None = None,
     pose_spacing: float = 0.5,
     calibration: str | os.PathLike[str] | None = None,
     out: str | os.PathLike[str] | None = None,
@@ -850,7 +850,7 @@ def calibrate_file(
     attitudes-only ``t,qw,qx,qy,qz`` file; multi-position with ≥ 3 distinct still attitudes;
     otherwise single-attitude static on the longest still interval), ``model`` names it.
     ``noise``: a Kalibr imu.yaml (default EuRoC figures). With ``poses``: ``estimate``, a
-    comma-separated list of ``time-offset``, ``gyro-intrinsics``, ``g-sensitivity``,
+    comma-separated string or a list of ``time-offset``, ``gyro-intrinsics``, ``g-sensitivity``,
     ``accel-intrinsics`` (``parameters`` [{name, unit, excited, value, kept, std}] in the
     result; a parameter the motion does not excite is withheld: ``value`` None, ``kept`` its
     initial value), ``pose_spacing`` [s], ``calibration`` (a
@@ -867,7 +867,8 @@ def calibrate_file(
     --estimate noise --json``, the maximum-likelihood noise densities, bias random walks and
     the ground truth's own errors from ImuFactors over back-to-back windows of each length of
     ``window`` [s] (default [0.5, 1, 2, 4]); result ``noise``, ``ground_truth_error``,
-    ``withheld``, ``per_length``, ``fit``. ``noise`` is the starting point (else a moment
+    ``withheld``, ``per_length``, ``gravity`` (the world gravity vector that fits, its tilt and
+    whether the information criterion supports it), ``fit``. ``noise`` is the starting point (else a moment
     estimate); a ground-truth error given (``pose_rot_std`` [rad], ``pose_pos_std`` [m],
     ``vel_std`` [m/s], ``bias_gyro_std`` [rad/s], ``bias_acc_std`` [m/s²]) is held at that
     value, the others are fitted; ``out`` writes the fitted model as a Kalibr imu.yaml.

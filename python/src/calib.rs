@@ -322,6 +322,26 @@ pub(crate) fn calibrate_multi_pose_py<'py>(
     multi_pose_dict(py, &c)
 }
 
+/// `estimate` as the command's comma-separated list: a string (`"noise"`,
+/// `"time-offset,gyro-intrinsics"`) or a list of names (`["noise"]`).
+fn estimate_arg(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<String>> {
+    let Some(obj) = obj.filter(|o| !o.is_none()) else {
+        return Ok(None);
+    };
+    if let Ok(s) = obj.extract::<String>() {
+        return Ok(Some(s));
+    }
+    obj.extract::<Vec<String>>()
+        .map(|v| Some(v.join(",")))
+        .map_err(|_| {
+            raise(
+                Class::Input,
+                "estimate: give a string (\"noise\", \"time-offset,gyro-intrinsics\") or a list \
+                 of names ([\"noise\"])",
+            )
+        })
+}
+
 /// calibrate(path=None, *, gyro=None, accel=None, ..., noise=None, poses=None, gravity=9.81,
 /// from_ns=None, to_ns=None, pose_rot_std=None, pose_pos_std=None, latitude=None, heading=None,
 /// estimate=None, pose_spacing=0.5, calibration=None, out=None, scheme="midpoint", window=None,
@@ -349,7 +369,7 @@ pub(crate) fn calibrate_file<'py>(
     pose_pos_std: Option<f64>,
     latitude: Option<f64>,
     heading: Option<f64>,
-    estimate: Option<String>,
+    estimate: Option<&Bound<'py, PyAny>>,
     pose_spacing: f64,
     calibration: Option<PathBuf>,
     out: Option<PathBuf>,
@@ -364,6 +384,7 @@ pub(crate) fn calibrate_file<'py>(
     crate::checks::gravity_magnitude("gravity", gravity)?;
     let scheme = crate::params::scheme_from(scheme)?;
     earth_args(latitude, heading)?;
+    let estimate = estimate_arg(estimate)?;
     let needs_poses = estimate.is_some() || calibration.is_some();
     if needs_poses && poses.is_none() {
         return Err(raise(

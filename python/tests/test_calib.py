@@ -467,6 +467,11 @@ def test_noise_model_from_ground_truth_equals_the_command(preint_cli, tmp_path):
     (line,) = [x for x in out.read_text().splitlines()
                if x.startswith("accelerometer_noise_density:")]
     assert float(line.split(":")[1].split("#")[0]) == acc
+    as_list = preint.calibrate_file(EUROC, poses=EUROC_GT, noise=EUROC_NOISE, from_ns=t0,
+                                    to_ns=t1, estimate=["noise"], window=[0.5, 1, 2, 4])
+    assert as_list["gravity"] == f["gravity"] and as_list["noise"] == f["noise"]
+    with pytest.raises(preint.InputError, match="list of names"):
+        preint.calibrate_file(EUROC, poses=EUROC_GT, estimate=3)
     g = f["gravity"]
     assert g["supported"] and g["likelihood_ratio"] > g["bic_penalty"]
     assert abs(g["tilt_deg"] - 0.236) < 3 * g["tilt_deg_std"]
