@@ -92,15 +92,35 @@ fn nav(s: &GroundTruthState) -> NavState {
     NavState::new(s.rotation(), s.p, s.v)
 }
 
+/// Where a window sits and how its residual moves with the ground-truth states at its ends:
+/// what [`crate::calibrate::noise_correlation`] needs to tell errors correlated in time.
+#[derive(Clone, Copy, Debug)]
+pub struct Endpoints {
+    /// The ground-truth rows at i and j \[ns\].
+    pub t_ns: (i64, i64),
+    /// `∂r/∂x_i`, `∂r/∂x_j` in the `NavState` tangent [δφ, δp, δv].
+    pub state: (SMatrix<f64, 9, 9>, SMatrix<f64, 9, 9>),
+}
+
 /// The window `[gi, gj]` of `samples` ([`NoiseWindow`], module docs); `params` (at
 /// [`Level::Covariance`] or above, with non-zero white noise) builds the factor whose residual
 /// and Jacobians are taken.
 pub fn noise_window(
     params: &PreintParams,
     samples: &[ImuSample],
-    (gi, gj): (&GroundTruthState, &GroundTruthState),
+    ends: (&GroundTruthState, &GroundTruthState),
     length_s: f64,
 ) -> Result<NoiseWindow, WindowError> {
+    noise_window_at(params, samples, ends, length_s).map(|(w, _)| w)
+}
+
+/// [`noise_window`] and the window's [`Endpoints`].
+pub fn noise_window_at(
+    params: &PreintParams,
+    samples: &[ImuSample],
+    (gi, gj): (&GroundTruthState, &GroundTruthState),
+    length_s: f64,
+) -> Result<(NoiseWindow, Endpoints), WindowError> {
     let span = (gi.t_ns, gj.t_ns);
     let mut p = params.clone();
     p.level = Level::Covariance;
@@ -139,12 +159,17 @@ pub fn noise_window(
     for k in 0..5 {
         basis[4 + k] = unit(k);
     }
-    Ok(NoiseWindow {
+    let window = NoiseWindow {
         length_s,
         r,
         basis,
         gravity_jacobian: gravity_jacobian(gi, (span.1 - span.0) as f64 * 1e-9),
-    })
+    };
+    let ends = Endpoints {
+        t_ns: span,
+        state: (jac.state_i, jac.state_j),
+    };
+    Ok((window, ends))
 }
 
 /// `∂r/∂g` of the component-wise residual at the state `gi` over `dt_s` \[s\]: zero in

@@ -219,6 +219,17 @@ struct Eval {
     fisher: SMatrix<f64, PARAMS, PARAMS>,
 }
 
+/// `Σ_w(θ) = Σ_k θ_k A_{w,k}`, the covariance of the window's residual at `θ`.
+pub fn covariance(w: &NoiseWindow, theta: &SVector<f64, PARAMS>) -> SMatrix<f64, 9, 9> {
+    sigma(w, theta)
+}
+
+/// `θ` of the estimate (0 for a parameter withheld on its bound), in the order of
+/// [`Param::ALL`].
+pub fn theta_of(fit: &NoiseFit) -> SVector<f64, PARAMS> {
+    SVector::from_fn(|k, _| fit.params[k].theta.0)
+}
+
 fn sigma(w: &NoiseWindow, theta: &SVector<f64, PARAMS>) -> SMatrix<f64, 9, 9> {
     (0..PARAMS).fold(SMatrix::zeros(), |s, k| s + w.basis[k] * theta[k])
 }

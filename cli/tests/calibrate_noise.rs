@@ -142,6 +142,23 @@ fn the_fit_on_one_half_is_consistent_on_the_other() {
     let tilt = g["tilt_deg"].as_f64().unwrap();
     assert!((0.1..0.5).contains(&tilt), "{g}");
     assert!(tilt > 5.0 * g["tilt_deg_std"].as_f64().unwrap(), "{g}");
+    // vicon2gt is a smoothed product: its errors at neighbouring rows are correlated, which
+    // back-to-back 0.5 s windows show beyond what independent row errors predict.
+    let c = &j["ground_truth_time_correlation"];
+    let short = &c["per_length"][0];
+    assert_eq!(short["length_s"], 0.5, "{c}");
+    assert_eq!(short["correlated"], true, "{c}");
+    assert!(
+        short["observed"].as_f64() > short["expected_independent"].as_f64(),
+        "{c}"
+    );
+    assert!(
+        c["verdict"]
+            .as_str()
+            .unwrap()
+            .contains("correlated in time"),
+        "{c}"
+    );
     let v: Vec<f64> = (0..3).map(|k| g["vector"][k].as_f64().unwrap()).collect();
     let gv = format!("--gravity-vector={},{},{}", v[0], v[1], v[2]);
     let truth = [

@@ -48,6 +48,7 @@
 
 mod json;
 mod known;
+pub mod noise_correlation;
 pub mod noise_model;
 
 pub use json::{calibrated_json, earth_note, to_json};

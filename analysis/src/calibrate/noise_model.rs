@@ -17,11 +17,14 @@
 //! JSON: `{estimate: "noise", noise, ground_truth_error, withheld: [{parameter, reason,
 //! upper_bound?}], per_length: [{length_s, count, skipped, chi2_dof_before, chi2_dof_after}],
 //! gravity: {given, vector, vector_std, correction, magnitude, tilt_deg, tilt_deg_std,
-//! supported, likelihood_ratio, bic_penalty, use}, iterations, log_likelihood,
-//! update_rate_hz, fit, written?}` (vectors in m/s², world frame).
+//! supported, likelihood_ratio, bic_penalty, use}, ground_truth_time_correlation:
+//! {per_length: [{length_s, pairs, observed, expected_independent, std_error, correlated}],
+//! verdict}, iterations, log_likelihood, update_rate_hz, fit, written?}` (vectors in m/s²,
+//! world frame; the correlation is [`noise_correlation`]'s).
 
+use super::noise_correlation::{self, LagCorrelation};
 use crate::consistency::fit_json;
-use crate::noise_windows::noise_window;
+use crate::noise_windows::noise_window_at;
 use crate::truth_windows::{check_lengths, for_each_window, length_ns, overlap, read_window};
 use crate::{Error, ImuInput, checks};
 use nalgebra::Vector3;
@@ -99,6 +102,9 @@ pub struct NoiseRun {
     pub start: ImuNoise,
     /// The world gravity vector the windows were preintegrated with \[m/s²\], `(0, 0, −G)`.
     pub gravity_given: Vector3<f64>,
+    /// Whether the ground truth's errors look correlated in time, per length
+    /// ([`noise_correlation`]).
+    pub time_correlation: Vec<LagCorrelation>,
     /// The Kalibr imu.yaml written to `out`, when given.
     pub written: Option<PathBuf>,
 }
@@ -159,13 +165,15 @@ fn fit_windows(o: &NoiseOptions) -> Result<NoiseRun, Error> {
     let mut sorted = lengths.to_vec();
     sorted.sort_by(f64::total_cmp);
     sorted.dedup();
-    let (mut windows, mut skipped) = (Vec::new(), Vec::new());
+    let (mut windows, mut ends, mut skipped) = (Vec::new(), Vec::new(), Vec::new());
     for &l in &sorted {
-        let (mut ws, s) =
-            for_each_window((samples, &gt), (span, dt), length_ns(l, span)?, |w, g| {
-                noise_window(&params, w, g, l).ok()
-            });
-        windows.append(&mut ws);
+        let (ws, s) = for_each_window((samples, &gt), (span, dt), length_ns(l, span)?, |w, g| {
+            noise_window_at(&params, w, g, l).ok()
+        });
+        for (w, e) in ws {
+            windows.push(w);
+            ends.push(e);
+        }
         skipped.push((l, s));
     }
     let mut st = [0.0; PARAMS];
@@ -193,6 +201,7 @@ fn fit_windows(o: &NoiseOptions) -> Result<NoiseRun, Error> {
         // "before" is at the EuRoC densities the fit did not start from.
         before_at(&mut fit, &windows, &start, &held);
     }
+    let time_correlation = noise_correlation::lag_one(&windows, &ends, &fit);
     Ok(NoiseRun {
         imu,
         fit,
@@ -200,6 +209,7 @@ fn fit_windows(o: &NoiseOptions) -> Result<NoiseRun, Error> {
         rate_hz: 1e9 / dt,
         start,
         gravity_given: params.gravity,
+        time_correlation,
         written: None,
     })
 }
@@ -305,6 +315,17 @@ pub fn to_json(r: &NoiseRun) -> Value {
     if let Some(g) = gravity_json(r) {
         j["gravity"] = g;
     }
+    let rows: Vec<Value> = (r.time_correlation.iter())
+        .map(|c| {
+            json!({"length_s": c.length_s, "pairs": c.pairs, "observed": c.observed,
+                "expected_independent": c.expected, "std_error": c.std_error,
+                "correlated": c.correlated()})
+        })
+        .collect();
+    j["ground_truth_time_correlation"] = json!({
+        "per_length": rows,
+        "verdict": noise_correlation::verdict(&r.time_correlation),
+    });
     if let Some(p) = &r.written {
         j["written"] = json!(p.display().to_string());
     }

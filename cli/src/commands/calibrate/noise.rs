@@ -6,6 +6,7 @@
 use super::Args;
 use crate::fit::{fit_text, strict};
 use crate::{CliError, Output};
+use preint_analysis::calibrate::noise_correlation;
 use preint_analysis::calibrate::noise_model::{self, KEYS, NoiseOptions, NoiseRun};
 use preint_calib::noise_fit::Withheld;
 use std::fmt::Write as _;
@@ -76,6 +77,11 @@ fn to_text(r: &NoiseRun) -> String {
             g.penalty
         );
     }
+    let _ = writeln!(
+        h,
+        "  ground truth in time         {}",
+        noise_correlation::verdict(&r.time_correlation)
+    );
     let _ = writeln!(
         h,
         "{:>8} {:>6} {:>7} {:>14} {:>13}",

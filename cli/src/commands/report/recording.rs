@@ -310,6 +310,10 @@ fn fit_section(page: &mut Page, t: &TruthCheck) {
         let g0 = r.gravity_given;
         page.p(&format!("World gravity fitted with the densities (the ground truth's frame need not be levelled): ({:.4}, {:.4}, {:.4}) ± {:.1e} m/s², {:.3} ± {:.3}° from ({}, {}, {}); likelihood ratio {:.1} against the information criterion's {:.1}: {}.", v[0], v[1], v[2], g.cov.diagonal().map(|d| d.max(0.0).sqrt()).max(), g.tilt_from(&g0).to_degrees(), g.tilt_std_from(&g0).to_degrees(), g0[0], g0[1], g0[2], g.lr, g.penalty, if g.supported { "kept, and used by the fitted model's consistency above" } else { "not supported, the given gravity kept" }));
     }
+    page.p(&format!(
+        "The ground truth in time: {}.",
+        preint_analysis::calibrate::noise_correlation::verdict(&r.time_correlation)
+    ));
     page.p("The fit's own χ²/dof per window length, at the given model and at the fitted one. Its window covariance carries the bias random walk within each window (the bias held at its value at i while the true bias drifts): the fitted model's consistency above uses the same weight (`ImuFactor::with_in_window_drift`); GTSAM's `ImuFactor`, weighted by the white noise alone, leaves it out.");
     page.table(
         &[
