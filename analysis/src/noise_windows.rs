@@ -164,12 +164,22 @@ pub fn noise_window_at(
         r,
         basis,
         gravity_jacobian: gravity_jacobian(gi, (span.1 - span.0) as f64 * 1e-9),
+        block: 0,
     };
     let ends = Endpoints {
         t_ns: span,
         state: (jac.state_i, jac.state_j),
     };
     Ok((window, ends))
+}
+
+/// Sets each window's [`NoiseWindow::block`]: the stretch `[t₀ + kB, t₀ + (k+1)B)` its start
+/// row falls in, `B = block_ns` (the longest window length: back-to-back windows of lengths
+/// dividing it then share data only within a block; `t₀` the start of the span cut).
+pub fn assign_blocks(windows: &mut [NoiseWindow], ends: &[Endpoints], t0_ns: i64, block_ns: i64) {
+    for (w, e) in windows.iter_mut().zip(ends) {
+        w.block = ((e.t_ns.0 - t0_ns).max(0) / block_ns.max(1)) as usize;
+    }
 }
 
 /// `∂r/∂g` of the component-wise residual at the state `gi` over `dt_s` \[s\]: zero in

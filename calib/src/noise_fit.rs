@@ -22,8 +22,9 @@
 //! Prentice Hall 1993, §3.9 (eq. 3.31) and §7.8). Fisher scoring `θ ← θ + F⁻¹ g` keeps
 //! `θ ≥ 0`: a parameter on the bound 0 whose gradient points below it is held there for the
 //! step (projected Fisher scoring), and a step that lowers `ℓ` is halved. The standard deviation
-//! of `θ_k` is `√(F⁻¹)_kk` (the Cramér–Rao bound, attained asymptotically by the MLE); that of a
-//! density `N = √θ` is `σ_θ / (2N)`.
+//! of `θ_k` is `√(F⁻¹)_kk` (the Cramér–Rao bound, attained asymptotically by the MLE) for
+//! independent windows, and the sandwich covariance of [`sandwich`] when windows share data
+//! (several lengths cut from one recording); that of a density `N = √θ` is `σ_θ / (2N)`.
 //!
 //! A parameter is withheld ([`Withheld`]) when it was held at a given value, when it sits on the
 //! bound 0 (its `2σ` upper bound is reported instead) or when its `σ` exceeds its value (the
@@ -42,6 +43,7 @@
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 
 pub mod gravity;
+pub mod sandwich;
 pub use gravity::GravityEstimate;
 
 /// Number of parameters.
@@ -112,6 +114,10 @@ pub struct NoiseWindow {
     /// `G = ∂r/∂g`, the residual's Jacobian with respect to the world gravity vector
     /// \[(rad, m/s, m) per m/s²\] (zero when the mean is not fitted).
     pub gravity_jacobian: SMatrix<f64, 9, 3>,
+    /// The stretch of the recording the window lies in: windows of one block may share data,
+    /// windows of different blocks do not ([`sandwich`]; one block per window when the windows
+    /// are independent).
+    pub block: usize,
 }
 
 /// Why a parameter has no fitted value.
@@ -419,15 +425,22 @@ fn fit_with(
             break;
         }
     }
-    let gravity = fit_gravity.then(|| GravityEstimate {
-        correction: dg,
-        cov: gravity::correction(windows, &theta).1,
-        lr: 0.0,
-        penalty: 0.0,
-        supported: true,
+    let j = sandwich::shared(windows).then(|| sandwich::score_variance(windows, &res, &theta));
+    let gravity = fit_gravity.then(|| {
+        let info_inv = gravity::correction(windows, &theta).1;
+        GravityEstimate {
+            correction: dg,
+            cov: match &j {
+                Some((_, jg)) => info_inv * jg * info_inv,
+                None => info_inv,
+            },
+            lr: 0.0,
+            penalty: 0.0,
+            supported: true,
+        }
     });
     Ok(NoiseFit {
-        params: estimates(&e, &theta, &free, opts),
+        params: estimates(&e, &theta, &free, (opts, j.map(|j| j.0).as_ref())),
         iterations,
         log_likelihood: e.ll,
         per_length: per_length(windows, (&raw, before.as_ref()), (&res, &theta)),
@@ -435,14 +448,24 @@ fn fit_with(
     })
 }
 
+/// The covariance of `θ_s`: `F_ss⁻¹`, or the sandwich with the score variance `j` when the
+/// windows share data ([`sandwich`]).
+fn param_cov(e: &Eval, j: Option<&SMatrix<f64, PARAMS, PARAMS>>, s: &[usize]) -> DMatrix<f64> {
+    let h_inv = inverse_on(&e.fisher, s);
+    match j {
+        Some(j) => sandwich::on(&h_inv, j, s),
+        None => h_inv,
+    }
+}
+
 fn estimates(
     e: &Eval,
     theta: &SVector<f64, PARAMS>,
     free: &[usize],
-    opts: &NoiseFitOptions,
+    (opts, j): (&NoiseFitOptions, Option<&SMatrix<f64, PARAMS, PARAMS>>),
 ) -> Vec<ParamEstimate> {
     let interior: Vec<usize> = free.iter().copied().filter(|&k| theta[k] > 0.0).collect();
-    let cov = inverse_on(&e.fisher, &interior);
+    let cov = param_cov(e, j, &interior);
     Param::ALL
         .iter()
         .enumerate()
@@ -472,7 +495,7 @@ fn estimates(
             }
             let mut with: Vec<usize> = interior.clone();
             with.push(k);
-            let st = inverse_on(&e.fisher, &with)[(with.len() - 1, with.len() - 1)]
+            let st = param_cov(e, j, &with)[(with.len() - 1, with.len() - 1)]
                 .max(0.0)
                 .sqrt();
             ParamEstimate {

@@ -186,6 +186,7 @@ mod tests {
                         r,
                         basis,
                         gravity_jacobian: SMatrix::zeros(),
+                        block: w,
                     },
                     Endpoints {
                         t_ns: (t, t + 1_000_000_000),

@@ -24,7 +24,7 @@
 
 use super::noise_correlation::{self, LagCorrelation};
 use crate::consistency::fit_json;
-use crate::noise_windows::noise_window_at;
+use crate::noise_windows::{assign_blocks, noise_window_at};
 use crate::truth_windows::{check_lengths, for_each_window, length_ns, overlap, read_window};
 use crate::{Error, ImuInput, checks};
 use nalgebra::Vector3;
@@ -176,6 +176,8 @@ fn fit_windows(o: &NoiseOptions) -> Result<NoiseRun, Error> {
         }
         skipped.push((l, s));
     }
+    let longest = length_ns(sorted[sorted.len() - 1], span)?;
+    assign_blocks(&mut windows, &ends, span.0, longest);
     let mut st = [0.0; PARAMS];
     if o.noise.is_some() {
         st[..4].copy_from_slice(&[
