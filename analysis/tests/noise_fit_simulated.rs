@@ -17,6 +17,9 @@ use preint_analysis::truth_windows::for_each_window;
 use preint_calib::noise_fit::{NoiseFitOptions, PARAMS, Param, fit};
 use preint_io::GroundTruthState;
 use preint_sim::{SimConfig, scene_by_name, simulate};
+use rand::rngs::StdRng;
+use rand::{RngExt, SeedableRng};
+use rand_distr::StandardNormal;
 
 const NOISE: ImuNoise = ImuNoise {
     gyro_noise_density: 2e-3,
@@ -32,23 +35,10 @@ const LENGTHS_S: [f64; 4] = [0.5, 1.0, 2.0, 4.0];
 /// accelerometer bias [rad/s, m/s²].
 type TruthErr = [f64; 5];
 
-/// A seeded standard normal (xorshift64* and Box–Muller).
-struct Normal(u64);
-
-impl Normal {
-    fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        ((self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    fn next(&mut self) -> f64 {
-        let (a, b) = (self.uniform(), self.uniform());
-        (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
-    }
-    fn v3(&mut self, s: f64) -> Vector3<f64> {
-        Vector3::new(self.next(), self.next(), self.next()) * s
-    }
+/// Three seeded standard normal draws times `s`.
+fn v3(g: &mut StdRng, s: f64) -> Vector3<f64> {
+    let mut n = || -> f64 { g.sample(StandardNormal) };
+    Vector3::new(n(), n(), n()) * s
 }
 
 /// One trial: simulate, perturb the 100 Hz ground truth by `err`, fit; per parameter whether
@@ -57,15 +47,18 @@ fn trial(seed: u64, err: TruthErr) -> [Option<bool>; PARAMS] {
     let scene = scene_by_name("seed-ellipse").unwrap();
     let cfg = SimConfig::with_noise(NOISE);
     let sim = simulate(scene.as_ref(), 200.0, DURATION_S, &cfg, seed).unwrap();
-    let mut g = Normal(seed ^ 0x9e37_79b9_7f4a_7c15);
+    let mut g = StdRng::seed_from_u64(seed ^ 0x9e37_79b9_7f4a_7c15);
     let gt: Vec<GroundTruthState> = (sim.truth.iter().step_by(2))
         .map(|s| {
-            let q = (s.rotation() * SO3::exp(&g.v3(err[0]))).to_quaternion();
+            let q = (s.rotation() * SO3::exp(&v3(&mut g, err[0]))).to_quaternion();
             GroundTruthState {
-                p: s.p + g.v3(err[1]),
+                p: s.p + v3(&mut g, err[1]),
                 q,
-                v: s.v + g.v3(err[2]),
-                bias: ImuBias::new(s.bias.gyro + g.v3(err[3]), s.bias.acc + g.v3(err[4])),
+                v: s.v + v3(&mut g, err[2]),
+                bias: ImuBias::new(
+                    s.bias.gyro + v3(&mut g, err[3]),
+                    s.bias.acc + v3(&mut g, err[4]),
+                ),
                 ..*s
             }
         })

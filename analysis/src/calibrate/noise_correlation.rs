@@ -125,20 +125,16 @@ pub fn verdict(rows: &[LagCorrelation]) -> String {
 mod tests {
     use super::*;
     use preint_calib::noise_fit::{NoiseFitOptions, PARAMS, fit};
+    use rand::rngs::StdRng;
+    use rand::{RngExt, SeedableRng};
+    use rand_distr::StandardNormal;
 
-    /// A seeded standard normal (xorshift64* and Box–Muller).
-    struct Normal(u64);
+    /// A seeded standard normal.
+    struct Normal(StdRng);
 
     impl Normal {
-        fn uniform(&mut self) -> f64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            ((self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-        }
         fn next(&mut self) -> f64 {
-            let (u, v) = (self.uniform(), self.uniform());
-            (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+            self.0.sample(StandardNormal)
         }
         fn vec9(&mut self) -> SVector<f64, 9> {
             SVector::from_fn(|_, _| self.next())
@@ -154,7 +150,7 @@ mod tests {
     /// errors `e_k` an AR(1) sequence of coefficient `phi` (0: independent) and unit variance
     /// per component (`σ_R = σ_p = σ_v = 1`).
     fn windows(n: usize, phi: f64, seed: u64) -> (Vec<NoiseWindow>, Vec<Endpoints>) {
-        let mut g = Normal(seed);
+        let mut g = Normal(StdRng::seed_from_u64(seed));
         let mut e = g.vec9();
         let mut rows = vec![e];
         for _ in 0..n {
