@@ -47,6 +47,7 @@ const NULLABLE: &[&str] = &[
     "stopped",
     "error",
     "gyro_scale",
+    "gyro_axes",
     "why",
     "rate",
     "jitter",

@@ -143,6 +143,7 @@ fn single_json(a: &Audit) -> Map<String, Value> {
                    json!({"pairs": s.pairs,
                           "misfit_deg": {"deg_per_s": d, "as_read": one, "rad_per_s": rad}})
                }),
+               "gyro_axes": u.gyro_axes.as_ref().map(axes_json),
                "error": u.error,
                "verdict": u.verdict.as_ref().map_or("failed", |v| v.name()),
                "why": u.verdict.as_ref().and_then(|v| v.why())})
@@ -204,4 +205,22 @@ pub fn to_json(r: &AuditRun, no_unit_check: bool) -> Value {
         Report::Split(a) => split_json(a),
     });
     Value::Object(m)
+}
+
+/// `units.gyro_axes`: `{pairs, median_turn_deg, unexplained_as_read, best_other: {map,
+/// unexplained}, verdict: agree|mismatch|cannot tell, text}` (fractions of the turn).
+fn axes_json(a: &preint_io::plausibility::axes::AxisFit) -> Value {
+    use preint_io::plausibility::axes::AxisVerdict;
+    let (verdict, text) = match a.verdict() {
+        AxisVerdict::Agree => (
+            "agree",
+            "the gyro's axes are the accelerometer's".to_string(),
+        ),
+        AxisVerdict::Mismatch(m) => ("mismatch", m),
+        AxisVerdict::CannotTell(m) => ("cannot tell", m),
+    };
+    json!({"pairs": a.pairs, "median_turn_deg": a.median_turn_rad.to_degrees(),
+           "unexplained_as_read": a.identity,
+           "best_other": {"map": a.best_other.0.describe(), "unexplained": a.best_other.1},
+           "verdict": verdict, "text": text})
 }

@@ -61,7 +61,9 @@
 //! - `units` (on the first 32 768 samples, or null): `samples`, `gravity_median_m_s2`
 //!   (corrected with `--calibration`), `raw_gravity_median_m_s2`,
 //!   `gyro_median_rad_s`, `gyro_scale` (`pairs`, `misfit_deg`: `{deg_per_s, as_read,
-//!   rad_per_s}`, or null), `error` (the unit check's message, or null), `verdict`
+//!   rad_per_s}`, or null), `gyro_axes` (`pairs`, `median_turn_deg`, `unexplained_as_read`,
+//!   `best_other: {map, unexplained}`, `verdict`: `agree`, `mismatch` or `cannot tell`,
+//!   `text`; or null: `preint_io::plausibility::axes`), `error` (the unit check's message, or null), `verdict`
 //!   (`passed`, `inconclusive`, or `failed` with an error) and `why` (what an inconclusive check
 //!   missed, or null). `input.unit_check` holds the same verdict as every other command's
 //!   (`skipped` with `--no-unit-check`).

@@ -441,6 +441,7 @@ fn units(a: &Audit, f: &mut Vec<Finding>) {
         }
         None => "too few quasi-static moments to compare the gyro with gravity".to_string(),
     };
+    axes_finding(u, f);
     let facts = format!(
         "median |a| {:.3} m/s², median |ω| {:.4} rad/s over the first {} samples; {scale}",
         u.gravity_median_m_s2, u.gyro_median_rad_s, u.samples
@@ -462,4 +463,34 @@ fn units(a: &Audit, f: &mut Vec<Finding>) {
             format!("units plausible: {facts}"),
         )),
     }
+}
+
+/// Whether the gyro's axes are the accelerometer's (check 7 of the unit checks): a defect
+/// when another axis map explains the turning of gravity far better (the unit check's error
+/// then says the same), otherwise what the check could tell.
+fn axes_finding(u: &crate::audit::UnitCheck, f: &mut Vec<Finding>) {
+    use crate::plausibility::axes::AxisVerdict;
+    let (severity, m) = match u.gyro_axes.as_ref().map(|a| (a, a.verdict())) {
+        Some((_, AxisVerdict::Mismatch(m))) => (Severity::Defect, m),
+        Some((a, AxisVerdict::Agree)) => (
+            Severity::Info,
+            format!(
+                "gyro axes agree with the accelerometer's: over {} pairs of quasi-static moments \
+                 (gravity turning {:.0}° median) the gyro as read leaves {:.0} % of the turn \
+                 unexplained, every other axis map at least {:.0} %",
+                a.pairs,
+                a.median_turn_rad.to_degrees(),
+                100.0 * a.identity,
+                100.0 * a.best_other.1
+            ),
+        ),
+        Some((_, AxisVerdict::CannotTell(m))) => (Severity::Info, format!("axis check: {m}")),
+        None => (
+            Severity::Info,
+            "axis check: too few pairs of quasi-static moments between which gravity turns to \
+             compare the gyro's axes with the accelerometer's"
+                .to_string(),
+        ),
+    };
+    f.push(Finding::new(severity, "gyro axes", m));
 }

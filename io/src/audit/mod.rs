@@ -148,6 +148,10 @@ pub struct UnitCheck {
     /// How well the gyro scaled by π/180, 1 and 180/π explains the turning of gravity
     /// ([`crate::plausibility::gyro_scale_fit`]); `None` with fewer than 10 quasi-static pairs.
     pub gyro_scale: Option<GyroScaleFit>,
+    /// Whether the gyro's axes are the accelerometer's
+    /// ([`crate::plausibility::axes::gyro_axes_fit`]); `None` with fewer than 10 pairs of
+    /// quasi-static moments between which gravity turns.
+    pub gyro_axes: Option<crate::plausibility::axes::AxisFit>,
     /// The message of [`crate::plausibility::check_units_read_as`] when it refuses the data.
     pub error: Option<String>,
     /// Its verdict when it does not (passed or inconclusive).
@@ -402,6 +406,7 @@ fn unit_check(prefix: &[Located], opts: &AuditOptions) -> Option<UnitCheck> {
         raw_gravity_median_m_s2: med(raw),
         gyro_median_rad_s: med(v.iter().map(|s| s.gyro.norm()).collect()),
         gyro_scale: gyro_scale_fit(&v, median_interval_ns(&v) * 1e-9),
+        gyro_axes: crate::plausibility::axes::gyro_axes_fit(&v, median_interval_ns(&v) * 1e-9),
         error,
         verdict,
     })

@@ -38,6 +38,13 @@
 //!    multirotor's accelerometer follows its thrust axis), the misfits are all small or all
 //!    large, and the check is silent.
 //!
+//! 7. **Gyroscope axes against the accelerometer's.** Between quasi-static moments where
+//!    gravity turns, the gyro's rotation must turn the accelerometer's gravity direction as
+//!    it does; if another of the 48 signed permutations of the gyro's axes explains the turns
+//!    far better (an axis inverted, two swapped, a left-handed frame), the data is refused
+//!    naming that map ([`axes`]). Motion that does not turn gravity about every axis cannot
+//!    tell, and the check is silent.
+//!
 //! # Passed or inconclusive
 //! Passing checks 1–5 does not always confirm the units: a still recording at 10 Hz in
 //! seconds would pass as 10 kHz in milliseconds too. So the checks also ask, for each
@@ -64,6 +71,7 @@
 //!
 //! Beside the unit checks, [`limits`] refuses single readings beyond any IMU's range.
 
+pub mod axes;
 pub mod limits;
 pub mod scale;
 
@@ -175,6 +183,13 @@ pub fn check_units_read_as(
     let fit = alternatives::Fit::of(samples, dt, &candidates);
     if let Some(msg) = fit.refusal() {
         return Err(units(msg));
+    }
+    if let Some(axes::AxisVerdict::Mismatch(msg)) =
+        axes::gyro_axes_fit(samples, dt).map(|f| f.verdict())
+    {
+        return Err(units(format!(
+            "{msg}: fix the gyro's column order (--columns) or its signs, or --no-unit-check"
+        )));
     }
     let open: Vec<&alternatives::Alternative> = candidates
         .iter()

@@ -9,8 +9,9 @@
 //! the constant bias b is fitted by least squares and the misfit is `|Δu − u × (sΩ − T b)|`.
 
 use super::{G, acc_stats, median};
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use preint::ImuSample;
+use preint_lie::SO3;
 
 /// Fewest pairs of quasi-static moments for a verdict of the fit.
 pub const MIN_PAIRS: usize = 10;
@@ -33,13 +34,13 @@ pub(crate) struct TiltPair {
     t: f64,
 }
 
-/// The pairs of quasi-static windows of about 0.25 s, 1 s apart, of `samples` sampled every
-/// `dt` s (windows of at least 5 samples): accelerometer mean norm within 0.6 m/s² of g and
-/// largest per-axis standard deviation below 0.5 m/s². Ω and T are integrated with the
-/// timestamps as read, whatever `dt` (a candidate interval) is.
-pub(crate) fn tilt_pairs(samples: &[ImuSample], dt: f64) -> Vec<TiltPair> {
+/// The quasi-static windows of about 0.25 s of `samples` sampled every `dt` s (at least 5
+/// samples; accelerometer mean norm within 0.6 m/s² of g, largest per-axis standard deviation
+/// below 0.5 m/s²): the window length in samples, and each window's middle sample and gravity
+/// direction (unit, sensor frame).
+pub(crate) fn quasi_static(samples: &[ImuSample], dt: f64) -> (usize, Vec<(usize, Vector3<f64>)>) {
     let n = ((0.25 / dt).round() as usize).max(5);
-    let quasi: Vec<(usize, Vector3<f64>)> = samples
+    let quasi = samples
         .chunks(n)
         .enumerate()
         .filter_map(|(k, w)| {
@@ -48,6 +49,28 @@ pub(crate) fn tilt_pairs(samples: &[ImuSample], dt: f64) -> Vec<TiltPair> {
                 .then(|| (k * n + w.len() / 2, mean.normalize()))
         })
         .collect();
+    (n, quasi)
+}
+
+/// The gyro's rotation over `samples[i..=j]`, `Π_k Exp(ω_k Δt_k)`, and the same of `−ω`.
+pub(crate) fn gyro_turn(
+    samples: &[ImuSample],
+    (i, j): (usize, usize),
+) -> (Matrix3<f64>, Matrix3<f64>) {
+    let (mut plus, mut minus) = (Matrix3::identity(), Matrix3::identity());
+    for (s0, s1) in samples[i..j].iter().zip(&samples[i + 1..=j]) {
+        let w = s0.gyro * ((s1.t_ns - s0.t_ns) as f64 * 1e-9);
+        plus *= SO3::exp(&w).matrix();
+        minus *= SO3::exp(&-w).matrix();
+    }
+    (plus, minus)
+}
+
+/// The pairs of quasi-static windows ([`quasi_static`]) 1 s apart of `samples` sampled every
+/// `dt` s. Ω and T are integrated with the timestamps as read, whatever `dt` (a candidate
+/// interval) is.
+pub(crate) fn tilt_pairs(samples: &[ImuSample], dt: f64) -> Vec<TiltPair> {
+    let (n, quasi) = quasi_static(samples, dt);
     let mut pairs = Vec::new();
     for (a, &(i, u)) in quasi.iter().enumerate() {
         let Some(&(j, uj)) = quasi[a + 1..].iter().find(|(j, _)| *j == i + 4 * n) else {
@@ -70,14 +93,14 @@ pub(crate) fn tilt_pairs(samples: &[ImuSample], dt: f64) -> Vec<TiltPair> {
     pairs
 }
 
-/// The bias b minimising `Σ |Δu − u × (sΩ − T b)|²` (zero if unobservable).
-fn fitted_bias(pairs: &[TiltPair], s: f64) -> Vector3<f64> {
-    let (mut normal, mut rhs) = (nalgebra::Matrix3::zeros(), Vector3::zeros());
+/// The bias b minimising `Σ |Δu − u × (MΩ − T b)|²` (zero if unobservable).
+fn fitted_bias(pairs: &[TiltPair], m: &Matrix3<f64>) -> Vector3<f64> {
+    let (mut normal, mut rhs) = (Matrix3::zeros(), Vector3::zeros());
     for p in pairs {
-        // Δu − s u×Ω = −T u×b = A b with A = −T [u]×.
+        // Δu − u×MΩ = −T u×b = A b with A = −T [u]×.
         let a = -p.t * preint_lie::so3::hat(&p.u);
         normal += a.transpose() * a;
-        rhs += a.transpose() * (p.du - p.u.cross(&p.omega) * s);
+        rhs += a.transpose() * (p.du - p.u.cross(&(m * p.omega)));
     }
     normal
         .try_inverse()
@@ -85,15 +108,21 @@ fn fitted_bias(pairs: &[TiltPair], s: f64) -> Vector3<f64> {
 }
 
 /// Median misfit \[rad\] of the gravity direction over `pairs` with the gyro's integral
-/// scaled by `s` (its bias fitted).
-pub(crate) fn median_misfit(pairs: &[TiltPair], s: f64) -> f64 {
-    let b = fitted_bias(pairs, s);
+/// mapped by `m` (a scale `s I`, or an axis map: [`super::axes`]), its bias fitted.
+pub(crate) fn median_misfit_mapped(pairs: &[TiltPair], m: &Matrix3<f64>) -> f64 {
+    let b = fitted_bias(pairs, m);
     median(
         pairs
             .iter()
-            .map(|p| (p.du - p.u.cross(&(p.omega * s - b * p.t))).norm())
+            .map(|p| (p.du - p.u.cross(&(m * p.omega - b * p.t))).norm())
             .collect(),
     )
+}
+
+/// Median misfit \[rad\] of the gravity direction over `pairs` with the gyro's integral
+/// scaled by `s` (its bias fitted).
+pub(crate) fn median_misfit(pairs: &[TiltPair], s: f64) -> f64 {
+    median_misfit_mapped(pairs, &(Matrix3::identity() * s))
 }
 
 /// Median turn \[rad\] of the gravity direction between the moments of `pairs` (`|Δu|`).
