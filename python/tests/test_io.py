@@ -243,3 +243,25 @@ def test_reader_options_are_checked_by_name_and_type(call):
     with pytest.raises(preint.ShapeError) as e:
         call(path, check_units="yes")
     assert "check_units" in str(e.value)
+
+
+def test_audit_names_an_inverted_gyro_axis(preint_cli, tmp_path):
+    """``audit`` checks the gyro's axes against the accelerometer's on a recording that turns
+    gravity about x and y (``multi-pose-static``, simulated by the command line): they agree
+    as simulated; with the gyro's y readings negated, ``units.gyro_axes`` names the axis and
+    the audit has a defect."""
+    import subprocess
+
+    subprocess.run([*preint_cli, "simulate", "--scene", "multi-pose-static", "--duration",
+                    "33", "--out", str(tmp_path)], check=True, capture_output=True)
+    ok = preint.audit(tmp_path / "imu.csv")
+    assert ok["units"]["gyro_axes"]["verdict"] == "agree"
+    d = preint.read_imu(tmp_path / "imu.csv")
+    gyro = d["gyro"].copy()
+    gyro[:, 1] *= -1.0
+    flipped = tmp_path / "flipped.csv"
+    preint.write_euroc_imu(flipped, d["t_ns"], gyro, d["acc"])
+    r = preint.audit(flipped)
+    axes = r["units"]["gyro_axes"]
+    assert axes["verdict"] == "mismatch" and "gyro y looks inverted" in axes["text"]
+    assert any(f["kind"] == "gyro axes" and f["severity"] == "defect" for f in r["findings"])
