@@ -97,6 +97,25 @@ pub struct Args {
     pub bias_acc_std: Option<f64>,
 }
 
+/// Runs `f` of `steps` steps with a progress bar at a terminal (`f` names each step as it
+/// starts it), cleared when it ends.
+pub(crate) fn with_progress<T>(
+    steps: u64,
+    f: impl FnOnce(&mut dyn FnMut(&str)) -> Result<T, CliError>,
+) -> Result<T, CliError> {
+    let pb = progress::bar(steps, "report");
+    let out = f(&mut |msg| {
+        if let Some(pb) = &pb {
+            pb.set_message(msg.to_string());
+            pb.inc(1);
+        }
+    });
+    if let Some(pb) = &pb {
+        pb.finish_and_clear();
+    }
+    out
+}
+
 /// The report's numbers, its conclusions and the files written.
 #[derive(Clone, Debug)]
 pub struct Report {
@@ -113,16 +132,7 @@ pub struct Report {
 pub fn compute(args: &Args) -> Result<Report, CliError> {
     let out = &args.out;
     std::fs::create_dir_all(out).map_err(|e| CliError::out_path(out, e))?;
-    let pb = progress::bar(report::STEPS, "report");
-    let data = report::compute(&mut |msg| {
-        if let Some(pb) = &pb {
-            pb.set_message(msg.to_string());
-            pb.inc(1);
-        }
-    })?;
-    if let Some(pb) = &pb {
-        pb.finish_and_clear();
-    }
+    let data = with_progress(report::STEPS, |step| report::compute(step))?;
     let conclusions = report::conclusions(&data);
     let files = write_page(&data, &conclusions, out)?;
     Ok(Report {

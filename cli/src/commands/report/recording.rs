@@ -17,7 +17,6 @@ use preint_analysis::calibrate::Calibration;
 use preint_analysis::calibrate::noise_model::{self, KEYS};
 use preint_analysis::chi2_windows::{length_json, verdict_json};
 use preint_analysis::format::IMU_AXES;
-use preint_analysis::progress;
 use preint_calib::noise_fit::Withheld;
 use serde_json::{Value, json};
 use std::path::Path;
@@ -81,16 +80,7 @@ pub struct RecordingReport {
 pub fn compute(o: &Options) -> Result<RecordingReport, CliError> {
     let out = &o.out;
     std::fs::create_dir_all(out).map_err(|e| CliError::out_path(out, e))?;
-    let pb = progress::bar(recording::STEPS, "report");
-    let data = recording::compute(o, &mut |msg| {
-        if let Some(pb) = &pb {
-            pb.set_message(msg.to_string());
-            pb.inc(1);
-        }
-    })?;
-    if let Some(pb) = &pb {
-        pb.finish_and_clear();
-    }
+    let data = super::with_progress(recording::STEPS, |step| recording::compute(o, step))?;
     let conclusions = recording::conclusions(&data);
     let files = write_page(&data, &conclusions, out)?;
     Ok(RecordingReport {
