@@ -93,14 +93,14 @@ pub(crate) fn tilt_pairs(samples: &[ImuSample], dt: f64) -> Vec<TiltPair> {
     pairs
 }
 
-/// The bias b minimising `Σ |Δu − u × (MΩ − T b)|²` (zero if unobservable).
-fn fitted_bias(pairs: &[TiltPair], m: &Matrix3<f64>) -> Vector3<f64> {
+/// The bias b minimising `Σ |Δu − u × (sΩ − T b)|²` (zero if unobservable).
+fn fitted_bias(pairs: &[TiltPair], s: f64) -> Vector3<f64> {
     let (mut normal, mut rhs) = (Matrix3::zeros(), Vector3::zeros());
     for p in pairs {
-        // Δu − u×MΩ = −T u×b = A b with A = −T [u]×.
+        // Δu − s u×Ω = −T u×b = A b with A = −T [u]×.
         let a = -p.t * preint_lie::so3::hat(&p.u);
         normal += a.transpose() * a;
-        rhs += a.transpose() * (p.du - p.u.cross(&(m * p.omega)));
+        rhs += a.transpose() * (p.du - p.u.cross(&p.omega) * s);
     }
     normal
         .try_inverse()
@@ -108,21 +108,15 @@ fn fitted_bias(pairs: &[TiltPair], m: &Matrix3<f64>) -> Vector3<f64> {
 }
 
 /// Median misfit \[rad\] of the gravity direction over `pairs` with the gyro's integral
-/// mapped by `m` (a scale `s I`, or an axis map: [`super::axes`]), its bias fitted.
-pub(crate) fn median_misfit_mapped(pairs: &[TiltPair], m: &Matrix3<f64>) -> f64 {
-    let b = fitted_bias(pairs, m);
+/// scaled by `s` (its bias fitted).
+pub(crate) fn median_misfit(pairs: &[TiltPair], s: f64) -> f64 {
+    let b = fitted_bias(pairs, s);
     median(
         pairs
             .iter()
-            .map(|p| (p.du - p.u.cross(&(m * p.omega - b * p.t))).norm())
+            .map(|p| (p.du - p.u.cross(&(p.omega * s - b * p.t))).norm())
             .collect(),
     )
-}
-
-/// Median misfit \[rad\] of the gravity direction over `pairs` with the gyro's integral
-/// scaled by `s` (its bias fitted).
-pub(crate) fn median_misfit(pairs: &[TiltPair], s: f64) -> f64 {
-    median_misfit_mapped(pairs, &(Matrix3::identity() * s))
 }
 
 /// Median turn \[rad\] of the gravity direction between the moments of `pairs` (`|Δu|`).
