@@ -68,18 +68,14 @@ macro_rules! factor_pymethods {
         $(#[doc = $chi2_doc:tt])* chi2;
     ) => {
         impl $py {
-            /// The factor of `pim` with the residual `mode` (its pickled name may carry
-            /// [`DRIFT_SUFFIX`]) and, when `in_window_drift`, the drift-inclusive weight.
+            /// The factor of `pim` with the residual `mode` and, when `in_window_drift`, the
+            /// drift-inclusive weight.
             fn build(
                 pim: preint::PreintegratedImu,
                 mode: &str,
                 in_window_drift: bool,
             ) -> PyResult<Self> {
-                let (mode, pickled_drift) = match mode.strip_suffix(DRIFT_SUFFIX) {
-                    Some(m) => (m, true),
-                    None => (mode, false),
-                };
-                Self::construct(pim, mode_from(mode)?, in_window_drift || pickled_drift).map(Self)
+                Self::construct(pim, mode_from(mode)?, in_window_drift).map(Self)
             }
 
             /// `(residual, {"state_i", "state_j", bias blocks})` as numpy.
@@ -219,7 +215,11 @@ macro_rules! factor_pymethods {
             /// Inverse of `__reduce__`'s state (pickle).
             #[staticmethod]
             fn _from_state(mode: &str, state: &[u8]) -> PyResult<Self> {
-                Self::build(crate::state::decode_measurement(state)?, mode, false)
+                let (mode, drift) = match mode.strip_suffix(DRIFT_SUFFIX) {
+                    Some(m) => (m, true),
+                    None => (mode, false),
+                };
+                Self::build(crate::state::decode_measurement(state)?, mode, drift)
             }
         }
     };
