@@ -45,10 +45,7 @@ impl LagCorrelation {
 /// left out. The residuals are taken at the fit's gravity when it is supported.
 pub fn lag_one(windows: &[NoiseWindow], ends: &[Endpoints], fit: &NoiseFit) -> Vec<LagCorrelation> {
     let theta = noise_fit::theta_of(fit);
-    let dg = match &fit.gravity {
-        Some(g) if g.supported => g.correction,
-        _ => SVector::zeros(),
-    };
+    let dg = fit.gravity.map_or(SVector::zeros(), |g| g.applied());
     let mut s = SMatrix::<f64, 9, 9>::zeros();
     for k in 0..3 {
         (s[(k, k)], s[(3 + k, 3 + k)], s[(6 + k, 6 + k)]) = (theta[4], theta[5], theta[6]);

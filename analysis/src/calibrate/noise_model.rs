@@ -343,6 +343,12 @@ pub fn fitted_gravity(r: &NoiseRun) -> Option<Vector3<f64>> {
         .map(|g| r.gravity_given + g.correction)
 }
 
+/// The world gravity vector the fit's χ² "after" is at \[m/s², world frame\]: the fitted one
+/// when the information criterion supports it, else the given one.
+pub fn gravity_in_use(r: &NoiseRun) -> Vector3<f64> {
+    r.gravity_given + r.fit.gravity.map_or(Vector3::zeros(), |g| g.applied())
+}
+
 /// `gravity`: the world gravity vector that fits (module docs of [`preint_calib::noise_fit`])
 /// beside the given one, its tilt from it, and whether the information criterion supports it.
 fn gravity_json(r: &NoiseRun) -> Option<Value> {
@@ -350,7 +356,7 @@ fn gravity_json(r: &NoiseRun) -> Option<Value> {
     let g0 = r.gravity_given;
     let v = fitted_gravity(r)?;
     let list = |x: &Vector3<f64>| json!([x[0], x[1], x[2]]);
-    let std = g.cov.diagonal().map(|d| d.max(0.0).sqrt());
+    let std = g.std();
     Some(json!({
         "given": list(&g0),
         "vector": list(&v),

@@ -27,6 +27,20 @@ pub struct GravityEstimate {
 }
 
 impl GravityEstimate {
+    /// The standard deviation of each component of `δg` \[m/s²\], world frame.
+    pub fn std(&self) -> Vector3<f64> {
+        self.cov.diagonal().map(|d| d.max(0.0).sqrt())
+    }
+
+    /// The correction the fit applies \[m/s²\]: `δg` when supported, else zero.
+    pub fn applied(&self) -> Vector3<f64> {
+        if self.supported {
+            self.correction
+        } else {
+            Vector3::zeros()
+        }
+    }
+
     /// The angle \[rad\] between `g0` and the corrected gravity `g0 + δg`.
     pub fn tilt_from(&self, g0: &Vector3<f64>) -> f64 {
         g0.angle(&(g0 + self.correction))

@@ -336,10 +336,7 @@ pub fn fitted_model(fit: &NoiseRun) -> NoiseModel {
             bias_gyro_rad_s: v(7),
             bias_acc_m_s2: v(8),
         },
-        gravity: match (&fit.fit.gravity, noise_model::fitted_gravity(fit)) {
-            (Some(g), Some(v)) if g.supported => v,
-            _ => fit.gravity_given,
-        },
+        gravity: noise_model::gravity_in_use(fit),
         in_window_drift: true,
     }
 }

@@ -52,7 +52,7 @@ fn to_text(r: &NoiseRun) -> String {
     }
     if let (Some(g), Some(v)) = (&r.fit.gravity, noise_model::fitted_gravity(r)) {
         let g0 = r.gravity_given;
-        let std = g.cov.diagonal().map(|d| d.max(0.0).sqrt()).max();
+        let std = g.std().max();
         let _ = writeln!(
             h,
             "  world gravity                ({:.4}, {:.4}, {:.4}) ± {std:.1e} m/s², tilted \

@@ -298,7 +298,7 @@ fn fit_section(page: &mut Page, t: &TruthCheck) {
         .collect();
     if let (Some(g), Some(v)) = (&r.fit.gravity, noise_model::fitted_gravity(r)) {
         let g0 = r.gravity_given;
-        page.p(&format!("World gravity fitted with the densities (the ground truth's frame need not be levelled): ({:.4}, {:.4}, {:.4}) ± {:.1e} m/s², {:.3} ± {:.3}° from ({}, {}, {}); likelihood ratio {:.1} against the information criterion's {:.1}: {}.", v[0], v[1], v[2], g.cov.diagonal().map(|d| d.max(0.0).sqrt()).max(), g.tilt_from(&g0).to_degrees(), g.tilt_std_from(&g0).to_degrees(), g0[0], g0[1], g0[2], g.lr, g.penalty, if g.supported { "kept, and used by the fitted model's consistency above" } else { "not supported, the given gravity kept" }));
+        page.p(&format!("World gravity fitted with the densities (the ground truth's frame need not be levelled): ({:.4}, {:.4}, {:.4}) ± {:.1e} m/s², {:.3} ± {:.3}° from ({}, {}, {}); likelihood ratio {:.1} against the information criterion's {:.1}: {}.", v[0], v[1], v[2], g.std().max(), g.tilt_from(&g0).to_degrees(), g.tilt_std_from(&g0).to_degrees(), g0[0], g0[1], g0[2], g.lr, g.penalty, if g.supported { "kept, and used by the fitted model's consistency above" } else { "not supported, the given gravity kept" }));
     }
     page.p(&format!(
         "The ground truth in time: {}.",
