@@ -97,6 +97,14 @@ pub fn calibrate_known_attitudes(
     super::check_poses(samples, &as_poses)?;
     check_non_negative("pose_rot_std", opts.pose_rot_std)?;
     check_calibration_options(opts)?;
+    if opts.estimate.extrinsic() || opts.initial_extrinsic.is_some() {
+        return Err(BiasError::InvalidParameter {
+            name: "estimate",
+            reason: "the extrinsic transform (extrinsic-rotation, lever-arm) is estimated and \
+                     applied by the known-pose problem: give positions with the attitudes"
+                .into(),
+        });
+    }
     if opts.estimate.accel_intrinsics {
         return Err(BiasError::InvalidParameter {
             name: "estimate",
@@ -227,7 +235,12 @@ fn rotation_covariance(
     };
     for (k, pim) in pims.iter().enumerate() {
         // The rotation rows of the full problem's attitude-noise Jacobians.
-        let (ai9, aj9) = pose_noise_jacobians(pim, &pose(&attitudes[k]), &pose(&attitudes[k + 1]));
+        let (ai9, aj9) = pose_noise_jacobians(
+            pim,
+            &pose(&attitudes[k]),
+            &pose(&attitudes[k + 1]),
+            &Vector3::zeros(),
+        );
         let ai: Matrix3<f64> = ai9.fixed_rows::<3>(0).into_owned();
         let aj: Matrix3<f64> = aj9.fixed_rows::<3>(0).into_owned();
         diag.push(
@@ -304,7 +317,7 @@ mod tests {
             time_offset: true,
             gyro_intrinsics: true,
             g_sensitivity: true,
-            accel_intrinsics: false,
+            ..extras::Estimate::default()
         };
         let active = parameters(&est, IntrinsicsModel::Kalibr);
         let mut x0 = ImuIntrinsics::identity(IntrinsicsModel::Kalibr);
@@ -313,6 +326,7 @@ mod tests {
         let calib = Calibration {
             intrinsics: x0,
             td_s: 0.0,
+            extrinsic: extras::identity_pose(),
         };
         let bias_hat = ImuBias::new(Vector3::new(0.003, -0.002, 0.005), Vector3::zeros());
         let (pims, je): (Vec<_>, Vec<DMatrix<f64>>) = atts

@@ -11,7 +11,10 @@
 //!   `R_IMUtoGYRO` (together a full 3×3 gyroscope matrix); dimensionless and rad;
 //! - `g-sensitivity`: the 9 entries of `T_g` \[(rad/s)/(m/s²)\];
 //! - `accel-intrinsics`: the 6 free entries of `T_a` and, in the `rpng` model, the 3 angles of
-//!   `R_IMUtoACC`.
+//!   `R_IMUtoACC`;
+//! - `extrinsic-rotation`: `R_bs`, the IMU's attitude in the frame of the poses, as a right
+//!   perturbation `R_bs·Exp(δθ)` \[rad\] ([`super::extrinsic`]);
+//! - `lever-arm`: `p_bs`, the IMU's origin in the frame of the poses \[m\].
 //!
 //! As in OpenVINS, one of the two sensor rotations stays fixed (identity by default): the IMU
 //! frame is defined by that sensor's axes, and the known poses fix it against the world.
@@ -35,9 +38,15 @@
 
 use crate::bias::BiasError;
 use crate::gauss_newton::Solution;
-use nalgebra::{DMatrix, DVector, SVector};
+use nalgebra::{DMatrix, DVector, SVector, Vector3};
 use preint::intrinsics::{AppliedIntrinsics, ImuIntrinsics, IntrinsicsModel};
-use preint::{ImuBias, ImuSample, PreintError, PreintParams, PreintegratedImu};
+use preint::{ImuBias, ImuSample, PreintError, PreintParams, PreintegratedImu, SensorPose};
+use preint_lie::SO3;
+
+/// The identity transform: the poses are the IMU's.
+pub(crate) fn identity_pose() -> SensorPose {
+    SensorPose::new(SO3::identity(), Vector3::zeros())
+}
 
 /// Which calibration parameters [`super::calibrate_known_poses`] estimates beside the biases
 /// (module docs). All false by default: biases, velocities and gravity only.
@@ -51,15 +60,21 @@ pub struct Estimate {
     pub g_sensitivity: bool,
     /// `T_a` and, in the `rpng` model, `R_IMUtoACC`.
     pub accel_intrinsics: bool,
+    /// `R_bs`, the IMU's attitude in the frame of the poses ([`super::extrinsic`]).
+    pub extrinsic_rotation: bool,
+    /// `p_bs`, the IMU's origin in the frame of the poses \[m\] ([`super::extrinsic`]).
+    pub lever_arm: bool,
 }
 
 impl Estimate {
     /// The names [`Estimate::parse`] accepts.
-    pub const NAMES: [&'static str; 4] = [
+    pub const NAMES: [&'static str; 6] = [
         "time-offset",
         "gyro-intrinsics",
         "g-sensitivity",
         "accel-intrinsics",
+        "extrinsic-rotation",
+        "lever-arm",
     ];
 
     /// Parses a comma-separated list of [`Estimate::NAMES`] (e.g.
@@ -72,6 +87,8 @@ impl Estimate {
                 "gyro-intrinsics" => e.gyro_intrinsics = true,
                 "g-sensitivity" => e.g_sensitivity = true,
                 "accel-intrinsics" => e.accel_intrinsics = true,
+                "extrinsic-rotation" => e.extrinsic_rotation = true,
+                "lever-arm" => e.lever_arm = true,
                 _ => {
                     return Err(format!(
                         "unknown parameter `{name}` (expected some of {})",
@@ -85,7 +102,16 @@ impl Estimate {
 
     /// True when any parameter is asked for.
     pub fn any(&self) -> bool {
-        self.time_offset || self.gyro_intrinsics || self.g_sensitivity || self.accel_intrinsics
+        self.time_offset
+            || self.gyro_intrinsics
+            || self.g_sensitivity
+            || self.accel_intrinsics
+            || self.extrinsic()
+    }
+
+    /// True when a part of the extrinsic transform is asked for.
+    pub fn extrinsic(&self) -> bool {
+        self.extrinsic_rotation || self.lever_arm
     }
 }
 
@@ -96,6 +122,10 @@ pub enum Param {
     TimeOffset,
     /// Column `i` of the intrinsics' parameters ([`preint::intrinsics`], 24 columns).
     Intrinsic(usize),
+    /// Component `i` of the right perturbation of `R_bs` \[rad\] ([`super::extrinsic`]).
+    ExtrinsicRotation(usize),
+    /// Component `i` of the lever arm `p_bs` \[m, frame of the poses\].
+    LeverArm(usize),
 }
 
 impl Param {
@@ -116,6 +146,8 @@ impl Param {
                 format!("{r}.θ{}", ["x", "y", "z"][i - 12])
             }
             Param::Intrinsic(i) => format!("T_g[{},{}]", (i - 15) % 3, (i - 15) / 3),
+            Param::ExtrinsicRotation(i) => format!("R_bs.θ{}", ["x", "y", "z"][i]),
+            Param::LeverArm(i) => format!("p_bs.{}", ["x", "y", "z"][i]),
         }
     }
 
@@ -126,6 +158,8 @@ impl Param {
             Param::Intrinsic(i) if i < 12 => "1",
             Param::Intrinsic(i) if i < 15 => "rad",
             Param::Intrinsic(_) => "(rad/s)/(m/s²)",
+            Param::ExtrinsicRotation(_) => "rad",
+            Param::LeverArm(_) => "m",
         }
     }
 
@@ -135,6 +169,8 @@ impl Param {
             Param::TimeOffset => limits.time_offset_s,
             Param::Intrinsic(i) if i < 15 => limits.scale_misalignment,
             Param::Intrinsic(_) => limits.g_sensitivity,
+            Param::ExtrinsicRotation(_) => limits.extrinsic_rotation_rad,
+            Param::LeverArm(_) => limits.lever_arm_m,
         }
     }
 }
@@ -149,6 +185,10 @@ pub struct ExcitationLimits {
     pub scale_misalignment: f64,
     /// Entries of `T_g` \[(rad/s)/(m/s²)\] (default 1e-4, ≈ 0.06 °/s per g).
     pub g_sensitivity: f64,
+    /// Components of the extrinsic rotation \[rad\] (default 5e-3: 0.29°).
+    pub extrinsic_rotation_rad: f64,
+    /// Components of the lever arm \[m\] (default 0.01).
+    pub lever_arm_m: f64,
 }
 
 impl Default for ExcitationLimits {
@@ -157,6 +197,8 @@ impl Default for ExcitationLimits {
             time_offset_s: 1e-3,
             scale_misalignment: 1e-3,
             g_sensitivity: 1e-4,
+            extrinsic_rotation_rad: 5e-3,
+            lever_arm_m: 0.01,
         }
     }
 }
@@ -182,6 +224,12 @@ pub fn parameters(e: &Estimate, model: IntrinsicsModel) -> Vec<Param> {
             out.extend((12..15).map(Param::Intrinsic));
         }
     }
+    if e.extrinsic_rotation {
+        out.extend((0..3).map(Param::ExtrinsicRotation));
+    }
+    if e.lever_arm {
+        out.extend((0..3).map(Param::LeverArm));
+    }
     out
 }
 
@@ -191,9 +239,9 @@ pub fn parameters(e: &Estimate, model: IntrinsicsModel) -> Vec<Param> {
 pub struct ParameterEstimate {
     /// Which parameter.
     pub param: Param,
-    /// Its value: `t_d` \[s\], the intrinsics' entry, or the angle \[rad\] of the estimated
-    /// rotation relative to the initial one (the rotation itself is in the result's
-    /// intrinsics).
+    /// Its value: `t_d` \[s\], the intrinsics' entry, the lever arm's component \[m\], or the
+    /// angle \[rad\] of the estimated rotation relative to the initial one (the rotation itself
+    /// is in the result's intrinsics or extrinsic).
     pub value: f64,
     /// Its standard deviation (same unit; `+∞` when the motion does not move it at all).
     pub std: f64,
@@ -206,6 +254,8 @@ pub struct ParameterEstimate {
 pub(crate) struct Calibration {
     pub(crate) intrinsics: ImuIntrinsics,
     pub(crate) td_s: f64,
+    /// The pose of the IMU in the frame of the poses (`R_bs`, `p_bs`).
+    pub(crate) extrinsic: SensorPose,
 }
 
 impl Calibration {
@@ -214,6 +264,7 @@ impl Calibration {
         Self {
             intrinsics: opts.initial_intrinsics,
             td_s: opts.initial_time_offset_s,
+            extrinsic: opts.initial_extrinsic.unwrap_or_else(identity_pose),
         }
     }
 
@@ -238,29 +289,41 @@ impl Calibration {
     pub(crate) fn moved(&self, params: &[Param], e: &[f64]) -> Calibration {
         let mut delta = SVector::<f64, { ImuIntrinsics::PARAMS }>::zeros();
         let mut td = self.td_s;
+        let (mut dtheta, mut dp) = (Vector3::zeros(), Vector3::zeros());
         for (p, v) in params.iter().zip(e) {
             match p {
                 Param::TimeOffset => td += v,
                 Param::Intrinsic(i) => delta[*i] = *v,
+                Param::ExtrinsicRotation(i) => dtheta[*i] = *v,
+                Param::LeverArm(i) => dp[*i] = *v,
             }
         }
         Calibration {
             intrinsics: self.intrinsics.perturbed(&delta),
             td_s: td,
+            extrinsic: SensorPose::new(
+                self.extrinsic.rotation.plus(&dtheta),
+                self.extrinsic.translation + dp,
+            ),
         }
     }
 
     /// The estimate's value of `p` (module docs of [`ParameterEstimate::value`]): the angle
     /// entries are those of `Log(R_initialᵀ R)`.
-    pub(crate) fn value(&self, p: Param, initial: &ImuIntrinsics) -> f64 {
+    pub(crate) fn value(&self, p: Param, initial: &Calibration) -> f64 {
         let x = &self.intrinsics;
+        let initial_x = &initial.intrinsics;
         match p {
+            Param::ExtrinsicRotation(i) => {
+                self.extrinsic.rotation.minus(&initial.extrinsic.rotation)[i]
+            }
+            Param::LeverArm(i) => self.extrinsic.translation[i],
             Param::TimeOffset => self.td_s,
             Param::Intrinsic(i) if i < 12 => x.params()[i],
             Param::Intrinsic(i) if i < 15 => {
                 let (r0, r) = match x.model {
-                    IntrinsicsModel::Kalibr => (initial.r_imu_to_gyro, x.r_imu_to_gyro),
-                    IntrinsicsModel::Rpng => (initial.r_imu_to_acc, x.r_imu_to_acc),
+                    IntrinsicsModel::Kalibr => (initial_x.r_imu_to_gyro, x.r_imu_to_gyro),
+                    IntrinsicsModel::Rpng => (initial_x.r_imu_to_acc, x.r_imu_to_acc),
                 };
                 let d = preint_lie::SO3::from_matrix(&(r0.transpose() * r)).log();
                 d[i - 12]
@@ -302,8 +365,11 @@ pub(crate) fn window(
         match (p, &jac) {
             (Param::TimeOffset, _) => out.column_mut(k).copy_from(&pim.jac_td),
             (Param::Intrinsic(i), Some(j)) => out.column_mut(k).copy_from(&j.column(*i)),
-            // `jac` is present whenever an intrinsic parameter is asked for.
-            (Param::Intrinsic(_), None) => {}
+            // `jac` is present whenever an intrinsic parameter is asked for; the extrinsic
+            // transform moves the poses, not the deltas ([`super::extrinsic`]).
+            (Param::Intrinsic(_), None)
+            | (Param::ExtrinsicRotation(_), _)
+            | (Param::LeverArm(_), _) => {}
         }
     }
     Ok((pim, out))
@@ -334,11 +400,11 @@ pub(crate) fn fit_excited<T>(
             let mut parameters: Vec<ParameterEstimate> = active
                 .iter()
                 .zip(&stds)
-                .map(|(p, std)| (*p, calib.value(*p, &initial.intrinsics), *std, true))
+                .map(|(p, std)| (*p, calib.value(*p, initial), *std, true))
                 .chain(
                     withheld
                         .iter()
-                        .map(|(p, std)| (*p, initial.value(*p, &initial.intrinsics), *std, false)),
+                        .map(|(p, std)| (*p, initial.value(*p, initial), *std, false)),
                 )
                 .map(|(param, value, std, excited)| ParameterEstimate {
                     param,

@@ -20,6 +20,11 @@
 //! correction of the windows' deltas (their Jacobians `J_td`, `J_θ`), with a standard deviation,
 //! and withheld when the motion does not excite them ([`extras::ExcitationLimits`]).
 //!
+//! The poses may be those of another frame rigidly attached to the IMU (a camera, a lidar, a
+//! motion-capture body): [`KnownPoseOptions::initial_extrinsic`] gives the IMU's pose in it,
+//! and `estimate` can ask for its rotation and lever arm ([`extrinsic`]), started at the
+//! hand-eye rotation when not given.
+//!
 //! When the fit is not credible ([`crate::fit`]), [`conventions`] tries the usual convention
 //! errors of a pose file (quaternion order, inverse rotation or pose, world z down, poses of
 //! another frame) and names the one that explains the misfit.
@@ -36,6 +41,7 @@
 pub mod attitudes;
 pub mod conventions;
 pub mod extras;
+pub mod extrinsic;
 pub mod gravity;
 pub mod pose_noise;
 pub mod residuals;
@@ -50,11 +56,12 @@ use extras::{
     Calibration, Estimate, ExcitationLimits, Layout, Param, ParameterEstimate, Relinearised,
     fit_excited, parameters, relinearise,
 };
+use extrinsic::{ExtrinsicEstimate, ExtrinsicStart};
 use gravity::GravityDir;
 use nalgebra::{DMatrix, DVector, Vector3};
 use pose_noise::{Whitening, residual_covariance};
 use preint::intrinsics::ImuIntrinsics;
-use preint::{ImuBias, ImuSample, PreintParams, dt_seconds};
+use preint::{ImuBias, ImuSample, PreintParams, SensorPose, dt_seconds};
 use preint_lie::SO3;
 use residuals::Problem;
 
@@ -96,6 +103,11 @@ pub struct KnownPoseOptions {
     pub initial_time_offset_s: f64,
     /// Standard deviations above which a parameter counts as not excited.
     pub excitation: ExcitationLimits,
+    /// The IMU's pose in the frame of the poses (`R_bs`, `p_bs`; [`extrinsic`]), applied to
+    /// the poses and the initial value of what `estimate` asks of it. `None` (default): the
+    /// poses are the IMU's, or, when the rotation is estimated, it starts at the hand-eye
+    /// rotation. Exclusive with `params.body_p_sensor`.
+    pub initial_extrinsic: Option<SensorPose>,
 }
 
 impl KnownPoseOptions {
@@ -112,6 +124,7 @@ impl KnownPoseOptions {
             initial_intrinsics: ImuIntrinsics::default(),
             initial_time_offset_s: 0.0,
             excitation: ExcitationLimits::default(),
+            initial_extrinsic: None,
         }
     }
 }
@@ -163,6 +176,8 @@ pub struct KnownPoseCalibration {
     /// the estimated rotation): what propagates the calibration's own uncertainty into a
     /// window it is applied to, `Σ + J Σ_c Jᵀ` with `J = [J_b, J_e]`.
     pub covariance: DMatrix<f64>,
+    /// The IMU's pose in the frame of the poses, when estimated or given.
+    pub extrinsic: Option<ExtrinsicEstimate>,
 }
 
 impl KnownPoseCalibration {
@@ -236,8 +251,10 @@ pub fn calibrate_known_poses(
     check_non_negative("pose_rot_std", opts.pose_rot_std)?;
     check_non_negative("pose_pos_std", opts.pose_pos_std)?;
     check_calibration_options(opts)?;
+    check_extrinsic_options(opts)?;
     let gnorm = check_gravity("params.gravity", &opts.params.gravity)?;
     let g0 = Vector3::new(0.0, 0.0, -gnorm);
+    let (opts, start) = &extrinsic_start(samples, poses, opts);
     let asked = parameters(&opts.estimate, opts.initial_intrinsics.model);
     let eo = 6 + 3 * poses.len();
     let out = fit_excited(
@@ -251,13 +268,71 @@ pub fn calibrate_known_poses(
             Ok((f, calib, (0..active.len()).map(|k| stds[eo + k]).collect()))
         },
     )?;
+    let extrinsic = start.map(|s| (s, extrinsic::rotation_rms(poses)));
     Ok(calibration(
         out.fit,
-        &g0,
-        &opts.params.gravity,
+        (&g0, &opts.params.gravity),
         poses.len(),
         out.parameters,
+        extrinsic,
     ))
+}
+
+/// The options with the extrinsic start of [`extrinsic`] ("Start"): the given transform, or,
+/// when the rotation is estimated without one, the hand-eye rotation (the identity when the
+/// motion cannot give it); `None` when the poses are the IMU's.
+fn extrinsic_start(
+    samples: &[ImuSample],
+    poses: &[KnownPose],
+    opts: &KnownPoseOptions,
+) -> (KnownPoseOptions, Option<ExtrinsicStart>) {
+    if opts.initial_extrinsic.is_some() {
+        return (opts.clone(), Some(ExtrinsicStart::Given));
+    }
+    if !opts.estimate.extrinsic() {
+        return (opts.clone(), None);
+    }
+    let mut o = opts.clone();
+    let mut start = ExtrinsicStart::Identity;
+    if opts.estimate.extrinsic_rotation {
+        let atts: Vec<(i64, SO3)> = poses.iter().map(|p| (p.t_ns, p.r)).collect();
+        if let Some(x) = conventions::hand_eye_rotation(samples, &atts, opts) {
+            o.initial_extrinsic = Some(SensorPose::new(x, Vector3::zeros()));
+            start = ExtrinsicStart::HandEye;
+        }
+    }
+    (o, Some(start))
+}
+
+/// The extrinsic options are consistent: one way of giving the IMU's pose, and a valid one.
+fn check_extrinsic_options(opts: &KnownPoseOptions) -> Result<(), BiasError> {
+    if (opts.estimate.extrinsic() || opts.initial_extrinsic.is_some())
+        && opts.params.body_p_sensor.is_some()
+    {
+        return Err(BiasError::InvalidParameter {
+            name: "params.body_p_sensor",
+            reason: "the IMU's pose in the frame of the poses is given or estimated through                      initial_extrinsic (applied to the poses); params.body_p_sensor would apply                      it a second time"
+                .into(),
+        });
+    }
+    if let Some(x) = &opts.initial_extrinsic
+        && !x.is_valid()
+    {
+        return Err(BiasError::InvalidParameter {
+            name: "initial_extrinsic",
+            reason: "not a rigid transform (non-finite, or the rotation is not orthonormal)".into(),
+        });
+    }
+    for (name, v) in [
+        (
+            "excitation.extrinsic_rotation_rad",
+            opts.excitation.extrinsic_rotation_rad,
+        ),
+        ("excitation.lever_arm_m", opts.excitation.lever_arm_m),
+    ] {
+        check_positive(name, v)?;
+    }
+    Ok(())
 }
 
 /// The initial calibration is valid: intrinsics invertible, time offset finite, and the
@@ -302,7 +377,8 @@ fn fit(
             )
         },
     };
-    let x = initial_state(poses, opts, g0, active.len());
+    let start = Calibration::initial(opts).extrinsic;
+    let x = initial_state(&extrinsic::imu_poses(poses, &start), opts, g0, active.len());
     relinearise(opts, active, x, &layout, |lin, x| {
         solve_linearised(samples, poses, opts, lin, active, g0, x)
     })
@@ -383,7 +459,13 @@ fn solve_linearised(
 ) -> Result<Solution<State>, BiasError> {
     let times = poses.windows(2).map(|w| (w[0].t_ns, w[1].t_ns));
     let (pims, extras) = extras::windows(&opts.params, lin, active, samples, times)?;
-    let (diag, sub) = residual_covariance(&pims, poses, opts.pose_rot_std, opts.pose_pos_std);
+    let x_bs = lin.1.extrinsic;
+    let (diag, sub) = residual_covariance(
+        &pims,
+        &extrinsic::imu_poses(poses, &x_bs),
+        (opts.pose_rot_std, opts.pose_pos_std),
+        &extrinsic::lever_in_imu(&x_bs),
+    );
     let white = Whitening::new(&diag, &sub).ok_or_else(|| BiasError::InvalidParameter {
         name: "params",
         reason: "the residual covariance (preintegration + pose noise) is not positive \
@@ -392,6 +474,8 @@ fn solve_linearised(
     })?;
     let problem = Problem {
         poses,
+        active,
+        extrinsic: x_bs,
         pims: &pims,
         extras: &extras,
         g0: *g0,
@@ -400,13 +484,14 @@ fn solve_linearised(
     Ok(solve(problem, x, GaussNewton::default(), opts.max_iters)?)
 }
 
-/// The result of the last solve: estimates and marginal standard deviations.
+/// The result of the last solve: estimates and marginal standard deviations (and the extrinsic
+/// estimate, when the poses are of another frame: where it started and how much they rotate).
 fn calibration(
     fit: Fit,
-    g0: &Vector3<f64>,
-    g_init: &Vector3<f64>,
+    (g0, g_init): (&Vector3<f64>, &Vector3<f64>),
     n: usize,
     parameters: Vec<ParameterEstimate>,
+    extrinsic: Option<(ExtrinsicStart, Vector3<f64>)>,
 ) -> KnownPoseCalibration {
     let sol = fit.sol;
     let (p, rwg) = &sol.estimate;
@@ -416,6 +501,13 @@ fn calibration(
     let covariance = DMatrix::from_fn(idx.len(), idx.len(), |i, j| {
         sol.covariance[(idx[i], idx[j])]
     });
+    let active: Vec<Param> = parameters
+        .iter()
+        .filter(|e| e.excited)
+        .map(|e| e.param)
+        .collect();
+    let extrinsic = extrinsic
+        .map(|s| extrinsic::estimate(fit.calib.extrinsic, &sol.covariance, eo, &active, s));
     let (gravity, gd) = rwg.gravity(g0);
     let gcov = gd * sol.marginal_covariance::<2>(np) * gd.transpose();
     let cosang = (gravity.dot(g_init) / (gravity.norm() * g_init.norm())).clamp(-1.0, 1.0);
@@ -439,5 +531,6 @@ fn calibration(
         time_offset_s: fit.calib.td_s,
         parameters,
         covariance,
+        extrinsic,
     }
 }

@@ -29,19 +29,22 @@
 
 use super::KnownPose;
 use nalgebra::allocator::Allocator;
-use nalgebra::{Const, DefaultAllocator, Dim, Dyn, Matrix3, OMatrix, SMatrix};
+use nalgebra::{Const, DefaultAllocator, Dim, Dyn, Matrix3, OMatrix, SMatrix, Vector3};
 use preint::PreintegratedImu;
 use preint_lie::{hat, jr_inv};
 
 type M9 = SMatrix<f64, 9, 9>;
 type M9x3 = SMatrix<f64, 9, 3>;
 
-/// Jacobians of residual k w.r.t. the attitude noise of its poses i and j (9×3 each), at the
-/// preintegrated deltas (module docs).
+/// Jacobians of residual k w.r.t. the attitude noise of its IMU poses i and j (9×3 each), at
+/// the preintegrated deltas (module docs); `q` is the lever arm in the IMU frame, through which
+/// the attitude noise of the given poses also moves the IMU positions
+/// ([`super::extrinsic`], "Pose noise"; zero for poses of the IMU).
 pub(super) fn pose_noise_jacobians(
     pim: &PreintegratedImu,
     pi: &KnownPose,
     pj: &KnownPose,
+    q: &Vector3<f64>,
 ) -> (M9x3, M9x3) {
     let rjt_ri = pj.r.inverse().compose(&pi.r);
     let rphi = pim
@@ -54,20 +57,24 @@ pub(super) fn pose_noise_jacobians(
     ai.fixed_rows_mut::<3>(0)
         .copy_from(&(-jri * rjt_ri.matrix()));
     ai.fixed_rows_mut::<3>(3).copy_from(&hat(&pim.delta_v));
-    ai.fixed_rows_mut::<3>(6).copy_from(&hat(&pim.delta_p));
+    ai.fixed_rows_mut::<3>(6)
+        .copy_from(&(hat(&pim.delta_p) + hat(q)));
     let mut aj = M9x3::zeros();
     aj.fixed_rows_mut::<3>(0).copy_from(&jri);
+    aj.fixed_rows_mut::<3>(6)
+        .copy_from(&(-(rjt_ri.matrix().transpose() * hat(q))));
     (ai, aj)
 }
 
 /// Block-tridiagonal residual covariance `blockdiag(Σ_imu) + A S Aᵀ` (module docs) for pose
-/// standard deviations `s_r` \[rad\], `s_p` \[m\]: diagonal blocks and sub-diagonal blocks
+/// standard deviations `s_r` \[rad\], `s_p` \[m\] of the IMU poses `poses` (lever arm `q` in
+/// the IMU frame, [`pose_noise_jacobians`]): diagonal blocks and sub-diagonal blocks
 /// `Σ_k,k−1` (`sub[0]` is zero).
 pub(super) fn residual_covariance(
     pims: &[PreintegratedImu],
     poses: &[KnownPose],
-    s_r: f64,
-    s_p: f64,
+    (s_r, s_p): (f64, f64),
+    q: &Vector3<f64>,
 ) -> (Vec<M9>, Vec<M9>) {
     let (vr, vp) = (s_r * s_r, s_p * s_p);
     let pos_rows = |rit: &Matrix3<f64>| {
@@ -80,7 +87,7 @@ pub(super) fn residual_covariance(
     let mut prev_j: Option<(M9x3, M9x3)> = None;
     for (k, pim) in pims.iter().enumerate() {
         let (pi, pj) = (&poses[k], &poses[k + 1]);
-        let (ai, aj) = pose_noise_jacobians(pim, pi, pj);
+        let (ai, aj) = pose_noise_jacobians(pim, pi, pj, q);
         let rit = *pi.r.inverse().matrix();
         let (bi, bj) = (pos_rows(&(-rit)), pos_rows(&rit));
         diag.push(
@@ -197,7 +204,7 @@ mod tests {
                 let rp = rit.act(&(x.3 - x.1 - vi * dt - g0 * (0.5 * dt * dt))) - pim.delta_p;
                 DVector::from_iterator(9, rphi.iter().chain(rv.iter()).chain(rp.iter()).copied())
             };
-            let (ai, aj) = pose_noise_jacobians(pim, &pi, &pj);
+            let (ai, aj) = pose_noise_jacobians(pim, &pi, &pj, &Vector3::zeros());
             let rit = *pi.r.inverse().matrix();
             let mut bi = DMatrix::zeros(9, 3);
             bi.view_mut((6, 0), (3, 3)).copy_from(&(-rit));
@@ -218,12 +225,78 @@ mod tests {
         }
     }
 
+    /// With poses of another frame b (the IMU 0.4 m away and turned by ≈ 60°), the Jacobians
+    /// `A` (lever-arm terms included) times `R_bsᵀ` against Ridders' derivative of the raw
+    /// residual w.r.t. attitude perturbations of the *given* poses, mapped to the IMU poses
+    /// through the transform ([`super::super::extrinsic`]); same point and tolerance as above.
+    /// Without the lever-arm terms the position rows are off by `|[q]×| ≈ 0.4`.
+    #[test]
+    fn pose_noise_jacobians_with_a_lever_arm_match_ridders() {
+        use super::super::extrinsic::{imu_pose, lever_in_imu};
+        let s = setup(ImuNoise::zero(200.0));
+        let truth_bias = ImuBias::new(
+            Vector3::new(0.004, -0.003, 0.006),
+            Vector3::new(0.08, -0.05, 0.12),
+        );
+        let pims = pims(&s, &truth_bias);
+        let g0 = Vector3::new(0.0, 0.0, -9.81);
+        let x = preint::SensorPose::new(
+            SO3::exp(&Vector3::new(0.7, 0.4, -0.6)),
+            Vector3::new(0.2, -0.3, 0.15),
+        );
+        // The given poses: R_b = R_s R_bsᵀ, p_b = p_s − R_b p_bs.
+        let given = |p: &KnownPose| {
+            let r = p.r.compose(&x.rotation.inverse());
+            KnownPose {
+                t_ns: p.t_ns,
+                r,
+                p: p.p - r.act(&x.translation),
+            }
+        };
+        let q = lever_in_imu(&x);
+        for k in [0usize, 5, 11] {
+            let pim = &pims[k];
+            let (bi, bj) = (given(&s.poses[k]), given(&s.poses[k + 1]));
+            let (vi, vj) = (s.truth[50 * k].v, s.truth[50 * (k + 1)].v);
+            let raw = |n: &(SO3, SO3)| {
+                let si = imu_pose(&KnownPose { r: n.0, ..bi }, &x);
+                let sj = imu_pose(&KnownPose { r: n.1, ..bj }, &x);
+                let rit = si.r.inverse();
+                let dt = pim.delta_t;
+                let rphi = pim.delta_r.inverse().compose(&rit.compose(&sj.r)).log();
+                let rv = rit.act(&(vj - vi - g0 * dt)) - pim.delta_v;
+                let rp = rit.act(&(sj.p - si.p - vi * dt - g0 * (0.5 * dt * dt))) - pim.delta_p;
+                DVector::from_iterator(9, rphi.iter().chain(rv.iter()).chain(rp.iter()).copied())
+            };
+            let (ai, aj) = pose_noise_jacobians(pim, &s.poses[k], &s.poses[k + 1], &q);
+            let rbs_t = x.rotation.inverse().matrix().into_owned();
+            let opts = CheckOptions {
+                tolerance: 3e-5,
+                ..CheckOptions::default()
+            };
+            let rep = check_jacobian(
+                raw,
+                &(bi.r, bj.r),
+                &[
+                    crate::to_dmatrix(&(ai * rbs_t)),
+                    crate::to_dmatrix(&(aj * rbs_t)),
+                ],
+                &opts,
+            )
+            .unwrap();
+            println!(
+                "pose-noise Jacobian with a lever arm, pair {k}: {:.2e}",
+                rep.worst_rel_error
+            );
+        }
+    }
+
     /// `‖L⁻¹r‖² = rᵀΣ⁻¹r` with Σ assembled densely from its blocks and inverted by nalgebra.
     #[test]
     fn block_tridiagonal_whitening_equals_dense_inverse() {
         let s = setup(ImuNoise::euroc());
         let pims = pims(&s, &ImuBias::zero());
-        let (diag, sub) = residual_covariance(&pims, &s.poses, 3e-3, 5e-3);
+        let (diag, sub) = residual_covariance(&pims, &s.poses, (3e-3, 5e-3), &Vector3::zeros());
         let white = Whitening::new(&diag, &sub).unwrap();
         let m = 9 * diag.len();
         let mut dense = DMatrix::zeros(m, m);

@@ -22,17 +22,24 @@
 //! ([`super::pose_noise`]).
 
 use super::KnownPose;
+use super::extras::Param;
+use super::extrinsic::{self, WindowTerms};
 use super::gravity::GravityDir;
 use super::pose_noise::Whitening;
 use crate::gauss_newton::LeastSquares;
 use nalgebra::{DMatrix, DVector, Vector3};
-use preint::PreintegratedImu;
+use preint::{PreintegratedImu, SensorPose};
 use preint_lie::{jr, jr_inv};
 
 /// The problem at one linearisation point (the windows preintegrated at `b̂` and the
 /// calibration's estimate); state `([b_g, b_a, v_0, …, v_P−1, e_0, …, e_m−1], R_wg)`.
 pub(super) struct Problem<'a> {
+    /// The given poses (of the frame b; [`super::extrinsic`]).
     pub(super) poses: &'a [KnownPose],
+    /// The scalars of `e`.
+    pub(super) active: &'a [Param],
+    /// The extrinsic transform at the linearisation point, moved by `e`'s correction.
+    pub(super) extrinsic: SensorPose,
     pub(super) pims: &'a [PreintegratedImu],
     /// Per window, the 9 × m Jacobian of its deltas with respect to `e` ([`super::extras`]).
     pub(super) extras: &'a [DMatrix<f64>],
@@ -63,10 +70,16 @@ impl Problem<'_> {
         let eo = 6 + 3 * self.poses.len();
         let e = p.rows(eo, np - eo);
         let (g, gd) = rwg.gravity(&self.g0);
+        let dx = extrinsic::state_correction(p, eo, self.active);
+        let x = extrinsic::moved(&self.extrinsic, &dx);
         for (k, pim) in self.pims.iter().enumerate() {
             let je = &self.extras[k];
             let c = je * e;
-            let (pi, pj) = (&self.poses[k], &self.poses[k + 1]);
+            let given = (&self.poses[k], &self.poses[k + 1]);
+            let (pi, pj) = (
+                &extrinsic::imu_pose(given.0, &x),
+                &extrinsic::imu_pose(given.1, &x),
+            );
             let (vi, vj) = (v3(6 + 3 * k), v3(6 + 3 * k + 3));
             let jb = &pim.jac;
             let dbg = bg - pim.bias_hat.gyro;
@@ -79,8 +92,9 @@ impl Problem<'_> {
             let rit = pi.r.inverse();
             let err = dr.inverse().compose(&rit.compose(&pj.r));
             let rphi = err.log();
-            let rv = rit.act(&(vj - vi - g * dt)) - dv;
-            let rp = rit.act(&(pj.p - pi.p - vi * dt - g * (0.5 * dt * dt))) - dp;
+            let yv = rit.act(&(vj - vi - g * dt));
+            let yp = rit.act(&(pj.p - pi.p - vi * dt - g * (0.5 * dt * dt)));
+            let (rv, rp) = (yv - dv, yp - dp);
             let row = 9 * k;
             r.fixed_rows_mut::<3>(row).copy_from(&rphi);
             r.fixed_rows_mut::<3>(row + 3).copy_from(&rv);
@@ -111,8 +125,45 @@ impl Problem<'_> {
                 .copy_from(&(-ritm * gd * dt));
             j.view_mut((row + 6, np), (3, 2))
                 .copy_from(&(-ritm * gd * (0.5 * dt * dt)));
+            let terms = WindowTerms {
+                given,
+                rit: ritm,
+                m: *rit.compose(&pj.r).matrix(),
+                rphi,
+                y: (yv, yp),
+            };
+            self.extrinsic_columns(&mut j, row, eo, &terms, &dx.0);
         }
         (r, j)
+    }
+}
+
+impl Problem<'_> {
+    /// Writes the columns of the extrinsic parameters of `e` for the window at `row`.
+    fn extrinsic_columns(
+        &self,
+        j: &mut DMatrix<f64>,
+        row: usize,
+        eo: usize,
+        w: &WindowTerms,
+        dth: &Vector3<f64>,
+    ) {
+        if !self
+            .active
+            .iter()
+            .any(|p| matches!(p, Param::ExtrinsicRotation(_) | Param::LeverArm(_)))
+        {
+            return;
+        }
+        let (d_rot, d_p) = extrinsic::jacobians(w, dth);
+        for (k, p) in self.active.iter().enumerate() {
+            let col = match p {
+                Param::ExtrinsicRotation(a) => d_rot.column(*a),
+                Param::LeverArm(a) => d_p.column(*a),
+                Param::TimeOffset | Param::Intrinsic(_) => continue,
+            };
+            j.view_mut((row, eo + k), (9, 1)).copy_from(&col);
+        }
     }
 }
 
@@ -130,7 +181,7 @@ impl LeastSquares for Problem<'_> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::extras::{Calibration, Estimate, parameters, window};
+    use super::super::extras::{Calibration, Estimate, identity_pose, parameters, window};
     use super::super::pose_noise::residual_covariance;
     use super::super::test_data::{pims, setup};
     use super::*;
@@ -147,15 +198,22 @@ mod tests {
         // Without calibration parameters, and with all 25 (time offset, gyro, g-sensitivity,
         // accelerometer) at non-identity intrinsics.
         let none = vec![DMatrix::zeros(9, 0); pims.len()];
-        check_problem(&s, &pims, &none);
+        check_problem(&s, &pims, &none, (&[], identity_pose()));
         let all = Estimate {
             time_offset: true,
             gyro_intrinsics: true,
             g_sensitivity: true,
             accel_intrinsics: true,
+            extrinsic_rotation: true,
+            lever_arm: true,
         };
         let active = parameters(&all, IntrinsicsModel::Kalibr);
-        assert_eq!(active.len(), 25);
+        assert_eq!(active.len(), 31);
+        // Poses of a frame turned by ≈ 70° from the IMU, 0.3 m away.
+        let x_bs = SensorPose::new(
+            SO3::exp(&Vector3::new(0.9, -0.6, 0.5)),
+            Vector3::new(0.3, -0.1, 0.2),
+        );
         let mut x0 = ImuIntrinsics::identity(IntrinsicsModel::Kalibr);
         x0.t_w[(1, 0)] = 2e-3;
         x0.t_w[(2, 2)] = 1.01;
@@ -164,6 +222,7 @@ mod tests {
         let calib = Calibration {
             intrinsics: x0,
             td_s: 0.0,
+            extrinsic: x_bs,
         };
         let (pims, extras): (Vec<_>, Vec<_>) = s
             .poses
@@ -180,7 +239,7 @@ mod tests {
                 .unwrap()
             })
             .unzip();
-        check_problem(&s, &pims, &extras);
+        check_problem(&s, &pims, &extras, (&active, x_bs));
     }
 
     /// The analytic Jacobian of the whitened problem against Ridders' away from the optimum.
@@ -188,12 +247,17 @@ mod tests {
         s: &super::super::test_data::Setup,
         pims: &[PreintegratedImu],
         extras: &[DMatrix<f64>],
+        (active, x_bs): (&[Param], SensorPose),
     ) {
-        let (diag, sub) = residual_covariance(pims, &s.poses, 2e-3, 4e-3);
+        let imu = extrinsic::imu_poses(&s.poses, &x_bs);
+        let q = extrinsic::lever_in_imu(&x_bs);
+        let (diag, sub) = residual_covariance(pims, &imu, (2e-3, 4e-3), &q);
         let white = Whitening::new(&diag, &sub).unwrap();
         let g0 = Vector3::new(0.0, 0.0, -9.81);
         let problem = Problem {
             poses: &s.poses,
+            active,
+            extrinsic: x_bs,
             pims,
             extras,
             g0,
