@@ -45,13 +45,14 @@ use std::path::Path;
 /// The keys of which a calibration file must hold at least one: the intrinsics of both
 /// formats and the time offset (a file of `model:` and noise densities alone calibrates
 /// nothing; one that states the identity does, explicitly).
-pub const CALIBRATION_KEYS: [&str; 8] = [
+pub const CALIBRATION_KEYS: [&str; 9] = [
     "Tw",
     "Ta",
     "R_IMUtoGYRO",
     "R_IMUtoACC",
     "Tg",
     "time_offset",
+    preint_io::extrinsics::BODY_P_SENSOR_KEY,
     "gyroscopes",
     "accelerometers",
 ];
@@ -111,14 +112,15 @@ pub fn time_offset_ns_of(t: Option<f64>) -> i64 {
     t.map_or(0, |t| (t * 1e9).round() as i64)
 }
 
-/// Writes `intrinsics`, `noise`, `time_offset_s` and the scheme they were estimated for to
-/// `path` as OpenVINS' `kalibr_imu_chain.yaml`.
+/// Writes `intrinsics`, `noise`, `time_offset_s`, the scheme they were estimated for and the
+/// IMU's pose in the frame of the poses (`preint_body_p_sensor`) to `path` as OpenVINS'
+/// `kalibr_imu_chain.yaml`.
 pub fn write(
     path: &Path,
     intrinsics: ImuIntrinsics,
     noise: &ImuNoise,
-    time_offset_s: Option<f64>,
-    scheme: Option<Scheme>,
+    (time_offset_s, scheme): (Option<f64>, Option<Scheme>),
+    body_p_sensor: Option<preint::SensorPose>,
 ) -> Result<(), Error> {
     let cal = ImuCalibration {
         intrinsics,
@@ -126,6 +128,7 @@ pub fn write(
         time_offset_s,
         rostopic: None,
         scheme,
+        body_p_sensor,
     };
     preint_io::write_openvins_imu_chain(path, &cal)?;
     Ok(())

@@ -275,6 +275,7 @@ fn audit_checks_a_calibration_file_against_the_recording() {
             time_offset_s: Some(2e-3),
             rostopic: None,
             scheme: None,
+            body_p_sensor: None,
         };
         preint_io::write_openvins_imu_chain(&p, &cal).unwrap();
         p

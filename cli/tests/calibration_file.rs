@@ -206,6 +206,7 @@ fn advise_applies_the_calibrations_intrinsics() {
             time_offset_s: None,
             rostopic: None,
             scheme: None,
+            body_p_sensor: None,
         },
     )
     .unwrap();

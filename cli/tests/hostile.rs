@@ -28,6 +28,7 @@ const NULLABLE: &[&str] = &[
     "coriolis",
     "body_p_sensor",
     "time_offset_s",
+    "extrinsics",
     // An estimate or a recommendation the data does not support (said in the text).
     "recommended_scheme",
     "recommended_rate",

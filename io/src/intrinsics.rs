@@ -62,6 +62,9 @@ pub struct ImuCalibration {
     /// `preint_scheme`: the scheme the time offset was estimated for (module docs); `None`
     /// when the file does not say.
     pub scheme: Option<Scheme>,
+    /// `preint_body_p_sensor`: the IMU's pose in the frame of the poses it was calibrated
+    /// against ([`crate::extrinsics`]).
+    pub body_p_sensor: Option<preint::SensorPose>,
 }
 
 /// Accepted range of a scale factor (a diagonal entry of `Tw`, `Ta`): ±20–25 %.
@@ -109,6 +112,7 @@ impl Ctx<'_> {
             time_offset_s,
             rostopic,
             scheme: self.scheme(map, path)?,
+            body_p_sensor: crate::extrinsics::read_body_p_sensor(map, path, self.source)?,
         })
     }
 
@@ -498,6 +502,9 @@ fn header_lines(out: &mut String, cal: &ImuCalibration) {
             "  preint_scheme: \"{}\"  # the preint scheme time_offset was estimated for\n",
             s.name()
         ));
+    }
+    if let Some(x) = &cal.body_p_sensor {
+        out.push_str(&crate::extrinsics::body_p_sensor_line(x));
     }
 }
 

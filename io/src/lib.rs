@@ -37,6 +37,7 @@ pub mod containers;
 pub mod detect;
 pub mod error;
 pub mod euroc;
+pub mod extrinsics;
 pub mod groundtruth;
 pub mod intrinsics;
 pub mod kalibr;

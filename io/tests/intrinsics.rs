@@ -55,6 +55,7 @@ fn calibration(x: ImuIntrinsics) -> ImuCalibration {
         time_offset_s: Some(-0.0045123456789),
         rostopic: Some("/imu0".into()),
         scheme: None,
+        body_p_sensor: None,
     }
 }
 
@@ -79,6 +80,7 @@ fn openvins_files_round_trip_exactly() {
         time_offset_s: None,
         rostopic: None,
         scheme: None,
+        body_p_sensor: None,
     };
     let text = openvins_imu_chain_string(&bare);
     assert_eq!(parse_openvins_imu_chain(&text, "mem").unwrap(), bare);

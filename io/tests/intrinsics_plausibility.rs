@@ -15,6 +15,47 @@ fn file(scheme: Option<Scheme>) -> ImuCalibration {
         time_offset_s: Some(4.04e-3),
         rostopic: None,
         scheme,
+        body_p_sensor: None,
+    }
+}
+
+/// `preint_body_p_sensor` is written and read back exactly; a quaternion that is not unit or a
+/// list of the wrong length is refused naming the file, line and key.
+#[test]
+fn the_imu_pose_round_trips_and_malformed_ones_are_refused() {
+    use preint::SensorPose;
+    use preint_lie::SO3;
+    let x = SensorPose::new(
+        SO3::exp(&preint::nalgebra::Vector3::new(0.3, -1.2, 0.7)),
+        preint::nalgebra::Vector3::new(0.12, -0.05, 0.3),
+    );
+    let cal = ImuCalibration {
+        body_p_sensor: Some(x),
+        ..file(None)
+    };
+    let text = preint_io::openvins_imu_chain_string(&cal);
+    let back = preint_io::parse_openvins_imu_chain(&text, "cal.yaml").unwrap();
+    let y = back.body_p_sensor.unwrap();
+    assert_eq!(y.translation, x.translation);
+    assert!((y.rotation.matrix() - x.rotation.matrix()).amax() < 1e-15);
+    for (bad, needle) in [
+        (
+            "imu0:\n  preint_body_p_sensor: [ 0, 0, 0, 1, 0, 0, 0.1 ]\n",
+            "norm 1.004987562",
+        ),
+        (
+            "imu0:\n  preint_body_p_sensor: [ 0, 0, 0, 1, 0, 0 ]\n",
+            "expected 7 numbers",
+        ),
+        (
+            "imu0:\n  preint_body_p_sensor: [ 0, 0, x, 1, 0, 0, 0 ]\n",
+            "preint_body_p_sensor[2]",
+        ),
+    ] {
+        let e = preint_io::parse_openvins_imu_chain(bad, "cal.yaml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("cal.yaml:2") && e.contains(needle), "{e}");
     }
 }
 

@@ -10,6 +10,7 @@ use preint::intrinsics::{ImuIntrinsics, IntrinsicsModel};
 use preint_calib::Fit;
 use preint_calib::bias::MultiPoseCalibration;
 use preint_calib::bias::known_poses::extras::ParameterEstimate;
+use preint_calib::bias::known_poses::extrinsic::{ExtrinsicEstimate, ExtrinsicStart};
 use serde_json::{Value, json};
 
 /// `v·√(χ²/dof)` per component.
@@ -52,6 +53,7 @@ pub fn calibrated_json(r: &Calibrated) -> Value {
             "gravity": list(&c.gravity), "gravity_std": list(&c.gravity_std),
             "gravity_std_scaled": s(&c.gravity_std), "gravity_tilt_deg": c.gravity_tilt.to_degrees(),
             "pose_rot_std": pose_std.0, "pose_pos_std": pose_std.1,
+            "extrinsics": c.extrinsic.as_ref().map(|e| extrinsics_json(e, f)),
             "iterations": c.iterations, "cost": 0.5 * c.chi2, "chi2": c.chi2, "dof": c.dof,
             "units": {"gyro_bias": "rad/s", "acc_bias": "m/s^2", "gravity": "m/s^2"},
         }),
@@ -114,6 +116,38 @@ fn parameters_json(ps: &[ParameterEstimate], model: IntrinsicsModel, f: &Fit) ->
                 "std": std, "std_scaled": std.map(|s| f.scaled(s))})
         })
         .collect()
+}
+
+/// The tangent order of the extrinsic covariance, as printed beside it.
+pub const EXTRINSIC_TANGENT: &str = "[dtheta_x, dtheta_y, dtheta_z] rad (right perturbation \
+    R_bs*Exp(dtheta)), [dp_x, dp_y, dp_z] m (lever arm, frame of the poses)";
+
+/// The IMU's pose in the frame of the poses: `body_p_sensor` as `[x, y, z, qw, qx, qy, qz]`,
+/// its 6×6 covariance (modelled and scaled by χ²/dof; null rows and columns where withheld)
+/// in the order `tangent`, σ, `excited` per part, where it started and how much the poses
+/// rotate about each axis.
+fn extrinsics_json(e: &ExtrinsicEstimate, f: &Fit) -> Value {
+    let num = |v: f64| v.is_finite().then_some(v);
+    let cov = |k: f64| -> Vec<Vec<Option<f64>>> {
+        (0..6)
+            .map(|i| (0..6).map(|j| num(e.covariance[(i, j)] * k)).collect())
+            .collect()
+    };
+    let scale2 = f.scale() * f.scale();
+    let std = e.std();
+    json!({
+        "body_p_sensor": preint_io::extrinsics::pose_vector(&e.body_p_sensor),
+        "covariance": cov(1.0), "covariance_scaled": cov(scale2), "tangent": EXTRINSIC_TANGENT,
+        "std": std.map(num), "std_scaled": std.map(|s| num(f.scaled(s))),
+        "excited": {"rotation": e.rotation_excited, "lever_arm": e.lever_arm_excited},
+        "start": match e.start {
+            ExtrinsicStart::Given => "given",
+            ExtrinsicStart::HandEye => "hand-eye",
+            ExtrinsicStart::Identity => "identity",
+        },
+        "rotation_rms_rad_s": list(&e.rotation_rms_rad_s),
+        "units": {"body_p_sensor": "m, Hamilton quaternion qw qx qy qz of R_bs (IMU -> frame of the poses)"},
+    })
 }
 
 /// The intrinsics' matrices, row by row.

@@ -117,18 +117,31 @@ pub(super) fn known_poses(
 ) -> Result<Calibrated, Error> {
     checks::positive("--pose-spacing", args.pose_spacing)?;
     let estimate = args.estimate.unwrap_or_default();
-    if estimate.any() && args.body_p_sensor.is_some() {
-        return Err(Error::Usage(
-            "--estimate with --body-p-sensor: the calibration parameters are estimated in the \
-             IMU's frame; give poses of the IMU instead"
-                .into(),
-        ));
-    }
     let file = args
         .calibration
         .as_deref()
         .map(calibration_file::read)
         .transpose()?;
+    let file_x = file.as_ref().and_then(|f| f.body_p_sensor);
+    if file_x.is_some() && args.body_p_sensor.is_some() {
+        return Err(Error::Usage(format!(
+            "--body-p-sensor with --calibration {}, which holds the IMU's pose \
+             (preint_body_p_sensor): give one of them",
+            args.calibration
+                .as_deref()
+                .unwrap_or(Path::new(""))
+                .display()
+        )));
+    }
+    // With anything estimated, or a calibration file's transform, the IMU's pose is applied
+    // to the poses (and is the start of what is estimated of it); otherwise as the
+    // preintegration's lever arm.
+    let on_poses = estimate.any() || file_x.is_some();
+    let initial_extrinsic = if on_poses {
+        args.body_p_sensor.or(file_x)
+    } else {
+        None
+    };
     let td0 = file.as_ref().and_then(|f| f.time_offset_s);
     let time_offset = estimate.time_offset || td0.is_some();
     let margin = if time_offset {
@@ -148,7 +161,7 @@ pub(super) fn known_poses(
         ));
     }
     let params = PreintParams {
-        body_p_sensor: args.body_p_sensor,
+        body_p_sensor: if on_poses { None } else { args.body_p_sensor },
         ..PreintParams::from_noise(noise)
             .with_scheme(scheme)
             .with_gravity(Vector3::new(0.0, 0.0, -args.gravity))
@@ -158,6 +171,7 @@ pub(super) fn known_poses(
         pose_pos_std: args.pose_pos_std,
         estimate,
         initial_time_offset_s: td0.unwrap_or(0.0),
+        initial_extrinsic,
         ..KnownPoseOptions::new(params)
     };
     if let Some(f) = &file {

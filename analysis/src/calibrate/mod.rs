@@ -51,7 +51,7 @@ mod known;
 pub mod noise_correlation;
 pub mod noise_model;
 
-pub use json::{calibrated_json, earth_note, to_json};
+pub use json::{EXTRINSIC_TANGENT, calibrated_json, earth_note, to_json};
 
 use crate::checks::UnitCheck;
 use crate::{Error, ImuInput, calibration_file, checks, noise, stream};
@@ -247,6 +247,9 @@ pub struct Written {
     pub time_offset: bool,
     /// The scheme it records (`preint_scheme`): the known-pose problem's.
     pub scheme: Option<preint::Scheme>,
+    /// Kalibr's `camchain-imucam.yaml` written beside it (`<stem>-camchain-imucam.yaml`), when
+    /// the known-pose problem estimated or was given the IMU's pose in the frame of the poses.
+    pub camchain: Option<PathBuf>,
 }
 
 /// A calibration, how its recording was read, and the file written.
@@ -280,7 +283,8 @@ pub fn compute(o: &Options) -> Result<CalibrateRun, Error> {
 
 /// Writes `r` to `path` as OpenVINS' kalibr_imu_chain.yaml: the intrinsics of the problem's
 /// estimate (the identity where it has none), the time offset when estimated or given, the
-/// noise densities and the known-pose problem's scheme.
+/// noise densities, the known-pose problem's scheme and, when estimated or given, the IMU's
+/// pose in the frame of the poses (also as Kalibr's `camchain-imucam.yaml` beside it).
 fn write(path: &Path, r: &Calibrated, noise: &ImuNoise) -> Result<Written, Error> {
     let (intrinsics, td, from) = match &r.calibration {
         Calibration::MultiPose(m) => (
@@ -310,12 +314,26 @@ fn write(path: &Path, r: &Calibrated, noise: &ImuNoise) -> Result<Written, Error
         Calibration::KnownPoses { .. } | Calibration::KnownAttitudes { .. }
     )
     .then_some(r.scheme);
-    calibration_file::write(path, intrinsics, noise, td, scheme)?;
+    let extrinsic = match &r.calibration {
+        Calibration::KnownPoses { c, .. } => c.extrinsic.map(|e| e.body_p_sensor),
+        _ => None,
+    };
+    calibration_file::write(path, intrinsics, noise, (td, scheme), extrinsic)?;
+    let camchain = match extrinsic {
+        Some(x) => {
+            let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+            let cc = path.with_file_name(format!("{stem}-camchain-imucam.yaml"));
+            preint_io::extrinsics::write_kalibr_camchain(&cc, &x, td.unwrap_or(0.0))?;
+            Some(cc)
+        }
+        None => None,
+    };
     Ok(Written {
         path: path.to_path_buf(),
         intrinsics_from: from,
         time_offset: td.is_some(),
         scheme,
+        camchain,
     })
 }
 

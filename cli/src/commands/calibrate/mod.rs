@@ -28,8 +28,10 @@ pub struct Args {
     pub poses: Option<PathBuf>,
     /// Known-pose problem: parameters estimated beside the biases, comma-separated, from
     /// time-offset, gyro-intrinsics, g-sensitivity, accel-intrinsics (OpenVINS' kalibr model:
-    /// Tw and R_IMUtoGYRO, Tg, Ta). Each is printed with its σ, or withheld (not applied, not
-    /// written) when the motion does not excite it. `noise` (alone): the maximum-likelihood
+    /// Tw and R_IMUtoGYRO, Tg, Ta), extrinsic-rotation and lever-arm (the IMU's pose in the
+    /// frame of the poses, as --body-p-sensor takes it; started at the hand-eye rotation
+    /// unless --body-p-sensor or --calibration gives one). Each is printed with its σ, or
+    /// withheld (not applied, not written) when the motion does not excite it. `noise` (alone): the maximum-likelihood
     /// noise densities, bias random walks and the ground truth's own errors from ImuFactors
     /// over back-to-back windows (--window) between EuRoC ground-truth states (--poses).
     #[arg(help_heading = "Known poses", long, value_name = "LIST", requires = "poses", value_parser = EstimateList::parse)]
@@ -128,7 +130,8 @@ pub struct Args {
     pub pose_pos_std: Option<f64>,
     /// Pose of the IMU in the body frame, x,y,z,qw,qx,qy,qz (m; quaternion rotating sensor
     /// vectors into the body frame). Known-pose problem: the poses are the body's and the
-    /// preintegration removes the lever arm. Static problem: roll and pitch are also given for
+    /// preintegration removes the lever arm; with --estimate it is applied to the poses and is
+    /// the start of extrinsic-rotation and lever-arm. Static problem: roll and pitch are also given for
     /// the body. Biases are always the IMU's, in its own axes.
     #[arg(help_heading = "Sensor model", long, value_parser = preint_analysis::parse::sensor_pose, allow_hyphen_values = true)]
     pub body_p_sensor: Option<preint::SensorPose>,
@@ -150,8 +153,11 @@ pub struct Args {
     pub heading: Option<f64>,
     /// Write the calibration as OpenVINS' kalibr_imu_chain.yaml: the intrinsics (Tw,
     /// R_IMUtoGYRO, Ta, R_IMUtoACC, Tg; from the multi-position model BIC chose, or the
-    /// known-pose estimate, else the identity), the time offset when estimated, and the noise
-    /// densities. `integrate --calibration FILE` applies it.
+    /// known-pose estimate, else the identity), the time offset when estimated, the noise
+    /// densities and the IMU's pose in the frame of the poses when estimated
+    /// (preint_body_p_sensor; also as Kalibr's camchain-imucam.yaml, T_cam_imu and
+    /// timeshift_cam_imu, in <stem>-camchain-imucam.yaml beside it). `integrate --calibration
+    /// FILE` applies it.
     #[arg(help_heading = "Output", long, value_name = "FILE")]
     pub out: Option<std::path::PathBuf>,
     /// Known-pose problem: the scheme the windows are preintegrated with, which should be the

@@ -8,6 +8,7 @@ use preint::intrinsics::IntrinsicsModel;
 use preint_analysis::calibrate::{CalibrateRun, Calibrated, Calibration, earth_note};
 use preint_calib::Fit;
 use preint_calib::bias::known_poses::extras::ParameterEstimate;
+use preint_calib::bias::known_poses::extrinsic::{ExtrinsicEstimate, ExtrinsicStart};
 use preint_calib::bias::{EarthRateInBody, StaticCalibration, StillInterval};
 
 /// `v·√(χ²/dof)` per component.
@@ -123,6 +124,48 @@ fn static_text(
     )
 }
 
+/// The IMU's pose in the frame of the poses: as `--body-p-sensor` takes it, where it started,
+/// what was withheld and how much the poses rotate (the lever arm needs rotation).
+fn extrinsic_lines(e: &ExtrinsicEstimate) -> String {
+    let v = preint_io::extrinsics::pose_vector(&e.body_p_sensor);
+    let start = match e.start {
+        ExtrinsicStart::Given => "the given transform",
+        ExtrinsicStart::HandEye => "the hand-eye rotation",
+        ExtrinsicStart::Identity => "the identity (the motion turns about one axis only)",
+    };
+    let part = |excited: bool| {
+        if excited {
+            "estimated"
+        } else {
+            "not all excited"
+        }
+    };
+    let w = e.rotation_rms_rad_s;
+    let mut out = format!(
+        "  IMU in the frame of the poses: --body-p-sensor {:.6},{:.6},{:.6},{:.8},{:.8},{:.8},{:.8}          (rotation {}, lever arm {}; started at {start})
+  covariance order {}
+",
+        v[0],
+        v[1],
+        v[2],
+        v[3],
+        v[4],
+        v[5],
+        v[6],
+        part(e.rotation_excited),
+        part(e.lever_arm_excited),
+        preint_analysis::calibrate::EXTRINSIC_TANGENT
+    );
+    if !e.lever_arm_excited {
+        out.push_str(&format!(
+            "  the poses turn at RMS {:.3}, {:.3}, {:.3} rad/s about their x, y, z axes: a \
+             lever-arm component needs rotation about the two other axes\n",
+            w.x, w.y, w.z
+        ));
+    }
+    out
+}
+
 /// The human summary: the problem solved, its estimates with their standard deviations
 /// (modelled, then scaled by √(χ²/dof)), the fit, and its warnings and notes.
 pub fn calibrated_text(r: &Calibrated) -> String {
@@ -131,12 +174,13 @@ pub fn calibrated_text(r: &Calibrated) -> String {
         Calibration::KnownPoses {
             source, poses, c, ..
         } => format!(
-            "known-pose calibration ({poses} poses from {source}, scheme {}):\n{}{}{}  gravity \
+            "known-pose calibration ({poses} poses from {source}, scheme {}):\n{}{}{}{}  gravity \
              tilt {:.3}°, χ²/dof = {:.2}, {} iterations\n",
             scheme::label(r.scheme),
             gyro_line(&c.bias.gyro, &c.gyro_bias_std, f),
             acc_line(&c.bias.acc, &c.acc_bias_std, f),
             parameter_lines(&c.parameters, c.intrinsics.model, f),
+            c.extrinsic.as_ref().map_or(String::new(), extrinsic_lines),
             c.gravity_tilt.to_degrees(),
             c.chi2 / c.dof.max(1) as f64,
             c.iterations
@@ -194,6 +238,13 @@ pub fn to_text(r: &CalibrateRun) -> String {
                 scheme::label(s)
             ))
         ));
+        if let Some(cc) = &w.camchain {
+            human.push_str(&format!(
+                "extrinsics written to {} (Kalibr camchain-imucam.yaml: T_cam_imu, \
+                 timeshift_cam_imu)\n",
+                cc.display()
+            ));
+        }
     }
     human
 }

@@ -1,5 +1,6 @@
-//! `integrate --calibration FILE`: the file's intrinsics applied to the raw samples and its
-//! time offset moving the keyframes onto the IMU's clock
+//! `integrate --calibration FILE`: the file's intrinsics applied to the raw samples, its
+//! time offset moving the keyframes onto the IMU's clock and its IMU pose in the frame of the
+//! poses (`preint_body_p_sensor`) applied as `--body-p-sensor`
 //! ([`preint_analysis::calibration_file`]).
 
 use preint::intrinsics::{AppliedIntrinsics, ImuIntrinsics};
@@ -22,6 +23,8 @@ pub struct AppliedCalibration {
     pub time_offset_ns: i64,
     /// The scheme its time offset was estimated for (`preint_scheme`).
     pub scheme: Option<Scheme>,
+    /// Its IMU pose in the body frame (`preint_body_p_sensor`), applied as `--body-p-sensor`.
+    pub body_p_sensor: Option<preint::SensorPose>,
     /// The line [`calibration_file::scheme_note`] prints when that scheme lags differently
     /// from the scheme used, or is unknown.
     pub scheme_note: Option<String>,
@@ -37,10 +40,22 @@ impl AppliedCalibration {
         if !cal.intrinsics.is_identity() {
             params.intrinsics = Some(AppliedIntrinsics::new(cal.intrinsics));
         }
+        if let Some(x) = cal.body_p_sensor {
+            if params.body_p_sensor.is_some() {
+                return Err(preint_analysis::Error::Usage(format!(
+                    "--body-p-sensor with --calibration {}, which holds the IMU's pose \
+                     (preint_body_p_sensor): give one of them",
+                    path.display()
+                ))
+                .into());
+            }
+            params.body_p_sensor = Some(x);
+        }
         let applied = Self {
             file: path.display().to_string(),
             intrinsics: cal.intrinsics,
             time_offset_ns: calibration_file::time_offset_ns(&cal),
+            body_p_sensor: cal.body_p_sensor,
             scheme: None,
             scheme_note: None,
         };
@@ -69,6 +84,7 @@ impl AppliedCalibration {
                      t_j_ns are on the IMU clock: --from/--to plus time_offset_ns",
             "scheme": self.scheme.map(crate::scheme::label),
             "scheme_note": self.scheme_note,
+            "body_p_sensor": self.body_p_sensor.as_ref().map(preint_io::extrinsics::pose_vector),
         })
     }
 
@@ -85,6 +101,15 @@ impl AppliedCalibration {
             if x.is_identity() { ", identity" } else { "" },
             self.time_offset_ns
         );
+        if let Some(x) = &self.body_p_sensor {
+            let v = preint_io::extrinsics::pose_vector(x);
+            let _ = writeln!(
+                h,
+                "calibration {}: the IMU's pose in the body frame applied as --body-p-sensor \
+                 {:.6},{:.6},{:.6},{:.8},{:.8},{:.8},{:.8}",
+                self.file, v[0], v[1], v[2], v[3], v[4], v[5], v[6]
+            );
+        }
         if let Some(n) = &self.scheme_note {
             let _ = writeln!(h, "{n}");
         }
