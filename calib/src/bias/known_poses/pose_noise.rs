@@ -177,6 +177,21 @@ mod tests {
     use preint::{ImuBias, ImuNoise};
     use preint_lie::SO3;
 
+    /// Noise-free data, its windows preintegrated at the true bias, and gravity.
+    fn noise_free_at_the_truth() -> (
+        super::super::test_data::Setup,
+        Vec<PreintegratedImu>,
+        Vector3<f64>,
+    ) {
+        let s = setup(ImuNoise::zero(200.0));
+        let truth_bias = ImuBias::new(
+            Vector3::new(0.004, -0.003, 0.006),
+            Vector3::new(0.08, -0.05, 0.12),
+        );
+        let pims = pims(&s, &truth_bias);
+        (s, pims, Vector3::new(0.0, 0.0, -9.81))
+    }
+
     /// The pose-noise Jacobians `A` (module docs) against Ridders' derivative of the raw
     /// residual w.r.t. perturbations of the two poses (`R ← R·Exp(δφ)`, `p ← p + δp`), at the
     /// true state of noise-free data, where `[Δv]×`, `[Δp]×` equal the state-dependent terms
@@ -185,13 +200,7 @@ mod tests {
     /// entries ≈ 0.02, hence the tolerance 3e-5; a wrong sign or block would give O(1)).
     #[test]
     fn pose_noise_jacobians_match_ridders_at_the_truth() {
-        let s = setup(ImuNoise::zero(200.0));
-        let truth_bias = ImuBias::new(
-            Vector3::new(0.004, -0.003, 0.006),
-            Vector3::new(0.08, -0.05, 0.12),
-        );
-        let pims = pims(&s, &truth_bias);
-        let g0 = Vector3::new(0.0, 0.0, -9.81);
+        let (s, pims, g0) = noise_free_at_the_truth();
         for k in [0usize, 5, 11] {
             let pim = &pims[k];
             let (pi, pj) = (s.poses[k], s.poses[k + 1]);
@@ -233,13 +242,7 @@ mod tests {
     #[test]
     fn pose_noise_jacobians_with_a_lever_arm_match_ridders() {
         use super::super::extrinsic::{imu_pose, lever_in_imu};
-        let s = setup(ImuNoise::zero(200.0));
-        let truth_bias = ImuBias::new(
-            Vector3::new(0.004, -0.003, 0.006),
-            Vector3::new(0.08, -0.05, 0.12),
-        );
-        let pims = pims(&s, &truth_bias);
-        let g0 = Vector3::new(0.0, 0.0, -9.81);
+        let (s, pims, g0) = noise_free_at_the_truth();
         let x = preint::SensorPose::new(
             SO3::exp(&Vector3::new(0.7, 0.4, -0.6)),
             Vector3::new(0.2, -0.3, 0.15),
