@@ -94,6 +94,15 @@ pub fn pose_vector(x: &SensorPose) -> [f64; 7] {
     [t.x, t.y, t.z, s * q.w, s * q.i, s * q.j, s * q.k]
 }
 
+/// `x,y,z,qw,qx,qy,qz` as `--body-p-sensor` takes it (µm and 1e-8 of the quaternion).
+pub fn body_p_sensor_flag(x: &SensorPose) -> String {
+    let v = pose_vector(x);
+    format!(
+        "{:.6},{:.6},{:.6},{:.8},{:.8},{:.8},{:.8}",
+        v[0], v[1], v[2], v[3], v[4], v[5], v[6]
+    )
+}
+
 /// The calibration file's line of the key (module docs), indented under `imu0`.
 pub(crate) fn body_p_sensor_line(x: &SensorPose) -> String {
     let v = pose_vector(x);

@@ -70,7 +70,9 @@ fn misfit_cause(
                     );
                     let s = if q.w < 0.0 { -1.0 } else { 1.0 };
                     format!(
-                        " (--body-p-sensor 0,0,0,{:.6},{:.6},{:.6},{:.6} with a zero lever arm)",
+                        " (--body-p-sensor 0,0,0,{:.6},{:.6},{:.6},{:.6} with a zero lever arm, or \
+                         estimate the rotation and lever arm: --estimate \
+                         extrinsic-rotation,lever-arm)",
                         s * q.w,
                         s * q.i,
                         s * q.j,

@@ -289,21 +289,19 @@ impl Calibration {
     pub(crate) fn moved(&self, params: &[Param], e: &[f64]) -> Calibration {
         let mut delta = SVector::<f64, { ImuIntrinsics::PARAMS }>::zeros();
         let mut td = self.td_s;
-        let (mut dtheta, mut dp) = (Vector3::zeros(), Vector3::zeros());
         for (p, v) in params.iter().zip(e) {
             match p {
                 Param::TimeOffset => td += v,
                 Param::Intrinsic(i) => delta[*i] = *v,
-                Param::ExtrinsicRotation(i) => dtheta[*i] = *v,
-                Param::LeverArm(i) => dp[*i] = *v,
+                Param::ExtrinsicRotation(_) | Param::LeverArm(_) => {}
             }
         }
         Calibration {
             intrinsics: self.intrinsics.perturbed(&delta),
             td_s: td,
-            extrinsic: SensorPose::new(
-                self.extrinsic.rotation.plus(&dtheta),
-                self.extrinsic.translation + dp,
+            extrinsic: super::extrinsic::moved(
+                &self.extrinsic,
+                &super::extrinsic::correction(params, e),
             ),
         }
     }

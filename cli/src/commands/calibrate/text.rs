@@ -127,7 +127,6 @@ fn static_text(
 /// The IMU's pose in the frame of the poses: as `--body-p-sensor` takes it, where it started,
 /// what was withheld and how much the poses rotate (the lever arm needs rotation).
 fn extrinsic_lines(e: &ExtrinsicEstimate) -> String {
-    let v = preint_io::extrinsics::pose_vector(&e.body_p_sensor);
     let start = match e.start {
         ExtrinsicStart::Given => "the given transform",
         ExtrinsicStart::HandEye => "the hand-eye rotation",
@@ -142,16 +141,9 @@ fn extrinsic_lines(e: &ExtrinsicEstimate) -> String {
     };
     let w = e.rotation_rms_rad_s;
     let mut out = format!(
-        "  IMU in the frame of the poses: --body-p-sensor {:.6},{:.6},{:.6},{:.8},{:.8},{:.8},{:.8}          (rotation {}, lever arm {}; started at {start})
-  covariance order {}
-",
-        v[0],
-        v[1],
-        v[2],
-        v[3],
-        v[4],
-        v[5],
-        v[6],
+        "  IMU in the frame of the poses: --body-p-sensor {} (rotation {}, lever arm {}; \
+         started at {start})\n  covariance order {}\n",
+        preint_io::extrinsics::body_p_sensor_flag(&e.body_p_sensor),
         part(e.rotation_excited),
         part(e.lever_arm_excited),
         preint_analysis::calibrate::EXTRINSIC_TANGENT

@@ -102,12 +102,11 @@ impl AppliedCalibration {
             self.time_offset_ns
         );
         if let Some(x) = &self.body_p_sensor {
-            let v = preint_io::extrinsics::pose_vector(x);
             let _ = writeln!(
                 h,
-                "calibration {}: the IMU's pose in the body frame applied as --body-p-sensor \
-                 {:.6},{:.6},{:.6},{:.8},{:.8},{:.8},{:.8}",
-                self.file, v[0], v[1], v[2], v[3], v[4], v[5], v[6]
+                "calibration {}: the IMU's pose in the body frame applied as --body-p-sensor {}",
+                self.file,
+                preint_io::extrinsics::body_p_sensor_flag(x)
             );
         }
         if let Some(n) = &self.scheme_note {
