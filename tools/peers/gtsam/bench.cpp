@@ -16,13 +16,13 @@
 // and the parameters are filled at the offsets the library reads (the disassembly of
 // PreintegrationParams::equals / PreintegrationCombinedParams::equals). `--params` prints them
 // through the library's own `print`, and `--deltas` prints each backend's ΔR, Δv, Δp and
-// covariance after the stream, which run.sh compares with preint's and with the wheel's Python
+// preintMeasCov() after the stream, which run.sh compares with preint's and with the wheel's Python
 // bindings (bit for bit).
 //
 // Usage:
 //   bench [--samples N] [--runs K]   one round: per backend, the median of K runs of N samples,
 //                                    ns per integrateMeasurement call, one "name value" per line
-//   bench --deltas [--samples N]     deltas and covariance diagonals after N samples (%.17g)
+//   bench --deltas [--samples N]     ΔR, Δv, Δp and covariance after N samples (%.17g, column-major)
 //   bench --csv FILE [--samples N]   write the stream as an EuRoC imu0/data.csv
 //   bench --params                   print the parameters through libgtsam's print
 
@@ -264,7 +264,8 @@ void print_deltas(const char* name, const gtsam::Matrix3& R, const gtsam::Vector
     for (int r = 0; r < 3; ++r) std::printf(" %.17g", R(r, c));  // column-major
   for (int i = 0; i < 3; ++i) std::printf(" %.17g", v(i));
   for (int i = 0; i < 3; ++i) std::printf(" %.17g", p(i));
-  for (Eigen::Index i = 0; i < cov.rows(); ++i) std::printf(" %.17g", cov(i, i));
+  for (Eigen::Index c = 0; c < cov.cols(); ++c)
+    for (Eigen::Index r = 0; r < cov.rows(); ++r) std::printf(" %.17g", cov(r, c));
   std::printf("\n");
 }
 
@@ -322,7 +323,7 @@ int main(int argc, char** argv) {
     return std::fclose(f) == 0 ? 0 : 1;
   }
   if (deltas) {
-    // name R(9, column-major) v(3) p(3) diag(cov)
+    // name R(9, column-major) v(3) p(3) cov(81 or 225, column-major)
     deltas_of<ManifoldPreintegration, ManifoldPreintegration>("manifold", s, p);
     deltas_of<TangentPreintegration, TangentPreintegration>("tangent", s, p);
     deltas_of<LieGroupPreintegration, ManifoldPreintegration>("liegroup", s, p);
