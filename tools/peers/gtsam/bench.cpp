@@ -25,6 +25,9 @@
 //   bench --deltas [--samples N]     ΔR, Δv, Δp and covariance after N samples (%.17g, column-major)
 //   bench --csv FILE [--samples N]   write the stream as an EuRoC imu0/data.csv
 //   bench --params                   print the parameters through libgtsam's print
+//   bench --only NAME [--samples N]  integrate the stream once with one backend (manifold,
+//                                    tangent, liegroup, galilean, combined), for valgrind:
+//                                    run.sh's INSTR=1 counts the instructions in integrate<…>
 
 #include <Eigen/Core>
 
@@ -37,6 +40,7 @@
 #include <memory>
 #include <new>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 // ---------------------------------------------------------------------------------------------
@@ -221,7 +225,7 @@ const gtsam::imuBias::ConstantBias& zero_bias() {
 }
 
 template <class P>
-void integrate(P& pim, const Stream& s) {
+__attribute__((noinline)) void integrate(P& pim, const Stream& s) {
   const size_t m = s.dt.size();
   for (size_t k = 0; k < m; ++k) pim.integrateMeasurement(s.acc[k], s.gyro[k], s.dt[k]);
 }
@@ -286,6 +290,7 @@ int main(int argc, char** argv) {
   int runs = 11;
   bool deltas = false, print_params = false;
   const char* csv = nullptr;
+  std::string only;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--samples" && i + 1 < argc) samples = std::strtoull(argv[++i], nullptr, 10);
@@ -293,8 +298,11 @@ int main(int argc, char** argv) {
     else if (a == "--deltas") deltas = true;
     else if (a == "--params") print_params = true;
     else if (a == "--csv" && i + 1 < argc) csv = argv[++i];
+    else if (a == "--only" && i + 1 < argc) only = argv[++i];
     else {
-      std::fprintf(stderr, "usage: %s [--samples N] [--runs K] [--deltas] [--params] [--csv FILE]\n",
+      std::fprintf(stderr,
+                   "usage: %s [--samples N] [--runs K] [--deltas] [--params] [--csv FILE] "
+                   "[--only NAME]\n",
                    argv[0]);
       return 2;
     }
@@ -321,6 +329,25 @@ int main(int argc, char** argv) {
       std::fprintf(f, "%lld,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", s.t_ns[k], s.gyro[k](0),
                    s.gyro[k](1), s.gyro[k](2), s.acc[k](0), s.acc[k](1), s.acc[k](2));
     return std::fclose(f) == 0 ? 0 : 1;
+  }
+  if (!only.empty()) {
+    auto once = [&](auto* pim) {
+      integrate(*pim, s);
+      using P = std::remove_pointer_t<decltype(pim)>;
+      pim->~P();
+    };
+    void* mem = std::aligned_alloc(64, sizeof(Combined));
+    if (only == "manifold") once(make_pim<ManifoldPreintegration>(mem, p));
+    else if (only == "tangent") once(make_pim<TangentPreintegration>(mem, p));
+    else if (only == "liegroup") once(make_pim<LieGroupPreintegration>(mem, p));
+    else if (only == "galilean") once(make_pim<GalileanPreintegration>(mem, p));
+    else if (only == "combined") once(make_combined(mem, pc));
+    else {
+      std::fprintf(stderr, "--only: manifold, tangent, liegroup, galilean or combined\n");
+      return 2;
+    }
+    std::free(mem);
+    return 0;
   }
   if (deltas) {
     // name R(9, column-major) v(3) p(3) cov(81 or 225, column-major)

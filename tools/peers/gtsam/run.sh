@@ -16,6 +16,8 @@
 # 2. Checks: the parameters as libgtsam prints them; GTSAM's ΔR, Δv, Δp and covariance after the
 #    stream against the wheel's Python bindings (bit for bit) and against preint's `integrate`
 #    on the same samples (GTSAM Manifold ≡ preint euler, GTSAM Galilean ≡ preint galilean).
+#    With valgrind installed, instructions per integrateMeasurement call (callgrind), to set
+#    beside tools/instructions.sh's counts for preint.
 # 3. ROUNDS rounds, each the GTSAM harness (every backend, median of RUNS runs of SAMPLES
 #    samples) and then `preint speed --samples SAMPLES` (median of 11 runs); prints min / median
 #    / max over the rounds and the per-round ratios preint / GTSAM.
@@ -135,6 +137,18 @@ for g, s in [("manifold", "euler"), ("galilean", "galilean"), ("tangent", "midpo
     print(f"{g:<9} {s:<9} {rel(R, d['delta_R']):9.1e} {rel(v, d['delta_v']):9.1e} {rel(p, d['delta_p']):9.1e}"
           f" {rel(C, d['covariance']):9.1e}" + ("   (different discretisations)" if g == "tangent" else ""))
 EOF
+
+if command -v valgrind > /dev/null; then
+  echo "== instructions per integrateMeasurement call (callgrind, $SAMPLES samples; preint's: tools/instructions.sh)"
+  for b in manifold tangent liegroup galilean combined; do
+    valgrind --tool=callgrind --callgrind-out-file="$OUT/callgrind.$b" --toggle-collect='*integrate<*' \
+      "$OUT/bench" --only "$b" --samples "$SAMPLES" > /dev/null 2>&1
+    ir=$(grep -E '^summary:|^totals:' "$OUT/callgrind.$b" | tail -n 1 | awk '{print $2}')
+    echo "  $b $((ir / (SAMPLES - 1)))"
+  done
+else
+  echo "== instruction counts skipped (apt-get install valgrind)"
+fi
 
 echo "== $ROUNDS rounds (GTSAM: median of $RUNS runs of $SAMPLES samples per backend; preint speed: median of 11)"
 : > "$OUT/rounds.tsv"
