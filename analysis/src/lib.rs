@@ -49,6 +49,7 @@ pub mod denoise;
 pub mod error;
 pub mod factor_windows;
 pub mod format;
+pub mod initialise;
 pub mod input_class;
 pub mod noise;
 pub mod noise_windows;

@@ -46,6 +46,7 @@ pub mod bias;
 pub mod checker;
 pub mod fit;
 pub mod gauss_newton;
+pub mod init;
 pub mod noise_fit;
 pub mod numdiff;
 

@@ -126,7 +126,9 @@ fn true_value(p: Param) -> f64 {
             SO3::from_matrix(&x.r_imu_to_gyro).log()[i - 12]
         }
         Param::Intrinsic(i) => x.params()[i],
-        Param::ExtrinsicRotation(_) | Param::LeverArm(_) => unreachable!("not estimated here"),
+        Param::ExtrinsicRotation(_) | Param::LeverArm(_) | Param::Scale => {
+            unreachable!("not estimated here")
+        }
     }
 }
 
@@ -215,7 +217,7 @@ fn with_calibration_cov(
             Param::TimeOffset => j.column_mut(6 + k).copy_from(&m.jac_td),
             Param::Intrinsic(i) => j.column_mut(6 + k).copy_from(&ji.column(*i)),
             // Not estimated here; they move the poses, not the deltas.
-            Param::ExtrinsicRotation(_) | Param::LeverArm(_) => {}
+            Param::ExtrinsicRotation(_) | Param::LeverArm(_) | Param::Scale => {}
         }
     }
     let add = &j * &c.covariance * j.transpose();
@@ -345,7 +347,9 @@ fn a_static_recording_excites_no_calibration_parameter() {
             Param::TimeOffset => 0.0,
             Param::Intrinsic(i) if (12..15).contains(&i) => 0.0,
             Param::Intrinsic(i) => ImuIntrinsics::default().params()[i],
-            Param::ExtrinsicRotation(_) | Param::LeverArm(_) => unreachable!("not estimated here"),
+            Param::ExtrinsicRotation(_) | Param::LeverArm(_) | Param::Scale => {
+                unreachable!("not estimated here")
+            }
         };
         assert_eq!(e.value, initial);
     }

@@ -2,7 +2,7 @@
 //! its own flags in its module under [`crate::commands`].
 
 use crate::commands::{advise, allan, bench_steps, calibrate, convert, factor, integrate, report};
-use crate::commands::{simulate, speed};
+use crate::commands::{initialise, simulate, speed};
 use clap::{Parser, Subcommand};
 
 const CONVENTIONS: &str = "\
@@ -88,6 +88,13 @@ pub enum Command {
     /// and is printed as unobservable). A recording with neither poses nor a still interval is
     /// refused (exit 2). The model chosen is printed ("model" in the JSON).
     Calibrate(calibrate::Args),
+    /// Visual-inertial initialisation from a front end's keyframe poses (known up to scale, or
+    /// metric): gravity, scale, keyframe velocities and both biases with their covariance, and
+    /// whether they are known well enough to start from ("ready"; a window that is not ready
+    /// still exits 0 and says why). A linear start (VINS-Mono's alignment), then the
+    /// maximum-a-posteriori refinement on the preintegrated windows, the scale by its profile
+    /// likelihood.
+    Initialise(initialise::Args),
     /// Overlapping Allan deviation, fitted noise density, random walk and bias instability;
     /// writes imu.yaml (Kalibr) and the charts allan_gyro.svg and allan_acc.svg into --out when
     /// given.

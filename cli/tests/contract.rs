@@ -87,6 +87,8 @@ const EXAMPLES: &[(&str, &str, &[&str])] = &[
     ("calibrate", "bias_gyro_std", &["1e-4", "--estimate", "noise", "--poses", EUROC_GT]),
     ("calibrate", "bias_acc_std", &["0.01", "--estimate", "noise", "--poses", EUROC_GT]),
     ("calibrate", "pose_spacing", &["0.25", "--poses", EUROC_GT]),
+    ("initialise", "pose_spacing", &["0.25"]),
+    ("initialise", "bias_prior_std", &["0.01,0.1"]),
     ("*", "latitude", &["47.4"]),
     ("calibrate", "heading", &["30", "--latitude", "47.4"]),
     // advise, bench-steps.
@@ -114,6 +116,7 @@ const REQUIRED: &[(&str, &[&str])] = &[
     ("advise", &["imu", "noise"]),
     ("convert", &["imu", "out"]),
     ("audit", &["imu"]),
+    ("initialise", &["imu", "poses"]),
 ];
 
 /// Arguments clap adds itself.
@@ -240,6 +243,10 @@ fn exercise(cli: &Cli) {
         Command::Integrate(a) => Some(&a.input),
         Command::Factor(a) => Some(&a.input),
         Command::Calibrate(a) => Some(&a.input),
+        Command::Initialise(a) => {
+            let _ = format!("{:?}", a.options());
+            Some(&a.input)
+        }
         Command::Allan(a) => Some(&a.input),
         Command::Advise(a) => Some(&a.input),
         Command::Convert(a) => Some(&a.input),

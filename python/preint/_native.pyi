@@ -598,6 +598,7 @@ __all__ += [
     "calibrate_multi_pose",
     "calibrate_static",
     "detect_still_intervals",
+    "initialise_file",
     "read_calibration",
     "read_groundtruth",
     "read_imu",
@@ -819,6 +820,41 @@ def calibrate_multi_pose(
 
     Raises CalibrationError (kind ``TooFew`` with fewer than 3 still intervals, ...).
     """
+
+def initialise_file(
+    path: str | os.PathLike[str] | None = None,
+    *,
+    poses: str | os.PathLike[str],
+    gyro: str | os.PathLike[str] | None = None,
+    accel: str | os.PathLike[str] | None = None,
+    scale: str = "unknown",
+    noise: str | os.PathLike[str] | None = None,
+    gravity: float = 9.81,
+    from_ns: int | None = None,
+    to_ns: int | None = None,
+    pose_rot_std: float = 0.0,
+    pose_pos_std: float = 0.0,
+    pose_spacing: float = 0.1,
+    body_p_sensor: Sequence[float] | None = None,
+    bias_prior_std: tuple[float, float] = (0.05, 0.2),
+    scheme: str = "midpoint",
+    **options: Unpack[_ReaderOptions],
+) -> dict[str, Any]:
+    """``preint initialise --json`` on a recording and a front end's keyframe poses
+    (``t,x,y,z,qw,qx,qy,qz`` or EuRoC ground truth, positions in their own unit), as a dict:
+    ``scale`` [m per unit of the poses] and ``scale_std`` (``scale="known"``: metric poses,
+    scale 1), ``gravity`` [m/s², world frame of the poses] with ``gravity_std``,
+    ``bias_gyro`` [rad/s], ``bias_acc`` [m/s²] with their σ, ``velocities`` [{t_ns, v, std}],
+    the 10×10 ``covariance`` in ``covariance_order`` (s, g, b_g, b_a), ``fit``,
+    ``std_factor`` (every σ is multiplied by max(1, √(χ²/dof))), ``linear_start``, and
+    ``ready`` with its ``reason`` (a window that is not ready is a result, not an error).
+    ``pose_rot_std`` [rad] and ``pose_pos_std`` [unit of the poses]: the keyframes' noise;
+    ``pose_spacing`` [s]; ``body_p_sensor`` (x, y, z, qw, qx, qy, qz): the IMU's pose in the
+    frame of the poses; ``bias_prior_std`` (gyro rad/s, accelerometer m/s²): the zero-mean
+    prior of the maximum-a-posteriori refinement.
+
+    Raises CalibrationError (kind ``Failed``) for a file without positions or fewer than three
+    keyframes; InputError for a bad file or value."""
 
 def calibrate_file(
     path: str | os.PathLike[str] | None = None,

@@ -10,6 +10,7 @@ mod checks;
 mod convert;
 mod errors;
 mod factor;
+mod init;
 mod io;
 mod measurement;
 mod navstate;
@@ -54,6 +55,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(calib::calibrate_static_py, m)?)?;
     m.add_function(wrap_pyfunction!(calib::calibrate_multi_pose_py, m)?)?;
     m.add_function(wrap_pyfunction!(calib::calibrate_file, m)?)?;
+    m.add_function(wrap_pyfunction!(init::initialise_file, m)?)?;
     m.add_function(wrap_pyfunction!(calibration::read_calibration, m)?)?;
     m.add_function(wrap_pyfunction!(calibration::apply_intrinsics, m)?)?;
     m.add_function(wrap_pyfunction!(advise::advise_py, m)?)?;

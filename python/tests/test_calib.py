@@ -544,3 +544,41 @@ def test_noise_model_arguments_are_refused_without_estimate_noise():
         preint.calibrate_file(EUROC, poses=EUROC_GT, estimate="noise,time-offset")
     with pytest.raises(preint.ShapeError, match="--vel-std"):
         preint.calibrate_file(EUROC, poses=EUROC_GT, estimate="noise", vel_std=-1.0)
+
+
+def test_initialise_file_equals_the_command(preint_cli, tmp_path):
+    """``initialise_file`` on 4 s of EuRoC with the ground truth's positions divided by 4 (a
+    front end's unknown scale): the result equals ``preint initialise --json`` on the same
+    files, the scale found is 0.25 m per unit to 5 %, gravity is 9.81 m/s² long and the
+    covariance has the order it names; ``scale="known"`` on the metric poses gives scale 1."""
+    import json
+    import subprocess
+
+    t0 = 1_403_715_283_262_142_976
+    rows = [r for r in EUROC_GT.read_text().splitlines() if r and not r.startswith("#")]
+    out_rows = []
+    for r in rows:
+        v = r.split(",")
+        if not (t0 <= int(v[0]) <= t0 + 4_000_000_000):
+            continue
+        p = [repr(float(x) * 4.0) for x in v[1:4]]
+        out_rows.append(",".join([v[0], *p, *v[4:8]]))
+    poses = tmp_path / "keyframes.csv"
+    poses.write_text("#t,x,y,z,qw,qx,qy,qz\n" + "\n".join(out_rows) + "\n")
+    f = preint.initialise_file(EUROC, poses=poses, pose_rot_std=1e-3, pose_pos_std=0.008)
+    r = subprocess.run([*preint_cli, "initialise", "--imu", str(EUROC), "--poses", str(poses),
+                        "--pose-rot-std", "1e-3", "--pose-pos-std", "0.008", "--json"],
+                       check=True, capture_output=True, text=True)
+    c = json.loads(r.stdout)
+    for key in ["scale", "scale_std", "gravity", "bias_gyro", "bias_acc", "covariance", "ready",
+                "reason", "velocities", "covariance_order"]:
+        assert f[key] == c[key], key
+    assert abs(f["scale"] / 0.25 - 1.0) < 0.05, f["scale"]
+    assert abs(np.linalg.norm(f["gravity"]) - 9.81) < 1e-9
+    assert f["covariance_order"][:4] == ["s", "g.x", "g.y", "g.z"]
+    assert np.asarray(f["covariance"]).shape == (10, 10)
+    k = preint.initialise_file(EUROC, poses=EUROC_GT, scale="known", from_ns=t0,
+                               to_ns=t0 + 2_000_000_000, pose_pos_std=0.002)
+    assert (k["scale"], k["scale_std"], k["scale_mode"]) == (1.0, 0.0, "known")
+    with pytest.raises(preint.InputError):
+        preint.initialise_file(EUROC, poses=poses, scale="metric")

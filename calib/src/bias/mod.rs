@@ -43,13 +43,15 @@ pub mod still;
 
 mod stats;
 mod tilt;
-mod validate;
+pub(crate) mod validate;
 
 use crate::gauss_newton::GnError;
 use preint::PreintError;
 
 pub use earth_rate::{EarthRateInBody, earth_rate_in_body, remove_earth_rate};
-pub use known_poses::{KnownPose, KnownPoseCalibration, KnownPoseOptions, calibrate_known_poses};
+pub use known_poses::{
+    BiasPrior, KnownPose, KnownPoseCalibration, KnownPoseOptions, calibrate_known_poses,
+};
 pub use multipose::{
     ModelFit, MultiPoseCalibration, MultiPoseModel, MultiPoseOptions, calibrate_multi_pose,
 };

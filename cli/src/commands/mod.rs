@@ -12,6 +12,7 @@ pub mod bench_steps;
 pub mod calibrate;
 pub mod convert;
 pub mod factor;
+pub mod initialise;
 pub mod integrate;
 pub mod report;
 pub mod simulate;
@@ -54,6 +55,7 @@ fn dispatch(command: &Command) -> Result<Output, CliError> {
         Command::Integrate(a) => integrate::run(a),
         Command::Factor(a) => factor::run(a),
         Command::Calibrate(a) => calibrate::run(a),
+        Command::Initialise(a) => initialise::run(a),
         Command::Allan(a) => allan::run(a),
         Command::BenchSteps(a) => bench_steps::run(a),
         Command::Advise(a) => advise::run(a),

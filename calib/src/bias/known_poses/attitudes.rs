@@ -105,6 +105,14 @@ pub fn calibrate_known_attitudes(
                 .into(),
         });
     }
+    if opts.estimate_scale || opts.bias_prior.is_some() {
+        return Err(BiasError::InvalidParameter {
+            name: "estimate_scale",
+            reason: "the scale and the bias prior belong to the known-pose problem (positions \
+                     and attitudes); attitudes alone have no positions to scale"
+                .into(),
+        });
+    }
     if opts.estimate.accel_intrinsics {
         return Err(BiasError::InvalidParameter {
             name: "estimate",
@@ -327,6 +335,7 @@ mod tests {
             intrinsics: x0,
             td_s: 0.0,
             extrinsic: extras::identity_pose(),
+            scale: 1.0,
         };
         let bias_hat = ImuBias::new(Vector3::new(0.003, -0.002, 0.005), Vector3::zeros());
         let (pims, je): (Vec<_>, Vec<DMatrix<f64>>) = atts

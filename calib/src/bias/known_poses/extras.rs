@@ -126,6 +126,9 @@ pub enum Param {
     ExtrinsicRotation(usize),
     /// Component `i` of the lever arm `p_bs` \[m, frame of the poses\].
     LeverArm(usize),
+    /// The scale `s` of the poses' positions \[m per unit of the poses\]
+    /// ([`super::KnownPoseOptions::estimate_scale`]): the IMU positions are `s·p̃ + R̃ p_bs`.
+    Scale,
 }
 
 impl Param {
@@ -148,6 +151,7 @@ impl Param {
             Param::Intrinsic(i) => format!("T_g[{},{}]", (i - 15) % 3, (i - 15) / 3),
             Param::ExtrinsicRotation(i) => format!("R_bs.θ{}", ["x", "y", "z"][i]),
             Param::LeverArm(i) => format!("p_bs.{}", ["x", "y", "z"][i]),
+            Param::Scale => "s".into(),
         }
     }
 
@@ -160,12 +164,15 @@ impl Param {
             Param::Intrinsic(_) => "(rad/s)/(m/s²)",
             Param::ExtrinsicRotation(_) => "rad",
             Param::LeverArm(_) => "m",
+            Param::Scale => "m/unit",
         }
     }
 
-    /// The limit of its standard deviation in `limits`.
+    /// The limit of its standard deviation in `limits` (none for the scale: whether it is
+    /// known well enough is the initialisation's readiness verdict, [`crate::init`]).
     pub fn limit(self, limits: &ExcitationLimits) -> f64 {
         match self {
+            Param::Scale => f64::INFINITY,
             Param::TimeOffset => limits.time_offset_s,
             Param::Intrinsic(i) if i < 15 => limits.scale_misalignment,
             Param::Intrinsic(_) => limits.g_sensitivity,
@@ -256,6 +263,8 @@ pub(crate) struct Calibration {
     pub(crate) td_s: f64,
     /// The pose of the IMU in the frame of the poses (`R_bs`, `p_bs`).
     pub(crate) extrinsic: SensorPose,
+    /// The scale of the poses' positions \[m per unit\] (1 for metric poses).
+    pub(crate) scale: f64,
 }
 
 impl Calibration {
@@ -265,6 +274,7 @@ impl Calibration {
             intrinsics: opts.initial_intrinsics,
             td_s: opts.initial_time_offset_s,
             extrinsic: opts.initial_extrinsic.unwrap_or_else(identity_pose),
+            scale: opts.initial_scale,
         }
     }
 
@@ -289,10 +299,12 @@ impl Calibration {
     pub(crate) fn moved(&self, params: &[Param], e: &[f64]) -> Calibration {
         let mut delta = SVector::<f64, { ImuIntrinsics::PARAMS }>::zeros();
         let mut td = self.td_s;
+        let mut scale = self.scale;
         for (p, v) in params.iter().zip(e) {
             match p {
                 Param::TimeOffset => td += v,
                 Param::Intrinsic(i) => delta[*i] = *v,
+                Param::Scale => scale += v,
                 Param::ExtrinsicRotation(_) | Param::LeverArm(_) => {}
             }
         }
@@ -303,6 +315,7 @@ impl Calibration {
                 &self.extrinsic,
                 &super::extrinsic::correction(params, e),
             ),
+            scale,
         }
     }
 
@@ -316,6 +329,7 @@ impl Calibration {
                 self.extrinsic.rotation.minus(&initial.extrinsic.rotation)[i]
             }
             Param::LeverArm(i) => self.extrinsic.translation[i],
+            Param::Scale => self.scale,
             Param::TimeOffset => self.td_s,
             Param::Intrinsic(i) if i < 12 => x.params()[i],
             Param::Intrinsic(i) if i < 15 => {
@@ -364,10 +378,11 @@ pub(crate) fn window(
             (Param::TimeOffset, _) => out.column_mut(k).copy_from(&pim.jac_td),
             (Param::Intrinsic(i), Some(j)) => out.column_mut(k).copy_from(&j.column(*i)),
             // `jac` is present whenever an intrinsic parameter is asked for; the extrinsic
-            // transform moves the poses, not the deltas ([`super::extrinsic`]).
+            // transform and the scale move the poses, not the deltas ([`super::extrinsic`]).
             (Param::Intrinsic(_), None)
             | (Param::ExtrinsicRotation(_), _)
-            | (Param::LeverArm(_), _) => {}
+            | (Param::LeverArm(_), _)
+            | (Param::Scale, _) => {}
         }
     }
     Ok((pim, out))

@@ -96,9 +96,18 @@ pub(crate) fn imu_pose(p: &KnownPose, x: &SensorPose) -> KnownPose {
     }
 }
 
-/// The IMU's poses from the poses of the frame b.
-pub(crate) fn imu_poses(poses: &[KnownPose], x: &SensorPose) -> Vec<KnownPose> {
-    poses.iter().map(|p| imu_pose(p, x)).collect()
+/// The IMU's poses from the poses of the frame b, their positions scaled by `scale` \[m per
+/// unit\] (1 for metric poses; [`super::KnownPoseOptions::estimate_scale`]).
+pub(crate) fn imu_poses(poses: &[KnownPose], x: &SensorPose, scale: f64) -> Vec<KnownPose> {
+    poses
+        .iter()
+        .map(|p| imu_pose(&scaled(p, scale), x))
+        .collect()
+}
+
+/// The pose with its position scaled by `s`.
+pub(crate) fn scaled(p: &KnownPose, s: f64) -> KnownPose {
+    KnownPose { p: p.p * s, ..*p }
 }
 
 /// The state's correction `(δθ, δp)` of the extrinsic transform: the entries of `e` (in the
@@ -109,7 +118,7 @@ pub(crate) fn correction(active: &[Param], e: &[f64]) -> (Vector3<f64>, Vector3<
         match p {
             Param::ExtrinsicRotation(i) => dth[*i] = *v,
             Param::LeverArm(i) => dp[*i] = *v,
-            Param::TimeOffset | Param::Intrinsic(_) => {}
+            Param::TimeOffset | Param::Intrinsic(_) | Param::Scale => {}
         }
     }
     (dth, dp)
@@ -179,7 +188,7 @@ pub(crate) fn estimate(
     let slot = |p: &Param| match p {
         Param::ExtrinsicRotation(i) => Some(*i),
         Param::LeverArm(i) => Some(3 + *i),
-        Param::TimeOffset | Param::Intrinsic(_) => None,
+        Param::TimeOffset | Param::Intrinsic(_) | Param::Scale => None,
     };
     let mut covariance = Matrix6::from_element(f64::NAN);
     let idx: Vec<(usize, usize)> = active

@@ -108,6 +108,30 @@ pub struct KnownPoseOptions {
     /// poses are the IMU's, or, when the rotation is estimated, it starts at the hand-eye
     /// rotation. Exclusive with `params.body_p_sensor`.
     pub initial_extrinsic: Option<SensorPose>,
+    /// The scale of the poses' positions \[m per unit\]: applied to them (`s·p̃`), and the
+    /// initial value when estimated (default 1: metric poses). `pose_pos_std` is in the
+    /// poses' unit.
+    pub initial_scale: f64,
+    /// Estimate the scale too (poses known up to scale, a monocular front end; default
+    /// false). Its estimate is [`KnownPoseCalibration::parameters`]' [`Param::Scale`] entry,
+    /// never withheld ([`crate::init`] decides whether it is known well enough).
+    pub estimate_scale: bool,
+    /// A Gaussian prior on the biases (default none: the data alone).
+    pub bias_prior: Option<BiasPrior>,
+}
+
+/// A Gaussian prior on the biases, `b_g ~ N(μ_g, σ_g² I)`, `b_a ~ N(μ_a, σ_a² I)`: the
+/// maximum-a-posteriori form of the inertial-only optimisation (Campos et al., T-RO 2021,
+/// sec. V-A), which keeps a short window's accelerometer bias from trading against gravity and
+/// scale.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BiasPrior {
+    /// The prior mean μ.
+    pub mean: ImuBias,
+    /// σ_g \[rad/s\].
+    pub gyro_std: f64,
+    /// σ_a \[m/s²\].
+    pub acc_std: f64,
 }
 
 impl KnownPoseOptions {
@@ -125,6 +149,9 @@ impl KnownPoseOptions {
             initial_time_offset_s: 0.0,
             excitation: ExcitationLimits::default(),
             initial_extrinsic: None,
+            initial_scale: 1.0,
+            estimate_scale: false,
+            bias_prior: None,
         }
     }
 }
@@ -155,7 +182,8 @@ pub struct KnownPoseCalibration {
     pub velocity_std: Vec<Vector3<f64>>,
     /// χ² of the whitened residuals.
     pub chi2: f64,
-    /// Degrees of freedom: residuals − unknowns = `9(P − 1) − (3P + 8)`.
+    /// Degrees of freedom: residuals − unknowns = `9(P − 1) (+ 6 with a bias prior) − (3P + 8
+    /// + m)`, `m` the excited calibration parameters.
     pub dof: usize,
     /// Total Gauss-Newton iterations.
     pub iterations: u64,
@@ -178,6 +206,14 @@ pub struct KnownPoseCalibration {
     pub covariance: DMatrix<f64>,
     /// The IMU's pose in the frame of the poses, when estimated or given.
     pub extrinsic: Option<ExtrinsicEstimate>,
+    /// The scale of the poses' positions \[m per unit\] (estimated, or the initial one).
+    pub scale: f64,
+    /// The solver's covariance of the whole state, in the order `[b_g, b_a, v_0, …, v_P−1,
+    /// e, δg]` (`e` as in [`KnownPoseCalibration::covariance`], `δg` the 2-DoF gravity
+    /// tangent of [`gravity`]).
+    pub state_covariance: DMatrix<f64>,
+    /// `∂g/∂δg` \[m/s² per rad\], 3×2: the gravity vector's columns of the state covariance.
+    pub gravity_jacobian: nalgebra::Matrix3x2<f64>,
 }
 
 impl KnownPoseCalibration {
@@ -252,10 +288,14 @@ pub fn calibrate_known_poses(
     check_non_negative("pose_pos_std", opts.pose_pos_std)?;
     check_calibration_options(opts)?;
     check_extrinsic_options(opts)?;
+    check_scale_options(opts)?;
     let gnorm = check_gravity("params.gravity", &opts.params.gravity)?;
     let g0 = Vector3::new(0.0, 0.0, -gnorm);
     let (opts, start) = &extrinsic_start(samples, poses, opts);
-    let asked = parameters(&opts.estimate, opts.initial_intrinsics.model);
+    let mut asked = parameters(&opts.estimate, opts.initial_intrinsics.model);
+    if opts.estimate_scale {
+        asked.push(Param::Scale);
+    }
     let eo = 6 + 3 * poses.len();
     let out = fit_excited(
         &asked,
@@ -335,6 +375,23 @@ fn check_extrinsic_options(opts: &KnownPoseOptions) -> Result<(), BiasError> {
     Ok(())
 }
 
+/// The scale is positive and finite, and the bias prior's deviations positive.
+fn check_scale_options(opts: &KnownPoseOptions) -> Result<(), BiasError> {
+    check_positive("initial_scale", opts.initial_scale)?;
+    if let Some(b) = &opts.bias_prior {
+        check_positive("bias_prior.gyro_std", b.gyro_std)?;
+        check_positive("bias_prior.acc_std", b.acc_std)?;
+        let mean = b.mean.gyro.iter().chain(b.mean.acc.iter());
+        if mean.clone().any(|v| !v.is_finite()) {
+            return Err(BiasError::InvalidParameter {
+                name: "bias_prior.mean",
+                reason: "non-finite".into(),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// The initial calibration is valid: intrinsics invertible, time offset finite, and the
 /// excitation limits positive.
 pub(super) fn check_calibration_options(opts: &KnownPoseOptions) -> Result<(), BiasError> {
@@ -377,15 +434,16 @@ fn fit(
             )
         },
     };
-    let start = Calibration::initial(opts).extrinsic;
-    let x = initial_state(&extrinsic::imu_poses(poses, &start), opts, g0, active.len());
+    let start = Calibration::initial(opts);
+    let imu = extrinsic::imu_poses(poses, &start.extrinsic, start.scale);
+    let x = initial_state(&imu, opts, g0, active.len());
     relinearise(opts, active, x, &layout, |lin, x| {
         solve_linearised(samples, poses, opts, lin, active, g0, x)
     })
 }
 
 /// At least 3 poses, at strictly increasing times within the samples' span, finite.
-pub(super) fn check_poses(samples: &[ImuSample], poses: &[KnownPose]) -> Result<(), BiasError> {
+pub(crate) fn check_poses(samples: &[ImuSample], poses: &[KnownPose]) -> Result<(), BiasError> {
     if poses.len() < 3 {
         return Err(BiasError::TooFew {
             what: "poses",
@@ -459,11 +517,11 @@ fn solve_linearised(
 ) -> Result<Solution<State>, BiasError> {
     let times = poses.windows(2).map(|w| (w[0].t_ns, w[1].t_ns));
     let (pims, extras) = extras::windows(&opts.params, lin, active, samples, times)?;
-    let x_bs = lin.1.extrinsic;
+    let (x_bs, scale) = (lin.1.extrinsic, lin.1.scale);
     let (diag, sub) = residual_covariance(
         &pims,
-        &extrinsic::imu_poses(poses, &x_bs),
-        (opts.pose_rot_std, opts.pose_pos_std),
+        &extrinsic::imu_poses(poses, &x_bs, scale),
+        (opts.pose_rot_std, opts.pose_pos_std * scale),
         &extrinsic::lever_in_imu(&x_bs),
     );
     let white = Whitening::new(&diag, &sub).ok_or_else(|| BiasError::InvalidParameter {
@@ -480,6 +538,8 @@ fn solve_linearised(
         extras: &extras,
         g0: *g0,
         white: &white,
+        scale,
+        prior: opts.bias_prior,
     };
     Ok(solve(problem, x, GaussNewton::default(), opts.max_iters)?)
 }
@@ -532,5 +592,8 @@ fn calibration(
         parameters,
         covariance,
         extrinsic,
+        scale: fit.calib.scale,
+        state_covariance: sol.covariance.clone(),
+        gravity_jacobian: gd,
     }
 }

@@ -21,11 +21,11 @@
 //! tests. The solver sees them whitened by the pose-noise covariance
 //! ([`super::pose_noise`]).
 
-use super::KnownPose;
 use super::extras::Param;
 use super::extrinsic::{self, WindowTerms};
 use super::gravity::GravityDir;
 use super::pose_noise::Whitening;
+use super::{BiasPrior, KnownPose};
 use crate::gauss_newton::LeastSquares;
 use nalgebra::{DMatrix, DVector, Vector3};
 use preint::{PreintegratedImu, SensorPose};
@@ -46,6 +46,11 @@ pub(super) struct Problem<'a> {
     /// `g₀ = (0, 0, −|g|)`.
     pub(super) g0: Vector3<f64>,
     pub(super) white: &'a Whitening,
+    /// The scale of the given positions at the linearisation point, moved by `e`'s
+    /// [`Param::Scale`] entry (1 for metric poses).
+    pub(super) scale: f64,
+    /// The prior on the biases, when given: 6 rows `(b − μ)/σ` after the windows'.
+    pub(super) prior: Option<BiasPrior>,
 }
 
 impl Problem<'_> {
@@ -72,10 +77,16 @@ impl Problem<'_> {
         let (g, gd) = rwg.gravity(&self.g0);
         let dx = extrinsic::state_correction(p, eo, self.active);
         let x = extrinsic::moved(&self.extrinsic, &dx);
+        let scale_col = self.active.iter().position(|q| *q == Param::Scale);
+        let s = self.scale + scale_col.map_or(0.0, |k| e[k]);
         for (k, pim) in self.pims.iter().enumerate() {
             let je = &self.extras[k];
             let c = je * e;
-            let given = (&self.poses[k], &self.poses[k + 1]);
+            let given = &(
+                extrinsic::scaled(&self.poses[k], s),
+                extrinsic::scaled(&self.poses[k + 1], s),
+            );
+            let given = (&given.0, &given.1);
             let (pi, pj) = (
                 &extrinsic::imu_pose(given.0, &x),
                 &extrinsic::imu_pose(given.1, &x),
@@ -133,7 +144,41 @@ impl Problem<'_> {
                 y: (yv, yp),
             };
             self.extrinsic_columns(&mut j, row, eo, &terms, &dx.0);
+            if let Some(c) = scale_col {
+                // ∂r_p/∂s = R_s,iᵀ(p̃_j − p̃_i).
+                let d = ritm * (self.poses[k + 1].p - self.poses[k].p);
+                j.view_mut((row + 6, eo + c), (3, 1)).copy_from(&d);
+            }
         }
+        (r, j)
+    }
+
+    /// The whitened residual and Jacobian with the prior's rows below them.
+    fn with_prior(
+        &self,
+        p: &DVector<f64>,
+        (r, j): (DVector<f64>, DMatrix<f64>),
+    ) -> (DVector<f64>, DMatrix<f64>) {
+        let Some(prior) = &self.prior else {
+            return (r, j);
+        };
+        let (m, n) = (r.len(), j.ncols());
+        let mut r = r.resize_vertically(m + 6, 0.0);
+        let want_j = j.nrows() > 0;
+        let mut j = if want_j {
+            j.resize_vertically(m + 6, 0.0)
+        } else {
+            j
+        };
+        let mean = [prior.mean.gyro, prior.mean.acc];
+        for k in 0..6 {
+            let std = if k < 3 { prior.gyro_std } else { prior.acc_std };
+            r[m + k] = (p[k] - mean[k / 3][k % 3]) / std;
+            if want_j {
+                j[(m + k, k)] = 1.0 / std;
+            }
+        }
+        debug_assert!(!want_j || j.ncols() == n);
         (r, j)
     }
 }
@@ -160,7 +205,7 @@ impl Problem<'_> {
             let col = match p {
                 Param::ExtrinsicRotation(a) => d_rot.column(*a),
                 Param::LeverArm(a) => d_p.column(*a),
-                Param::TimeOffset | Param::Intrinsic(_) => continue,
+                Param::TimeOffset | Param::Intrinsic(_) | Param::Scale => continue,
             };
             j.view_mut((row, eo + k), (9, 1)).copy_from(&col);
         }
@@ -172,10 +217,11 @@ impl LeastSquares for Problem<'_> {
     type State = (DVector<f64>, GravityDir);
     fn residual_jacobian(&self, x: &Self::State) -> (DVector<f64>, DMatrix<f64>) {
         let (r, j) = self.raw(x, true);
-        (self.white.apply(r), self.white.apply(j))
+        self.with_prior(&x.0, (self.white.apply(r), self.white.apply(j)))
     }
     fn residual(&self, x: &Self::State) -> DVector<f64> {
-        self.white.apply(self.raw(x, false).0)
+        let r = self.white.apply(self.raw(x, false).0);
+        self.with_prior(&x.0, (r, DMatrix::zeros(0, 0))).0
     }
 }
 
@@ -198,7 +244,7 @@ mod tests {
         // Without calibration parameters, and with all 25 (time offset, gyro, g-sensitivity,
         // accelerometer) at non-identity intrinsics.
         let none = vec![DMatrix::zeros(9, 0); pims.len()];
-        check_problem(&s, &pims, &none, (&[], identity_pose()));
+        check_problem(&s, &pims, &none, (&[], identity_pose()), (1.0, None));
         let all = Estimate {
             time_offset: true,
             gyro_intrinsics: true,
@@ -207,8 +253,10 @@ mod tests {
             extrinsic_rotation: true,
             lever_arm: true,
         };
-        let active = parameters(&all, IntrinsicsModel::Kalibr);
+        let mut active = parameters(&all, IntrinsicsModel::Kalibr);
         assert_eq!(active.len(), 31);
+        // And the scale of up-to-scale positions, with a prior on the biases.
+        active.push(Param::Scale);
         // Poses of a frame turned by ≈ 70° from the IMU, 0.3 m away.
         let x_bs = SensorPose::new(
             SO3::exp(&Vector3::new(0.9, -0.6, 0.5)),
@@ -223,6 +271,7 @@ mod tests {
             intrinsics: x0,
             td_s: 0.0,
             extrinsic: x_bs,
+            scale: 0.7,
         };
         let (pims, extras): (Vec<_>, Vec<_>) = s
             .poses
@@ -239,7 +288,12 @@ mod tests {
                 .unwrap()
             })
             .unzip();
-        check_problem(&s, &pims, &extras, (&active, x_bs));
+        let prior = BiasPrior {
+            mean: ImuBias::new(Vector3::new(1e-3, 0.0, -2e-3), Vector3::new(0.05, 0.0, 0.1)),
+            gyro_std: 0.01,
+            acc_std: 0.2,
+        };
+        check_problem(&s, &pims, &extras, (&active, x_bs), (0.7, Some(prior)));
     }
 
     /// The analytic Jacobian of the whitened problem against Ridders' away from the optimum.
@@ -248,8 +302,9 @@ mod tests {
         pims: &[PreintegratedImu],
         extras: &[DMatrix<f64>],
         (active, x_bs): (&[Param], SensorPose),
+        (scale, prior): (f64, Option<BiasPrior>),
     ) {
-        let imu = extrinsic::imu_poses(&s.poses, &x_bs);
+        let imu = extrinsic::imu_poses(&s.poses, &x_bs, scale);
         let q = extrinsic::lever_in_imu(&x_bs);
         let (diag, sub) = residual_covariance(pims, &imu, (2e-3, 4e-3), &q);
         let white = Whitening::new(&diag, &sub).unwrap();
@@ -262,6 +317,8 @@ mod tests {
             extras,
             g0,
             white: &white,
+            scale,
+            prior,
         };
         let n = s.poses.len();
         // Away from the optimum: biases off by 1e-3 rad/s and 0.05 m/s², velocities off,
@@ -282,6 +339,8 @@ mod tests {
         }
         let x = (p, GravityDir(SO3::exp(&Vector3::new(0.04, -0.03, 0.2))));
         let (_, j) = problem.residual_jacobian(&x);
+        let rows = 9 * pims.len() + if prior.is_some() { 6 } else { 0 };
+        assert_eq!(j.nrows(), rows);
         let np = 6 + 3 * n + m;
         let blocks = [j.columns(0, np).into_owned(), j.columns(np, 2).into_owned()];
         let rep = check_jacobian(
