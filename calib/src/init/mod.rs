@@ -236,8 +236,9 @@ fn result(
     let gravity_dir_std_rad =
         gcov.symmetric_eigenvalues().max().max(0.0).sqrt() / c.gravity.norm() * std_factor;
     let scale_std = sd(0);
-    let (ready, reason) = verdict(p.scale, scale_std, gravity_dir_std_rad, &fit, opts);
     let window_s = preint::dt_seconds(poses[0].t_ns, poses[poses.len() - 1].t_ns);
+    let (ready, mut reason) = verdict(p.scale, scale_std, gravity_dir_std_rad, &fit, opts);
+    reason.push_str(&drift_note(opts, window_s, sd(7).max(sd(8)).max(sd(9))));
     let velocity_std = c
         .velocity_std
         .iter()
@@ -295,6 +296,23 @@ fn joint_covariance(p: &Scaled) -> SMatrix<f64, 10, 10> {
         SMatrix::from_element(f64::INFINITY)
     };
     SMatrix::from_fn(|r, k| cond[(r, k)]) + spread
+}
+
+/// A note when the accelerometer bias's random walk over the window, `σ_ba √T`, exceeds the
+/// bias's own σ: the problem holds the bias constant, so its σ (and those correlated with it)
+/// do not carry the drift ([`crate::bias::known_poses`], "Limits").
+fn drift_note(opts: &InitOptions, window_s: f64, acc_bias_std: f64) -> String {
+    let rw = opts.params.acc_bias_rw_cov.diagonal().max().max(0.0).sqrt();
+    let drift = rw * window_s.sqrt();
+    if drift > acc_bias_std {
+        format!(
+            "; note: the accelerometer bias's random walk moves it by ≈ {drift:.3} m/s² over \
+             the {window_s:.1} s window, more than its σ {acc_bias_std:.3} m/s², which holds it \
+             constant: a shorter window models it better"
+        )
+    } else {
+        String::new()
+    }
 }
 
 /// Ready when the scale's relative σ and the gravity direction's σ are within the limits; the
