@@ -52,12 +52,12 @@
 //! # factrs' generic entry points
 //!
 //! factrs builds a factor from a `ResidualN` type (its automatic-differentiation interface,
-//! generic over dual numbers). The residuals here implement it to be accepted by
-//! `FactorBuilder`/`fac!`, but factrs' graph and optimisers call the object-safe
-//! [`Residual`] methods, which evaluate preint's analytic Jacobians. The generic
-//! `residual5`/`residual6` evaluate the residual at the real parts of their arguments, and
-//! their `Differ` is factrs' `NumericalDiff` (central differences in `f64`), so that entry
-//! point gives numeric Jacobians, never silently zero ones.
+//! generic over dual numbers), so both residuals implement `Residual5`/`Residual6` as well;
+//! factrs' graph and optimisers call the object-safe [`Residual`] methods, which evaluate
+//! preint's analytic Jacobians. The generic `residual5`/`residual6` return the first-order
+//! expansion `r + J (x ⊖ re(x))` at the real parts `re(x)` of their arguments, so factrs'
+//! forward-mode differentiation (their `Differ`, `ForwardProp`) reproduces the analytic
+//! Jacobian: that entry point is consistent with the other, never silently zero.
 //!
 //! Needs factrs built with `f64` (without its `f32` feature) and without its `serde` feature
 //! (a serialisable residual must be registered with typetag).
@@ -67,7 +67,7 @@
 use std::sync::OnceLock;
 
 use factrs::containers::{Key, Values};
-use factrs::linalg::{Const, DiffResult, MatrixX, Numeric, NumericalDiff, VectorX};
+use factrs::linalg::{Const, DiffResult, ForwardProp, MatrixX, Numeric, VectorX};
 use factrs::residuals::{Residual, Residual5, Residual6};
 use factrs::variables::{ImuBias, SE3, SO3, Variable, VectorVar3};
 use preint::lie::SO3 as PreintSO3;
@@ -154,8 +154,19 @@ fn real_bias<T: Numeric>(b: &ImuBias<T>) -> ImuBias {
     )
 }
 
-fn lift<T: Numeric>(r: &[f64]) -> VectorX<T> {
-    VectorX::from_iterator(r.len(), r.iter().map(|x| T::from_subset(x)))
+/// `r + J δ` in the scalar type `T`, with `δ` the stacked tangent offsets `x ⊖ re(x)` of the
+/// arguments from their real parts (zero real part; for dual numbers, their derivative parts):
+/// the first-order expansion that carries `J` into automatic differentiation.
+fn propagate<T: Numeric>(r: &VectorX, j: &MatrixX, offsets: &[VectorX<T>]) -> VectorX<T> {
+    let d: Vec<T> = offsets.iter().flat_map(|o| o.iter().copied()).collect();
+    debug_assert_eq!(d.len(), j.ncols());
+    VectorX::from_fn(r.len(), |i, _| {
+        d.iter()
+            .enumerate()
+            .fold(T::from_subset(&r[i]), |acc, (c, dc)| {
+                acc + T::from_subset(&j[(i, c)]) * *dc
+            })
+    })
 }
 
 // ------------------------------------------------------------------------------------------
@@ -311,7 +322,7 @@ impl Residual5 for ImuResidual {
     type V5 = ImuBias;
     type DimIn = Const<24>;
     type DimOut = Const<9>;
-    type Differ = NumericalDiff<6>;
+    type Differ = ForwardProp<Const<24>>;
 
     fn residual5<T: Numeric>(
         &self,
@@ -321,10 +332,23 @@ impl Residual5 for ImuResidual {
         vel_j: VectorVar3<T>,
         bias_i: ImuBias<T>,
     ) -> VectorX<T> {
-        let xi = nav_state(&real_pose(&pose_i), &real_vec(&vel_i));
-        let xj = nav_state(&real_pose(&pose_j), &real_vec(&vel_j));
-        let b = bias(&real_bias(&bias_i));
-        lift(self.whitened(&xi, &xj, &b).0.as_slice())
+        let (pi, vi, pj, vj) = (
+            real_pose(&pose_i),
+            real_vec(&vel_i),
+            real_pose(&pose_j),
+            real_vec(&vel_j),
+        );
+        let bi = real_bias(&bias_i);
+        let (xi, xj) = (nav_state(&pi, &vi), nav_state(&pj, &vj));
+        let (r, j) = self.whitened(&xi, &xj, &bias(&bi));
+        let offsets = [
+            pose_i.ominus(&pi.cast()),
+            vel_i.ominus(&vi.cast()),
+            pose_j.ominus(&pj.cast()),
+            vel_j.ominus(&vj.cast()),
+            bias_i.ominus(&bi.cast()),
+        ];
+        propagate(&r, &to_factrs_jacobian(&j, &xi, &xj, false), &offsets)
     }
 }
 
@@ -402,7 +426,7 @@ impl Residual6 for CombinedImuResidual {
     type V6 = ImuBias;
     type DimIn = Const<30>;
     type DimOut = Const<15>;
-    type Differ = NumericalDiff<6>;
+    type Differ = ForwardProp<Const<30>>;
 
     fn residual6<T: Numeric>(
         &self,
@@ -413,11 +437,24 @@ impl Residual6 for CombinedImuResidual {
         bias_i: ImuBias<T>,
         bias_j: ImuBias<T>,
     ) -> VectorX<T> {
-        let xi = nav_state(&real_pose(&pose_i), &real_vec(&vel_i));
-        let xj = nav_state(&real_pose(&pose_j), &real_vec(&vel_j));
-        let bi = bias(&real_bias(&bias_i));
-        let bj = bias(&real_bias(&bias_j));
-        lift(self.whitened(&xi, &xj, &bi, &bj).0.as_slice())
+        let (pi, vi, pj, vj) = (
+            real_pose(&pose_i),
+            real_vec(&vel_i),
+            real_pose(&pose_j),
+            real_vec(&vel_j),
+        );
+        let (bi, bj) = (real_bias(&bias_i), real_bias(&bias_j));
+        let (xi, xj) = (nav_state(&pi, &vi), nav_state(&pj, &vj));
+        let (r, j) = self.whitened(&xi, &xj, &bias(&bi), &bias(&bj));
+        let offsets = [
+            pose_i.ominus(&pi.cast()),
+            vel_i.ominus(&vi.cast()),
+            pose_j.ominus(&pj.cast()),
+            vel_j.ominus(&vj.cast()),
+            bias_i.ominus(&bi.cast()),
+            bias_j.ominus(&bj.cast()),
+        ];
+        propagate(&r, &to_factrs_jacobian(&j, &xi, &xj, true), &offsets)
     }
 }
 
