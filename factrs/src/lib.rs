@@ -238,7 +238,7 @@ fn to_factrs_jacobian<const R: usize>(
     m
 }
 
-fn get<'v, V: factrs::variables::VariableDtype + 'static>(values: &'v Values, key: Key) -> &'v V {
+fn get<V: factrs::variables::VariableDtype + 'static>(values: &Values, key: Key) -> &V {
     values.get_unchecked(key).unwrap_or_else(|| {
         panic!(
             "key {key:?} missing from the values, or not a {}",

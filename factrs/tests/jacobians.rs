@@ -157,7 +157,10 @@ fn block_error(analytic: &MatrixX, numeric: &MatrixX) -> f64 {
 
 #[test]
 fn imu_residual_jacobian_matches_central_differences_through_factrs_oplus() {
-    assert!(!preint_factrs::left_perturbation(), "factrs' default, right perturbation");
+    assert!(
+        !preint_factrs::left_perturbation(),
+        "factrs' default, right perturbation"
+    );
     for scheme in [Scheme::Midpoint, Scheme::Euler] {
         for mode in [ResidualMode::Logmap, ResidualMode::ComponentWise] {
             let (m, vars) = setup(scheme);

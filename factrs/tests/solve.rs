@@ -217,7 +217,10 @@ struct Ours<'a> {
 }
 
 fn to_bias(v: &SVector<f64, 6>) -> preint::ImuBias {
-    preint::ImuBias::new(v.fixed_rows::<3>(0).into_owned(), v.fixed_rows::<3>(3).into_owned())
+    preint::ImuBias::new(
+        v.fixed_rows::<3>(0).into_owned(),
+        v.fixed_rows::<3>(3).into_owned(),
+    )
 }
 
 impl LeastSquares for Ours<'_> {
@@ -235,19 +238,23 @@ impl LeastSquares for Ours<'_> {
             let mut j = DMatrix::zeros(6, n);
             r.rows_mut(0, 3).copy_from(&(e / SIGMA_ROT));
             r.rows_mut(3, 3).copy_from(&((s.p - m.p) / SIGMA_POS));
-            j.view_mut((0, 9 * k), (3, 3)).copy_from(&(jr_inv(&e) / SIGMA_ROT));
-            j.view_mut((3, 9 * k + 3), (3, 3)).copy_from(&(s.r.matrix() / SIGMA_POS));
+            j.view_mut((0, 9 * k), (3, 3))
+                .copy_from(&(jr_inv(&e) / SIGMA_ROT));
+            j.view_mut((3, 9 * k + 3), (3, 3))
+                .copy_from(&(s.r.matrix() / SIGMA_POS));
             rows.push((r, j));
         }
         // Velocity prior at keyframe 0 and the bias prior on the first bias.
         let mut r = DVector::zeros(9);
         let mut j = DMatrix::zeros(9, n);
-        r.rows_mut(0, 3).copy_from(&((states[0].v - self.p.truth[0].v) / SIGMA_VEL));
+        r.rows_mut(0, 3)
+            .copy_from(&((states[0].v - self.p.truth[0].v) / SIGMA_VEL));
         j.view_mut((0, 6), (3, 3)).fill_with_identity();
         j.view_mut((0, 6), (3, 3)).scale_mut(1.0 / SIGMA_VEL);
         r.rows_mut(3, 6).copy_from(&(biases[0] / SIGMA_BIAS));
         j.view_mut((3, bias_col(0)), (6, 6)).fill_with_identity();
-        j.view_mut((3, bias_col(0)), (6, 6)).scale_mut(1.0 / SIGMA_BIAS);
+        j.view_mut((3, bias_col(0)), (6, 6))
+            .scale_mut(1.0 / SIGMA_BIAS);
         rows.push((r, j));
         // IMU factors.
         for k in 0..K - 1 {
@@ -258,7 +265,8 @@ impl LeastSquares for Ours<'_> {
                     let mut j = DMatrix::zeros(9, n);
                     j.view_mut((0, 9 * k), (9, 9)).copy_from(&jac.state_i());
                     j.view_mut((0, 9 * k + 9), (9, 9)).copy_from(&jac.state_j());
-                    j.view_mut((0, bias_col(0)), (9, 6)).copy_from(&jac.bias_i());
+                    j.view_mut((0, bias_col(0)), (9, 6))
+                        .copy_from(&jac.bias_i());
                     rows.push((DVector::from_column_slice(r.as_slice()), j));
                 }
                 Imu::Combined(f) => {
@@ -266,9 +274,12 @@ impl LeastSquares for Ours<'_> {
                     let (r, jac) = f[k].evaluate_whitened(xi, xj, &bi, &bj);
                     let mut j = DMatrix::zeros(15, n);
                     j.view_mut((0, 9 * k), (15, 9)).copy_from(&jac.state_i());
-                    j.view_mut((0, 9 * k + 9), (15, 9)).copy_from(&jac.state_j());
-                    j.view_mut((0, bias_col(k)), (15, 6)).copy_from(&jac.bias_i());
-                    j.view_mut((0, bias_col(k + 1)), (15, 6)).copy_from(&jac.bias_j());
+                    j.view_mut((0, 9 * k + 9), (15, 9))
+                        .copy_from(&jac.state_j());
+                    j.view_mut((0, bias_col(k)), (15, 6))
+                        .copy_from(&jac.bias_i());
+                    j.view_mut((0, bias_col(k + 1)), (15, 6))
+                        .copy_from(&jac.bias_j());
                     rows.push((DVector::from_column_slice(r.as_slice()), j));
                 }
             }
@@ -291,9 +302,19 @@ impl LeastSquares for Ours<'_> {
 fn solve_ours(p: &Problem, combined: bool) -> (State, DVector<f64>) {
     let nb = if combined { K } else { 1 };
     let imu = if combined {
-        Imu::Combined(p.pims.iter().map(|m| CombinedImuFactor::new(m.clone()).unwrap()).collect())
+        Imu::Combined(
+            p.pims
+                .iter()
+                .map(|m| CombinedImuFactor::new(m.clone()).unwrap())
+                .collect(),
+        )
     } else {
-        Imu::Plain(p.pims.iter().map(|m| ImuFactor::new(m.clone()).unwrap()).collect())
+        Imu::Plain(
+            p.pims
+                .iter()
+                .map(|m| ImuFactor::new(m.clone()).unwrap())
+                .collect(),
+        )
     };
     let x0: State = (start(p), vec![SVector::zeros(); nb]);
     let sol = solve(Ours { p, imu }, x0, OurGaussNewton::undamped(), 50).unwrap();
@@ -331,7 +352,10 @@ fn compare(p: &Problem, combined: bool) -> (f64, f64) {
         let d = t.local(o);
         for i in 0..9 {
             let z = d[i] / std[9 * k + i];
-            assert!(z.abs() < 5.0, "keyframe {k} coordinate {i}: {z:.2}σ from the truth");
+            assert!(
+                z.abs() < 5.0,
+                "keyframe {k} coordinate {i}: {z:.2}σ from the truth"
+            );
         }
     }
     let b = to_bias(&ob[0]);
