@@ -8,12 +8,21 @@
 //! ```
 //! use factrs::{assign_symbols, fac, core::Graph, variables::{ImuBias, SE3, VectorVar3}};
 //! use preint_factrs::ImuResidual;
-//! # let factor = preint_factrs::doc_factor();
+//! # use preint::{ImuBias as Bias, ImuFactor, ImuSample, PreintParams, Preintegrator};
+//! # use preint::nalgebra::Vector3;
+//! # let params = PreintParams::from_noise(&preint::ImuNoise::euroc());
+//! # let mut pi = Preintegrator::new(params, Bias::zero()).unwrap();
+//! # for k in 0..201i64 {
+//! #     let s = ImuSample::new(k * 5_000_000, Vector3::new(0.0, 0.0, 0.2), Vector3::new(0.1, 0.0, 9.81));
+//! #     pi.integrate(&s).unwrap();
+//! # }
+//! # let factor = ImuFactor::new(pi.finish().unwrap()).unwrap();
 //! assign_symbols!(X: SE3; V: VectorVar3; B: ImuBias);
 //!
 //! let mut graph = Graph::new();
 //! // `factor`: a preint::ImuFactor between keyframes 0 and 1.
 //! graph.add_factor(fac![ImuResidual::new(factor), (X(0), V(0), X(1), V(1), B(0))]);
+//! # assert_eq!(graph.len(), 1);
 //! ```
 //!
 //! # Variables
@@ -456,22 +465,4 @@ impl Residual6 for CombinedImuResidual {
         ];
         propagate(&r, &to_factrs_jacobian(&j, &xi, &xj, true), &offsets)
     }
-}
-
-/// A factor for the documentation examples: 1 s of a constant turn at 200 Hz with the EuRoC
-/// noise densities.
-#[doc(hidden)]
-pub fn doc_factor() -> ImuFactor {
-    use preint::{ImuSample, PreintParams, Preintegrator};
-    let params = PreintParams::from_noise(&preint::ImuNoise::euroc());
-    let mut pi = Preintegrator::new(params, preint::ImuBias::zero()).expect("valid parameters");
-    for k in 0..201i64 {
-        let s = ImuSample::new(
-            k * 5_000_000,
-            Vector3::new(0.0, 0.0, 0.2),
-            Vector3::new(0.1, 0.0, 9.81),
-        );
-        pi.integrate(&s).expect("ordered samples");
-    }
-    ImuFactor::new(pi.finish().expect("a window")).expect("a factor")
 }
