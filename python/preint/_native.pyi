@@ -836,7 +836,7 @@ def initialise_file(
     pose_pos_std: float = 0.0,
     pose_spacing: float = 0.1,
     body_p_sensor: Sequence[float] | None = None,
-    bias_prior_std: tuple[float, float] = (0.05, 0.2),
+    bias_prior_std: tuple[float, float] | None = None,
     scheme: str = "midpoint",
     **options: Unpack[_ReaderOptions],
 ) -> dict[str, Any]:
@@ -850,8 +850,8 @@ def initialise_file(
     ``ready`` with its ``reason`` (a window that is not ready is a result, not an error).
     ``pose_rot_std`` [rad] and ``pose_pos_std`` [unit of the poses]: the keyframes' noise;
     ``pose_spacing`` [s]; ``body_p_sensor`` (x, y, z, qw, qx, qy, qz): the IMU's pose in the
-    frame of the poses; ``bias_prior_std`` (gyro rad/s, accelerometer m/s²): the zero-mean
-    prior of the maximum-a-posteriori refinement.
+    frame of the poses; ``bias_prior_std`` (gyro rad/s, accelerometer m/s²; None: 0.05 and
+    0.2): the zero-mean prior of the maximum-a-posteriori refinement.
 
     Raises CalibrationError (kind ``Failed``) for a file without positions or fewer than three
     keyframes; InputError for a bad file or value."""

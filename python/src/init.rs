@@ -15,7 +15,7 @@ use std::path::PathBuf;
 #[pyfunction]
 #[pyo3(signature = (path=None, *, poses, gyro=None, accel=None, scale="unknown", noise=None,
     gravity=9.81, from_ns=None, to_ns=None, pose_rot_std=0.0, pose_pos_std=0.0,
-    pose_spacing=0.1, body_p_sensor=None, bias_prior_std=(0.05, 0.2), scheme="midpoint",
+    pose_spacing=0.1, body_p_sensor=None, bias_prior_std=None, scheme="midpoint",
     **options))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn initialise_file<'py>(
@@ -33,7 +33,7 @@ pub(crate) fn initialise_file<'py>(
     pose_pos_std: f64,
     pose_spacing: f64,
     body_p_sensor: Option<Vec<f64>>,
-    bias_prior_std: (f64, f64),
+    bias_prior_std: Option<(f64, f64)>,
     scheme: &str,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
@@ -68,7 +68,7 @@ pub(crate) fn initialise_file<'py>(
         pose_rot_std,
         pose_pos_std,
         body_p_sensor,
-        bias_prior_std,
+        bias_prior_std: bias_prior_std.unwrap_or((0.05, 0.2)),
         scheme: crate::params::scheme_from(scheme)?,
     };
     let json = py
