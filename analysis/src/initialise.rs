@@ -97,34 +97,22 @@ pub fn compute(o: &Options) -> Result<Initialised, Error> {
 
 /// The poses of `file` inside the samples' span, `spacing_s` apart; positions required.
 fn keyframes(file: &Path, samples: &[ImuSample], spacing_s: f64) -> Result<Vec<KnownPose>, Error> {
-    let rows = preint_io::read_poses(file)?;
-    let (t0, t1) = (samples[0].t_ns, samples[samples.len() - 1].t_ns);
-    let spacing = (spacing_s * 1e9).round() as i64;
-    let mut out: Vec<KnownPose> = Vec::new();
-    for r in rows.iter().filter(|r| r.t_ns >= t0 && r.t_ns <= t1) {
-        let Some(p) = r.p else {
-            return Err(Error::Failed(format!(
-                "{}: attitudes only; the initialisation needs positions (t,x,y,z,qw,qx,qy,qz)",
-                file.display()
-            )));
-        };
-        if out.last().is_none_or(|l| r.t_ns - l.t_ns >= spacing) {
-            out.push(KnownPose {
+    let rows = crate::calibrate::poses_in_span(file, samples, spacing_s, 0)?;
+    rows.iter()
+        .map(|r| {
+            let p = r.p.ok_or_else(|| {
+                Error::Failed(format!(
+                    "{}: attitudes only; the initialisation needs positions (t,x,y,z,qw,qx,qy,qz)",
+                    file.display()
+                ))
+            })?;
+            Ok(KnownPose {
                 t_ns: r.t_ns,
                 r: SO3::from_quaternion(&r.q),
                 p,
-            });
-        }
-    }
-    if out.len() < 3 {
-        return Err(Error::Failed(format!(
-            "{}: {} keyframes inside the IMU time span (≥ {spacing_s} s apart); the \
-             initialisation needs at least 3",
-            file.display(),
-            out.len()
-        )));
-    }
-    Ok(out)
+            })
+        })
+        .collect()
 }
 
 fn v3(v: &Vector3<f64>) -> Value {

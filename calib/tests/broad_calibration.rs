@@ -33,14 +33,16 @@
 //! scheme the median and the 95th percentile of the held-out rotation error fall by at least
 //! 30 %.
 
-use nalgebra::{UnitQuaternion, Vector3};
+#[path = "common/broad.rs"]
+mod broad;
+
+use nalgebra::Vector3;
 use preint::intrinsics::{AppliedIntrinsics, IntrinsicsModel};
-use preint::{ImuBias, ImuNoise, ImuSample, PreintParams, Scheme, preintegrate};
+use preint::{ImuBias, ImuSample, PreintParams, Scheme, preintegrate};
 use preint_calib::KnownPoseOptions;
 use preint_calib::bias::known_poses::extras::Estimate;
 use preint_calib::bias::known_poses::{KnownAttitude, calibrate_known_attitudes};
 use preint_lie::SO3;
-use std::path::PathBuf;
 
 struct Broad {
     samples: Vec<ImuSample>,
@@ -49,26 +51,7 @@ struct Broad {
 }
 
 fn load() -> Broad {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/data/broad/broad_10_undisturbed_slow_translation_A_35s_160s_imu_q.csv");
-    let text = std::fs::read_to_string(path).unwrap();
-    let (mut samples, mut q) = (Vec::new(), Vec::new());
-    for line in text.lines().skip(1) {
-        let f: Vec<&str> = line.split(',').collect();
-        let v: Vec<f64> = f[1..11].iter().map(|x| x.parse().unwrap()).collect();
-        // t_s = index / 285.714… Hz with six decimals: the index, then exact ns at 3.5 ms.
-        let k = (f[0].parse::<f64>().unwrap() / 0.0035).round() as i64;
-        samples.push(ImuSample::new(
-            k * 3_500_000,
-            Vector3::new(v[0], v[1], v[2]),
-            Vector3::new(v[3], v[4], v[5]),
-        ));
-        q.push(v[6].is_finite().then(|| {
-            SO3::from_quaternion(&UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
-                v[6], v[7], v[8], v[9],
-            )))
-        }));
-    }
+    let (samples, q) = broad::samples_and_attitudes();
     Broad { samples, q }
 }
 
@@ -78,27 +61,6 @@ const NS: i64 = 1_000_000_000;
 fn at(b: &Broad, t_s: f64) -> usize {
     let t = (t_s * 1e9) as i64;
     b.samples.partition_point(|s| s.t_ns < t)
-}
-
-/// White-noise densities from the rest before 36.8 s (module docs).
-fn noise(b: &Broad) -> ImuNoise {
-    let rest = &b.samples[..at(b, 36.5)];
-    let n = rest.len() as f64;
-    let density = |f: &dyn Fn(&ImuSample) -> Vector3<f64>| {
-        let mean = rest.iter().map(f).sum::<Vector3<f64>>() / n;
-        let var = rest
-            .iter()
-            .map(|s| (f(s) - mean).map(|x| x * x))
-            .sum::<Vector3<f64>>()
-            / (n - 1.0);
-        var.max().sqrt() * 0.0035f64.sqrt()
-    };
-    ImuNoise {
-        gyro_noise_density: density(&|s| s.gyro),
-        acc_noise_density: density(&|s| s.acc),
-        update_rate_hz: 1.0 / 0.0035,
-        ..ImuNoise::euroc()
-    }
 }
 
 /// Attitudes every 0.25 s over [a, b] s where the motion capture saw the body.
@@ -148,7 +110,7 @@ fn percentile(v: &[f64], q: f64) -> f64 {
 #[test]
 fn broad_gyroscope_calibration_first_half_to_second_half() {
     let br = load();
-    let noise = noise(&br);
+    let noise = broad::noise(&br.samples);
     let atts = attitudes(&br, 37.5, 97.5);
     println!(
         "BROAD trial 10: σ_g {:.3e} rad/s/√Hz, σ_a {:.3e} m/s²/√Hz (rest), {} attitudes; \

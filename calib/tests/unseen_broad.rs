@@ -15,8 +15,11 @@
 //!   random scale in [0.2, 5]; windows of 1, 2, 4 and 10 s every 8 s over [38, 148] s.
 //!   Asserted: the median scale error at 4 s ≤ 2 %. CI runs 1 and 4 s; `PREINT_FULL=1` all four.
 
+#[path = "common/broad.rs"]
+mod broad;
+
 use nalgebra::{Rotation3, Unit, UnitQuaternion, Vector3};
-use preint::{ImuNoise, ImuSample, PreintParams, Scheme, SensorPose};
+use preint::{ImuSample, PreintParams, Scheme, SensorPose};
 use preint_calib::bias::known_poses::extras::Estimate;
 use preint_calib::init::{InitOptions, initialise};
 use preint_calib::{KnownPose, KnownPoseCalibration, KnownPoseOptions, calibrate_known_poses};
@@ -24,40 +27,11 @@ use preint_lie::SO3;
 use preint_sim::rng_from_seed;
 use rand::RngExt;
 use rand_distr::StandardNormal;
-use std::path::PathBuf;
 
 const NS: i64 = 1_000_000_000;
 
-fn file(name: &str) -> String {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/data/broad")
-        .join(name);
-    std::fs::read_to_string(p).unwrap()
-}
-
-/// `t_s` = index / 285.714… Hz with six decimals: the index, then exact ns at 3.5 ms.
-fn t_ns(t_s: &str) -> i64 {
-    (t_s.parse::<f64>().unwrap() / 0.0035).round() as i64 * 3_500_000
-}
-
-fn samples() -> Vec<ImuSample> {
-    file("broad_10_undisturbed_slow_translation_A_35s_160s_imu_q.csv")
-        .lines()
-        .skip(1)
-        .map(|l| {
-            let f: Vec<&str> = l.split(',').collect();
-            let v: Vec<f64> = f[1..7].iter().map(|x| x.parse().unwrap()).collect();
-            ImuSample::new(
-                t_ns(f[0]),
-                Vector3::new(v[0], v[1], v[2]),
-                Vector3::new(v[3], v[4], v[5]),
-            )
-        })
-        .collect()
-}
-
 fn poses() -> Vec<KnownPose> {
-    file("broad_10_undisturbed_slow_translation_A_35s_160s_poses.csv")
+    broad::file("broad_10_undisturbed_slow_translation_A_35s_160s_poses.csv")
         .lines()
         .skip(1)
         .map(|l| {
@@ -66,33 +40,12 @@ fn poses() -> Vec<KnownPose> {
             let q =
                 UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(v[3], v[4], v[5], v[6]));
             KnownPose {
-                t_ns: t_ns(f[0]),
+                t_ns: broad::t_ns(f[0]),
                 r: SO3::from_quaternion(&q),
                 p: Vector3::new(v[0], v[1], v[2]),
             }
         })
         .collect()
-}
-
-/// White-noise densities from the rest before 36.5 s.
-fn noise(s: &[ImuSample]) -> ImuNoise {
-    let rest: Vec<&ImuSample> = s.iter().filter(|x| x.t_ns < 36 * NS + NS / 2).collect();
-    let n = rest.len() as f64;
-    let density = |f: &dyn Fn(&ImuSample) -> Vector3<f64>| {
-        let mean = rest.iter().map(|x| f(x)).sum::<Vector3<f64>>() / n;
-        let var = rest
-            .iter()
-            .map(|x| (f(x) - mean).map(|v| v * v))
-            .sum::<Vector3<f64>>()
-            / (n - 1.0);
-        var.max().sqrt() * 0.0035f64.sqrt()
-    };
-    ImuNoise {
-        gyro_noise_density: density(&|x| x.gyro),
-        acc_noise_density: density(&|x| x.acc),
-        update_rate_hz: 1.0 / 0.0035,
-        ..ImuNoise::euroc()
-    }
 }
 
 /// Poses `spacing_ns` apart within [a, b] s.
@@ -137,9 +90,9 @@ fn re_expressed(poses: &[KnownPose], x: &SensorPose) -> Vec<KnownPose> {
 
 #[test]
 fn broad_a_hidden_transform_is_recovered_and_the_scale_initialised() {
-    let s = samples();
+    let s = broad::samples_and_attitudes().0;
     let all = poses();
-    let params = PreintParams::from_noise(&noise(&s)).with_scheme(Scheme::Midpoint);
+    let params = PreintParams::from_noise(&broad::noise(&s)).with_scheme(Scheme::Midpoint);
     let kf = keyframes(&all, (40.0, 100.0), NS / 4);
     let axis = Unit::new_normalize(Vector3::new(1.0, 1.0, 0.0));
     let x = SensorPose::new(

@@ -136,7 +136,7 @@ fn bad_keyframes_and_flags_are_refused_naming_them() {
         (&["--bias-prior-std", "0,0.2"][..], "--bias-prior-std"),
         (&["--pose-spacing", "-1"][..], "--pose-spacing"),
         (&["--scale", "metric"][..], "--scale"),
-        (&["--pose-spacing", "5"][..], "at least 3"),
+        (&["--pose-spacing", "5"][..], "fewer than three poses"),
     ] {
         let mut a = vec!["initialise", "--imu", imu, "--poses", metric];
         a.extend_from_slice(flags);

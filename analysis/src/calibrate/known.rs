@@ -27,12 +27,23 @@ fn select_poses(
     samples: &[ImuSample],
     margin_ns: i64,
 ) -> Result<Vec<preint_io::PoseRow>, Error> {
+    poses_in_span(pfile, samples, args.pose_spacing, margin_ns)
+}
+
+/// The rows of the pose file `pfile` inside the samples' time span less `margin_ns` at each
+/// end, `spacing_s` apart; fewer than three is an error naming the file.
+pub(crate) fn poses_in_span(
+    pfile: &Path,
+    samples: &[ImuSample],
+    spacing_s: f64,
+    margin_ns: i64,
+) -> Result<Vec<preint_io::PoseRow>, Error> {
     let rows = preint_io::read_poses(pfile)?;
     let (t0, t1) = (
         samples[0].t_ns + margin_ns,
         samples[samples.len() - 1].t_ns - margin_ns,
     );
-    let spacing = (args.pose_spacing * 1e9).round() as i64;
+    let spacing = (spacing_s * 1e9).round() as i64;
     let mut kp: Vec<preint_io::PoseRow> = Vec::new();
     for s in rows.iter().filter(|s| s.t_ns >= t0 && s.t_ns <= t1) {
         if kp.last().is_none_or(|l| s.t_ns - l.t_ns >= spacing) {
@@ -44,7 +55,7 @@ fn select_poses(
             "{}: fewer than three poses inside the IMU time span (poses ≥ {} s apart{} are \
              used)",
             pfile.display(),
-            args.pose_spacing,
+            spacing_s,
             if margin_ns > 0 {
                 format!(", ≥ {} s from its ends", margin_ns as f64 * 1e-9)
             } else {

@@ -52,6 +52,7 @@ pub mod noise_correlation;
 pub mod noise_model;
 
 pub use json::{EXTRINSIC_TANGENT, calibrated_json, earth_note, to_json};
+pub(crate) use known::poses_in_span;
 
 use crate::checks::UnitCheck;
 use crate::{Error, ImuInput, calibration_file, checks, noise, stream};

@@ -125,17 +125,11 @@ impl Args {
 
 /// Two comma-separated numbers (`--bias-prior-std`).
 fn two_numbers(s: &str) -> Result<(f64, f64), String> {
-    let v: Vec<&str> = s.split(',').map(str::trim).collect();
-    let num = |t: &str| {
-        t.parse::<f64>()
-            .map_err(|_| format!("`{t}` is not a number"))
-    };
-    match v.as_slice() {
-        [a, b] => Ok((num(a)?, num(b)?)),
-        _ => Err(format!(
-            "`{s}`: two comma-separated numbers, gyro (rad/s) and accelerometer (m/s^2)"
-        )),
-    }
+    let [g, a] = preint_analysis::parse::numbers::<2>(
+        s,
+        "two comma-separated numbers, gyro (rad/s) and accelerometer (m/s^2)",
+    )?;
+    Ok((g, a))
 }
 
 /// The text form.
