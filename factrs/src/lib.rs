@@ -260,6 +260,35 @@ fn nav_at(values: &Values, pose: Key, vel: Key) -> NavState {
     nav_state(get::<SE3>(values, pose), get::<VectorVar3>(values, vel))
 }
 
+/// The two keyframes `(pose_i, vel_i, pose_j, vel_j)` of `keys[0..4]`.
+fn keyframes_at(values: &Values, keys: &[Key]) -> (NavState, NavState) {
+    (
+        nav_at(values, keys[0], keys[1]),
+        nav_at(values, keys[2], keys[3]),
+    )
+}
+
+/// The two keyframes at the real parts of generic arguments, and the arguments' tangent
+/// offsets from them (the first four of [`propagate`]'s offsets).
+fn real_keyframes<T: Numeric>(
+    (pose_i, vel_i): (&SE3<T>, &VectorVar3<T>),
+    (pose_j, vel_j): (&SE3<T>, &VectorVar3<T>),
+) -> ((NavState, NavState), Vec<VectorX<T>>) {
+    let (pi, vi, pj, vj) = (
+        real_pose(pose_i),
+        real_vec(vel_i),
+        real_pose(pose_j),
+        real_vec(vel_j),
+    );
+    let offsets = vec![
+        pose_i.ominus(&pi.cast()),
+        vel_i.ominus(&vi.cast()),
+        pose_j.ominus(&pj.cast()),
+        vel_j.ominus(&vj.cast()),
+    ];
+    ((nav_state(&pi, &vi), nav_state(&pj, &vj)), offsets)
+}
+
 // ------------------------------------------------------------------------------------------
 // ImuResidual
 // ------------------------------------------------------------------------------------------
@@ -305,15 +334,13 @@ impl Residual for ImuResidual {
     }
 
     fn residual(&self, values: &Values, keys: &[Key]) -> VectorX {
-        let xi = nav_at(values, keys[0], keys[1]);
-        let xj = nav_at(values, keys[2], keys[3]);
+        let (xi, xj) = keyframes_at(values, keys);
         let b = bias(get::<ImuBias>(values, keys[4]));
         self.whitened(&xi, &xj, &b).0
     }
 
     fn residual_jacobian(&self, values: &Values, keys: &[Key]) -> DiffResult<VectorX, MatrixX> {
-        let xi = nav_at(values, keys[0], keys[1]);
-        let xj = nav_at(values, keys[2], keys[3]);
+        let (xi, xj) = keyframes_at(values, keys);
         let b = bias(get::<ImuBias>(values, keys[4]));
         let (value, j) = self.whitened(&xi, &xj, &b);
         DiffResult {
@@ -341,22 +368,10 @@ impl Residual5 for ImuResidual {
         vel_j: VectorVar3<T>,
         bias_i: ImuBias<T>,
     ) -> VectorX<T> {
-        let (pi, vi, pj, vj) = (
-            real_pose(&pose_i),
-            real_vec(&vel_i),
-            real_pose(&pose_j),
-            real_vec(&vel_j),
-        );
+        let ((xi, xj), mut offsets) = real_keyframes((&pose_i, &vel_i), (&pose_j, &vel_j));
         let bi = real_bias(&bias_i);
-        let (xi, xj) = (nav_state(&pi, &vi), nav_state(&pj, &vj));
+        offsets.push(bias_i.ominus(&bi.cast()));
         let (r, j) = self.whitened(&xi, &xj, &bias(&bi));
-        let offsets = [
-            pose_i.ominus(&pi.cast()),
-            vel_i.ominus(&vi.cast()),
-            pose_j.ominus(&pj.cast()),
-            vel_j.ominus(&vj.cast()),
-            bias_i.ominus(&bi.cast()),
-        ];
         propagate(&r, &to_factrs_jacobian(&j, &xi, &xj, false), &offsets)
     }
 }
@@ -406,16 +421,14 @@ impl Residual for CombinedImuResidual {
     }
 
     fn residual(&self, values: &Values, keys: &[Key]) -> VectorX {
-        let xi = nav_at(values, keys[0], keys[1]);
-        let xj = nav_at(values, keys[2], keys[3]);
+        let (xi, xj) = keyframes_at(values, keys);
         let bi = bias(get::<ImuBias>(values, keys[4]));
         let bj = bias(get::<ImuBias>(values, keys[5]));
         self.whitened(&xi, &xj, &bi, &bj).0
     }
 
     fn residual_jacobian(&self, values: &Values, keys: &[Key]) -> DiffResult<VectorX, MatrixX> {
-        let xi = nav_at(values, keys[0], keys[1]);
-        let xj = nav_at(values, keys[2], keys[3]);
+        let (xi, xj) = keyframes_at(values, keys);
         let bi = bias(get::<ImuBias>(values, keys[4]));
         let bj = bias(get::<ImuBias>(values, keys[5]));
         let (value, j) = self.whitened(&xi, &xj, &bi, &bj);
@@ -446,23 +459,11 @@ impl Residual6 for CombinedImuResidual {
         bias_i: ImuBias<T>,
         bias_j: ImuBias<T>,
     ) -> VectorX<T> {
-        let (pi, vi, pj, vj) = (
-            real_pose(&pose_i),
-            real_vec(&vel_i),
-            real_pose(&pose_j),
-            real_vec(&vel_j),
-        );
+        let ((xi, xj), mut offsets) = real_keyframes((&pose_i, &vel_i), (&pose_j, &vel_j));
         let (bi, bj) = (real_bias(&bias_i), real_bias(&bias_j));
-        let (xi, xj) = (nav_state(&pi, &vi), nav_state(&pj, &vj));
+        offsets.push(bias_i.ominus(&bi.cast()));
+        offsets.push(bias_j.ominus(&bj.cast()));
         let (r, j) = self.whitened(&xi, &xj, &bias(&bi), &bias(&bj));
-        let offsets = [
-            pose_i.ominus(&pi.cast()),
-            vel_i.ominus(&vi.cast()),
-            pose_j.ominus(&pj.cast()),
-            vel_j.ominus(&vj.cast()),
-            bias_i.ominus(&bi.cast()),
-            bias_j.ominus(&bj.cast()),
-        ];
         propagate(&r, &to_factrs_jacobian(&j, &xi, &xj, true), &offsets)
     }
 }
